@@ -1,0 +1,60 @@
+// bsdfkit._core: thread pool control, model bindings and the image I/O / Embree glue.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <algorithm>
+#include <atomic>
+#include <string>
+#include <thread>
+
+#include "bsdfkit/io.h"
+
+namespace py = pybind11;
+
+namespace bsdfkit::py_bind {
+
+static std::atomic<int> g_threads{int(std::max(1u, std::thread::hardware_concurrency()))};
+int num_threads() { return g_threads.load(); }
+
+void bind_pbrt_models(py::module_ &m);
+
+} // namespace bsdfkit::py_bind
+
+using namespace bsdfkit;
+
+PYBIND11_MODULE(_core, m) {
+    m.doc() = "bsdfkit compiled core (use the bsdfkit package, not this module directly)";
+    m.def("set_num_threads", [](int n) {
+        if (n < 1) throw py::value_error("n: number of threads must be >= 1");
+        py_bind::g_threads = n;
+    });
+    m.def("get_num_threads", [] { return py_bind::g_threads.load(); });
+    m.def("hardware_concurrency", [] { return int(std::max(1u, std::thread::hardware_concurrency())); });
+
+    py_bind::bind_pbrt_models(m);
+
+    m.def("read_image", [](const std::string &path) {
+        io::Image img;
+        std::string err;
+        {
+            py::gil_scoped_release release;
+            err = io::read_image(path, img);
+        }
+        if (!err.empty()) throw std::runtime_error(err);
+        py::array_t<float> a({img.height, img.width, img.channels});
+        std::copy(img.pixels.begin(), img.pixels.end(), a.mutable_data());
+        return a;
+    });
+    m.def("write_image", [](const std::string &path, py::array_t<float, py::array::c_style | py::array::forcecast> a) {
+        if (a.ndim() != 3) throw py::value_error("img: expected an (H, W, C) array");
+        int h = int(a.shape(0)), w = int(a.shape(1)), c = int(a.shape(2));
+        std::string err;
+        {
+            py::gil_scoped_release release;
+            err = io::write_image(path, a.data(), w, h, c);
+        }
+        if (!err.empty()) throw std::runtime_error(err);
+    });
+    m.def("embree_version", &io::embree_version);
+    m.def("openimageio_version", &io::openimageio_version);
+}

@@ -1,0 +1,153 @@
+// Dielectric interface: smooth (delta) or Trowbridge-Reitz rough reflection and transmission
+// (pbrt-v4 DielectricBxDF; Walter et al. 2007 "Microfacet models for refraction").
+//   eta   relative IOR inside / outside (> 0; < 1 means the outside is denser)
+//   mfd   anisotropic GGX; max(alpha) < 1e-3 (or eta == 1) makes both lobes deltas
+// wo may lie on either side. In Radiance mode transmitted radiance is scaled by 1/etap^2,
+// in Importance mode it is not (Veach 1997 ch. 5), so f is not symmetric for transmission.
+#pragma once
+#include "../core/bsdf_sample.h"
+#include "../core/fresnel.h"
+#include "../core/microfacet.h"
+
+namespace bsdfkit {
+
+template <typename F> struct DielectricBxDF {
+    F eta;
+    TrowbridgeReitz<F> mfd;
+
+    bool is_smooth() const { return eta == F(1) || mfd.effectively_smooth(); }
+
+    uint8_t flags() const {
+        uint8_t f = eta == F(1) ? Transmission : (Reflection | Transmission);
+        return uint8_t(f | (mfd.effectively_smooth() ? Specular : Glossy));
+    }
+
+    // Lobe probabilities restricted by sample_flags.
+    static void lobe_probs(F R, uint8_t sample_flags, F *pr, F *pt) {
+        *pr = (sample_flags & RT_Reflection) ? R : F(0);
+        *pt = (sample_flags & RT_Transmission) ? F(1) - R : F(0);
+    }
+
+    // Generalized half vector of a pair, facing +z, and the relative IOR etap along wi.
+    // Returns false where pbrt-v4 returns 0: a horizon direction, a degenerate half vector,
+    // or a back-facing microfacet.
+    bool half_vector(const Vec3<F> &wo, const Vec3<F> &wi, Vec3<F> *wm, F *etap) const {
+        F cos_o = CosTheta(wo), cos_i = CosTheta(wi);
+        bool reflect = cos_i * cos_o > F(0);
+        *etap = reflect ? F(1) : (cos_o > F(0) ? eta : F(1) / eta);
+        Vec3<F> h = wi * *etap + wo;
+        F len2 = length_squared(h);
+        bool ok = cos_i != F(0) && cos_o != F(0) && len2 > F(0);
+        h = face_forward(h / std::sqrt(ok ? len2 : F(1)), Vec3<F>(0, 0, 1));
+        *wm = h;
+        // Discard back-facing microfacets (Walter 2007 sec. 5.1)
+        ok = ok && dot(h, wi) * cos_i >= F(0) && dot(h, wo) * cos_o >= F(0);
+        return ok;
+    }
+
+    Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode) const {
+        if (is_smooth()) return Spectrum<F>(F(0));
+        Vec3<F> wm;
+        F etap;
+        bool ok = half_vector(wo, wi, &wm, &etap);
+        bool reflect = CosTheta(wi) * CosTheta(wo) > F(0);
+        F cos_o = CosTheta(wo), cos_i = CosTheta(wi);
+        F Fr = FrDielectric(dot(wo, wm), eta);
+        F dg = mfd.D(wm) * mfd.G(wo, wi);
+        // Reflection: D G F / |4 cos_i cos_o|
+        F fr = dg * Fr / std::abs(F(4) * cos_i * cos_o);
+        // Transmission: D G (1 - F) |wi.wm wo.wm / (cos_i cos_o (wi.wm + wo.wm / etap)^2)|
+        F denom = sqr(dot(wi, wm) + dot(wo, wm) / etap) * cos_i * cos_o;
+        F ft = dg * (F(1) - Fr) * std::abs(dot(wi, wm) * dot(wo, wm) / denom);
+        ft = mode == TransportMode::Radiance ? ft / sqr(etap) : ft;
+        F v = reflect ? fr : ft;
+        ok = ok && (reflect ? true : denom != F(0));
+        return Spectrum<F>(ok ? v : F(0));
+    }
+
+    BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode,
+                           uint8_t sample_flags) const {
+        return is_smooth() ? sample_smooth(wo, uc, mode, sample_flags)
+                           : sample_rough(wo, uc, u, mode, sample_flags);
+    }
+
+    BSDFSample<F> sample_smooth(const Vec3<F> &wo, F uc, TransportMode mode, uint8_t sample_flags) const {
+        BSDFSample<F> s;
+        // eta == 1 is a pure pass-through; force R = 0 rather than trusting rounding.
+        F R = eta == F(1) ? F(0) : FrDielectric(CosTheta(wo), eta), pr, pt;
+        lobe_probs(R, sample_flags, &pr, &pt);
+        bool reflect = uc < pr / (pr + pt);
+        // Specular reflection about +z, or refraction through the flat interface.
+        Vec3<F> wr(-wo.x, -wo.y, wo.z), wt;
+        F etap;
+        bool refr_ok = Refract(wo, Vec3<F>(0, 0, 1), eta, &etap, &wt);
+        s.wi = reflect ? wr : wt;
+        F cos_i = AbsCosTheta(s.wi);
+        F ft = (F(1) - R) / cos_i;
+        ft = mode == TransportMode::Radiance ? ft / sqr(etap) : ft;
+        s.f = Spectrum<F>(reflect ? R / cos_i : ft);
+        s.pdf = (reflect ? pr : pt) / (pr + pt);
+        s.flags = reflect ? SpecularReflection : SpecularTransmission;
+        s.eta = reflect ? F(1) : etap;
+        s.valid = (pr + pt) > F(0) && cos_i > F(0) && (reflect || refr_ok);
+        return s;
+    }
+
+    BSDFSample<F> sample_rough(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode,
+                               uint8_t sample_flags) const {
+        BSDFSample<F> s;
+        Vec3<F> wm = mfd.Sample_wm(wo, u);
+        F R = FrDielectric(dot(wo, wm), eta), pr, pt;
+        lobe_probs(R, sample_flags, &pr, &pt);
+        bool reflect = uc < pr / (pr + pt);
+        F cos_o = CosTheta(wo);
+        F pdf_wm = mfd.PDF(wo, wm);
+
+        // Reflection about the sampled normal.
+        Vec3<F> wr = Reflect(wo, wm);
+        F pdf_r = pdf_wm / (F(4) * absdot(wo, wm)) * pr / (pr + pt);
+        F f_r = mfd.D(wm) * mfd.G(wo, wr) * R / std::abs(F(4) * CosTheta(wr) * cos_o);
+        bool ok_r = SameHemisphere(wo, wr);
+
+        // Refraction through the sampled normal, with the half-vector Jacobian.
+        Vec3<F> wt;
+        F etap;
+        bool ok_t = Refract(wo, wm, eta, &etap, &wt);
+        ok_t = ok_t && !SameHemisphere(wo, wt) && wt.z != F(0);
+        F denom = sqr(dot(wt, wm) + dot(wo, wm) / etap);
+        F dwm_dwi = absdot(wt, wm) / denom;
+        F pdf_t = pdf_wm * dwm_dwi * pt / (pr + pt);
+        F f_t = (F(1) - R) * mfd.D(wm) * mfd.G(wo, wt) *
+                std::abs(dot(wt, wm) * dot(wo, wm) / (CosTheta(wt) * cos_o * denom));
+        f_t = mode == TransportMode::Radiance ? f_t / sqr(etap) : f_t;
+
+        s.wi = reflect ? wr : wt;
+        s.f = Spectrum<F>(reflect ? f_r : f_t);
+        s.pdf = reflect ? pdf_r : pdf_t;
+        s.flags = reflect ? GlossyReflection : GlossyTransmission;
+        s.eta = reflect ? F(1) : etap;
+        s.valid = (pr + pt) > F(0) && cos_o != F(0) && (reflect ? ok_r : ok_t);
+        return s;
+    }
+
+    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
+        if (is_smooth()) return F(0);
+        Vec3<F> wm;
+        F etap;
+        bool ok = half_vector(wo, wi, &wm, &etap);
+        bool reflect = CosTheta(wi) * CosTheta(wo) > F(0);
+        F R = FrDielectric(dot(wo, wm), eta), pr, pt;
+        lobe_probs(R, sample_flags, &pr, &pt);
+        F pdf_wm = mfd.PDF(wo, wm);
+        F p_r = pdf_wm / (F(4) * absdot(wo, wm)) * pr;
+        F denom = sqr(dot(wi, wm) + dot(wo, wm) / etap);
+        F p_t = pdf_wm * absdot(wi, wm) / denom * pt;
+        F p = (reflect ? p_r : p_t) / (pr + pt);
+        ok = ok && (pr + pt) > F(0) && (reflect ? true : denom > F(0));
+        return ok ? p : F(0);
+    }
+
+    void regularize() { mfd.regularize(); }
+};
+
+} // namespace bsdfkit

@@ -1,0 +1,58 @@
+// Lambertian reflection plus Lambertian transmission (pbrt-v4 DiffuseTransmissionBxDF).
+//   R  reflectance per channel, T  transmittance per channel, each in [0, 1]
+// Symmetric: the transport mode does not change the value.
+#pragma once
+#include "../core/bsdf_sample.h"
+#include "../core/frame.h"
+#include "../core/sampling.h"
+
+namespace bsdfkit {
+
+template <typename F> struct DiffuseTransmissionBxDF {
+    Spectrum<F> R, T;
+
+    uint8_t flags() const {
+        return uint8_t((R.is_black() ? Unset : DiffuseReflection) | (T.is_black() ? Unset : DiffuseTransmission));
+    }
+
+    Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode) const {
+        return select(SameHemisphere(wo, wi), R * InvPi<F>, T * InvPi<F>);
+    }
+
+    // Lobe probabilities from the largest channel, restricted by sample_flags.
+    void lobe_probs(uint8_t sample_flags, F *pr, F *pt) const {
+        *pr = (sample_flags & RT_Reflection) ? R.max_component() : F(0);
+        *pt = (sample_flags & RT_Transmission) ? T.max_component() : F(0);
+    }
+
+    BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode,
+                           uint8_t sample_flags) const {
+        F pr, pt;
+        lobe_probs(sample_flags, &pr, &pt);
+        BSDFSample<F> s;
+        F sum = pr + pt;
+        bool reflect = uc < pr / sum;
+        Vec3<F> wi = SampleCosineHemisphere(u);
+        // reflection stays on wo's side, transmission goes to the other side
+        bool below = (wo.z < F(0)) == reflect;
+        wi.z = below ? -wi.z : wi.z;
+        s.wi = wi;
+        s.pdf = CosineHemispherePDF(AbsCosTheta(wi)) * (reflect ? pr : pt) / sum;
+        s.f = f(wo, wi, mode);
+        s.flags = reflect ? DiffuseReflection : DiffuseTransmission;
+        s.valid = sum > F(0);
+        return s;
+    }
+
+    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
+        F pr, pt;
+        lobe_probs(sample_flags, &pr, &pt);
+        F sum = pr + pt;
+        F p = CosineHemispherePDF(AbsCosTheta(wi)) * (SameHemisphere(wo, wi) ? pr : pt);
+        return sum > F(0) ? p / sum : F(0);
+    }
+
+    void regularize() {}
+};
+
+} // namespace bsdfkit

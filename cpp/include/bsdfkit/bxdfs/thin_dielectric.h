@@ -1,0 +1,42 @@
+// Thin dielectric slab: specular reflection plus straight-through transmission, summing the
+// inter-reflections inside the slab without absorption (pbrt-v4 ThinDielectricBxDF).
+//   eta   relative IOR of the slab (> 0)
+// The ray leaves into the medium it came from, so the sample's eta is 1 and no 1/eta^2 applies.
+#pragma once
+#include "../core/bsdf_sample.h"
+#include "../core/fresnel.h"
+
+namespace bsdfkit {
+
+template <typename F> struct ThinDielectricBxDF {
+    F eta;
+
+    uint8_t flags() const { return Reflection | Transmission | Specular; }
+
+    Spectrum<F> f(const Vec3<F> &, const Vec3<F> &, TransportMode) const { return Spectrum<F>(F(0)); }
+
+    BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F>, TransportMode, uint8_t sample_flags) const {
+        BSDFSample<F> s;
+        F R = FrDielectric(AbsCosTheta(wo), eta);
+        // Geometric series of inter-reflections: R' = R + T^2 R / (1 - R^2)
+        F T = F(1) - R;
+        F Rs = R < F(1) ? R + sqr(T) * R / (F(1) - sqr(R)) : R;
+        F pr = (sample_flags & RT_Reflection) ? Rs : F(0);
+        F pt = (sample_flags & RT_Transmission) ? F(1) - Rs : F(0);
+        bool reflect = uc < pr / (pr + pt);
+        s.wi = reflect ? Vec3<F>(-wo.x, -wo.y, wo.z) : -wo;
+        F cos_i = AbsCosTheta(s.wi);
+        s.f = Spectrum<F>((reflect ? Rs : F(1) - Rs) / cos_i);
+        s.pdf = (reflect ? pr : pt) / (pr + pt);
+        s.flags = reflect ? SpecularReflection : SpecularTransmission;
+        s.eta = F(1);
+        s.valid = (pr + pt) > F(0) && cos_i > F(0);
+        return s;
+    }
+
+    F pdf(const Vec3<F> &, const Vec3<F> &, TransportMode, uint8_t) const { return F(0); }
+
+    void regularize() {}
+};
+
+} // namespace bsdfkit

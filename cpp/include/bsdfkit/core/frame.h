@@ -1,0 +1,48 @@
+// Local shading frame helpers (z is the normal), named as in pbrt-v4.
+#pragma once
+#include "math.h"
+
+namespace bsdfkit {
+
+template <typename F> inline F CosTheta(const Vec3<F> &w) { return w.z; }
+template <typename F> inline F Cos2Theta(const Vec3<F> &w) { return w.z * w.z; }
+template <typename F> inline F AbsCosTheta(const Vec3<F> &w) { return std::abs(w.z); }
+template <typename F> inline F Sin2Theta(const Vec3<F> &w) { return max_(F(0), F(1) - Cos2Theta(w)); }
+template <typename F> inline F SinTheta(const Vec3<F> &w) { return std::sqrt(Sin2Theta(w)); }
+// +inf on the horizon; callers test for it (pbrt-v4 D and Lambda).
+template <typename F> inline F Tan2Theta(const Vec3<F> &w) { return Sin2Theta(w) / Cos2Theta(w); }
+template <typename F> inline F CosPhi(const Vec3<F> &w) {
+    F s = SinTheta(w);
+    return s == F(0) ? F(1) : clamp(w.x / s, F(-1), F(1));
+}
+template <typename F> inline F SinPhi(const Vec3<F> &w) {
+    F s = SinTheta(w);
+    return s == F(0) ? F(0) : clamp(w.y / s, F(-1), F(1));
+}
+// Strict: a direction on the horizon is in neither hemisphere.
+template <typename F> inline bool SameHemisphere(const Vec3<F> &a, const Vec3<F> &b) { return a.z * b.z > F(0); }
+
+// Mirror wo about n (pbrt-v4 Reflect).
+template <typename F> inline Vec3<F> Reflect(const Vec3<F> &wo, const Vec3<F> &n) {
+    return -wo + F(2) * dot(wo, n) * n;
+}
+
+// Refraction of wi about n with relative IOR eta (inside/outside); handles wi below n by
+// inverting eta. Returns false on total internal reflection (pbrt-v4 Refract).
+template <typename F>
+inline bool Refract(const Vec3<F> &wi, Vec3<F> n, F eta, F *etap, Vec3<F> *wt) {
+    F cos_i = dot(n, wi);
+    bool inside = cos_i < F(0);
+    eta = inside ? F(1) / eta : eta;
+    cos_i = inside ? -cos_i : cos_i;
+    n = inside ? -n : n;
+    F sin2_i = max_(F(0), F(1) - sqr(cos_i));
+    F sin2_t = sin2_i / sqr(eta);
+    bool tir = sin2_t >= F(1);
+    F cos_t = safe_sqrt(F(1) - sin2_t);
+    *wt = -wi / eta + (cos_i / eta - cos_t) * n;
+    *etap = eta;
+    return !tir;
+}
+
+} // namespace bsdfkit

@@ -1,0 +1,43 @@
+// Warps from [0,1)^2 to disks, hemispheres and spheres, with their densities.
+#pragma once
+#include "math.h"
+
+namespace bsdfkit {
+
+// Shirley & Chiu 1997 concentric map, (0,0) -> centre.
+template <typename F> inline Point2<F> SampleUniformDiskConcentric(Point2<F> u) {
+    F ox = F(2) * u.x - F(1), oy = F(2) * u.y - F(1);
+    bool first = std::abs(ox) > std::abs(oy);
+    F r = first ? ox : oy;
+    F ratio = first ? safe_div(oy, ox) : safe_div(ox, oy);
+    F theta = first ? PiOver4<F> * ratio : PiOver2<F> - PiOver4<F> * ratio;
+    return {r * std::cos(theta), r * std::sin(theta)};
+}
+
+// r = sqrt(u0), phi = 2 pi u1.
+template <typename F> inline Point2<F> SampleUniformDiskPolar(Point2<F> u) {
+    F r = std::sqrt(u.x), phi = F(2) * Pi<F> * u.y;
+    return {r * std::cos(phi), r * std::sin(phi)};
+}
+
+// Malley's method: project the concentric disk up to the hemisphere.
+template <typename F> inline Vec3<F> SampleCosineHemisphere(Point2<F> u) {
+    Point2<F> d = SampleUniformDiskConcentric(u);
+    F z = safe_sqrt(F(1) - d.x * d.x - d.y * d.y);
+    return {d.x, d.y, z};
+}
+template <typename F> inline F CosineHemispherePDF(F cos_theta) { return cos_theta * InvPi<F>; }
+
+template <typename F> inline Vec3<F> SampleUniformHemisphere(Point2<F> u) {
+    F z = u.x, r = safe_sqrt(F(1) - z * z), phi = F(2) * Pi<F> * u.y;
+    return {r * std::cos(phi), r * std::sin(phi), z};
+}
+template <typename F> inline F UniformHemispherePDF() { return Inv2Pi<F>; }
+
+template <typename F> inline Vec3<F> SampleUniformSphere(Point2<F> u) {
+    F z = F(1) - F(2) * u.x, r = safe_sqrt(F(1) - z * z), phi = F(2) * Pi<F> * u.y;
+    return {r * std::cos(phi), r * std::sin(phi), z};
+}
+template <typename F> inline F UniformSpherePDF() { return F(0.25) * InvPi<F>; }
+
+} // namespace bsdfkit

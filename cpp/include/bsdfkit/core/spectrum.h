@@ -1,0 +1,36 @@
+// Fixed-size spectrum: 3 RGB channels. Parameters are uniform per model.
+#pragma once
+#include "math.h"
+
+namespace bsdfkit {
+
+template <typename Float, int N = 3> struct Spectrum {
+    static constexpr int Size = N;
+    Float v[N];
+    Spectrum() = default;
+    explicit constexpr Spectrum(Float c) : v{} { for (int i = 0; i < N; ++i) v[i] = c; }
+    Float &operator[](int i) { return v[i]; }
+    const Float &operator[](int i) const { return v[i]; }
+#define BSDFKIT_SPEC_OP(op)                                                                  \
+    Spectrum operator op(const Spectrum &o) const {                                          \
+        Spectrum r; for (int i = 0; i < N; ++i) r.v[i] = v[i] op o.v[i]; return r;           \
+    }                                                                                        \
+    Spectrum operator op(Float s) const {                                                    \
+        Spectrum r; for (int i = 0; i < N; ++i) r.v[i] = v[i] op s; return r;                \
+    }
+    BSDFKIT_SPEC_OP(+) BSDFKIT_SPEC_OP(-) BSDFKIT_SPEC_OP(*) BSDFKIT_SPEC_OP(/)
+#undef BSDFKIT_SPEC_OP
+    Float max_component() const { Float m = v[0]; for (int i = 1; i < N; ++i) m = max_(m, v[i]); return m; }
+    Float average() const { Float s = 0; for (int i = 0; i < N; ++i) s += v[i]; return s / N; }
+    bool is_black() const { bool b = true; for (int i = 0; i < N; ++i) b = b && (v[i] == Float(0)); return b; }
+};
+template <typename Float, int N>
+inline Spectrum<Float, N> operator*(Float s, const Spectrum<Float, N> &a) { return a * s; }
+template <typename Float, int N>
+inline Spectrum<Float, N> operator-(Float s, const Spectrum<Float, N> &a) { return Spectrum<Float, N>(s) - a; }
+template <typename Float, int N>
+inline Spectrum<Float, N> select(bool c, const Spectrum<Float, N> &a, const Spectrum<Float, N> &b) {
+    Spectrum<Float, N> r; for (int i = 0; i < N; ++i) r.v[i] = c ? a.v[i] : b.v[i]; return r;
+}
+
+} // namespace bsdfkit

@@ -1,0 +1,83 @@
+"""Array plumbing shared by every model: validation, dtype choice, broadcasting, out=."""
+from __future__ import annotations
+
+import math
+import numbers
+
+import numpy as np
+
+__all__ = ["as_dirs", "kernel_dtype", "flatten_to", "check_out", "as_uniform"]
+
+
+def _as_real_array(x, name: str) -> np.ndarray:
+    try:
+        a = np.asarray(x)
+    except Exception as e:  # ragged lists and the like
+        raise TypeError(f"{name}: cannot be converted to a numeric array ({e})") from None
+    if a.dtype.kind not in "fiu":
+        raise TypeError(f"{name}: expected a real numeric array, got dtype {a.dtype}")
+    return a
+
+
+def as_dirs(x, name: str) -> np.ndarray:
+    """`x` as an array of directions with last axis 3 (dtype kept; checked later by the kernel)."""
+    a = _as_real_array(x, name)
+    if a.ndim == 0 or a.shape[-1] != 3:
+        raise ValueError(f"{name}: expected an array of directions with last axis of length 3, got shape {a.shape}")
+    return a
+
+
+def as_uniform(x, name: str, tail: tuple) -> np.ndarray:
+    a = _as_real_array(x, name)
+    if a.shape[a.ndim - len(tail):] != tail or a.ndim < len(tail):
+        raise ValueError(f"{name}: expected trailing shape {tail}, got {a.shape}")
+    if a.size and not (np.all(a >= 0) and np.all(a <= 1)):
+        raise ValueError(f"{name}: sample values must lie in [0, 1] (and not be NaN)")
+    return a
+
+
+def kernel_dtype(*arrays: np.ndarray) -> np.dtype:
+    """float32 kernels when every input is float32, float64 otherwise (numpy's promotion spirit)."""
+    if all(a.dtype == np.float32 for a in arrays):
+        return np.dtype(np.float32)
+    return np.dtype(np.float64)
+
+
+def broadcast_batch(names, *shapes) -> tuple:
+    try:
+        return np.broadcast_shapes(*shapes)
+    except ValueError:
+        desc = ", ".join(f"{n} {s}" for n, s in zip(names, shapes))
+        raise ValueError(f"{' and '.join(names)}: batch shapes cannot be broadcast together ({desc})") from None
+
+
+def flatten_to(a: np.ndarray, batch: tuple, tail: tuple, dtype) -> np.ndarray:
+    """Rows of `a` for the kernel: 1 row if `a` is a single item, else one per batch element."""
+    if a.shape[: a.ndim - len(tail)] == batch:
+        return np.ascontiguousarray(a, dtype=dtype).reshape((-1,) + tail)
+    if math.prod(a.shape[: a.ndim - len(tail)]) == 1:
+        return np.ascontiguousarray(a, dtype=dtype).reshape((1,) + tail)
+    return np.ascontiguousarray(np.broadcast_to(a, batch + tail), dtype=dtype).reshape((-1,) + tail)
+
+
+def check_out(out, shape: tuple, dtype) -> np.ndarray:
+    """Validates a user-supplied output array or allocates one."""
+    if out is None:
+        return np.empty(shape, dtype=dtype)
+    if not isinstance(out, np.ndarray):
+        raise TypeError(f"out: expected a numpy.ndarray, got {type(out).__name__}")
+    if out.dtype != dtype:
+        raise TypeError(f"out: dtype must be {dtype} for these inputs, got {out.dtype}")
+    if out.shape != shape:
+        raise ValueError(f"out: shape must be {shape}, got {out.shape}")
+    if not out.flags.c_contiguous or not out.flags.writeable:
+        raise ValueError("out: must be a writeable C-contiguous array")
+    return out
+
+
+def check_int(x, name: str, lo: int) -> int:
+    if isinstance(x, bool) or not isinstance(x, numbers.Integral):
+        raise TypeError(f"{name}: expected an integer, got {type(x).__name__}")
+    if x < lo:
+        raise ValueError(f"{name}: must be >= {lo}, got {x}")
+    return int(x)

@@ -1,0 +1,67 @@
+"""Image input/output through OpenImageIO (EXR/HDR linear float; PNG/JPEG 8-bit sRGB)."""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from . import _core
+
+__all__ = ["read_image", "write_image", "linear_to_srgb", "srgb_to_linear"]
+
+_LDR = (".png", ".jpg", ".jpeg", ".bmp")
+
+
+def linear_to_srgb(x: np.ndarray) -> np.ndarray:
+    """IEC 61966-2-1 sRGB transfer function (input clipped to [0, 1])."""
+    x = np.clip(x, 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+
+
+def srgb_to_linear(x: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`linear_to_srgb`."""
+    x = np.clip(x, 0.0, 1.0)
+    return np.where(x <= 0.04045, x / 12.92, np.power((x + 0.055) / 1.055, 2.4))
+
+
+def read_image(path, *, linear: bool = True) -> np.ndarray:
+    """Reads an image as float32 (H, W, C). LDR formats are decoded from sRGB to linear unless
+    ``linear=False``. Raises FileNotFoundError for a missing file and OSError with
+    OpenImageIO's reason for an unreadable one."""
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        raise FileNotFoundError(f"path: no such image file: {path}")
+    try:
+        img = _core.read_image(path)
+    except RuntimeError as e:
+        raise OSError(f"cannot read image {e}") from None
+    if linear and path.lower().endswith(_LDR):
+        img = srgb_to_linear(img).astype(np.float32)
+    return img
+
+
+def write_image(path, img, *, exposure: float = 0.0) -> None:
+    """Writes a linear float image (H, W) or (H, W, C), C in {1, 3, 4}.
+
+    EXR/HDR keep linear float values; PNG/JPEG get 2**exposure scaling, the sRGB transfer
+    curve and 8-bit quantisation (alpha is left linear)."""
+    path = os.fspath(path)
+    a = np.asarray(img)
+    if a.dtype.kind not in "fiu":
+        raise TypeError(f"img: expected a real numeric array, got dtype {a.dtype}")
+    if a.ndim == 2:
+        a = a[..., None]
+    if a.ndim != 3 or a.shape[2] not in (1, 3, 4) or a.shape[0] < 1 or a.shape[1] < 1:
+        raise ValueError(f"img: expected shape (H, W) or (H, W, C) with C in 1, 3, 4; got {np.shape(img)}")
+    a = a.astype(np.float32)
+    if not np.all(np.isfinite(a)):
+        raise ValueError("img: contains NaN or Inf")
+    if path.lower().endswith(_LDR):
+        c = min(a.shape[2], 3)
+        a = a.copy()
+        a[..., :c] = linear_to_srgb(a[..., :c] * 2.0 ** exposure)
+        a = np.clip(a, 0.0, 1.0)
+    try:
+        _core.write_image(path, np.ascontiguousarray(a))
+    except RuntimeError as e:
+        raise OSError(f"cannot write image {e}") from None
