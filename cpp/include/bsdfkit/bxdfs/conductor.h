@@ -36,7 +36,7 @@ template <typename F> struct ConductorBxDF {
         if (mfd.effectively_smooth()) {
             // Delta mirror: f = Fr / |cos_i|, discrete probability 1.
             s.wi = Vec3<F>(-wo.x, -wo.y, wo.z);
-            F cos_i = AbsCosTheta(s.wi);
+            F cos_i = DeltaAbsCos(s.wi);
             s.f = FrComplex(cos_i, eta, k) / cos_i;
             s.pdf = F(1);
             s.flags = SpecularReflection;

@@ -82,7 +82,7 @@ template <typename F> struct DielectricBxDF {
         F etap;
         bool refr_ok = Refract(wo, Vec3<F>(0, 0, 1), eta, &etap, &wt);
         s.wi = reflect ? wr : wt;
-        F cos_i = AbsCosTheta(s.wi);
+        F cos_i = DeltaAbsCos(s.wi);
         F ft = (F(1) - R) / cos_i;
         ft = mode == TransportMode::Radiance ? ft / sqr(etap) : ft;
         s.f = Spectrum<F>(reflect ? R / cos_i : ft);

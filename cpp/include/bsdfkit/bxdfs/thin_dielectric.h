@@ -25,7 +25,7 @@ template <typename F> struct ThinDielectricBxDF {
         F pt = (sample_flags & RT_Transmission) ? F(1) - Rs : F(0);
         bool reflect = uc < pr / (pr + pt);
         s.wi = reflect ? Vec3<F>(-wo.x, -wo.y, wo.z) : -wo;
-        F cos_i = AbsCosTheta(s.wi);
+        F cos_i = DeltaAbsCos(s.wi);
         s.f = Spectrum<F>((reflect ? Rs : F(1) - Rs) / cos_i);
         s.pdf = (reflect ? pr : pt) / (pr + pt);
         s.flags = reflect ? SpecularReflection : SpecularTransmission;

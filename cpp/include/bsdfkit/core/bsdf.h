@@ -7,15 +7,32 @@
 
 namespace bsdfkit {
 
+// Last line of defence at the degenerate limits (both cosines underflowing, G -> 0 against a
+// vanishing Jacobian): a value that is not a finite non-negative number becomes 0. The
+// models' own guards cover every regular case; tests compare those against references.
+template <typename F> inline F finite_or_zero(F v) {
+    return (v >= F(0) && v <= std::numeric_limits<F>::max()) ? v : F(0);
+}
+template <typename F> inline Spectrum<F> finite_or_zero(const Spectrum<F> &s) {
+    Spectrum<F> r;
+    for (int i = 0; i < Spectrum<F>::Size; ++i) r[i] = finite_or_zero(s[i]);
+    return r;
+}
+template <typename F> inline bool is_finite_nonneg(const Spectrum<F> &s) {
+    bool ok = true;
+    for (int i = 0; i < Spectrum<F>::Size; ++i) ok = ok && s[i] >= F(0) && s[i] <= std::numeric_limits<F>::max();
+    return ok;
+}
+
 template <typename Model, typename F>
 inline Spectrum<F> bsdf_f(const Model &m, const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode) {
-    Spectrum<F> v = m.f(wo, wi, mode);
+    Spectrum<F> v = finite_or_zero(m.f(wo, wi, mode));
     return select(wo.z != F(0), v, Spectrum<F>(F(0)));
 }
 
 template <typename Model, typename F>
 inline F bsdf_pdf(const Model &m, const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode, uint8_t sf) {
-    F p = m.pdf(wo, wi, mode, sf);
+    F p = finite_or_zero(m.pdf(wo, wi, mode, sf));
     return wo.z != F(0) ? p : F(0);
 }
 
@@ -24,7 +41,7 @@ inline BSDFSample<F> bsdf_sample(const Model &m, const Vec3<F> &wo, F uc, Point2
                                  uint8_t sf) {
     BSDFSample<F> s = m.sample_f(wo, uc, u, mode, sf);
     bool ok = s.valid && wo.z != F(0) && (m.flags() & sf) != 0 && !s.f.is_black() && s.pdf > F(0) &&
-              s.wi.z != F(0);
+              s.wi.z != F(0) && is_finite_nonneg(s.f) && s.pdf <= std::numeric_limits<F>::max();
     // Every output of a rejected sample is a defined value, never a NaN from a dead branch.
     BSDFSample<F> r;
     r.f = select(ok, s.f, Spectrum<F>(F(0)));

@@ -19,6 +19,11 @@ template <typename F> inline F SinPhi(const Vec3<F> &w) {
     F s = SinTheta(w);
     return s == F(0) ? F(0) : clamp(w.y / s, F(-1), F(1));
 }
+// |cos theta| for a delta lobe's f = F / |cos|: floored at the smallest normal number so a
+// denormal cosine cannot overflow f to inf (the lobe's weight f |cos| / pdf stays <= F).
+template <typename F> inline F DeltaAbsCos(const Vec3<F> &w) {
+    return max_(AbsCosTheta(w), std::numeric_limits<F>::min());
+}
 // Strict: a direction on the horizon is in neither hemisphere.
 template <typename F> inline bool SameHemisphere(const Vec3<F> &a, const Vec3<F> &b) { return a.z * b.z > F(0); }
 

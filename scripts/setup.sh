@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Idempotent setup: system packages (apt), Python packages (pip), then build and install
+# bsdfkit itself. Quick when everything is already present and the sources are unchanged.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+APT_PKGS=(g++ cmake make libembree-dev libopenimageio-dev openimageio-tools libopencv-core-dev
+          libtbb-dev libllvm15)
+missing=()
+for p in "${APT_PKGS[@]}"; do
+  dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "[setup] apt-get install ${missing[*]}"
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
+fi
+
+PY=${PYTHON:-python3}
+# Build backend + runtime + test dependencies (Mitsuba/Dr.Jit are test references only).
+if ! $PY - <<'PYEOF' 2>/dev/null
+import importlib.metadata as md, sys
+need = {"scikit-build-core": None, "pybind11": None, "numpy": None, "matplotlib": None, "pytest": None,
+        "pytest-xdist": None, "hypothesis": None, "mitsuba": "3.9.1", "drjit": None, "scipy": None,
+        "nbclient": None, "nbmake": None, "ipykernel": None, "nbformat": None}
+for name, least in need.items():
+    v = md.version(name)
+    if least and tuple(int(x) for x in v.split(".")[:3]) < tuple(int(x) for x in least.split(".")):
+        sys.exit(1)
+PYEOF
+then
+  echo "[setup] pip install build and test dependencies"
+  $PY -m pip install -q --disable-pip-version-check "scikit-build-core>=0.10" "pybind11>=2.12" numpy matplotlib \
+      pytest pytest-xdist hypothesis "mitsuba>=3.9.1" drjit scipy nbclient nbmake ipykernel nbformat
+fi
+
+# Rebuild only when a source file changed since the last install.
+stamp_dir=build; mkdir -p "$stamp_dir"
+hash=$(cat CMakeLists.txt pyproject.toml $(find cpp python -type f \( -name '*.h' -o -name '*.cpp' -o -name '*.py' -o -name '*.pyi' -o -name 'py.typed' \) | sort) | sha1sum | cut -d' ' -f1)
+if [ "$(cat "$stamp_dir/.installed" 2>/dev/null)" != "$hash" ] || ! $PY -c "import bsdfkit._core" 2>/dev/null; then
+  echo "[setup] building and installing bsdfkit"
+  $PY -m pip install -q --disable-pip-version-check --no-build-isolation --no-deps .
+  echo "$hash" > "$stamp_dir/.installed"
+fi

@@ -1,0 +1,221 @@
+"""Array API contract: shapes, broadcasting, dtype rule, out=, threads, value semantics, bad input."""
+import pickle
+
+import numpy as np
+import pytest
+
+import bsdfkit as bk
+from conftest import random_dirs
+
+
+def test_shapes_and_broadcasting(any_model, rng):
+    wo = bk.direction(np.radians(40), 0.3)
+    wi = random_dirs(rng, 60).reshape(4, 15, 3)
+    f = any_model.eval(wo, wi)
+    assert f.shape == (4, 15, 3) and f.dtype == np.float64
+    assert any_model.pdf(wo, wi).shape == (4, 15)
+    # broadcasting equals the explicit loop over the broadcast rows
+    wo_b = np.broadcast_to(wo, wi.shape)
+    np.testing.assert_array_equal(f, any_model.eval(np.ascontiguousarray(wo_b), wi))
+    # (4,1,3) against (1,15,3) -> (4,15,3), not a trivial 1-vs-N case
+    wo2 = random_dirs(rng, 4).reshape(4, 1, 3)
+    wi2 = random_dirs(rng, 15).reshape(1, 15, 3)
+    f2 = any_model.eval(wo2, wi2)
+    assert f2.shape == (4, 15, 3)
+    np.testing.assert_array_equal(f2[2, 7], any_model.eval(wo2[2, 0], wi2[0, 7]))
+    # empty batch
+    assert any_model.eval(wo, np.zeros((0, 3))).shape == (0, 3)
+
+
+def test_dtype_rule(any_model, rng):
+    wo = random_dirs(rng, 1000, 1)
+    wi = random_dirs(rng, 1000)
+    f64 = any_model.eval(wo, wi)
+    f32 = any_model.eval(wo.astype(np.float32), wi.astype(np.float32))
+    assert f32.dtype == np.float32 and f64.dtype == np.float64
+    # mixed precision promotes to float64, integer arrays are converted to float64
+    assert any_model.eval(wo.astype(np.float32), wi).dtype == np.float64
+    assert any_model.eval(np.array([0, 0, 1]), np.array([0, 0, 1])).dtype == np.float64
+    assert any_model.pdf(wo.astype(np.float32), wi.astype(np.float32)).dtype == np.float32
+    s = any_model.sample(wo[0].astype(np.float32), n=100, seed=1)
+    assert s.wi.dtype == np.float32 and s.f.dtype == np.float32 and s.pdf.dtype == np.float32
+
+
+def test_out_argument(rng):
+    m = bk.Conductor.from_metal("Cu", alpha=0.2)
+    wo, wi = random_dirs(rng, 100, 1), random_dirs(rng, 100, 1)
+    out = np.empty((100, 3))
+    r = m.eval(wo, wi, out=out)
+    assert r is out
+    np.testing.assert_array_equal(out, m.eval(wo, wi))
+    pout = np.empty(100)
+    assert m.pdf(wo, wi, out=pout) is pout
+    with pytest.raises(ValueError, match="out"):
+        m.eval(wo, wi, out=np.empty((99, 3)))
+    with pytest.raises(TypeError, match="out"):
+        m.eval(wo, wi, out=np.empty((100, 3), np.float32))
+    with pytest.raises(TypeError, match="out"):
+        m.eval(wo, wi, out=[[0, 0, 0]] * 100)
+    with pytest.raises(ValueError, match="out"):
+        m.eval(wo, wi, out=np.empty((100, 6))[:, ::2])
+
+
+def test_threads_bit_identical(rng):
+    n = 200_000
+    wo, wi = random_dirs(rng, n, 1), random_dirs(rng, n)
+    uc, u = rng.random(n), rng.random((n, 2))
+    for m in (bk.Dielectric(1.5, alpha=0.3), bk.Conductor.from_metal("Au", alpha_x=0.3, alpha_y=0.1)):
+        res = []
+        for t in (1, 2, 3):
+            bk.set_num_threads(t)
+            s = m.sample(wo, uc, u)
+            res.append((m.eval(wo, wi), m.pdf(wo, wi), s.wi, s.f, s.pdf, m.albedo(wo[:3], n_samples=20000, seed=3)))
+        bk.set_num_threads(bk._core.hardware_concurrency())
+        for r in res[1:]:
+            for a, b in zip(res[0], r):
+                np.testing.assert_array_equal(a, b)
+
+
+def test_sample_seeded_reproducible():
+    m = bk.Diffuse(0.5)
+    wo = bk.direction(0.3, 0.0)
+    a = m.sample(wo, n=1000, seed=7)
+    b = m.sample(wo, n=1000, seed=7)
+    c = m.sample(wo, n=1000, seed=8)
+    np.testing.assert_array_equal(a.wi, b.wi)
+    assert not np.array_equal(a.wi, c.wi)
+    assert a.wi.shape == (1000, 3) and a.valid.all()
+
+
+def test_value_semantics():
+    m = bk.Conductor.from_metal("Cu", alpha_x=0.3, alpha_y=0.2, masking="separable")
+    assert m == bk.Conductor.from_metal("Cu", alpha_x=0.3, alpha_y=0.2, masking="separable")
+    assert m != bk.Conductor.from_metal("Cu", alpha_x=0.3, alpha_y=0.2)
+    assert hash(m) == hash(bk.Conductor.from_metal("Cu", alpha_x=0.3, alpha_y=0.2, masking="separable"))
+    assert "Conductor(" in repr(m) and "alpha_x=0.3" in repr(m) and "separable" in repr(m)
+    with pytest.raises(AttributeError):
+        m.alpha_x = 0.5
+    with pytest.raises(ValueError):
+        m.eta[0] = 2.0  # parameter arrays are read-only
+    for model in (m, bk.Diffuse(0.3), bk.DiffuseTransmission(0.1, 0.2), bk.Dielectric(1.33, alpha=0.1),
+                  bk.ThinDielectric(1.2)):
+        m2 = pickle.loads(pickle.dumps(model))
+        assert m2 == model and type(m2) is type(model)
+        d = bk.direction(0.5, 0.1)
+        np.testing.assert_array_equal(m2.eval(d, -d * [1, 1, -1]), model.eval(d, -d * [1, 1, -1]))
+
+
+def test_flags():
+    F = bk.BxDFFlags
+    assert bk.Diffuse(0.5).flags == F.DiffuseReflection
+    assert bk.Diffuse(0.0).flags == F.Unset
+    assert bk.DiffuseTransmission(0.2, 0.3).flags == F.DiffuseReflection | F.DiffuseTransmission
+    assert bk.Conductor(1, 1).flags == F.SpecularReflection
+    assert bk.Conductor(1, 1, alpha=0.1).flags == F.GlossyReflection
+    assert bk.Dielectric(1.5).flags == F.SpecularReflection | F.SpecularTransmission
+    assert bk.Dielectric(1.0, alpha=0.2).flags == F.GlossyTransmission
+    assert bk.ThinDielectric(1.5).flags == F.Reflection | F.Transmission | F.Specular
+
+
+def test_helpers():
+    np.testing.assert_allclose(bk.roughness_to_alpha(0.25), 0.5)
+    np.testing.assert_allclose(bk.roughness_to_alpha([0.0, 0.04]), [0.0, 0.2])
+    g = bk.hemisphere_grid(10, 20)
+    assert g.shape == (200, 3) and np.all(g[:, 2] > 0)
+    np.testing.assert_allclose(np.linalg.norm(g, axis=1), 1)
+    d = bk.direction(np.radians([0, 90]), 0.0)
+    np.testing.assert_allclose(d, [[0, 0, 1], [1, 0, 0]], atol=1e-15)
+    # from_reflectance: normal-incidence Fresnel equals r (pbrt-v4 artist form)
+    m = bk.Conductor.from_reflectance([0.9, 0.5, 0.1])
+    s = m.sample([0, 0, 1.0], [0.5], [[0.5, 0.5]])
+    np.testing.assert_allclose(s.f[0] * s.wi[0, 2] / s.pdf[0], [0.9, 0.5, 0.1], rtol=1e-12)
+
+
+# ------------------------------------------------------------------ bad input
+
+def test_bad_directions():
+    m = bk.Diffuse(0.5)
+    z = np.array([0, 0, 1.0])
+    with pytest.raises(ValueError, match="wo"):
+        m.eval(np.zeros((5, 2)), z)
+    with pytest.raises(ValueError, match="wi"):
+        m.eval(z, np.zeros(4))
+    with pytest.raises(ValueError, match="wo and wi"):
+        m.eval(np.tile(z, (3, 1)), np.tile(z, (4, 1)))
+    with pytest.raises(TypeError, match="wo"):
+        m.eval(z.astype(complex), z)
+    with pytest.raises(TypeError, match="wi"):
+        m.eval(z, np.array(["a", "b", "c"]))
+    with pytest.raises(TypeError, match="wo"):
+        m.eval(np.array([None, None, None]), z)
+    with pytest.raises(ValueError, match="wi"):
+        m.eval(z, [0, 0, 2.0])  # not unit
+    with pytest.raises(ValueError, match="wo"):
+        m.pdf([np.nan, 0, 1], z)
+    with pytest.raises(ValueError, match="wo"):
+        m.sample([0, 0, np.inf], n=3)
+    with pytest.raises(ValueError, match="wo"):
+        m.albedo([1.0, 1.0, 1.0])
+
+
+def test_bad_sample_arguments():
+    m = bk.Dielectric(1.5, alpha=0.1)
+    z = np.array([0, 0, 1.0])
+    with pytest.raises(ValueError, match="uc"):
+        m.sample(z, [1.5], [[0.1, 0.1]])
+    with pytest.raises(ValueError, match="u"):
+        m.sample(z, [0.5], [[0.1, np.nan]])
+    with pytest.raises(ValueError, match="u"):
+        m.sample(z, [0.5], [[0.1, 0.2, 0.3]])
+    with pytest.raises(ValueError):
+        m.sample(z)
+    with pytest.raises(ValueError, match="n"):
+        m.sample(z, [0.5], [[0.1, 0.1]], n=4)
+    with pytest.raises(ValueError, match="n"):
+        m.sample(z, n=-1)
+    with pytest.raises(TypeError, match="n"):
+        m.sample(z, n=2.5)
+    with pytest.raises(ValueError, match="mode"):
+        m.eval(z, z, mode=7)
+    with pytest.raises(ValueError, match="sample_flags"):
+        m.pdf(z, z, sample_flags=9)
+    with pytest.raises(ValueError, match="n_samples"):
+        m.albedo(z, n_samples=0)
+    with pytest.raises(ValueError, match="seed"):
+        m.albedo(z, seed=-3)
+
+
+@pytest.mark.parametrize("ctor, match", [
+    (lambda: bk.Diffuse(1.2), "reflectance"),
+    (lambda: bk.Diffuse([-0.1, 0.5, 0.5]), "reflectance"),
+    (lambda: bk.Diffuse([0.1, 0.5]), "reflectance"),
+    (lambda: bk.Diffuse(np.nan), "reflectance"),
+    (lambda: bk.DiffuseTransmission(0.5, 1.5), "transmittance"),
+    (lambda: bk.Conductor(0.0, 1.0), "eta"),
+    (lambda: bk.Conductor(1.0, -1.0), "k"),
+    (lambda: bk.Conductor(1.0, 1.0, alpha=-0.1), "alpha"),
+    (lambda: bk.Conductor(1.0, 1.0, alpha_y=np.inf), "alpha_y"),
+    (lambda: bk.Conductor(1.0, 1.0, masking="fast"), "masking"),
+    (lambda: bk.Conductor.from_metal("Unobtainium"), "name"),
+    (lambda: bk.Conductor.from_metal("Cu", roughness=-1), "roughness"),
+    (lambda: bk.Conductor.from_metal("Cu", roughness=0.1, alpha=0.1), "roughness"),
+    (lambda: bk.Conductor.from_reflectance(1.5), "reflectance"),
+    (lambda: bk.Dielectric(0.0), "eta"),
+    (lambda: bk.Dielectric(-1.5), "eta"),
+    (lambda: bk.Dielectric(1.5, alpha=-1), "alpha"),
+    (lambda: bk.ThinDielectric(np.nan), "eta"),
+])
+def test_bad_parameters(ctor, match):
+    with pytest.raises(ValueError, match=match):
+        ctor()
+
+
+def test_bad_parameter_types():
+    with pytest.raises(TypeError, match="eta"):
+        bk.Dielectric("glass")
+    with pytest.raises(TypeError, match="reflectance"):
+        bk.Diffuse("red")
+    with pytest.raises(TypeError, match="n"):
+        bk.set_num_threads(1.5)
+    with pytest.raises(ValueError, match="n"):
+        bk.set_num_threads(0)
