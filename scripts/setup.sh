@@ -5,7 +5,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 APT_PKGS=(g++ cmake make libembree-dev libopenimageio-dev openimageio-tools libopencv-core-dev
-          libtbb-dev libllvm15)
+          libtbb-dev libllvm15 libllvm19)
+# libllvm19: Dr.Jit 1.5 (Mitsuba's llvm_ad_rgb) emits llvm.maximum/minimum, which LLVM 15/16's
+# x86 backend cannot select (a process abort); LLVM >= 17 is needed for the reference tests.
 missing=()
 for p in "${APT_PKGS[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
