@@ -110,6 +110,8 @@ class SampleResult:
 
 
 def _mode(mode) -> int:
+    if isinstance(mode, str) and mode.capitalize() in TransportMode.__members__:
+        return int(TransportMode[mode.capitalize()])
     try:
         return int(TransportMode(mode))
     except (ValueError, TypeError):
