@@ -11,7 +11,7 @@ import time
 import numpy as np
 
 from . import plot as _plot
-from ._enums import BxDFFlags, TransportMode
+from ._enums import TransportMode
 from ._models import Conductor, Dielectric, Diffuse, DiffuseTransmission, ThinDielectric
 
 #: Incident angles (degrees) of the lobe grid columns and of the albedo table.
@@ -41,6 +41,11 @@ def _anisotropic(model) -> bool:
     return "alpha_x" in p and p["alpha_x"] != p["alpha_y"]
 
 
+def _is_gray(model) -> bool:
+    """True when all three channels of the model are equal (its RGB curves would coincide)."""
+    return all(np.ptp(np.asarray(v)) == 0 for v in model._params.values() if isinstance(v, np.ndarray))
+
+
 def _refracts(model) -> bool:
     """True when Radiance-mode transmission is scaled by 1/η² (a real index change)."""
     return isinstance(model, Dielectric) and model.eta != 1.0
@@ -50,8 +55,11 @@ def _lobes_figure(configs, path):
     from matplotlib.figure import Figure
 
     nrow, ncol = len(configs), len(THETAS)
-    fig = Figure(figsize=(3.3 * ncol + 0.9, 3.55 * nrow + 0.9), layout="constrained")
-    fig.get_layout_engine().set(h_pad=0.06, w_pad=0.04, hspace=0.02, wspace=0.02)
+    # fixed margins: constrained layout would more than double the (polar-heavy) drawing time
+    w, h = 3.3 * ncol + 1.1, 3.45 * nrow + 1.7
+    fig = Figure(figsize=(w, h))
+    fig.subplots_adjust(left=0.8 / w, right=1 - 0.35 / w, top=1 - 1.45 / h, bottom=0.3 / h,
+                        wspace=0.32, hspace=0.42)
     axes = fig.subplots(nrow, ncol, subplot_kw=dict(projection="polar"), squeeze=False)
     for i, (name, m) in enumerate(configs):
         for j, th in enumerate(THETAS):
@@ -66,15 +74,19 @@ def _lobes_figure(configs, path):
                 _plot.polar(m, theta_o=th, ax=ax, title="", legend=False, colors=[f"C{i % 10}"])
             ax.set_title(f"θo = {th}°", fontsize="medium", pad=8)
             if j == 0:
-                ax.text(-0.30, 0.5, _plot.describe(m), transform=ax.transAxes, rotation=90,
-                        ha="center", va="center", fontsize="medium", fontweight="bold")
-            if _anisotropic(m) and j == ncol - 1:
-                ax.legend(loc="lower right", bbox_to_anchor=(1.12, -0.14), fontsize="x-small", framealpha=0.9)
+                row = _plot.describe(m)
+                if _anisotropic(m):
+                    row = f"$\\bf{{{row.replace(' ', '~')}}}$\nsolid: φ = 0° plane, dashed: φ = 90°"
+                    ax.text(-0.27, 0.5, row, transform=ax.transAxes, rotation=90, ha="center", va="center",
+                            fontsize="medium", linespacing=1.4)
+                else:
+                    ax.text(-0.24, 0.5, row, transform=ax.transAxes, rotation=90, ha="center", va="center",
+                            fontsize="medium", fontweight="bold")
     fig.suptitle("In-plane lobe slices: f·|cos θi| [1/sr] (luminance) vs signed angle θi from the normal [°]\n"
                  "reflection above the surface line, transmission below; dashed: ωo at −θo (mirror at +θo); "
                  "arrows: delta lobes, length = reflectance R / transmittance T [unitless]",
-                 fontsize="large")
-    fig.savefig(path, dpi=80)
+                 fontsize="large", y=1 - 0.2 / h, va="top")
+    fig.savefig(path, dpi=90)
 
 
 def _albedo_figure(configs, path):
@@ -86,17 +98,20 @@ def _albedo_figure(configs, path):
     axes = fig.subplots(nrow, ncol, squeeze=False, sharex=True, sharey=True)
     for k, (name, m) in enumerate(configs):
         ax = axes.flat[k]
-        _plot.albedo(m, n_samples=PLOT_SAMPLES, ax=ax, channel="rgb", label="", title="", legend=False)
-        _plot.albedo(m, n_samples=PLOT_SAMPLES, ax=ax, channel="luminance", label="luminance",
-                     colors=["k"], title="", legend=False)
+        gray = _is_gray(m)
+        if not gray:
+            _plot.albedo(m, n_samples=PLOT_SAMPLES, ax=ax, channel="rgb", label="", title="", legend=False)
+        _plot.albedo(m, n_samples=PLOT_SAMPLES, ax=ax, channel="luminance",
+                     label="luminance (R = G = B)" if gray else "luminance", colors=["k"], title="", legend=False)
         if _refracts(m):
-            _plot.albedo(m, n_samples=PLOT_SAMPLES, ax=ax, label="luminance, Importance mode",
-                         mode=TransportMode.Importance, colors=["0.45"], linestyle=":", title="", legend=False)
+            _plot.albedo(m, n_samples=PLOT_SAMPLES, ax=ax, label="Importance mode (energy, no 1/η²)",
+                         mode=TransportMode.Importance, colors=["tab:purple"], linestyle=(0, (1, 1.5)),
+                         title="", legend=False)
         ax.set_title(_plot.describe(m), fontsize="medium")
         handles, labels = ax.get_legend_handles_labels()
         keep = [(h, lab.replace(" [", "").replace("]", "") if lab.startswith(" [") else lab)
                 for h, lab in zip(handles, labels)]
-        ax.legend(*zip(*keep), fontsize="x-small", loc="lower left", ncol=2)
+        ax.legend(*zip(*keep), fontsize="small", loc="lower left", ncol=1 if gray else 2)
         if k % ncol:
             ax.set_ylabel("")
         if k < len(configs) - ncol:
@@ -107,7 +122,7 @@ def _albedo_figure(configs, path):
     axes.flat[0].set_ylim(0, max(ymax, 1.1))
     fig.suptitle(f"Directional albedo ρ(θo) = ∫ f |cos θi| dωi, Radiance mode, {PLOT_SAMPLES} samples per θo "
                  "(R, G, B and luminance; dashed: white furnace ρ = 1)", fontsize="large")
-    fig.savefig(path, dpi=80)
+    fig.savefig(path, dpi=90)
 
 
 def _albedo_table(configs, path, n_samples=TABLE_SAMPLES):
@@ -129,9 +144,6 @@ def _albedo_table(configs, path, n_samples=TABLE_SAMPLES):
             notes.append(f"- `{name}`: in Radiance mode transmitted radiance is divided by η² = {m.eta ** 2:g}; "
                          "the energy albedo (Importance mode), luminance at θo = "
                          + ", ".join(f"{t}°: {v:.4f}" for t, v in zip(THETAS, imp)) + ".")
-        if m.flags & BxDFFlags.Specular:
-            notes.append(f"- `{name}` has delta lobes: its albedo is exact up to float rounding "
-                         "(every sample has the same weight).")
     lines += ["", "Notes:", ""] + notes + [
         "- Rough microfacet models (single scattering) lose energy at large α and grazing angles; "
         "values below 1 for a non-absorbing dielectric are expected."]

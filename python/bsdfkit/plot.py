@@ -149,12 +149,25 @@ def _delta_lobes(model: BxDF, wo: np.ndarray, xdir: np.ndarray, n: int, seed: in
     return lobes
 
 
+def _weak_half(val, z, below):
+    """(side, factor) when the weaker half of a curve peaks below ``below`` times the stronger one."""
+    up = float(np.max(val[z > 0], initial=0.0))
+    dn = float(np.max(val[z < 0], initial=0.0))
+    weak, strong = min(up, dn), max(up, dn)
+    if weak <= 0 or weak >= below * strong:
+        return None
+    target = 0.6 * strong / weak
+    e = math.floor(math.log10(target))
+    factor = max(m * 10.0 ** e for m in (1, 2, 5) if m * 10.0 ** e <= target)
+    return ("reflection" if up < dn else "transmission"), factor
+
+
 # ---------------------------------------------------------------- polar lobe slice
 
 def polar(model_or_list, theta_o=30.0, phi_plane=0.0, cosine=True, log=False, channel="luminance",
           ax=None, n=721, label=None, *, title=None, legend=True, log_decades=4.0,
           mode=TransportMode.Radiance, n_delta=4096, seed=0, colors=None, linestyle="-",
-          annotate_delta=True):
+          annotate_delta=True, magnify_below=0.04):
     """In-plane slice of the lobe(s) over the full circle, in a polar Axes.
 
     Plots ``f(wo, wi) |cos θi|`` (or ``f`` if ``cosine=False``) for ``wi`` in the plane of
@@ -168,6 +181,9 @@ def polar(model_or_list, theta_o=30.0, phi_plane=0.0, cosine=True, log=False, ch
     in the legend (and, with ``annotate_delta``, at the arrow tip).
 
     channel: "luminance" (0.2126 R + 0.7152 G + 0.0722 B), "r", "g", "b" or "rgb" (three curves).
+    magnify_below: on a linear radius, when the weaker half (reflection or transmission) of a
+    curve peaks below this fraction of the stronger half, it is also drawn magnified by a round
+    factor (dotted, labelled "×factor") so that it does not vanish; 0 or None turns this off.
     log: radial axis logarithmic, covering ``log_decades`` decades below the largest value
     (values below are drawn at the centre).
     ax: a polar Axes to draw into (created if None); calling again on the same Axes overlays
@@ -177,7 +193,8 @@ def polar(model_or_list, theta_o=30.0, phi_plane=0.0, cosine=True, log=False, ch
     ``theta_deg`` (n,) signed angles, ``value`` (n,) or (n, 3) plotted values in linear units,
     ``wi`` (n, 3), ``wo`` (3,), ``theta_o``, ``phi_plane``, ``label``, ``model`` and ``delta``
     (a list of lobe dicts with ``theta_deg``, ``wi``, ``weight`` (RGB), ``value`` (channel),
-    ``flags``, ``kind``); and scalars ``channel``, ``cosine``, ``log``.
+    ``flags``, ``kind``), ``magnified`` (None or (side, factor) of the dotted magnified copy);
+    and scalars ``channel``, ``cosine``, ``log``.
     """
     models = _as_models(model_or_list)
     labels = _as_labels(label, len(models))
@@ -216,7 +233,8 @@ def polar(model_or_list, theta_o=30.0, phi_plane=0.0, cosine=True, log=False, ch
     first = not (isinstance(data, dict) and data.get("kind") == "polar")
     if first:
         data = dict(kind="polar", channel=channel, cosine=bool(cosine), log=bool(log), theta_deg=[], value=[],
-                    wi=[], wo=[], theta_o=[], phi_plane=[], label=[], model=[], delta=[])
+                    wi=[], wo=[], theta_o=[], phi_plane=[], label=[], model=[], delta=[],
+                    magnified=[])
         if log:
             vmax = max([float(np.max(e["value"])) for e in entries]
                        + [float(np.max(d["value"])) for e in entries for d in e["delta"]] + [0.0])
@@ -245,6 +263,24 @@ def polar(model_or_list, theta_o=30.0, phi_plane=0.0, cosine=True, log=False, ch
                             label=f"{lab} [{'RGB'[c]}]")
             else:
                 ax.plot(t, rmap(val), color=color, ls=linestyle, lw=1.6, label=lab)
+        mag = _weak_half(val if channel != "rgb" else luminance(val), wi[:, 2], magnify_below) if (
+            magnify_below and not log) else None
+        if mag is not None:
+            side, factor = mag
+            keep = (wi[:, 2] > 0) if side == "reflection" else (wi[:, 2] < 0)
+            if channel == "rgb":
+                for c in range(3):
+                    ax.plot(t, np.where(keep, val[:, c] * factor, np.nan), color=_RGB_COLORS[c], ls=":", lw=1.3,
+                            label=f"{lab} [{'RGB'[c]}]: {side} ×{factor:g}")
+            else:
+                ax.plot(t, np.where(keep, val * factor, np.nan), color=color, ls=":", lw=1.4,
+                        label=f"{lab}: {side} ×{factor:g}")
+            if annotate_delta:
+                i_pk = int(np.nanargmax(np.where(keep, luminance(val) if channel == "rgb" else val, np.nan)))
+                ax.annotate(f"{side} ×{factor:g}", xy=(t[i_pk], float(np.max(val[i_pk])) * factor),
+                            xytext=(4, 4), textcoords="offset points", fontsize="x-small",
+                            color="k" if channel == "rgb" else color,
+                            bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8))
         for d in e["delta"]:
             td = math.radians(d["theta_deg"])
             what = "R" if d["kind"] == "reflection" else "T"
@@ -278,6 +314,7 @@ def polar(model_or_list, theta_o=30.0, phi_plane=0.0, cosine=True, log=False, ch
         data["label"].append(lab)
         data["model"].append(e["model"])
         data["delta"].append(e["delta"])
+        data["magnified"].append(mag)
 
     # ---- axes decoration
     ax.set_theta_zero_location("N")
