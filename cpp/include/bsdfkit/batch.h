@@ -44,9 +44,8 @@ struct BadCounts {
 template <int SO, int SI, typename Model, typename F>
 void eval_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMode mode, F *out, int nthreads,
                 BadCounts &bad) {
-    parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
+    parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
         int64_t bo = 0, bi = 0;
-#pragma omp simd reduction(+ : bo, bi)
         for (int64_t i = b; i < e; ++i) {
             Vec3<F> o = load3<F, SO>(wo, i), w = load3<F, SI>(wi, i);
             bo += not_unit(o);
@@ -64,9 +63,8 @@ void eval_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMo
 template <int SO, int SI, typename Model, typename F>
 void pdf_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMode mode, uint8_t sf, F *out,
                int nthreads, BadCounts &bad) {
-    parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
+    parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
         int64_t bo = 0, bi = 0;
-#pragma omp simd reduction(+ : bo, bi)
         for (int64_t i = b; i < e; ++i) {
             Vec3<F> o = load3<F, SO>(wo, i), w = load3<F, SI>(wi, i);
             bo += not_unit(o);
@@ -87,9 +85,8 @@ template <typename F> struct SampleOut {
 template <int SO, typename Model, typename F>
 void sample_batch(const Model &m, const F *wo, const F *uc, const F *u, int64_t n, TransportMode mode, uint8_t sf,
                   const SampleOut<F> &out, int nthreads, BadCounts &bad) {
-    parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
+    parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
         int64_t bo = 0;
-#pragma omp simd reduction(+ : bo)
         for (int64_t i = b; i < e; ++i) {
             Vec3<F> o = load3<F, SO>(wo, i);
             bo += not_unit(o);

@@ -15,7 +15,8 @@ template <typename F> struct DielectricBxDF {
     F eta;
     TrowbridgeReitz<F> mfd;
 
-    bool is_smooth() const { return eta == F(1) || mfd.effectively_smooth(); }
+    // Bitwise | (not ||): a short-circuit here becomes control flow in every batch loop.
+    bool is_smooth() const { return (eta == F(1)) | mfd.effectively_smooth(); }
 
     uint8_t flags() const {
         uint8_t f = eta == F(1) ? Transmission : (Reflection | Transmission);
@@ -34,22 +35,26 @@ template <typename F> struct DielectricBxDF {
     bool half_vector(const Vec3<F> &wo, const Vec3<F> &wi, Vec3<F> *wm, F *etap) const {
         F cos_o = CosTheta(wo), cos_i = CosTheta(wi);
         bool reflect = cos_i * cos_o > F(0);
-        *etap = reflect ? F(1) : (cos_o > F(0) ? eta : F(1) / eta);
+        F eta_side = cos_o > F(0) ? eta : F(1) / eta;
+        *etap = reflect ? F(1) : eta_side;
         Vec3<F> h = wi * *etap + wo;
         F len2 = length_squared(h);
-        bool ok = cos_i != F(0) && cos_o != F(0) && len2 > F(0);
-        h = face_forward(h / std::sqrt(ok ? len2 : F(1)), Vec3<F>(0, 0, 1));
+        // Bitwise & keeps the mask free of short-circuit branches (vectorizes).
+        bool ok = (cos_i != F(0)) & (cos_o != F(0)) & (len2 > F(0));
+        F inv_len = F(1) / std::sqrt(ok ? len2 : F(1));
+        F sgn = h.z < F(0) ? -inv_len : inv_len; // normalize and face +z in one scale
+        h = h * sgn;
         *wm = h;
         // Discard back-facing microfacets (Walter 2007 sec. 5.1)
-        ok = ok && dot(h, wi) * cos_i >= F(0) && dot(h, wo) * cos_o >= F(0);
+        ok = ok & (dot(h, wi) * cos_i >= F(0)) & (dot(h, wo) * cos_o >= F(0));
         return ok;
     }
 
     Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode) const {
-        if (is_smooth()) return Spectrum<F>(F(0));
+        // Delta lobes evaluate to 0; folded into the mask (no early return) so the loop vectorizes.
         Vec3<F> wm;
         F etap;
-        bool ok = half_vector(wo, wi, &wm, &etap);
+        bool ok = half_vector(wo, wi, &wm, &etap) & !is_smooth();
         bool reflect = CosTheta(wi) * CosTheta(wo) > F(0);
         F cos_o = CosTheta(wo), cos_i = CosTheta(wi);
         F Fr = FrDielectric(dot(wo, wm), eta);
@@ -61,7 +66,7 @@ template <typename F> struct DielectricBxDF {
         F ft = dg * (F(1) - Fr) * std::abs(dot(wi, wm) * dot(wo, wm) / denom);
         ft = mode == TransportMode::Radiance ? ft / sqr(etap) : ft;
         F v = reflect ? fr : ft;
-        ok = ok && (reflect ? true : denom != F(0));
+        ok = ok & (reflect | (denom != F(0)));
         return Spectrum<F>(ok ? v : F(0));
     }
 
@@ -131,10 +136,9 @@ template <typename F> struct DielectricBxDF {
     }
 
     F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
-        if (is_smooth()) return F(0);
         Vec3<F> wm;
         F etap;
-        bool ok = half_vector(wo, wi, &wm, &etap);
+        bool ok = half_vector(wo, wi, &wm, &etap) & !is_smooth();
         bool reflect = CosTheta(wi) * CosTheta(wo) > F(0);
         F R = FrDielectric(dot(wo, wm), eta), pr, pt;
         lobe_probs(R, sample_flags, &pr, &pt);

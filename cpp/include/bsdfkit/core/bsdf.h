@@ -11,7 +11,10 @@ namespace bsdfkit {
 // vanishing Jacobian): a value that is not a finite non-negative number becomes 0. The
 // models' own guards cover every regular case; tests compare those against references.
 template <typename F> inline F finite_or_zero(F v) {
-    return (v >= F(0) && v <= std::numeric_limits<F>::max()) ? v : F(0);
+    // Two float selects rather than one select on (a && b): GCC 12's vectorizer cannot handle
+    // the boolean-valued COND_EXPRs that if-conversion makes of the && form.
+    v = v >= F(0) ? v : F(0);
+    return v <= std::numeric_limits<F>::max() ? v : F(0);
 }
 template <typename F> inline Spectrum<F> finite_or_zero(const Spectrum<F> &s) {
     Spectrum<F> r;
