@@ -5,7 +5,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 APT_PKGS=(g++ cmake make libembree-dev libopenimageio-dev openimageio-tools libopencv-core-dev
-          libtbb-dev libllvm15 libllvm19)
+          libtbb-dev libllvm15 libllvm19 libassimp-dev)
+# libassimp-dev: OBJ/PLY mesh files for the preview renderer (bsdfkit.render.load_mesh).
 # libllvm19: Dr.Jit 1.5 (Mitsuba's llvm_ad_rgb) emits llvm.maximum/minimum, which LLVM 15/16's
 # x86 backend cannot select (a process abort); LLVM >= 17 is needed for the reference tests.
 missing=()

@@ -17,6 +17,8 @@ static std::atomic<int> g_threads{int(std::max(1u, std::thread::hardware_concurr
 int num_threads() { return g_threads.load(); }
 
 void bind_pbrt_models(py::module_ &m);
+void bind_filament_models(py::module_ &m);
+void bind_render(py::module_ &m);
 
 } // namespace bsdfkit::py_bind
 
@@ -32,6 +34,8 @@ PYBIND11_MODULE(_core, m) {
     m.def("hardware_concurrency", [] { return int(std::max(1u, std::thread::hardware_concurrency())); });
 
     py_bind::bind_pbrt_models(m);
+    py_bind::bind_filament_models(m);
+    py_bind::bind_render(m);
 
     m.def("read_image", [](const std::string &path) {
         io::Image img;

@@ -1,4 +1,5 @@
-"""Command line: ``python -m bsdfkit demo [-o DIR]`` (also installed as ``bsdfkit``)."""
+"""Command line: ``python -m bsdfkit demo [-o DIR]``, ``python -m bsdfkit render MODEL-SPEC -o x.png``
+(also installed as ``bsdfkit``)."""
 from __future__ import annotations
 
 import argparse
@@ -17,6 +18,8 @@ def _parser() -> argparse.ArgumentParser:
                                    "80°), albedo.png (directional albedo vs θo) and albedo.md (albedo table).")
     d.add_argument("-o", "--outdir", default="bsdfkit-demo", metavar="DIR",
                    help="output directory, created if missing (default: ./bsdfkit-demo)")
+    from .render import _add_render_command
+    _add_render_command(sub)
     return p
 
 
@@ -35,6 +38,9 @@ def main(argv=None) -> int:
 
         run_demo(args.outdir)
         return 0
+    if args.command == "render":
+        from .render import _run_render_command
+        return _run_render_command(args)
     parser.error(f"unknown command {args.command!r}")  # unreachable: argparse rejects it first
     return 2
 

@@ -152,8 +152,8 @@ def _albedo_table(configs, path, n_samples=TABLE_SAMPLES):
 
 
 def run_demo(outdir="bsdfkit-demo", *, verbose=True):
-    """Write ``lobes.png``, ``albedo.png`` and ``albedo.md`` into ``outdir`` (created if
-    missing); returns the list of written paths."""
+    """Write ``lobes.png``, ``albedo.png``, ``albedo.md``, ``gallery.exr`` and ``gallery.png`` into
+    ``outdir`` (created if missing); returns the list of written paths."""
     t0 = time.perf_counter()
     os.makedirs(outdir, exist_ok=True)
     configs = configurations()
@@ -161,6 +161,8 @@ def run_demo(outdir="bsdfkit-demo", *, verbose=True):
     _lobes_figure(configs, paths[0])
     _albedo_figure(configs, paths[1])
     _albedo_table(configs, paths[2])
+    from .render import write_gallery  # gallery.exr / gallery.png: one path-traced sphere per configuration
+    paths += write_gallery(outdir, configs, verbose=verbose, progress=verbose)
     if verbose:
         for p in paths:
             print(os.path.abspath(p))

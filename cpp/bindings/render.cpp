@@ -1,0 +1,264 @@
+// Bindings of the preview renderer (bsdfkit.render is the public API). Materials arrive as the
+// model objects' `_core` (PyModel<X>) and are copied, float precision, into the renderer's
+// variant. Arrays are validated here too: bad input raises ValueError, it never crashes.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <array>
+#include <cmath>
+#include <memory>
+#include <utility>
+
+#include "bind_model.h"
+#include "bsdfkit/render/render.h"
+
+namespace bsdfkit::py_bind {
+
+using namespace bsdfkit::render;
+using V3 = std::array<double, 3>;
+template <typename T> using carray = py::array_t<T, py::array::c_style | py::array::forcecast>;
+
+namespace {
+
+template <typename T> struct type_tag {
+    using type = T;
+};
+
+// The bound model of `h` (a PyModel<M> for one M of RenderModels), float precision.
+template <template <typename> class... Ms>
+bool to_material_impl(const py::handle &h, Material *out, ModelList<Ms...> *) {
+    auto one = [&](auto tag) {
+        using P = typename decltype(tag)::type;
+        if (!py::isinstance<P>(h)) return false;
+        *out = h.cast<const P &>().template get<Float>();
+        return true;
+    };
+    return (one(type_tag<PyModel<Ms>>{}) || ...);
+}
+Material to_material(const py::object &model) {
+    py::object core = py::hasattr(model, "_core") ? model.attr("_core") : model;
+    Material m;
+    if (!to_material_impl(core, &m, static_cast<RenderModels *>(nullptr)))
+        throw py::type_error("material: expected a bsdfkit model, got " + std::string(py::str(py::type::of(model))));
+    return m;
+}
+
+Vec3f to_vec(const V3 &a, const char *name) {
+    for (double x : a)
+        if (!std::isfinite(x)) value_error(std::string(name) + ": must be finite");
+    return Vec3f(Float(a[0]), Float(a[1]), Float(a[2]));
+}
+
+RGB to_rgb(const V3 &a, const char *name) {
+    RGB c;
+    for (int i = 0; i < 3; ++i) {
+        if (!std::isfinite(a[size_t(i)]) || a[size_t(i)] < 0) value_error(std::string(name) + ": must be finite and >= 0");
+        c[i] = Float(a[size_t(i)]);
+    }
+    return c;
+}
+
+struct PyScene {
+    std::unique_ptr<Scene> scene = std::make_unique<Scene>();
+
+    void check_open() const {
+        if (scene->committed()) throw py::value_error("scene: already committed; build a new scene");
+    }
+    void check_material(int m, const char *name) const {
+        if (m < 0 || m >= int(scene->materials.size())) value_error(std::string(name) + ": no such material");
+    }
+    static Float checker_of(double c) {
+        if (!std::isfinite(c) || c < 0) value_error("checker: must be finite and >= 0");
+        return Float(c);
+    }
+
+    int add_material(const py::object &model) {
+        check_open();
+        return scene->add_material(to_material(model));
+    }
+
+    void add_sphere(const V3 &center, double radius, int mat_a, int mat_b, double checker) {
+        check_open();
+        Vec3f c = to_vec(center, "center");
+        if (!std::isfinite(radius) || !(radius > 0)) value_error("radius: must be finite and > 0");
+        check_material(mat_a, "material");
+        check_material(mat_b, "checker material");
+        std::string err = scene->add_sphere(c, Float(radius), mat_a, mat_b, checker_of(checker));
+        if (!err.empty()) throw std::runtime_error(err);
+    }
+
+    void add_mesh(const py::array &vertices, const py::array &indices, int mat_a, int mat_b, double checker) {
+        check_open();
+        carray<float> v = vertices;
+        if (v.ndim() != 2 || v.shape(1) != 3) value_error("vertices: expected shape (N, 3)");
+        char kind = indices.dtype().kind();
+        if (kind != 'i' && kind != 'u') throw py::type_error("indices: expected an integer array");
+        carray<int64_t> ix = indices;
+        if (ix.ndim() != 2 || ix.shape(1) != 3) value_error("indices: expected shape (M, 3)");
+        int64_t nv = v.shape(0), nt = ix.shape(0);
+        if (nv == 0 || nt == 0) value_error("mesh: needs at least one vertex and one triangle");
+        if (nv > int64_t(UINT32_MAX)) value_error("vertices: too many vertices");
+        const float *pv = v.data();
+        for (int64_t i = 0; i < nv * 3; ++i)
+            if (!std::isfinite(pv[i])) value_error("vertices: contains NaN or Inf (vertex " + std::to_string(i / 3) + ")");
+        std::vector<uint32_t> idx(size_t(nt * 3));
+        const int64_t *pi = ix.data();
+        for (int64_t i = 0; i < nt * 3; ++i) {
+            if (pi[i] < 0 || pi[i] >= nv)
+                value_error("indices: index " + std::to_string(pi[i]) + " out of range [0, " + std::to_string(nv) +
+                            ") in triangle " + std::to_string(i / 3));
+            idx[size_t(i)] = uint32_t(pi[i]);
+        }
+        check_material(mat_a, "material");
+        check_material(mat_b, "checker material");
+        std::string err = scene->add_mesh(pv, nv, idx.data(), nt, mat_a, mat_b, checker_of(checker));
+        if (!err.empty()) throw std::runtime_error(err);
+    }
+
+    void set_environment_constant(const V3 &L) { scene->env = Environment::uniform(to_rgb(L, "environment")); }
+
+    void set_environment_latlong(const py::array &img) {
+        carray<float> a = img;
+        if (a.ndim() != 3 || a.shape(2) != 3) value_error("environment: expected an (H, W, 3) image");
+        int h = int(a.shape(0)), w = int(a.shape(1));
+        if (h < 1 || w < 1) value_error("environment: empty image");
+        const float *p = a.data();
+        for (int64_t i = 0; i < int64_t(h) * w * 3; ++i)
+            if (!std::isfinite(p[i]) || p[i] < 0) value_error("environment: values must be finite and >= 0");
+        py::gil_scoped_release release;
+        scene->env = Environment::latlong(p, w, h);
+    }
+
+    void set_directional(const V3 &dir, const V3 &E) {
+        Vec3f d = to_vec(dir, "direction");
+        Float l = std::sqrt(length_squared(d));
+        if (!(l > 0)) value_error("direction: must be non-zero");
+        scene->sun.enabled = true;
+        scene->sun.dir = d / l;
+        scene->sun.E = to_rgb(E, "irradiance");
+    }
+
+    void commit() {
+        if (scene->committed()) return;
+        std::string err;
+        {
+            py::gil_scoped_release release;
+            err = scene->commit();
+        }
+        if (!err.empty()) throw std::runtime_error(err);
+    }
+
+    // Adds samples [s0, s1) to acc (H, W, 3) float64. Returns (completed, rays, nonfinite); a
+    // pending KeyboardInterrupt (Ctrl-C) stops the pass early and is re-raised.
+    py::tuple render(const V3 &origin, const V3 &target, const V3 &up, double fov, int max_depth, uint64_t seed,
+                     int s0, int s1, py::array_t<double> acc) {
+        commit();
+        if (!(acc.flags() & py::array::c_style) || !acc.writeable() || acc.ndim() != 3 || acc.shape(2) != 3)
+            value_error("acc: expected a writable C-contiguous (H, W, 3) float64 array");
+        RenderSettings st;
+        st.height = int(acc.shape(0));
+        st.width = int(acc.shape(1));
+        if (st.width < 1 || st.height < 1) value_error("width, height: must be >= 1");
+        if (max_depth < 0) value_error("max_depth: must be >= 0");
+        if (s0 < 0 || s1 < s0) value_error("samples: bad range");
+        if (!(fov > 0 && fov < 180)) value_error("fov: must be in (0, 180) degrees");
+        Vec3f o = to_vec(origin, "origin"), t = to_vec(target, "target"), u = to_vec(up, "up");
+        Vec3f fwd = t - o;
+        if (!(length_squared(fwd) > 0)) value_error("target: must differ from origin");
+        if (!(length_squared(cross(normalize(fwd), u)) > Float(1e-12))) value_error("up: must not be parallel to the view direction");
+        Camera cam = Camera::look_at(o, t, u, Float(fov));
+        st.max_depth = max_depth;
+        st.seed = seed;
+        st.threads = num_threads();
+        RenderStats stats;
+        bool interrupted = false;
+        bool done;
+        double *pacc = acc.mutable_data();
+        {
+            py::gil_scoped_release release;
+            auto should_stop = [&interrupted]() {
+                py::gil_scoped_acquire gil;
+                if (PyErr_CheckSignals() != 0) interrupted = true;
+                return interrupted;
+            };
+            done = render_samples(*scene, cam, st, s0, s1, pacc, &stats, should_stop);
+        }
+        if (interrupted) throw py::error_already_set();
+        return py::make_tuple(done, stats.rays, stats.nonfinite);
+    }
+
+    // Environment sampling, exposed for tests: u (N, 2) -> (wi (N, 3), pdf (N,), L (N, 3)).
+    py::tuple env_sample(carray<double> u) const {
+        if (u.ndim() != 2 || u.shape(1) != 2) value_error("u: expected shape (N, 2)");
+        int64_t n = u.shape(0);
+        py::array_t<float> wi({n, int64_t(3)}), pdf({n}), L({n, int64_t(3)});
+        const double *pu = u.data();
+        float *pw = wi.mutable_data(), *pp = pdf.mutable_data(), *pl = L.mutable_data();
+        for (int64_t i = 0; i < n; ++i) {
+            Vec3f w;
+            Float p;
+            double u0 = clamp(pu[2 * i], 0.0, 0x1.fffffffffffffp-1);
+            Float u1 = Float(clamp(pu[2 * i + 1], 0.0, double(0x1.fffffep-1f)));
+            RGB c = scene->env.sample(u0, u1, &w, &p);
+            pw[3 * i] = w.x, pw[3 * i + 1] = w.y, pw[3 * i + 2] = w.z;
+            pp[i] = p;
+            for (int c3 = 0; c3 < 3; ++c3) pl[3 * i + c3] = c[c3];
+        }
+        return py::make_tuple(wi, pdf, L);
+    }
+
+    py::tuple env_eval_pdf(carray<float> dirs) const {
+        if (dirs.ndim() != 2 || dirs.shape(1) != 3) value_error("dirs: expected shape (N, 3)");
+        int64_t n = dirs.shape(0);
+        py::array_t<float> pdf({n}), L({n, int64_t(3)});
+        const float *pd = dirs.data();
+        float *pp = pdf.mutable_data(), *pl = L.mutable_data();
+        for (int64_t i = 0; i < n; ++i) {
+            Vec3f d(pd[3 * i], pd[3 * i + 1], pd[3 * i + 2]);
+            Float l2 = length_squared(d);
+            if (!(l2 > 0) || !std::isfinite(l2)) value_error("dirs: must be finite and non-zero");
+            d = d / std::sqrt(l2);
+            pp[i] = scene->env.pdf(d);
+            RGB c = scene->env.eval(d);
+            for (int c3 = 0; c3 < 3; ++c3) pl[3 * i + c3] = c[c3];
+        }
+        return py::make_tuple(pdf, L);
+    }
+};
+
+} // namespace
+
+void bind_render(py::module_ &m) {
+    py::class_<PyScene>(m, "RenderScene")
+        .def(py::init<>())
+        .def("add_material", &PyScene::add_material)
+        .def("add_sphere", &PyScene::add_sphere)
+        .def("add_mesh", &PyScene::add_mesh)
+        .def("set_environment_constant", &PyScene::set_environment_constant)
+        .def("set_environment_latlong", &PyScene::set_environment_latlong)
+        .def("set_directional", &PyScene::set_directional)
+        .def("commit", &PyScene::commit)
+        .def("render", &PyScene::render)
+        .def("env_sample", &PyScene::env_sample)
+        .def("env_eval_pdf", &PyScene::env_eval_pdf)
+        .def_property_readonly("num_objects", [](const PyScene &s) { return s.scene->objects.size(); });
+
+    m.def("load_mesh", [](const std::string &path) {
+        std::vector<Float> v;
+        std::vector<uint32_t> ix;
+        std::string err;
+        {
+            py::gil_scoped_release release;
+            err = load_mesh(path, &v, &ix);
+        }
+        if (!err.empty()) throw std::runtime_error(err);
+        py::array_t<float> va({int64_t(v.size() / 3), int64_t(3)});
+        py::array_t<int64_t> ia({int64_t(ix.size() / 3), int64_t(3)});
+        std::copy(v.begin(), v.end(), va.mutable_data());
+        std::copy(ix.begin(), ix.end(), ia.mutable_data());
+        return py::make_tuple(va, ia);
+    });
+}
+
+} // namespace bsdfkit::py_bind

@@ -1,0 +1,516 @@
+// Filament's material models, evaluated and importance-sampled: the standard model (metallic /
+// roughness, anisotropy, clear coat, sheen, multiple-scattering energy compensation) and the
+// cloth model (Charlie sheen, Neubelt visibility, Lambert or wrapped diffuse).
+// Sources: Filament's document "Physically Based Rendering in Filament" (cited as "doc §...")
+// and its shaders (surface_brdf.fs, surface_shading_model_{standard,cloth}.fs,
+// surface_shading_lit.fs, common_material.fs); notation of ../shared/research/pbrt_filament.md §4.
+//
+// Parameters (FilamentStandardParams; Python: bsdfkit.FilamentStandard)
+//   base_color            RGB in [0,1]    diffuse albedo of dielectrics, f0 of metals
+//   metallic              [0,1]           f0 = 0.16 reflectance^2 (1 - metallic) + base_color metallic
+//   roughness             [0,1]           perceptual roughness r; alpha = r^2
+//   reflectance           [0,1]           dielectric f0 = 0.16 reflectance^2 (0.5 -> 4 %)
+//   anisotropy            [-1,1]          alpha_t = alpha (1 + a), alpha_b = alpha (1 - a) (Kulla 2017), t = x
+//   clear_coat            [0,1]           strength of an IOR 1.5 GGX coat (Kelemen visibility)
+//   clear_coat_roughness  [0,1]           perceptual; raises the base roughness by mix(r, max(r, r_c), cc)
+//   sheen_color           RGB in [0,1]    Charlie sheen lobe; the base is scaled by 1 - max(sheen) DFG.z
+//   sheen_roughness       [0,1]           perceptual roughness of the sheen lobe
+// Knobs (defaults: Filament desktop, FILAMENT_QUALITY_HIGH)
+//   diffuse     Lambert | Burley             (BRDF_DIFFUSE)
+//   visibility  Correlated | Fast            (V_SmithGGXCorrelated | _Fast; anisotropic lobes always
+//                                              use V_SmithGGXCorrelated_Anisotropic, as Filament)
+//   f90         one | filament               (f90 = saturate(50 * 0.33 * sum(f0)), "specular occlusion")
+//   energy_compensation                      color = Fd + Fr (1 + f0 (1 / DFG.y - 1))
+//   min_perceptual_roughness                 0.045 desktop, 0.089 mobile (MIN_PERCEPTUAL_ROUGHNESS)
+//   layering    Code | Doc                   (Fd + Fr) (1 - Fc) + Frc, or (Fd + Fr (1 - Fc)) (1 - Fc) + Frc
+//   clear_coat_ior_change                    f0 <- mix(f0, f0ClearCoatToSurface(f0), cc) (Filament default on)
+//
+// Conventions. One-sided reflection models, as in Filament: f = pdf = 0 unless wo.z > 0 and
+// wi.z > 0 (below the horizon nothing is reflected; never NaN). f excludes the cosine: Filament's
+// per-light shading is f <NoL>, so the cloth model's wrapped diffuse, which Filament does not
+// multiply by NoL, appears here divided by NoL. NoV is clamped to MIN_N_DOT_V = 1e-4 where
+// Filament clamps it (visibility, Burley, DFG lookups). The shaders' fp16 overflow guards are not
+// applied: the visibility floors 7.7e-6 / 3.9e-6 / 1.532e-5 (mobile only in Filament) and D_GGX's
+// cap k <= 453.5 (every platform; it lowers D only for alpha < 1/453.5, perceptual roughness
+// < 0.047, by up to 16 % at the peak for the desktop minimum 0.045): D_GGX here is the exact
+// Trowbridge-Reitz D of core/microfacet.h, whose pbrt cutoff makes D = 0 for NoH < 1e-4.
+// D_Charlie keeps its sin^2 >= 2^-7 floor (part of the shader formula on every platform).
+//
+// Sampling: lobe selection in proportion to each lobe's albedo estimated at wo from the DFG
+// table; visible-normal sampling (core/microfacet.h) for the base and coat GGX lobes, cosine
+// sampling for the diffuse lobe (cloth with a subsurface color: density proportional to
+// NoL + 0.5, the wrap term), and for the sheen lobe an equal mixture of Charlie-NDF sampling
+// (pdf D_Charlie cos(theta_h), sin(theta_h) = u^(alpha / (2 alpha + 1)), as Filament's cmgen)
+// and the diffuse sampler. pdf is always the full mixture density; sample_f returns the full f.
+#pragma once
+#include <array>
+#include <memory>
+
+#include "../core/bsdf_sample.h"
+#include "../core/microfacet.h"
+#include "../core/sampling.h"
+#include "filament_dfg.h"
+
+namespace bsdfkit {
+
+namespace filament {
+
+inline constexpr double kMinNoV = 1e-4;                   // MIN_N_DOT_V (common_material.fs)
+inline constexpr double kMinPerceptualRoughnessDesktop = 0.045;  // MIN_PERCEPTUAL_ROUGHNESS, desktop
+inline constexpr double kMinPerceptualRoughnessMobile = 0.089;   // MIN_PERCEPTUAL_ROUGHNESS, mobile
+inline constexpr double kCharlieSin2Floor = 0.0078125;    // 2^-7 floor on sin^2(theta_h) (brdf.fs D_Charlie)
+inline constexpr double kClearCoatF0 = 0.04;              // IOR 1.5 coat (doc §"Clear coat", f0(1.5))
+inline constexpr double kF90Scale = 50.0 * 0.33;          // f90 = saturate(dot(f0, vec3(50 * 0.33)))
+inline constexpr double kClothWrap = 0.5;                 // Fd_Wrap(NoL, 0.5) (shading_model_cloth.fs)
+
+enum class DiffuseTerm : uint8_t { Lambert = 0, Burley = 1 };
+enum class VisibilityTerm : uint8_t { Correlated = 0, Fast = 1 };
+enum class Layering : uint8_t { Code = 0, Doc = 1 };
+
+template <typename F> inline F pow5(F x) {
+    F x2 = x * x;
+    return x2 * x2 * x;
+}
+template <typename F> inline F saturate(F x) { return clamp(x, F(0), F(1)); }
+
+// ------------------------------------------------------------------ terms (brdf.fs names)
+
+// D_GGX and D_GGX_Anisotropic (Walter 2007; Burley 2012): with (t, b, n) = (x, y, z) both are
+// the Trowbridge-Reitz D(h) of core/microfacet.h.
+template <typename F> inline F D_GGX(const TrowbridgeReitz<F> &mfd, const Vec3<F> &h) { return mfd.D(h); }
+
+// D_Charlie (Estevez & Kulla 2017, brdf.fs): (2 + 1/a) sin^(1/a)(theta_h) / (2 pi), sin^2 >= 2^-7.
+template <typename F> inline F D_Charlie_sin2(F alpha, F sin2h) {
+    F inv = F(1) / alpha;
+    F s2 = max_(sin2h, F(kCharlieSin2Floor));
+    return (F(2) + inv) * std::pow(s2, inv * F(0.5)) * (F(0.5) * InvPi<F>);
+}
+template <typename F> inline F D_Charlie(F alpha, F NoH) { return D_Charlie_sin2(alpha, F(1) - NoH * NoH); }
+
+// The normalised Charlie NDF without the floor (CubemapIBL DistributionCharlie): the density of
+// the sheen sampler (with cos(theta_h)) and the DFG z channel.
+template <typename F> inline F D_CharlieExact_sin2(F alpha, F sin2h) {
+    F inv = F(1) / alpha;
+    return (F(2) + inv) * std::pow(max_(sin2h, F(0)), inv * F(0.5)) * (F(0.5) * InvPi<F>);
+}
+
+// D_Ashikhmin (Neubelt & Pettineo 2013 normalisation of Ashikhmin 2007 velvet; older brdf.fs):
+// (4 exp(-cot^2 / a^2) + sin^4) / (pi (1 + 4 a^2) sin^4), sin^2 >= 2^-7.
+template <typename F> inline F D_Ashikhmin(F alpha, F NoH) {
+    F a2 = alpha * alpha, cos2h = NoH * NoH;
+    F sin2h = max_(F(1) - cos2h, F(kCharlieSin2Floor));
+    F sin4h = sin2h * sin2h;
+    F cot2 = -cos2h / (a2 * sin2h);
+    return (F(4) * std::exp(cot2) + sin4h) / (Pi<F> * (F(4) * a2 + F(1)) * sin4h);
+}
+
+// V_SmithGGXCorrelated (Heitz 2014, brdf.fs): 0.5 / (NoL sqrt(NoV^2 (1 - a^2) + a^2) + NoV sqrt(NoL^2 (1 - a^2) + a^2)).
+template <typename F> inline F V_SmithGGXCorrelated(F alpha, F NoV, F NoL) {
+    F a2 = alpha * alpha;
+    F lambdaV = NoL * std::sqrt((NoV - a2 * NoV) * NoV + a2);
+    F lambdaL = NoV * std::sqrt((NoL - a2 * NoL) * NoL + a2);
+    return F(0.5) / (lambdaV + lambdaL);
+}
+
+// V_SmithGGXCorrelated_Fast (Hammon 2017, brdf.fs): 0.5 / mix(2 NoL NoV, NoL + NoV, a).
+template <typename F> inline F V_SmithGGXCorrelated_Fast(F alpha, F NoV, F NoL) {
+    return F(0.5) / lerp(alpha, F(2) * NoL * NoV, NoL + NoV);
+}
+
+// V_SmithGGXCorrelated_Anisotropic (Heitz 2014, brdf.fs):
+// 0.5 / (NoL |(at ToV, ab BoV, NoV)| + NoV |(at ToL, ab BoL, NoL)|).
+template <typename F>
+inline F V_SmithGGXCorrelated_Anisotropic(F at, F ab, F ToV, F BoV, F ToL, F BoL, F NoV, F NoL) {
+    F lambdaV = NoL * std::sqrt(sqr(at * ToV) + sqr(ab * BoV) + NoV * NoV);
+    F lambdaL = NoV * std::sqrt(sqr(at * ToL) + sqr(ab * BoL) + NoL * NoL);
+    return F(0.5) / (lambdaV + lambdaL);
+}
+
+// V_Kelemen (Kelemen 2001, brdf.fs): 0.25 / LoH^2 (LoH^2 floored at the smallest normal number
+// so that an underflowing LoH cannot make it infinite).
+template <typename F> inline F V_Kelemen(F LoH) {
+    return F(0.25) / max_(LoH * LoH, std::numeric_limits<F>::min());
+}
+
+// V_Neubelt (Neubelt & Pettineo 2013, brdf.fs): 1 / (4 (NoL + NoV - NoL NoV)).
+template <typename F> inline F V_Neubelt(F NoV, F NoL) { return F(1) / (F(4) * (NoL + NoV - NoL * NoV)); }
+
+// F_Schlick (Schlick 1994, brdf.fs): f0 + (f90 - f0) (1 - VoH)^5.
+template <typename F> inline F F_Schlick(F f0, F f90, F VoH) { return f0 + (f90 - f0) * pow5(F(1) - VoH); }
+template <typename F> inline Spectrum<F> F_Schlick(const Spectrum<F> &f0, F f90, F VoH) {
+    F fc = pow5(F(1) - VoH);
+    return f0 + (Spectrum<F>(f90) - f0) * fc;
+}
+
+// Fd_Lambert (brdf.fs): 1 / pi.
+template <typename F> inline F Fd_Lambert() { return InvPi<F>; }
+
+// Fd_Burley (Burley 2012, brdf.fs): F_Schlick(1, f90, NoL) F_Schlick(1, f90, NoV) / pi, f90 = 0.5 + 2 a LoH^2.
+template <typename F> inline F Fd_Burley(F alpha, F NoV, F NoL, F LoH) {
+    F f90 = F(0.5) + F(2) * alpha * LoH * LoH;
+    return F_Schlick(F(1), f90, NoL) * F_Schlick(F(1), f90, NoV) * InvPi<F>;
+}
+
+// Fd_Wrap (brdf.fs, energy-conserving wrap, no 1/pi): saturate((NoL + w) / (1 + w)^2).
+template <typename F> inline F Fd_Wrap(F NoL, F w) { return saturate((NoL + w) / sqr(F(1) + w)); }
+
+// f0ClearCoatToSurface (common_material.fs, desktop fit of iorToF0(f0ToIor(f0), 1.5)).
+inline double f0ClearCoatToSurface(double f0) {
+    return saturate(f0 * (f0 * (0.941892 - 0.263008 * f0) + 0.346479) - 0.0285998);
+}
+
+// ------------------------------------------------------------------ samplers
+
+// Charlie NDF sampling (cmgen hemisphereImportanceSampleDCharlie): pdf_h = D_CharlieExact cos(theta_h).
+template <typename F> inline Vec3<F> SampleCharlie(F alpha, Point2<F> u) {
+    F sin_t = std::pow(u.x, alpha / (F(2) * alpha + F(1)));
+    F cos_t = safe_sqrt(F(1) - sin_t * sin_t);
+    F phi = F(2) * Pi<F> * u.y;
+    return {sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t};
+}
+template <typename F> inline F CharliePDF(F alpha, const Vec3<F> &h) {
+    return D_CharlieExact_sin2(alpha, h.x * h.x + h.y * h.y) * max_(h.z, F(0));
+}
+
+// Hemisphere density proportional to cos(theta) + w (w = 0.5 matches Fd_Wrap):
+// pdf = (mu + w) / (2 pi (1/2 + w)); mu from the inverse CDF (mu^2 / 2 + w mu) / (1/2 + w) = u,
+// written without cancellation.
+template <typename F> inline Vec3<F> SampleWrapHemisphere(Point2<F> u, F w) {
+    F c = u.x * (F(1) + F(2) * w);
+    F mu = c / (w + std::sqrt(w * w + c));
+    F r = safe_sqrt(F(1) - mu * mu), phi = F(2) * Pi<F> * u.y;
+    return {r * std::cos(phi), r * std::sin(phi), mu};
+}
+template <typename F> inline F WrapHemispherePDF(F mu, F w) {
+    return (max_(mu, F(0)) + w) * (Inv2Pi<F> / (F(0.5) + w));
+}
+
+} // namespace filament
+
+// ====================================================================== standard model
+
+struct FilamentStandardParams {
+    std::array<double, 3> base_color{0.8, 0.8, 0.8};
+    double metallic = 0, roughness = 0.5, reflectance = 0.5, anisotropy = 0;
+    double clear_coat = 0, clear_coat_roughness = 0;
+    std::array<double, 3> sheen_color{0, 0, 0};
+    double sheen_roughness = 0;
+    filament::DiffuseTerm diffuse = filament::DiffuseTerm::Lambert;
+    filament::VisibilityTerm visibility = filament::VisibilityTerm::Correlated;
+    bool f90_filament = true;
+    bool energy_compensation = true;
+    double min_perceptual_roughness = filament::kMinPerceptualRoughnessDesktop;
+    filament::Layering layering = filament::Layering::Code;
+    bool clear_coat_ior_change = true;
+};
+
+// Written for the batch kernels' vectorizer: uniform switches are stored as F (0 or 1) and
+// applied with compares/selects or as arithmetic factors (a bool loaded from the model cannot
+// mask a float vector), the clear coat is always evaluated (clear_coat = 0 zeroes it), and the
+// sheen lobe, whose pow() has no vector form, is a compile-time variant (Sheen = true), so the
+// common case has no call and no branch per element.
+template <typename F, bool Sheen> struct FilamentStandardT {
+    // Derived at construction (surface_shading_lit.fs getPixelParams), see make().
+    Spectrum<F> diffuse_color{F(0)}, f0{F(0)}, sheen_color{F(0)};
+    F f90 = 1;
+    F alpha = 0;              // base GGX alpha after the clear-coat raise and the clamp
+    TrowbridgeReitz<F> spec;  // (alpha_t, alpha_b) on (x, y)
+    TrowbridgeReitz<F> coat;  // isotropic clear-coat alpha
+    F clear_coat = 0, sheen_alpha = 1, sheen_max = 0, diffuse_max = 0;
+    // knobs as 0/1 factors
+    F anisotropic = 0, fast_v = 0, burley = 0, energy_compensation = 1, doc_layering = 0;
+    DFGRow<F> dfg_base, dfg_coat, dfg_sheen;   // DFG rows at the base / coat / sheen roughness
+    std::shared_ptr<const FilamentDFG> dfg;    // keeps the table alive
+
+    static FilamentStandardT make(const FilamentStandardParams &p, std::shared_ptr<const FilamentDFG> table) {
+        using namespace filament;
+        FilamentStandardT m;
+        double min_pr = p.min_perceptual_roughness, min_alpha = min_pr * min_pr;
+        double cc = p.clear_coat;
+        double f0d = 0.16 * p.reflectance * p.reflectance;  // computeDielectricF0
+        for (int c = 0; c < 3; ++c) {
+            double f0 = p.base_color[c] * p.metallic + f0d * (1 - p.metallic);  // computeF0
+            if (p.clear_coat_ior_change) f0 = lerp(cc, f0, f0ClearCoatToSurface(f0));  // CLEAR_COAT_IOR_CHANGE
+            m.f0[c] = F(f0);
+            m.diffuse_color[c] = F(p.base_color[c] * (1 - p.metallic));  // computeDiffuseColor
+            m.sheen_color[c] = Sheen ? F(p.sheen_color[c]) : F(0);
+        }
+        double sum_f0 = double(m.f0[0]) + double(m.f0[1]) + double(m.f0[2]);
+        m.f90 = p.f90_filament ? F(saturate(kF90Scale * sum_f0)) : F(1);  // fresnel(), quality > LOW
+        // getClearCoatPixelParams / getRoughnessPixelParams
+        double cc_pr = clamp(p.clear_coat_roughness, min_pr, 1.0);
+        double pr = lerp(cc, p.roughness, p.roughness > cc_pr ? p.roughness : cc_pr);
+        pr = clamp(pr, min_pr, 1.0);
+        double a = pr * pr;
+        // anisotropicLobe: at = max(a (1 + aniso), MIN_ROUGHNESS), ab = max(a (1 - aniso), MIN_ROUGHNESS)
+        double at = a * (1 + p.anisotropy), ab = a * (1 - p.anisotropy);
+        at = at > min_alpha ? at : min_alpha;
+        ab = ab > min_alpha ? ab : min_alpha;
+        m.alpha = F(a);
+        m.spec = TrowbridgeReitz<F>(F(at), F(ab), Masking::Correlated);
+        m.coat = TrowbridgeReitz<F>(F(cc_pr * cc_pr), F(cc_pr * cc_pr), Masking::Correlated);
+        m.clear_coat = F(cc);
+        double s_pr = clamp(p.sheen_roughness, min_pr, 1.0);  // getSheenPixelParams
+        m.sheen_alpha = F(s_pr * s_pr);
+        m.sheen_max = m.sheen_color.max_component();
+        m.diffuse_max = m.diffuse_color.max_component();
+        m.anisotropic = p.anisotropy != 0 ? F(1) : F(0);
+        m.fast_v = p.visibility == VisibilityTerm::Fast ? F(1) : F(0);
+        m.burley = p.diffuse == DiffuseTerm::Burley ? F(1) : F(0);
+        m.energy_compensation = p.energy_compensation ? F(1) : F(0);
+        m.doc_layering = p.layering == Layering::Doc ? F(1) : F(0);
+        const F *d = table->template data<F>();
+        m.dfg_base = DFGRow<F>(d, table->size, pr);
+        m.dfg_coat = DFGRow<F>(d, table->size, cc_pr);
+        m.dfg_sheen = DFGRow<F>(d, table->size, s_pr);
+        m.dfg = std::move(table);
+        return m;
+    }
+
+    uint8_t flags() const { return diffuse_max > F(0) ? uint8_t(GlossyReflection | Diffuse) : uint8_t(GlossyReflection); }
+
+    // Energy compensation 1 + f0 (1 / DFG.y - 1) at NoV (getEnergyCompensationPixelParams); 1 when off.
+    Spectrum<F> Ec(F NoV) const {
+        F k = (F(1) / dfg_base(NoV, 1) - F(1)) * energy_compensation;
+        return Spectrum<F>(F(1)) + f0 * k;
+    }
+    // Sheen scaling 1 - max(sheenColor) DFG.z(sheen roughness, NoV), floored at 0: the sheen albedo
+    // z exceeds 1 at grazing NoV for sheen roughness below ~0.1 (up to ~10), where Filament's
+    // factor turns negative; here the base is switched off instead of subtracted.
+    F sheen_scaling(F NoV) const {
+        if constexpr (Sheen) return max_(F(1) - sheen_max * dfg_sheen(NoV, 2), F(0)); else return F(1);
+    }
+
+    // f = ((Fd + Fr Ec [(1 - Fc)]) sheenScaling + Fsheen) (1 - Fc) + Frc   (surfaceShading, cosine excluded)
+    Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode) const {
+        using namespace filament;
+        Vec3<F> h = wo + wi;
+        F len2 = length_squared(h);
+        bool active = wo.z > F(0) && wi.z > F(0) && len2 > F(0);
+        h = h / std::sqrt(active ? len2 : F(1));
+        F NoV = max_(wo.z, F(kMinNoV));  // clampNoV
+        F NoL = saturate(wi.z);
+        F LoH = saturate(dot(wi, h));
+        // Base specular lobe: D V F (isotropicLobe / anisotropicLobe)
+        F D = D_GGX(spec, h);
+        F Va = V_SmithGGXCorrelated_Anisotropic(spec.alpha_x, spec.alpha_y, wo.x, wo.y, wi.x, wi.y, NoV, NoL);
+        F Vi = fast_v > F(0) ? V_SmithGGXCorrelated_Fast(spec.alpha_x, NoV, NoL)
+                             : V_SmithGGXCorrelated(spec.alpha_x, NoV, NoL);
+        F V = anisotropic > F(0) ? Va : Vi;
+        // Clear coat Fresnel (clearCoatLobe): Fc = F_Schlick(0.04, 1, LoH) clearCoat (0 without a coat)
+        F Fc = F_Schlick(F(kClearCoatF0), F(1), LoH) * clear_coat;
+        F att = F(1) - Fc;
+        Spectrum<F> Fr = F_Schlick(f0, f90, LoH) * (D * V * (F(1) - doc_layering * Fc)) * Ec(NoV);
+        // Diffuse lobe (diffuseLobe)
+        F fd = burley > F(0) ? Fd_Burley(alpha, NoV, NoL, LoH) : Fd_Lambert<F>();
+        Spectrum<F> color = diffuse_color * fd + Fr;
+        // Sheen lobe (sheenLobe) after scaling the base
+        if constexpr (Sheen) {
+            F Ds = D_Charlie_sin2(sheen_alpha, h.x * h.x + h.y * h.y);
+            color = color * sheen_scaling(NoV) + sheen_color * (Ds * V_Neubelt(NoV, NoL));
+        }
+        // Clear coat lobe D_GGX(alpha_c) V_Kelemen(LoH) Fc on top of the attenuated base
+        // (V Fc first: with clear_coat = 0 the product is 0 even where V is huge)
+        color = color * att + Spectrum<F>(D_GGX(coat, h) * (V_Kelemen(LoH) * Fc));
+        return select(active, color, Spectrum<F>(F(0)));
+    }
+
+    // Lobe selection probabilities at wo, in proportion to each lobe's estimated albedo:
+    // diffuse and the sheen's cosine half share the cosine sampler.
+    struct Lobes {
+        F diffuse, sheen_cos, ggx, coat, charlie;
+    };
+    Lobes lobes(F NoV) const {
+        using namespace filament;
+        F att = F(1) - F_Schlick(F(kClearCoatF0), F(1), NoV) * clear_coat;
+        F x = dfg_base(NoV, 0), y = dfg_base(NoV, 1);
+        F scale = sheen_scaling(NoV);
+        // Schlick GGX albedo f0 (y - x) + f90 x (DFG reconstruction with f90)
+        Spectrum<F> es = (f0 * (y - x) + Spectrum<F>(f90 * x)) * Ec(NoV);
+        F w_spec = es.max_component() * scale * att * (F(1) - doc_layering * (F(1) - att));
+        F w_diff = diffuse_max * scale * att;
+        F xc = dfg_coat(NoV, 0), yc = dfg_coat(NoV, 1);
+        F w_coat = clear_coat * (F(kClearCoatF0) * (yc - xc) + xc);
+        F w_sheen = F(0);
+        if constexpr (Sheen) w_sheen = sheen_max * dfg_sheen(NoV, 2) * att;
+        F total = w_spec + w_diff + w_sheen + w_coat;
+        bool ok = total > F(0);
+        F inv = F(1) / (ok ? total : F(1));
+        Lobes l;
+        l.diffuse = w_diff * inv;
+        l.sheen_cos = F(0.5) * w_sheen * inv;
+        l.charlie = F(0.5) * w_sheen * inv;
+        l.coat = w_coat * inv;
+        l.ggx = ok ? w_spec * inv : F(1);
+        return l;
+    }
+
+    BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode, uint8_t sample_flags) const {
+        using namespace filament;
+        F NoV = max_(wo.z, F(kMinNoV));
+        Lobes l = lobes(NoV);
+        F c_diff = l.diffuse, c_cos = c_diff + l.sheen_cos, c_ggx = c_cos + l.ggx, c_coat = c_ggx + l.coat;
+        bool pick_cos = uc < c_cos;
+        bool pick_ggx = !pick_cos && uc < c_ggx;
+        bool pick_coat = !pick_cos && !pick_ggx && uc < c_coat && l.coat > F(0);
+        // One visible-normal sample for whichever GGX lobe was picked
+        TrowbridgeReitz<F> d;
+        d.alpha_x = pick_coat ? coat.alpha_x : spec.alpha_x;
+        d.alpha_y = pick_coat ? coat.alpha_y : spec.alpha_y;
+        Vec3<F> wi = Reflect(wo, d.Sample_wm(wo, u));
+        if constexpr (Sheen) {
+            bool pick_charlie = !pick_cos && !pick_ggx && !pick_coat && l.charlie > F(0);
+            wi = select(pick_charlie, Reflect(wo, SampleCharlie(sheen_alpha, u)), wi);
+        }
+        wi = select(pick_cos, SampleCosineHemisphere(u), wi);
+        BSDFSample<F> s;
+        s.wi = wi;
+        s.f = f(wo, wi, mode);
+        s.pdf = pdf(wo, wi, mode, sample_flags);
+        s.flags = (pick_cos && uc < c_diff) ? uint8_t(DiffuseReflection) : uint8_t(GlossyReflection);
+        s.valid = (sample_flags & RT_Reflection) != 0 && wo.z > F(0) && wi.z > F(0);
+        return s;
+    }
+
+    // Full mixture density: sum of selection probability x lobe sampler density.
+    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
+        using namespace filament;
+        Vec3<F> h = wo + wi;
+        F len2 = length_squared(h);
+        bool active = (sample_flags & RT_Reflection) && wo.z > F(0) && wi.z > F(0) && len2 > F(0);
+        h = h / std::sqrt(active ? len2 : F(1));
+        Lobes l = lobes(max_(wo.z, F(kMinNoV)));
+        F jac = F(1) / (F(4) * absdot(wo, h));  // reflection Jacobian dwm/dwi
+        F p = (l.diffuse + l.sheen_cos) * CosineHemispherePDF(wi.z) + l.ggx * spec.PDF(wo, h) * jac +
+              l.coat * coat.PDF(wo, h) * jac;
+        if constexpr (Sheen) p += l.charlie * CharliePDF(sheen_alpha, h) * jac;
+        return active ? p : F(0);
+    }
+
+    void regularize() {
+        spec.regularize();
+        coat.regularize();
+    }
+};
+
+// The two variants the bindings expose (Python picks by whether sheen_color is non-zero).
+template <typename F> using FilamentStandardBxDF = FilamentStandardT<F, false>;
+template <typename F> using FilamentStandardSheenBxDF = FilamentStandardT<F, true>;
+
+// ====================================================================== cloth model
+
+struct FilamentClothParams {
+    std::array<double, 3> base_color{0.5, 0.5, 0.5};
+    std::array<double, 3> sheen_color{0.7071067811865476, 0.7071067811865476, 0.7071067811865476};
+    std::array<double, 3> subsurface_color{0, 0, 0};
+    bool has_subsurface = false;
+    double roughness = 0.5;
+    filament::DiffuseTerm diffuse = filament::DiffuseTerm::Lambert;
+    double min_perceptual_roughness = filament::kMinPerceptualRoughnessDesktop;
+};
+
+// Cloth (surface_shading_model_cloth.fs): Fr = D_Charlie V_Neubelt sheenColor (no Fresnel, no
+// energy compensation); Fd = diffuse baseColor, or with a subsurface color
+// Fd = diffuse Fd_Wrap(NoL, 0.5) saturate(subsurfaceColor + NoL) baseColor, which Filament does not
+// multiply by NoL: here f = Fd / NoL + Fr (f <NoL> is bounded; f itself grows as 1/NoL at the horizon).
+template <typename F> struct FilamentClothBxDF {
+    Spectrum<F> base_color{F(0)}, sheen_color{F(0)}, subsurface_color{F(0)};
+    F alpha = 0.25, base_max = 0, sheen_max = 0;
+    F subsurface = 0, burley = 0;  // knobs as 0/1 factors (see FilamentStandardT)
+    DFGRow<F> dfg_row;
+    std::shared_ptr<const FilamentDFG> dfg;
+
+    static FilamentClothBxDF make(const FilamentClothParams &p, std::shared_ptr<const FilamentDFG> table) {
+        FilamentClothBxDF m;
+        for (int c = 0; c < 3; ++c) {
+            m.base_color[c] = F(p.base_color[c]);
+            m.sheen_color[c] = F(p.sheen_color[c]);
+            m.subsurface_color[c] = F(p.subsurface_color[c]);
+        }
+        m.subsurface = p.has_subsurface ? F(1) : F(0);
+        double pr = clamp(p.roughness, p.min_perceptual_roughness, 1.0);  // getRoughnessPixelParams
+        m.alpha = F(pr * pr);
+        m.base_max = m.base_color.max_component();
+        m.sheen_max = m.sheen_color.max_component();
+        m.burley = p.diffuse == filament::DiffuseTerm::Burley ? F(1) : F(0);
+        m.dfg_row = DFGRow<F>(table->template data<F>(), table->size, pr);
+        m.dfg = std::move(table);
+        return m;
+    }
+
+    uint8_t flags() const { return base_max > F(0) ? uint8_t(GlossyReflection | Diffuse) : uint8_t(GlossyReflection); }
+
+    Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode) const {
+        using namespace filament;
+        Vec3<F> h = wo + wi;
+        F len2 = length_squared(h);
+        bool active = wo.z > F(0) && wi.z > F(0) && len2 > F(0);
+        h = h / std::sqrt(active ? len2 : F(1));
+        F NoV = max_(wo.z, F(kMinNoV));
+        F NoL = saturate(wi.z);
+        F LoH = saturate(dot(wi, h));
+        // specular: D_Charlie V_Neubelt sheenColor
+        Spectrum<F> Fr = sheen_color * (D_Charlie_sin2(alpha, h.x * h.x + h.y * h.y) * V_Neubelt(NoV, NoL));
+        F fd = burley > F(0) ? Fd_Burley(alpha, NoV, NoL, LoH) : Fd_Lambert<F>();
+        // with a subsurface color: wrapped diffuse and cheap subsurface, which Filament does not
+        // multiply by NoL: divide here
+        F wrap = Fd_Wrap(NoL, F(kClothWrap)) / max_(NoL, std::numeric_limits<F>::min());
+        bool ss = subsurface > F(0);
+        Spectrum<F> Fd;
+        for (int c = 0; c < 3; ++c)
+            Fd[c] = base_color[c] * fd * (ss ? saturate(subsurface_color[c] + NoL) * wrap : F(1));
+        return select(active, Fd + Fr, Spectrum<F>(F(0)));
+    }
+
+    // Probabilities of the base sampler (cosine, or cos + 0.5 with a subsurface color; also the
+    // sheen's defensive half) and of the Charlie sampler.
+    struct Lobes {
+        F diffuse, sheen_base, charlie;
+    };
+    Lobes lobes(F NoV) const {
+        F w_diff = base_max;
+        F w_sheen = sheen_max * dfg_row(NoV, 2);
+        F total = w_diff + w_sheen;
+        bool ok = total > F(0);
+        F inv = F(1) / (ok ? total : F(1));
+        Lobes l;
+        l.diffuse = ok ? w_diff * inv : F(1);
+        l.sheen_base = F(0.5) * w_sheen * inv;
+        l.charlie = F(0.5) * w_sheen * inv;
+        return l;
+    }
+
+    F base_pdf(F mu) const {
+        return subsurface > F(0) ? filament::WrapHemispherePDF(mu, F(filament::kClothWrap)) : CosineHemispherePDF(mu);
+    }
+
+    BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode, uint8_t sample_flags) const {
+        using namespace filament;
+        Lobes l = lobes(max_(wo.z, F(kMinNoV)));
+        bool pick_base = uc < l.diffuse + l.sheen_base;
+        Vec3<F> wb = select(subsurface > F(0), SampleWrapHemisphere(u, F(kClothWrap)), SampleCosineHemisphere(u));
+        Vec3<F> wi = select(pick_base, wb, Reflect(wo, SampleCharlie(alpha, u)));
+        BSDFSample<F> s;
+        s.wi = wi;
+        s.f = f(wo, wi, mode);
+        s.pdf = pdf(wo, wi, mode, sample_flags);
+        s.flags = (pick_base && uc < l.diffuse) ? uint8_t(DiffuseReflection) : uint8_t(GlossyReflection);
+        s.valid = (sample_flags & RT_Reflection) != 0 && wo.z > F(0) && wi.z > F(0);
+        return s;
+    }
+
+    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
+        using namespace filament;
+        Vec3<F> h = wo + wi;
+        F len2 = length_squared(h);
+        bool active = (sample_flags & RT_Reflection) && wo.z > F(0) && wi.z > F(0) && len2 > F(0);
+        h = h / std::sqrt(active ? len2 : F(1));
+        Lobes l = lobes(max_(wo.z, F(kMinNoV)));
+        F p = (l.diffuse + l.sheen_base) * base_pdf(wi.z) + l.charlie * CharliePDF(alpha, h) / (F(4) * absdot(wo, h));
+        return active ? p : F(0);
+    }
+
+    void regularize() {}
+};
+
+} // namespace bsdfkit

@@ -1,0 +1,238 @@
+// Embree 3 glue of the preview renderer's scene.
+#include "bsdfkit/render/scene.h"
+
+#include <algorithm>
+#include <cstring>
+
+namespace bsdfkit::render {
+
+namespace {
+const char *embree_error_name(RTCError e) {
+    switch (e) {
+    case RTC_ERROR_NONE: return "no error";
+    case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
+    case RTC_ERROR_CANCELLED: return "cancelled";
+    default: return "unknown error";
+    }
+}
+std::string embree_status(RTCDevice dev, const char *what) {
+    RTCError e = rtcGetDeviceError(dev);
+    return e == RTC_ERROR_NONE ? std::string() : std::string("Embree: ") + what + ": " + embree_error_name(e);
+}
+} // namespace
+
+Scene::Scene() {
+    device_ = rtcNewDevice(nullptr);
+    if (device_) scene_ = rtcNewScene(device_);
+    if (scene_) {
+        rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
+    }
+}
+
+Scene::~Scene() {
+    if (scene_) rtcReleaseScene(scene_);
+    if (device_) rtcReleaseDevice(device_);
+}
+
+int Scene::add_material(const Material &m) {
+    materials.push_back(m);
+    return int(materials.size()) - 1;
+}
+
+std::string Scene::add_sphere(const Vec3f &center, Float radius, int mat_a, int mat_b, Float checker) {
+    if (!scene_) return "Embree: could not create a device";
+    if (committed_) return "scene already committed";
+    RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+    if (!g) return embree_status(device_, "rtcNewGeometry");
+    auto *v = static_cast<float *>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4,
+                                                           4 * sizeof(float), 1));
+    if (!v) {
+        rtcReleaseGeometry(g);
+        return embree_status(device_, "sphere buffer");
+    }
+    v[0] = center.x;
+    v[1] = center.y;
+    v[2] = center.z;
+    v[3] = radius;
+    rtcCommitGeometry(g);
+    unsigned id = unsigned(objects.size());
+    rtcAttachGeometryByID(scene_, g, id);
+    rtcReleaseGeometry(g);
+    Object o;
+    o.kind = Object::Kind::Sphere;
+    o.center = center;
+    o.radius = radius;
+    o.mat_a = mat_a;
+    o.mat_b = mat_b;
+    o.checker = checker;
+    objects.push_back(std::move(o));
+    return embree_status(device_, "sphere");
+}
+
+std::string Scene::add_mesh(const Float *vertices, int64_t nv, const uint32_t *indices, int64_t nt, int mat_a,
+                            int mat_b, Float checker) {
+    if (!scene_) return "Embree: could not create a device";
+    if (committed_) return "scene already committed";
+    RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+    if (!g) return embree_status(device_, "rtcNewGeometry");
+    // Embree pads its own buffers for vector loads past the last vertex.
+    auto *v = static_cast<float *>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), size_t(nv)));
+    auto *ix = static_cast<unsigned *>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), size_t(nt)));
+    if (!v || !ix) {
+        rtcReleaseGeometry(g);
+        return embree_status(device_, "mesh buffers");
+    }
+    std::memcpy(v, vertices, size_t(nv) * 3 * sizeof(float));
+    std::memcpy(ix, indices, size_t(nt) * 3 * sizeof(unsigned));
+    rtcCommitGeometry(g);
+    unsigned id = unsigned(objects.size());
+    rtcAttachGeometryByID(scene_, g, id);
+    rtcReleaseGeometry(g);
+    Object o;
+    o.kind = Object::Kind::Mesh;
+    o.vertices.assign(vertices, vertices + nv * 3);
+    o.indices.assign(indices, indices + nt * 3);
+    o.mat_a = mat_a;
+    o.mat_b = mat_b;
+    o.checker = checker;
+    objects.push_back(std::move(o));
+    return embree_status(device_, "mesh");
+}
+
+std::string Scene::commit() {
+    if (!scene_) return "Embree: could not create a device";
+    rtcCommitScene(scene_);
+    committed_ = true;
+    return embree_status(device_, "rtcCommitScene");
+}
+
+bool Scene::intersect(const Vec3f &o, const Vec3f &d, Hit *hit) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRayHit rh;
+    make_rayhit(rh, o, d);
+    rtcIntersect1(scene_, &ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    hit_point(rh, hit);
+    return true;
+}
+
+bool Scene::occluded(const Vec3f &o, const Vec3f &d, Float tfar) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRay r;
+    make_ray(r, o, d, tfar);
+    rtcOccluded1(scene_, &ctx, &r);
+    return r.tfar < 0.f;  // Embree sets tfar = -inf on a hit
+}
+
+void Scene::intersect_n(RTCRayHit *rays, unsigned n, bool coherent) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    // Packets of 16 (SoA): Embree traverses the BVH once for all 16 rays.
+    alignas(64) RTCRayHit16 p;
+    alignas(64) int valid[16];
+    for (unsigned b = 0; b < n; b += 16) {
+        unsigned m = std::min(16u, n - b);
+        for (unsigned i = 0; i < 16; ++i) {
+            const RTCRayHit &r = rays[b + (i < m ? i : 0)];
+            valid[i] = i < m ? -1 : 0;
+            p.ray.org_x[i] = r.ray.org_x;
+            p.ray.org_y[i] = r.ray.org_y;
+            p.ray.org_z[i] = r.ray.org_z;
+            p.ray.tnear[i] = r.ray.tnear;
+            p.ray.dir_x[i] = r.ray.dir_x;
+            p.ray.dir_y[i] = r.ray.dir_y;
+            p.ray.dir_z[i] = r.ray.dir_z;
+            p.ray.time[i] = 0.f;
+            p.ray.tfar[i] = r.ray.tfar;
+            p.ray.mask[i] = ~0u;
+            p.ray.id[i] = 0;
+            p.ray.flags[i] = 0;
+            p.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+            p.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+        }
+        rtcIntersect16(valid, scene_, &ctx, &p);
+        for (unsigned i = 0; i < m; ++i) {
+            RTCRayHit &r = rays[b + i];
+            r.ray.tfar = p.ray.tfar[i];
+            r.hit.geomID = p.hit.geomID[i];
+            r.hit.primID = p.hit.primID[i];
+            r.hit.u = p.hit.u[i];
+            r.hit.v = p.hit.v[i];
+        }
+    }
+}
+
+void Scene::occluded_n(RTCRay *rays, unsigned n, bool coherent) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    alignas(64) RTCRay16 p;
+    alignas(64) int valid[16];
+    for (unsigned b = 0; b < n; b += 16) {
+        unsigned m = std::min(16u, n - b);
+        for (unsigned i = 0; i < 16; ++i) {
+            const RTCRay &r = rays[b + (i < m ? i : 0)];
+            valid[i] = i < m ? -1 : 0;
+            p.org_x[i] = r.org_x;
+            p.org_y[i] = r.org_y;
+            p.org_z[i] = r.org_z;
+            p.tnear[i] = r.tnear;
+            p.dir_x[i] = r.dir_x;
+            p.dir_y[i] = r.dir_y;
+            p.dir_z[i] = r.dir_z;
+            p.time[i] = 0.f;
+            p.tfar[i] = r.tfar;
+            p.mask[i] = ~0u;
+            p.id[i] = 0;
+            p.flags[i] = 0;
+        }
+        rtcOccluded16(valid, scene_, &ctx, &p);
+        for (unsigned i = 0; i < m; ++i) rays[b + i].tfar = p.tfar[i];
+    }
+}
+
+void Scene::hit_point(const RTCRayHit &rh, Hit *hit) const {
+    const Object &ob = objects[rh.hit.geomID];
+    Vec3f o(rh.ray.org_x, rh.ray.org_y, rh.ray.org_z), d(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
+    if (ob.kind == Object::Kind::Sphere) {
+        // Re-project the hit onto the sphere: o + t d carries the error of t.
+        Vec3f p = o + d * rh.ray.tfar;
+        Vec3f n = p - ob.center;
+        Float l2 = length_squared(n);
+        n = l2 > Float(0) ? n / std::sqrt(l2) : Vec3f(0, 1, 0);
+        hit->p = ob.center + n * ob.radius;
+        hit->n = n;
+        // dp/dphi of the lat-long parametrisation around +y (brushed along parallels).
+        hit->tangent = Vec3f(-n.z, 0, n.x);
+    } else {
+        // Barycentric interpolation of the vertices is exact to rounding, unlike o + t d.
+        const uint32_t *ix = &ob.indices[size_t(rh.hit.primID) * 3];
+        const Float *v = ob.vertices.data();
+        Vec3f p0(v[3 * ix[0]], v[3 * ix[0] + 1], v[3 * ix[0] + 2]);
+        Vec3f p1(v[3 * ix[1]], v[3 * ix[1] + 1], v[3 * ix[1] + 2]);
+        Vec3f p2(v[3 * ix[2]], v[3 * ix[2] + 1], v[3 * ix[2] + 2]);
+        Float b1 = rh.hit.u, b2 = rh.hit.v;
+        hit->p = p0 * (Float(1) - b1 - b2) + p1 * b1 + p2 * b2;
+        Vec3f e1 = p1 - p0, e2 = p2 - p0;
+        Vec3f n = cross(e1, e2);
+        Float l2 = length_squared(n);
+        hit->n = l2 > Float(0) ? n / std::sqrt(l2) : Vec3f(0, 1, 0);
+        hit->tangent = e1;
+    }
+    int mat = ob.mat_a;
+    if (ob.checker > Float(0)) {
+        long cx = long(std::floor(hit->p.x / ob.checker)), cz = long(std::floor(hit->p.z / ob.checker));
+        mat = ((cx + cz) & 1) ? ob.mat_b : ob.mat_a;
+    }
+    hit->material = mat;
+}
+
+} // namespace bsdfkit::render

@@ -1,0 +1,734 @@
+"""Preview renderer: any bsdfkit material on an object under an environment.
+
+A path tracer in the C++ core (Embree 3 for rays, OpenImageIO for environment maps) that calls
+the very same per-element model code as ``eval``/``sample``/``pdf``. It estimates the light
+transport equation with BSDF sampling and environment importance sampling combined by multiple
+importance sampling (power heuristic), Russian roulette and a maximum depth, as pbrt-v4's
+``PathIntegrator`` does.
+
+>>> import bsdfkit as bk
+>>> img = bk.render.preview(bk.Conductor.from_metal("Au", alpha=0.2), spp=16)   # (256, 256, 3)
+>>> bk.io.write_image("gold.png", img)
+
+Conventions
+-----------
+* World space is y-up. A lat-long environment image maps row 0 to the zenith (+y) and column u
+  (in [0, 1) across the width) to the azimuth phi = 2 pi u, with the direction
+  ``(sin phi sin theta, cos theta, -cos phi sin theta)``, theta = pi v: the image centre looks
+  along +z, the left/right edges along -z, a quarter of the width along +x. This is the mapping
+  of Mitsuba 3's ``envmap`` plugin (with the identity ``to_world``). Radiance is bilinearly
+  interpolated between pixel centres.
+* Values are linear radiance in RGB; images come back as float32 (H, W, 3), row 0 at the top.
+* The camera is a pinhole: ``fov`` is the full horizontal field of view in degrees; image x
+  grows along ``forward x up``. Pixels are box-filtered (uniform jitter inside the pixel).
+* ``max_depth`` counts scattering events (pbrt-v4): 0 shows the environment only, 1 is direct
+  lighting. Mitsuba's ``max_depth`` counts path vertices: Mitsuba's value is ours + 1.
+* Objects: spheres, triangle meshes (numpy arrays, or OBJ/PLY/... files through Assimp) and a
+  ground plane, one bsdfkit model per object (the ground may alternate two in a checkerboard).
+  The shading frame is the geometric normal (outward: triangles wind counter-clockwise seen
+  from outside) and a tangent (a sphere's parallels around +y; a triangle's first edge), so an
+  anisotropic ``alpha_x`` runs along that tangent. Dielectric ``eta`` is inside over outside.
+* Determinism: a sample's random numbers depend only on (seed, pixel, sample index), so an image
+  is bit-identical for any thread count (``bk.set_num_threads``) and any split into passes.
+* Ctrl-C: the render stops within a fraction of a second and, by default
+  (``interrupt="raise"``), a ``KeyboardInterrupt`` propagates whose ``image`` attribute holds
+  the average of the passes completed so far (``None`` if none) and ``spp_done`` their sample
+  count. ``interrupt="return"`` returns that partial image instead (with a warning).
+"""
+from __future__ import annotations
+
+import math
+import os
+import sys
+import time
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import _core
+
+__all__ = ["Camera", "Scene", "preview", "render", "default_environment", "procedural_environment", "default_scene",
+           "gallery_scene", "load_mesh", "parse_spec", "write_gallery", "ENVIRONMENTS"]
+
+#: Named environments: procedural ``"sky"`` (the default: sky gradient, ground and a sun-like
+#: hot spot), ``"studio"`` (dark room with three soft boxes) and ``"white"`` (uniform radiance 1,
+#: the white furnace).
+ENVIRONMENTS = ("sky", "studio", "white")
+
+_LUM = np.array([0.2126, 0.7152, 0.0722])
+
+
+# ---------------------------------------------------------------- environments
+
+def _latlong_dirs(width: int, height: int) -> np.ndarray:
+    """World directions of the pixel centres of a lat-long image, (H, W, 3) float64."""
+    u = (np.arange(width) + 0.5) / width
+    v = (np.arange(height) + 0.5) / height
+    phi, theta = np.meshgrid(2 * np.pi * u, np.pi * v)
+    st = np.sin(theta)
+    return np.stack([np.sin(phi) * st, np.cos(theta), -np.cos(phi) * st], axis=-1)
+
+
+#: Direction toward the sun of the "sky" environment: behind the default camera's left shoulder.
+SUN_DIRECTION = np.array([-0.5, 0.62, 0.6]) / np.linalg.norm([-0.5, 0.62, 0.6])
+
+
+def _soft_disk(cos_angle, radius_deg, edge_deg):
+    ang = np.degrees(np.arccos(np.clip(cos_angle, -1, 1)))
+    t = np.clip((radius_deg + edge_deg - ang) / (2 * edge_deg), 0, 1)
+    return t * t * (3 - 2 * t)
+
+
+def procedural_environment(kind: str, directions) -> np.ndarray:
+    """Radiance of a procedural environment (``"sky"`` or ``"studio"``) toward world
+    ``directions`` (..., 3) (unit, y-up), float64 (..., 3). See :func:`default_environment`."""
+    if kind not in ("sky", "studio"):
+        raise ValueError(f"kind: must be 'sky' or 'studio', got {kind!r}")
+    d = np.asarray(directions, dtype=np.float64)
+    y = d[..., 1:2]
+    if kind == "sky":
+        up = np.clip(y, 0, 1)
+        zenith, horizon = np.array([0.18, 0.34, 0.85]), np.array([0.95, 1.0, 1.08])
+        sky = horizon + (zenith - horizon) * (1 - (1 - up) ** 3)
+        ground = np.array([0.32, 0.27, 0.22]) * (0.55 + 0.45 * np.clip(1 + 4 * y, 0, 1))
+        blend = np.clip(y * 40 + 0.5, 0, 1)               # ~1.4 degree soft horizon
+        env = ground + (sky - ground) * blend
+        c = d @ SUN_DIRECTION
+        ang = np.arccos(np.clip(c, -1, 1))
+        env = env + np.array([1.0, 0.8, 0.55]) * (4.0 * np.exp(-ang / 0.12))[..., None] * (y > -0.05)
+        env = env + np.array([1.0, 0.95, 0.85]) * 600.0 * _soft_disk(c, 2.5, 0.6)[..., None]
+    else:
+        env = np.full(d.shape, 0.03) + 0.04 * np.clip(y, 0, 1)
+        for direction, size, level in (((-0.6, 0.55, 0.6), 22.0, 9.0),      # key, front left above
+                                       ((0.85, 0.25, 0.45), 18.0, 3.0),      # fill, right
+                                       ((0.2, 0.5, -0.85), 12.0, 6.0)):      # rim, behind
+            v = np.asarray(direction) / np.linalg.norm(direction)
+            env = env + level * _soft_disk(d @ v, size, 2.0)[..., None]
+    return env
+
+
+#: Width of the procedural environments' lat-long images (height = width / 2): 1.4 degrees per
+#: texel keeps the sun a few texels wide while the map and its sampling table (0.9 MB) stay in
+#: a core's L2 cache; environment lookups are the renderer's main memory traffic.
+DEFAULT_ENV_WIDTH = 256
+
+
+def default_environment(kind: str = "sky", width: int = DEFAULT_ENV_WIDTH) -> np.ndarray:
+    """Procedural lat-long environment, float32 (width // 2, width, 3) linear radiance.
+
+    ``"sky"``: blue zenith fading to a bright horizon, a dim brownish ground below the horizon
+    and a sun-like hot spot (angular radius 2.5 degrees, radiance ~600, direction
+    :data:`SUN_DIRECTION`) with a soft glow. ``"studio"``: a dark grey room lit by a large key
+    soft box (front left, above), a fill (right) and a rim light (behind).
+    """
+    if kind not in ("sky", "studio"):
+        raise ValueError(f"kind: must be 'sky' or 'studio', got {kind!r}")
+    width = int(width)
+    if width < 8:
+        raise ValueError("width: must be >= 8")
+    env = procedural_environment(kind, _latlong_dirs(width, width // 2))
+    return np.ascontiguousarray(env, dtype=np.float32)
+
+
+def _read_env_file(path: str) -> np.ndarray:
+    """Lat-long image from a file via OpenImageIO; errors name the file and give OIIO's reason."""
+    try:
+        img = _core.read_image(path)
+    except RuntimeError as e:
+        if not os.path.exists(path):
+            raise FileNotFoundError(f"envmap: cannot read environment map {e}") from None
+        raise OSError(f"envmap: cannot read environment map {e}") from None
+    if path.lower().endswith((".png", ".jpg", ".jpeg", ".bmp")):
+        from .io import srgb_to_linear
+        img = srgb_to_linear(img).astype(np.float32)
+    return img
+
+
+def _environment(env):
+    """Normalises an environment spec to ('constant', rgb) or ('latlong', float32 (H, W, 3))."""
+    if env is None:
+        env = "sky"
+    if isinstance(env, os.PathLike):
+        env = os.fspath(env)
+    if isinstance(env, str):
+        key = env.lower()
+        if key in ("sky", "default"):
+            return ("latlong", default_environment("sky"))
+        if key == "studio":
+            return ("latlong", default_environment("studio"))
+        if key in ("white", "uniform", "furnace"):
+            return ("constant", (1.0, 1.0, 1.0))
+        return ("latlong", _checked_latlong(_read_env_file(env), f"envmap ({env})"))
+    if isinstance(env, (bool, np.bool_)):
+        raise TypeError("envmap: expected a name, a path, a radiance value or an image array, got a bool")
+    if isinstance(env, (int, float, np.integer, np.floating)):
+        env = (float(env),) * 3
+    a = np.asarray(env)
+    if a.dtype.kind not in "fiu":
+        raise TypeError(f"envmap: expected a name, a path, a radiance value or an image array, got {type(env).__name__}")
+    if a.shape == (3,):
+        rgb = a.astype(np.float64)
+        if not np.all(np.isfinite(rgb)) or np.any(rgb < 0):
+            raise ValueError("envmap: constant radiance must be finite and >= 0")
+        return ("constant", tuple(float(x) for x in rgb))
+    return ("latlong", _checked_latlong(a, "envmap"))
+
+
+def _checked_latlong(a, name) -> np.ndarray:
+    a = np.asarray(a)
+    if a.ndim == 2:
+        a = a[..., None]
+    if a.ndim != 3 or a.shape[2] not in (1, 3, 4) or a.shape[0] < 1 or a.shape[1] < 1:
+        raise ValueError(f"{name}: expected a lat-long image of shape (H, W), (H, W, 1), (H, W, 3) or (H, W, 4); "
+                         f"got {a.shape}")
+    a = a[..., :3] if a.shape[2] != 1 else np.repeat(a, 3, axis=2)
+    a = a.astype(np.float32)
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name}: contains NaN or Inf")
+    if np.any(a < 0):
+        raise ValueError(f"{name}: radiance must be >= 0")
+    return np.ascontiguousarray(a)
+
+
+# ---------------------------------------------------------------- meshes
+
+def load_mesh(path):
+    """Triangle mesh from a file (OBJ, PLY, STL, glTF, ... via Assimp): (vertices float32 (N, 3),
+    indices int64 (M, 3)). Every mesh of the file is merged and triangulated. Raises
+    FileNotFoundError for a missing file and ValueError naming the file with Assimp's reason
+    for an unreadable one."""
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        raise FileNotFoundError(f"path: no such mesh file: {path}")
+    try:
+        return _core.load_mesh(path)
+    except RuntimeError as e:
+        raise ValueError(f"cannot read mesh {e}") from None
+
+
+def _mesh_arrays(vertices, indices):
+    v = np.asarray(vertices)
+    if v.dtype.kind not in "fiu":
+        raise TypeError(f"vertices: expected a real array, got dtype {v.dtype}")
+    v = v.astype(np.float64)
+    if v.ndim != 2 or v.shape[1] != 3 or len(v) == 0:
+        raise ValueError(f"vertices: expected shape (N, 3) with N >= 1, got {v.shape}")
+    if not np.all(np.isfinite(v)):
+        raise ValueError("vertices: contains NaN or Inf")
+    i = np.asarray(indices)
+    if i.dtype.kind not in "iu":
+        raise TypeError(f"indices: expected an integer array, got dtype {i.dtype}")
+    if i.ndim != 2 or i.shape[1] != 3 or len(i) == 0:
+        raise ValueError(f"indices: expected shape (M, 3) with M >= 1, got {i.shape}")
+    if i.min() < 0 or i.max() >= len(v):
+        raise ValueError(f"indices: values must be in [0, {len(v)}), got range [{i.min()}, {i.max()}]")
+    return v, i.astype(np.int64)
+
+
+def _apply_transform(v, transform):
+    if transform is None:
+        return v
+    t = np.asarray(transform, dtype=np.float64)
+    if t.shape != (4, 4) or not np.all(np.isfinite(t)):
+        raise ValueError("transform: expected a finite 4x4 matrix")
+    h = v @ t[:3, :3].T + t[:3, 3]
+    if not np.all(np.isfinite(h)):
+        raise ValueError("transform: produces NaN or Inf vertices")
+    return h
+
+
+def _fit_on_ground(v, radius=1.0, height=0.0):
+    """Scales and moves vertices so that the bounding box fits a sphere of ``radius`` and sits
+    on the plane y = height, centred on the y axis."""
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    half = 0.5 * np.linalg.norm(hi - lo)
+    s = radius / half if half > 0 else 1.0
+    c = 0.5 * (lo + hi)
+    out = (v - c) * s
+    out[:, 1] += height - out[:, 1].min()
+    return out
+
+
+# ---------------------------------------------------------------- scene
+
+@dataclass
+class Camera:
+    """Pinhole camera: position, look-at point, up hint and full horizontal field of view (degrees)."""
+    origin: tuple = (0.0, 1.45, 5.6)
+    target: tuple = (0.0, 0.9, 0.0)
+    up: tuple = (0.0, 1.0, 0.0)
+    fov: float = 32.0
+
+    def _checked(self):
+        o, t, u = (np.asarray(x, dtype=np.float64) for x in (self.origin, self.target, self.up))
+        for name, x in (("origin", o), ("target", t), ("up", u)):
+            if x.shape != (3,) or not np.all(np.isfinite(x)):
+                raise ValueError(f"camera.{name}: expected 3 finite numbers")
+        f = t - o
+        if not np.linalg.norm(f) > 0:
+            raise ValueError("camera.target: must differ from camera.origin")
+        if np.linalg.norm(np.cross(f / np.linalg.norm(f), u)) < 1e-6:
+            raise ValueError("camera.up: must not be parallel to the view direction")
+        fov = float(self.fov)
+        if not 0 < fov < 180:
+            raise ValueError("camera.fov: must be in (0, 180) degrees")
+        return o.tolist(), t.tolist(), u.tolist(), fov
+
+
+def _model_check(material, name="material"):
+    core = getattr(material, "_core", None)
+    if core is None:
+        raise TypeError(f"{name}: expected a bsdfkit model (e.g. bk.Diffuse(0.8)), got {type(material).__name__}")
+    return material
+
+
+def _vec3(x, name):
+    a = np.asarray(x, dtype=np.float64)
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise ValueError(f"{name}: expected 3 finite numbers")
+    return a
+
+
+@dataclass
+class Scene:
+    """Objects, materials, lighting and camera of a render. Build with the ``add_*`` methods
+    (each returns the scene, so calls chain) and pass to :func:`render` / :func:`preview`.
+
+    ``environment``: ``"sky"`` (default), ``"studio"``, ``"white"``, a path to a lat-long
+    EXR/HDR/PNG, an (H, W, 3) radiance array, or a constant radiance (number or RGB).
+    """
+    environment: object = "sky"
+    camera: Camera = field(default_factory=Camera)
+    objects: list = field(default_factory=list)
+    lights: list = field(default_factory=list)
+
+    def add_sphere(self, material, center=(0.0, 1.0, 0.0), radius=1.0) -> "Scene":
+        """A sphere (outward normal) of one material."""
+        c = _vec3(center, "center")
+        r = float(radius)
+        if not (math.isfinite(r) and r > 0):
+            raise ValueError("radius: must be finite and > 0")
+        self.objects.append(dict(kind="sphere", material=_model_check(material), center=c, radius=r))
+        return self
+
+    def add_mesh(self, material, vertices, indices=None, *, transform=None, fit=False) -> "Scene":
+        """A triangle mesh of one material.
+
+        ``vertices`` (N, 3) and ``indices`` (M, 3) arrays (counter-clockwise seen from outside),
+        or ``vertices`` a path to a mesh file (OBJ/PLY/... read by :func:`load_mesh`).
+        ``transform``: optional 4x4 object-to-world matrix. ``fit=True`` then scales and moves
+        the mesh to fit a unit sphere standing on the ground plane y = 0 (like the preview sphere).
+        """
+        if isinstance(vertices, (str, os.PathLike)):
+            if indices is not None:
+                raise ValueError("indices: not accepted with a mesh file path")
+            vertices, indices = load_mesh(vertices)
+        elif indices is None:
+            raise ValueError("indices: required with a vertex array")
+        v, i = _mesh_arrays(vertices, indices)
+        v = _apply_transform(v, transform)
+        if fit:
+            v = _fit_on_ground(v)
+        self.objects.append(dict(kind="mesh", material=_model_check(material), vertices=v, indices=i))
+        return self
+
+    def add_ground(self, material=None, *, height=0.0, size=200.0, checker=None, checker_size=0.5) -> "Scene":
+        """A horizontal square (normal +y) of side ``size`` at y = ``height``. With ``checker`` (a
+        second model) the two materials alternate on squares of side ``checker_size``.
+        Defaults: a grey checkerboard of Diffuse(0.45) and Diffuse(0.15)."""
+        from ._models import Diffuse
+        if material is None:
+            material = Diffuse(0.45)
+            if checker is None:
+                checker = Diffuse(0.15)
+        h, s, cs = float(height), float(size), float(checker_size)
+        if not (math.isfinite(h) and math.isfinite(s) and s > 0):
+            raise ValueError("height, size: must be finite, size > 0")
+        if checker is not None and not (math.isfinite(cs) and cs > 0):
+            raise ValueError("checker_size: must be finite and > 0")
+        a = s / 2
+        v = np.array([[-a, h, -a], [a, h, -a], [a, h, a], [-a, h, a]])
+        i = np.array([[0, 2, 1], [0, 3, 2]])   # counter-clockwise seen from above: normal +y
+        self.objects.append(dict(kind="mesh", material=_model_check(material), vertices=v, indices=i,
+                                 checker=None if checker is None else _model_check(checker, "checker"),
+                                 checker_size=cs))
+        return self
+
+    def add_directional_light(self, direction, irradiance=(3.0, 3.0, 3.0)) -> "Scene":
+        """A light at infinity: ``irradiance`` (RGB, or a number) on a surface facing it, arriving
+        from ``direction`` (pointing toward the light). At most one."""
+        d = _vec3(direction, "direction")
+        if not np.linalg.norm(d) > 0:
+            raise ValueError("direction: must be non-zero")
+        e = np.broadcast_to(np.asarray(irradiance, dtype=np.float64), (3,))
+        if not np.all(np.isfinite(e)) or np.any(e < 0):
+            raise ValueError("irradiance: must be finite and >= 0")
+        if self.lights:
+            raise ValueError("lights: only one directional light is supported")
+        self.lights.append(dict(direction=d / np.linalg.norm(d), irradiance=e.copy()))
+        return self
+
+    def look_at(self, origin, target, up=(0.0, 1.0, 0.0), fov=None) -> "Scene":
+        """Sets the camera (``fov`` in degrees, full horizontal; kept if None)."""
+        self.camera = Camera(tuple(_vec3(origin, "origin")), tuple(_vec3(target, "target")),
+                             tuple(_vec3(up, "up")), self.camera.fov if fov is None else float(fov))
+        self.camera._checked()
+        return self
+
+    def _build(self, envmap=None):
+        """The C++ scene: materials, Embree geometry, lighting (committed)."""
+        s = _core.RenderScene()
+        mats = {}
+
+        def mat(m):
+            key = id(m)
+            if key not in mats:
+                mats[key] = s.add_material(m)
+            return mats[key]
+
+        for ob in self.objects:
+            a = mat(ob["material"])
+            b = mat(ob["checker"]) if ob.get("checker") is not None else a
+            cs = ob.get("checker_size", 0.0) if ob.get("checker") is not None else 0.0
+            if ob["kind"] == "sphere":
+                s.add_sphere(ob["center"].tolist(), ob["radius"], a, b, cs)
+            else:
+                s.add_mesh(np.ascontiguousarray(ob["vertices"], dtype=np.float32),
+                           np.ascontiguousarray(ob["indices"], dtype=np.int64), a, b, cs)
+        kind, val = _environment(self.environment if envmap is None else envmap)
+        if kind == "constant":
+            s.set_environment_constant(list(val))
+        else:
+            s.set_environment_latlong(val)
+        for light in self.lights:
+            s.set_directional(light["direction"].tolist(), light["irradiance"].tolist())
+        s.commit()
+        return s
+
+
+def default_scene(model, *, shape=None, envmap=None) -> Scene:
+    """The preview scene: ``model`` on a unit sphere (or ``shape``: a mesh file path or a
+    ``(vertices, indices)`` pair, fitted to the same place) standing on a grey checkerboard
+    ground, seen from the front, under ``envmap`` (default: the procedural sky)."""
+    sc = Scene(environment="sky" if envmap is None else envmap)
+    if shape is None or (isinstance(shape, str) and shape == "sphere"):
+        sc.add_sphere(model, center=(0.0, 1.0, 0.0), radius=1.0)
+    elif isinstance(shape, (str, os.PathLike)):
+        sc.add_mesh(model, shape, fit=True)
+    else:
+        v, i = shape
+        sc.add_mesh(model, v, i, fit=True)
+    sc.add_ground()
+    return sc
+
+
+def gallery_scene(models, *, columns=4, envmap=None, spacing=2.5, aspect=2.0) -> Scene:
+    """One unit sphere per model on the checkerboard ground, in rows of ``columns`` from the
+    back row to the front, left to right (rows staggered by half a spacing), framed for an
+    image of width / height = ``aspect`` (camera fov 40 degrees)."""
+    models = list(models)
+    if not models:
+        raise ValueError("models: need at least one model")
+    columns = max(1, min(int(columns), len(models)))
+    rows = math.ceil(len(models) / columns)
+    sc = Scene(environment="sky" if envmap is None else envmap)
+    row_gap = 0.8 * spacing
+    for k, m in enumerate(models):
+        r, c = divmod(k, columns)
+        x = (c - (columns - 1) / 2 + (0.25 if r % 2 == 0 else -0.25) * (rows > 1)) * spacing
+        z = (r - (rows - 1) / 2) * row_gap
+        sc.add_sphere(m, center=(x, 1.0, z), radius=1.0)
+    fov = 40.0
+    half_w = ((columns - 1) / 2 + 0.25 * (rows > 1)) * spacing + 1.35
+    depth = (rows - 1) * row_gap
+    dist = half_w / math.tan(math.radians(fov / 2)) + depth / 2 + 1.0
+    # tilt down ~9 degrees; keep the spheres' vertical extent inside the frame for this aspect
+    dist = max(dist, (1.7 + depth * 0.35) * aspect / math.tan(math.radians(fov / 2)))
+    sc.camera = Camera(origin=(0.0, 1.0 + 0.16 * dist, depth / 2 + dist), target=(0.0, 0.95, 0.0),
+                       up=(0.0, 1.0, 0.0), fov=fov)
+    sc.add_ground()
+    return sc
+
+
+#: Gallery output size and quality of ``python -m bsdfkit demo``.
+GALLERY_SIZE = (640, 320)
+GALLERY_SPP = 48
+
+
+def write_gallery(outdir, configs, *, size=GALLERY_SIZE, spp=GALLERY_SPP, progress=True, verbose=True):
+    """Renders one sphere per (name, model) of ``configs`` with :func:`gallery_scene` under the
+    default sky and writes ``gallery.exr`` (linear radiance) and ``gallery.png`` (sRGB);
+    returns the two paths."""
+    from .io import write_image
+    names = [n for n, _ in configs]
+    sc = gallery_scene([m for _, m in configs], aspect=size[0] / size[1])
+    img = render(sc, width=size[0], height=size[1], spp=spp, progress=progress)
+    paths = [os.path.join(outdir, "gallery.exr"), os.path.join(outdir, "gallery.png")]
+    write_image(paths[0], img)
+    write_image(paths[1], img)
+    if verbose:
+        cols = 4
+        rows = [names[i:i + cols] for i in range(0, len(names), cols)]
+        print("gallery spheres (back row first, left to right): " +
+              " | ".join(", ".join(r) for r in rows))
+    return paths
+
+
+# ---------------------------------------------------------------- rendering
+
+def _check_int(v, name, lo):
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)):
+        raise ValueError(f"{name}: expected an integer, got {v!r}")
+    if v < lo:
+        raise ValueError(f"{name}: must be >= {lo}, got {v}")
+    return int(v)
+
+
+class _Progress:
+    """A one-line text progress bar on stderr, shown only for renders expected to last > 1 s."""
+
+    def __init__(self, enabled, total, label):
+        self.enabled, self.total, self.label = enabled, total, label
+        self.t0 = time.perf_counter()
+        self.shown = False
+
+    def update(self, done):
+        if not self.enabled:
+            return
+        el = time.perf_counter() - self.t0
+        eta = el / done * (self.total - done) if done else float("inf")
+        if not self.shown and el + eta < 1.0:
+            return
+        self.shown = True
+        n = 30
+        k = int(n * done / self.total)
+        sys.stderr.write(f"\r{self.label} [{'#' * k}{'.' * (n - k)}] {done}/{self.total} spp "
+                         f"{el:5.1f} s, ~{eta:4.1f} s left ")
+        sys.stderr.flush()
+
+    def close(self, note=""):
+        if self.shown:
+            sys.stderr.write(f"{note}\n")
+            sys.stderr.flush()
+
+
+def render(scene: Scene, *, envmap=None, width=256, height=256, spp=64, max_depth=8, seed=0, progress=True,
+           interrupt="raise", return_stats=False):
+    """Renders a :class:`Scene`; see :func:`preview` for the arguments.
+
+    With ``return_stats=True`` returns ``(image, stats)``, stats a dict with ``seconds``
+    (wall time of the path tracing), ``build_seconds`` (scene and BVH), ``rays`` (camera,
+    bounce and shadow rays traced), ``spp`` and ``nonfinite`` (discarded NaN/Inf path samples).
+    """
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene: expected a bsdfkit.render.Scene, got {type(scene).__name__}")
+    width = _check_int(width, "width", 1)
+    height = _check_int(height, "height", 1)
+    spp = _check_int(spp, "spp", 1)
+    max_depth = _check_int(max_depth, "max_depth", 0)
+    seed = _check_int(seed, "seed", 0) & 0xFFFFFFFFFFFFFFFF
+    if width * height > 1 << 26:
+        raise ValueError("width * height: at most 2**26 pixels")
+    if interrupt not in ("raise", "return"):
+        raise ValueError(f"interrupt: must be 'raise' or 'return', got {interrupt!r}")
+    o, t, u, fov = scene.camera._checked()
+
+    t0 = time.perf_counter()
+    core = scene._build(envmap)
+    t1 = time.perf_counter()
+    acc = np.zeros((height, width, 3), np.float64)
+    scratch = np.empty_like(acc)
+    done, rays, nonfinite = 0, 0, 0
+    bar = _Progress(progress, spp, f"render {width}x{height}")
+    try:
+        k = 1
+        while done < spp:
+            k = min(k, spp - done)
+            np.copyto(scratch, acc)
+            ts = time.perf_counter()
+            _, r, nf = core.render(o, t, u, fov, max_depth, seed, done, done + k, scratch)
+            dt = time.perf_counter() - ts
+            acc, scratch = scratch, acc
+            done += k
+            rays += r
+            nonfinite += nf
+            bar.update(done)
+            # passes of ~0.25 s: responsive progress; the result does not depend on the split
+            k = max(1, min(4 * k, int(k * 0.25 / max(dt, 1e-6))))
+    except KeyboardInterrupt as e:
+        bar.close(" interrupted")
+        partial = (acc / done).astype(np.float32) if done else None
+        if interrupt == "return" and partial is not None:
+            warnings.warn(f"render interrupted: returning the image after {done} of {spp} spp", RuntimeWarning,
+                          stacklevel=2)
+            return (partial, dict(seconds=time.perf_counter() - t1, build_seconds=t1 - t0, rays=rays, spp=done,
+                                  nonfinite=nonfinite)) if return_stats else partial
+        e.image = partial
+        e.spp_done = done
+        raise
+    bar.close()
+    img = (acc / spp).astype(np.float32)
+    if return_stats:
+        return img, dict(seconds=time.perf_counter() - t1, build_seconds=t1 - t0, rays=rays, spp=spp,
+                         nonfinite=nonfinite)
+    return img
+
+
+def preview(model_or_scene, envmap=None, width=256, height=256, spp=64, max_depth=8, seed=0, progress=True, *,
+            shape=None, interrupt="raise", return_stats=False):
+    """Path-traced image of a material, float32 (height, width, 3) linear radiance.
+
+    model_or_scene: a bsdfkit model (shown on a unit sphere, or on ``shape``, standing on a
+        checkerboard ground; see :func:`default_scene`) or a :class:`Scene`.
+    envmap: environment, overriding the scene's: ``"sky"`` (procedural default), ``"studio"``,
+        ``"white"`` (uniform radiance 1), a lat-long EXR/HDR/PNG path, an (H, W, 3) array, or a
+        constant radiance. A missing or unreadable file raises FileNotFoundError / OSError naming
+        the file with OpenImageIO's reason.
+    width, height, spp: image size and samples per pixel (>= 1). max_depth: scattering events
+        per path (>= 0; Mitsuba's max_depth is ours + 1). seed: the image is a deterministic
+        function of the seed, independent of the thread count.
+    progress: a text progress bar on stderr for renders longer than about a second.
+    interrupt: on Ctrl-C, ``"raise"`` (default) re-raises KeyboardInterrupt carrying
+        ``.image`` (the completed passes' average, or None) and ``.spp_done``; ``"return"``
+        returns that partial image with a RuntimeWarning.
+
+    Write the result with ``bk.io.write_image("x.png", img, exposure=0)`` (sRGB PNG) or ".exr".
+    """
+    if isinstance(model_or_scene, Scene):
+        if shape is not None:
+            raise ValueError("shape: only accepted with a model, not a Scene")
+        scene = model_or_scene
+    else:
+        scene = default_scene(_model_check(model_or_scene, "model_or_scene"), shape=shape)
+    return render(scene, envmap=envmap, width=width, height=height, spp=spp, max_depth=max_depth, seed=seed,
+                  progress=progress, interrupt=interrupt, return_stats=return_stats)
+
+
+# ---------------------------------------------------------------- model specs (CLI)
+
+_SPEC_NAMES = {
+    "diffuse": "Diffuse", "lambert": "Diffuse",
+    "diffusetransmission": "DiffuseTransmission", "difftrans": "DiffuseTransmission",
+    "conductor": "Conductor", "metal": "Conductor",
+    "dielectric": "Dielectric", "glass": "Dielectric",
+    "thindielectric": "ThinDielectric", "thin": "ThinDielectric",
+}
+
+
+def _spec_value(text):
+    parts = text.split(",")
+    try:
+        vals = [float(p) for p in parts]
+    except ValueError:
+        return text
+    return vals[0] if len(vals) == 1 else vals
+
+
+def parse_spec(spec):
+    """A model from a readable spec: ``"conductor metal=Cu alpha=0.2"``, ``"diffuse 0.8,0.5,0.2"``,
+    ``"dielectric eta=1.5 alpha=0.1"``, ``"thindielectric"``, ``"difftrans 0.5 0.4"``.
+
+    The first word names the model (class name, case-insensitive, or an alias: lambert, metal,
+    glass, thin, difftrans); then positional values and ``key=value`` pairs of the constructor
+    (RGB as ``r,g,b``). For conductors ``metal=NAME`` uses ``Conductor.from_metal`` and
+    ``reflectance=`` ``Conductor.from_reflectance``. Raises ValueError on anything else."""
+    from . import _models
+
+    words = spec.split() if isinstance(spec, str) else list(spec)
+    if not words:
+        raise ValueError("spec: empty model spec")
+    name = words[0].lower().replace("_", "").replace("-", "")
+    if name not in _SPEC_NAMES:
+        raise ValueError(f"spec: unknown model {words[0]!r}; known: {', '.join(sorted(set(_SPEC_NAMES)))}")
+    cls = getattr(_models, _SPEC_NAMES[name])
+    args, kwargs = [], {}
+    for w in words[1:]:
+        if "=" in w:
+            k, v = w.split("=", 1)
+            if not k:
+                raise ValueError(f"spec: bad parameter {w!r}")
+            kwargs[k] = _spec_value(v)
+        else:
+            if kwargs:
+                raise ValueError(f"spec: positional value {w!r} after key=value parameters")
+            args.append(_spec_value(w))
+    try:
+        if cls is _models.Conductor and "metal" in kwargs:
+            return cls.from_metal(str(kwargs.pop("metal")), *args, **kwargs)
+        if cls is _models.Conductor and "reflectance" in kwargs:
+            return cls.from_reflectance(kwargs.pop("reflectance"), *args, **kwargs)
+        return cls(*args, **kwargs)
+    except TypeError as e:
+        raise ValueError(f"spec: {e}") from None
+
+
+# ---------------------------------------------------------------- command line (python -m bsdfkit render)
+
+def _spec_parser():
+    """The model-spec parser: the shared one of ``bsdfkit._spec`` (the ``lobes`` command's) when
+    present, else :func:`parse_spec` (same format)."""
+    try:
+        from ._spec import parse_spec as shared
+    except ImportError:
+        return parse_spec
+
+    def parse(text):
+        m = shared(text)
+        return m if hasattr(m, "_core") else parse_spec(text)
+    return parse
+
+
+def _add_render_command(sub) -> None:
+    r = sub.add_parser("render", help="path-trace one material on a sphere (or a mesh) under an environment",
+                       description="Render MODEL-SPEC, e.g. 'conductor metal=Cu alpha=0.2', 'diffuse 0.8,0.5,0.2', "
+                                   "'dielectric eta=1.5 alpha=0.1', 'thindielectric', 'difftrans 0.5 0.4', on a unit "
+                                   "sphere standing on a checkerboard ground. Writes PNG (sRGB) or EXR (linear) by "
+                                   "the extension of --output. Ctrl-C stops early and writes what was rendered.")
+    r.add_argument("spec", nargs="+", metavar="MODEL-SPEC", help="model name followed by its parameters")
+    r.add_argument("-o", "--output", default="render.png", metavar="PATH", help="output image (default: render.png)")
+    r.add_argument("--env", default="sky", metavar="ENV",
+                   help="sky (default), studio, white, or a lat-long EXR/HDR/PNG file")
+    r.add_argument("--shape", default=None, metavar="MESH", help="OBJ/PLY/... mesh instead of the sphere")
+    r.add_argument("--width", type=int, default=256)
+    r.add_argument("--height", type=int, default=256)
+    r.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
+    r.add_argument("--max-depth", type=int, default=8, help="scattering events per path (default 8)")
+    r.add_argument("--seed", type=int, default=0)
+    r.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops (default 0)")
+    r.add_argument("--threads", type=int, default=None, help="worker threads (default: all cores)")
+    r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+
+
+def _run_render_command(args) -> int:
+    from . import set_num_threads
+    from .io import write_image
+
+    try:
+        model = _spec_parser()(" ".join(args.spec))
+    except ValueError as e:
+        sys.stderr.write(f"bsdfkit render: {e}\n")
+        return 2
+    try:
+        if args.threads is not None:
+            set_num_threads(args.threads)
+        img = preview(model, envmap=args.env, width=args.width, height=args.height, spp=args.spp,
+                      max_depth=args.max_depth, seed=args.seed, progress=not args.quiet, shape=args.shape)
+    except KeyboardInterrupt as e:
+        partial = getattr(e, "image", None)
+        if partial is not None:
+            write_image(args.output, partial, exposure=args.exposure)
+            sys.stderr.write(f"bsdfkit render: interrupted; wrote {args.output} after {e.spp_done} spp\n")
+        else:
+            sys.stderr.write("bsdfkit render: interrupted\n")
+        return 130
+    except (ValueError, TypeError, OSError) as e:
+        sys.stderr.write(f"bsdfkit render: {e}\n")
+        return 1
+    try:
+        write_image(args.output, img, exposure=args.exposure)
+    except (ValueError, OSError) as e:
+        sys.stderr.write(f"bsdfkit render: {e}\n")
+        return 1
+    print(os.path.abspath(args.output))
+    return 0
