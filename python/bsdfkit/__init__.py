@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _core
+from . import _core, io
 from ._enums import BxDFFlags, ReflTrans, TransportMode
 from ._models import (METALS, BxDF, Conductor, Dielectric, Diffuse, DiffuseTransmission, SampleResult,
                       ThinDielectric, roughness_to_alpha)
