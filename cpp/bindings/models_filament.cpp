@@ -97,6 +97,36 @@ filament::DiffuseTerm to_diffuse(int d) {
     return filament::DiffuseTerm(d);
 }
 
+template <template <typename> class Model> void bind_standard(py::module_ &m, const char *name) {
+    bind_model<Model>(m, name).def(py::init([](const RGB &base, double metallic, double roughness, double reflectance,
+                                               double anisotropy, double clear_coat, double clear_coat_roughness,
+                                               const RGB &sheen, double sheen_roughness, int diffuse, int visibility,
+                                               bool f90_filament, bool energy_compensation,
+                                               double min_perceptual_roughness, int layering,
+                                               bool clear_coat_ior_change, const PyDFG &dfg) {
+        if (visibility != 0 && visibility != 1) value_error("visibility: must be 'correlated' or 'fast'");
+        if (layering != 0 && layering != 1) value_error("clear_coat_layering: must be 'code' or 'doc'");
+        FilamentStandardParams p;
+        p.base_color = base;
+        p.metallic = metallic;
+        p.roughness = roughness;
+        p.reflectance = reflectance;
+        p.anisotropy = anisotropy;
+        p.clear_coat = clear_coat;
+        p.clear_coat_roughness = clear_coat_roughness;
+        p.sheen_color = sheen;
+        p.sheen_roughness = sheen_roughness;
+        p.diffuse = to_diffuse(diffuse);
+        p.visibility = filament::VisibilityTerm(visibility);
+        p.f90_filament = f90_filament;
+        p.energy_compensation = energy_compensation;
+        p.min_perceptual_roughness = min_perceptual_roughness;
+        p.layering = filament::Layering(layering);
+        p.clear_coat_ior_change = clear_coat_ior_change;
+        return PyModel<Model>{Model<float>::make(p, dfg.table), Model<double>::make(p, dfg.table)};
+    }));
+}
+
 } // namespace
 
 void bind_filament_models(py::module_ &m) {
@@ -133,59 +163,12 @@ void bind_filament_models(py::module_ &m) {
         return f32 ? term_t<float>(name, args) : term_t<double>(name, args);
     });
 
-    // Two classes for the standard model: without sheen (vectorizable, the common case) and with.
-    auto standard_params = [](const RGB &base, double metallic, double roughness, double reflectance,
-                              double anisotropy, double clear_coat, double clear_coat_roughness, const RGB &sheen,
-                              double sheen_roughness, int diffuse, int visibility, bool f90_filament,
-                              bool energy_compensation, double min_perceptual_roughness, int layering,
-                              bool clear_coat_ior_change) {
-        if (visibility != 0 && visibility != 1) value_error("visibility: must be 'correlated' or 'fast'");
-        if (layering != 0 && layering != 1) value_error("clear_coat_layering: must be 'code' or 'doc'");
-        FilamentStandardParams p;
-        p.base_color = base;
-        p.metallic = metallic;
-        p.roughness = roughness;
-        p.reflectance = reflectance;
-        p.anisotropy = anisotropy;
-        p.clear_coat = clear_coat;
-        p.clear_coat_roughness = clear_coat_roughness;
-        p.sheen_color = sheen;
-        p.sheen_roughness = sheen_roughness;
-        p.diffuse = to_diffuse(diffuse);
-        p.visibility = filament::VisibilityTerm(visibility);
-        p.f90_filament = f90_filament;
-        p.energy_compensation = energy_compensation;
-        p.min_perceptual_roughness = min_perceptual_roughness;
-        p.layering = filament::Layering(layering);
-        p.clear_coat_ior_change = clear_coat_ior_change;
-        return p;
-    };
-    bind_model<FilamentStandardBxDF>(m, "FilamentStandard")
-        .def(py::init([standard_params](const RGB &base, double metallic, double roughness, double reflectance,
-                                        double anisotropy, double clear_coat, double clear_coat_roughness,
-                                        double sheen_roughness, int diffuse, int visibility, bool f90_filament,
-                                        bool energy_compensation, double min_perceptual_roughness, int layering,
-                                        bool clear_coat_ior_change, const PyDFG &dfg) {
-            FilamentStandardParams p = standard_params(
-                base, metallic, roughness, reflectance, anisotropy, clear_coat, clear_coat_roughness, RGB{0, 0, 0},
-                sheen_roughness, diffuse, visibility, f90_filament, energy_compensation, min_perceptual_roughness,
-                layering, clear_coat_ior_change);
-            return PyModel<FilamentStandardBxDF>{FilamentStandardBxDF<float>::make(p, dfg.table),
-                                                 FilamentStandardBxDF<double>::make(p, dfg.table)};
-        }));
-    bind_model<FilamentStandardSheenBxDF>(m, "FilamentStandardSheen")
-        .def(py::init([standard_params](const RGB &base, double metallic, double roughness, double reflectance,
-                                        double anisotropy, double clear_coat, double clear_coat_roughness,
-                                        const RGB &sheen, double sheen_roughness, int diffuse, int visibility,
-                                        bool f90_filament, bool energy_compensation, double min_perceptual_roughness,
-                                        int layering, bool clear_coat_ior_change, const PyDFG &dfg) {
-            FilamentStandardParams p = standard_params(
-                base, metallic, roughness, reflectance, anisotropy, clear_coat, clear_coat_roughness, sheen,
-                sheen_roughness, diffuse, visibility, f90_filament, energy_compensation, min_perceptual_roughness,
-                layering, clear_coat_ior_change);
-            return PyModel<FilamentStandardSheenBxDF>{FilamentStandardSheenBxDF<float>::make(p, dfg.table),
-                                                      FilamentStandardSheenBxDF<double>::make(p, dfg.table)};
-        }));
+    // Four classes for the standard model: with or without the clear-coat and the sheen lobes, so
+    // that the common case carries neither (and vectorizes); Python picks one (_filament_models.py).
+    bind_standard<FilamentStandardBxDF>(m, "FilamentStandard");
+    bind_standard<FilamentStandardCoatBxDF>(m, "FilamentStandardCoat");
+    bind_standard<FilamentStandardSheenBxDF>(m, "FilamentStandardSheen");
+    bind_standard<FilamentStandardCoatSheenBxDF>(m, "FilamentStandardCoatSheen");
 
     bind_model<FilamentClothBxDF>(m, "FilamentCloth")
         .def(py::init([](const RGB &base, const RGB &sheen, const RGB &subsurface, bool has_subsurface,

@@ -134,12 +134,15 @@ class FilamentStandard(BxDF):
         return _min_pr(self._params["min_roughness"])
 
     def _make_core(self):
-        # Two compiled variants: with a sheen lobe (whose pow() keeps the kernels scalar) or without.
+        # Four compiled variants, with or without the clear-coat and the sheen lobes (absent lobes
+        # cost nothing; the sheen lobe's pow() keeps a kernel scalar); each equals the general
+        # model with the missing lobe's strength 0.
         p = self._params
-        sheen = [p["sheen_color"].tolist()] if np.max(p["sheen_color"]) > 0 else []
-        cls = _core.FilamentStandardSheen if sheen else _core.FilamentStandard
+        coat, sheen = p["clear_coat"] > 0, float(np.max(p["sheen_color"])) > 0
+        cls = {(False, False): _core.FilamentStandard, (True, False): _core.FilamentStandardCoat,
+               (False, True): _core.FilamentStandardSheen, (True, True): _core.FilamentStandardCoatSheen}[coat, sheen]
         return cls(p["base_color"].tolist(), p["metallic"], p["roughness"], p["reflectance"], p["anisotropy"],
-                   p["clear_coat"], p["clear_coat_roughness"], *sheen, p["sheen_roughness"],
+                   p["clear_coat"], p["clear_coat_roughness"], p["sheen_color"].tolist(), p["sheen_roughness"],
                    _DIFFUSE[p["diffuse"]], _VISIBILITY[p["visibility"]], _F90[p["f90"]], p["energy_compensation"],
                    _min_pr(p["min_roughness"]), _LAYERING[p["clear_coat_layering"]], p["clear_coat_ior_change"],
                    _fil._table(p["dfg_lut_size"]))

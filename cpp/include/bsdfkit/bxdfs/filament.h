@@ -206,10 +206,10 @@ struct FilamentStandardParams {
 
 // Written for the batch kernels' vectorizer: uniform switches are stored as F (0 or 1) and
 // applied with compares/selects or as arithmetic factors (a bool loaded from the model cannot
-// mask a float vector), the clear coat is always evaluated (clear_coat = 0 zeroes it), and the
-// sheen lobe, whose pow() has no vector form, is a compile-time variant (Sheen = true), so the
-// common case has no call and no branch per element.
-template <typename F, bool Sheen> struct FilamentStandardT {
+// mask a float vector), and the optional lobes are compile-time variants: Coat (a lobe the
+// common case should not pay for) and Sheen (whose pow() has no vector form), so the common
+// case has no call and no branch per element.
+template <typename F, bool Coat, bool Sheen> struct FilamentStandardT {
     // Derived at construction (surface_shading_lit.fs getPixelParams), see make().
     Spectrum<F> diffuse_color{F(0)}, f0{F(0)}, sheen_color{F(0)};
     F f90 = 1;
@@ -249,7 +249,7 @@ template <typename F, bool Sheen> struct FilamentStandardT {
         m.alpha = F(a);
         m.spec = TrowbridgeReitz<F>(F(at), F(ab), Masking::Correlated);
         m.coat = TrowbridgeReitz<F>(F(cc_pr * cc_pr), F(cc_pr * cc_pr), Masking::Correlated);
-        m.clear_coat = F(cc);
+        m.clear_coat = Coat ? F(cc) : F(0);
         double s_pr = clamp(p.sheen_roughness, min_pr, 1.0);  // getSheenPixelParams
         m.sheen_alpha = F(s_pr * s_pr);
         m.sheen_max = m.sheen_color.max_component();
@@ -297,9 +297,8 @@ template <typename F, bool Sheen> struct FilamentStandardT {
         F Vi = fast_v > F(0) ? V_SmithGGXCorrelated_Fast(spec.alpha_x, NoV, NoL)
                              : V_SmithGGXCorrelated(spec.alpha_x, NoV, NoL);
         F V = anisotropic > F(0) ? Va : Vi;
-        // Clear coat Fresnel (clearCoatLobe): Fc = F_Schlick(0.04, 1, LoH) clearCoat (0 without a coat)
-        F Fc = F_Schlick(F(kClearCoatF0), F(1), LoH) * clear_coat;
-        F att = F(1) - Fc;
+        // Clear coat Fresnel (clearCoatLobe): Fc = F_Schlick(0.04, 1, LoH) clearCoat
+        F Fc = Coat ? F_Schlick(F(kClearCoatF0), F(1), LoH) * clear_coat : F(0);
         Spectrum<F> Fr = F_Schlick(f0, f90, LoH) * (D * V * (F(1) - doc_layering * Fc)) * Ec(NoV);
         // Diffuse lobe (diffuseLobe)
         F fd = burley > F(0) ? Fd_Burley(alpha, NoV, NoL, LoH) : Fd_Lambert<F>();
@@ -311,7 +310,7 @@ template <typename F, bool Sheen> struct FilamentStandardT {
         }
         // Clear coat lobe D_GGX(alpha_c) V_Kelemen(LoH) Fc on top of the attenuated base
         // (V Fc first: with clear_coat = 0 the product is 0 even where V is huge)
-        color = color * att + Spectrum<F>(D_GGX(coat, h) * (V_Kelemen(LoH) * Fc));
+        if constexpr (Coat) color = color * (F(1) - Fc) + Spectrum<F>(D_GGX(coat, h) * (V_Kelemen(LoH) * Fc));
         return select(active, color, Spectrum<F>(F(0)));
     }
 
@@ -322,16 +321,18 @@ template <typename F, bool Sheen> struct FilamentStandardT {
     };
     Lobes lobes(F NoV) const {
         using namespace filament;
-        F att = F(1) - F_Schlick(F(kClearCoatF0), F(1), NoV) * clear_coat;
+        F att = Coat ? F(1) - F_Schlick(F(kClearCoatF0), F(1), NoV) * clear_coat : F(1);
         F x = dfg_base(NoV, 0), y = dfg_base(NoV, 1);
         F scale = sheen_scaling(NoV);
         // Schlick GGX albedo f0 (y - x) + f90 x (DFG reconstruction with f90)
         Spectrum<F> es = (f0 * (y - x) + Spectrum<F>(f90 * x)) * Ec(NoV);
         F w_spec = es.max_component() * scale * att * (F(1) - doc_layering * (F(1) - att));
         F w_diff = diffuse_max * scale * att;
-        F xc = dfg_coat(NoV, 0), yc = dfg_coat(NoV, 1);
-        F w_coat = clear_coat * (F(kClearCoatF0) * (yc - xc) + xc);
-        F w_sheen = F(0);
+        F w_coat = F(0), w_sheen = F(0);
+        if constexpr (Coat) {
+            F xc = dfg_coat(NoV, 0), yc = dfg_coat(NoV, 1);
+            w_coat = clear_coat * (F(kClearCoatF0) * (yc - xc) + xc);
+        }
         if constexpr (Sheen) w_sheen = sheen_max * dfg_sheen(NoV, 2) * att;
         F total = w_spec + w_diff + w_sheen + w_coat;
         bool ok = total > F(0);
@@ -352,7 +353,7 @@ template <typename F, bool Sheen> struct FilamentStandardT {
         F c_diff = l.diffuse, c_cos = c_diff + l.sheen_cos, c_ggx = c_cos + l.ggx, c_coat = c_ggx + l.coat;
         bool pick_cos = uc < c_cos;
         bool pick_ggx = !pick_cos && uc < c_ggx;
-        bool pick_coat = !pick_cos && !pick_ggx && uc < c_coat && l.coat > F(0);
+        bool pick_coat = Coat && !pick_cos && !pick_ggx && uc < c_coat && l.coat > F(0);
         // One visible-normal sample for whichever GGX lobe was picked
         TrowbridgeReitz<F> d;
         d.alpha_x = pick_coat ? coat.alpha_x : spec.alpha_x;
@@ -381,8 +382,8 @@ template <typename F, bool Sheen> struct FilamentStandardT {
         h = h / std::sqrt(active ? len2 : F(1));
         Lobes l = lobes(max_(wo.z, F(kMinNoV)));
         F jac = F(1) / (F(4) * absdot(wo, h));  // reflection Jacobian dwm/dwi
-        F p = (l.diffuse + l.sheen_cos) * CosineHemispherePDF(wi.z) + l.ggx * spec.PDF(wo, h) * jac +
-              l.coat * coat.PDF(wo, h) * jac;
+        F p = (l.diffuse + l.sheen_cos) * CosineHemispherePDF(wi.z) + l.ggx * spec.PDF(wo, h) * jac;
+        if constexpr (Coat) p += l.coat * coat.PDF(wo, h) * jac;
         if constexpr (Sheen) p += l.charlie * CharliePDF(sheen_alpha, h) * jac;
         return active ? p : F(0);
     }
@@ -393,9 +394,12 @@ template <typename F, bool Sheen> struct FilamentStandardT {
     }
 };
 
-// The two variants the bindings expose (Python picks by whether sheen_color is non-zero).
-template <typename F> using FilamentStandardBxDF = FilamentStandardT<F, false>;
-template <typename F> using FilamentStandardSheenBxDF = FilamentStandardT<F, true>;
+// The variants the bindings expose (Python picks by whether clear_coat and sheen_color are non-zero);
+// a variant without a lobe equals the general model with that lobe's strength 0.
+template <typename F> using FilamentStandardBxDF = FilamentStandardT<F, false, false>;
+template <typename F> using FilamentStandardCoatBxDF = FilamentStandardT<F, true, false>;
+template <typename F> using FilamentStandardSheenBxDF = FilamentStandardT<F, false, true>;
+template <typename F> using FilamentStandardCoatSheenBxDF = FilamentStandardT<F, true, true>;
 
 // ====================================================================== cloth model
 
