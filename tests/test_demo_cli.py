@@ -7,7 +7,7 @@ import sys
 import numpy as np
 import pytest
 
-matplotlib = pytest.importorskip("matplotlib")
+import matplotlib
 matplotlib.use("Agg")
 import matplotlib.image as mimage  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
@@ -40,7 +40,7 @@ def demo_dir(tmp_path_factory):
 
 
 def test_demo_writes_pngs(demo_dir):
-    for name, min_h, min_w in (("lobes.png", 1000, 800), ("albedo.png", 400, 800)):
+    for name, min_h, min_w in (("lobes.png", 1000, 800), ("albedo.png", 400, 800), ("views.png", 1500, 1000)):
         path = demo_dir / name
         assert path.is_file() and path.stat().st_size > 10_000
         img = mimage.imread(str(path))
@@ -73,8 +73,8 @@ def test_demo_markdown_one_row_per_configuration(demo_dir):
 def test_run_demo_returns_paths(tmp_path):
     # run_demo itself (the CLI path is covered by the demo_dir fixture)
     paths = run_demo(str(tmp_path / "d"), verbose=False)
-    assert [os.path.basename(p) for p in paths] == ["lobes.png", "albedo.png", "albedo.md", "gallery.exr",
-                                                    "gallery.png"]
+    assert [os.path.basename(p) for p in paths] == ["lobes.png", "albedo.png", "albedo.md", "views.png",
+                                                    "gallery.exr", "gallery.png"]
     assert all(os.path.getsize(p) > 0 for p in paths)
 
 
@@ -113,7 +113,7 @@ def _recompute(model, theta_deg, theta_o, phi_plane, channel="luminance"):
 @pytest.mark.parametrize("theta_o, phi_plane", [(30.0, 0.0), (55.0, 40.0)])
 def test_polar_data_matches_eval_conductor(theta_o, phi_plane):
     m = bk.Conductor.from_metal("Au", alpha_x=0.3, alpha_y=0.1)   # anisotropic: the plane matters
-    ax = bkplot.polar(m, theta_o=theta_o, phi_plane=phi_plane)
+    ax = bkplot.polar(m, theta_o=theta_o, phi_plane=phi_plane, cosine=True)
     d = ax.bsdfkit_data
     assert ax.name == "polar"
     assert len(d["value"]) == len(d["theta_deg"]) == 1
@@ -125,14 +125,14 @@ def test_polar_data_matches_eval_conductor(theta_o, phi_plane):
     assert val[np.abs(th) < 90].max() > 0.1
     assert np.all(val[np.abs(th) > 90] == 0)   # no transmission
     # RGB channel
-    ax = bkplot.polar(m, theta_o=theta_o, phi_plane=phi_plane, channel="rgb")
+    ax = bkplot.polar(m, theta_o=theta_o, phi_plane=phi_plane, channel="rgb", cosine=True)
     np.testing.assert_allclose(ax.bsdfkit_data["value"][0], _recompute(m, th, theta_o, phi_plane, "rgb"),
                                rtol=1e-12, atol=1e-14)
 
 
 def test_polar_data_matches_eval_dielectric_both_halves():
     m = bk.Dielectric(1.5, alpha=0.3)
-    ax = bkplot.polar([m, bk.Diffuse(0.5)], theta_o=40)
+    ax = bkplot.polar([m, bk.Diffuse(0.5)], theta_o=40, cosine=True)
     d = ax.bsdfkit_data
     assert len(d["value"]) == 2 and len(d["label"]) == 2
     th, val = np.asarray(d["theta_deg"][0]), np.asarray(d["value"][0])

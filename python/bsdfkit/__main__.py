@@ -1,5 +1,5 @@
-"""Command line: ``python -m bsdfkit demo [-o DIR]``, ``python -m bsdfkit render MODEL-SPEC -o x.png``
-(also installed as ``bsdfkit``)."""
+"""Command line: ``python -m bsdfkit demo [-o DIR]``, ``python -m bsdfkit lobes MODEL-SPEC --theta 30 -o lobes.png``,
+``python -m bsdfkit render MODEL-SPEC -o x.png`` (also installed as ``bsdfkit``)."""
 from __future__ import annotations
 
 import argparse
@@ -13,14 +13,97 @@ def _parser() -> argparse.ArgumentParser:
                                 description="bsdfkit: pbrt-v4 BSDFs over numpy arrays.")
     p.add_argument("--version", action="version", version=f"bsdfkit {__version__}")
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
-    d = sub.add_parser("demo", help="write lobe plots, albedo plots and an albedo table",
+    d = sub.add_parser("demo", help="write lobe plots, albedo plots, an albedo table, all views and renders",
                        description="Write lobes.png (polar lobe slices of every model at θo = 0, 30, 60, "
-                                   "80°), albedo.png (directional albedo vs θo) and albedo.md (albedo table).")
+                                   "80°), albedo.png (directional albedo vs θo), albedo.md (albedo table), "
+                                   "views.png (3D lobe, image over directions, θh × θd slice and sampling "
+                                   "check of every model) and the rendered gallery.")
     d.add_argument("-o", "--outdir", default="bsdfkit-demo", metavar="DIR",
                    help="output directory, created if missing (default: ./bsdfkit-demo)")
+    _add_lobes_command(sub)
     from .render import _add_render_command
     _add_render_command(sub)
     return p
+
+
+# ---------------------------------------------------------------- python -m bsdfkit lobes
+
+_LOBES_EXAMPLES = ("conductor metal=Cu alpha=0.2", "dielectric eta=1.5 alpha=0.3", "diffuse 0.8,0.5,0.2",
+                   "difftrans 0.5 0.4", "conductor metal=Au alpha=0.1 + diffuse 0.5")
+
+
+def _add_lobes_command(sub) -> None:
+    from .plot import VIEWS  # matplotlib is imported lazily by plot.py, not here
+
+    lo = sub.add_parser(
+        "lobes", help="plot every view of a model (polar, 3D lobe, hemisphere, θh×θd, albedo, sampling) to a PNG",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Write the views of bsdfkit.plot.overview for MODEL-SPEC at one incident direction ωo.\n"
+                    "MODEL-SPEC: a model name and its parameters (key=value or positional; RGB as r,g,b);\n"
+                    "overlay several models by separating their specs with a '+' word. Examples:\n  "
+                    + "\n  ".join(_LOBES_EXAMPLES) + "\nRun with a bad spec to see every model and its parameters.")
+    lo.add_argument("spec", nargs="+", metavar="MODEL-SPEC", help="model name followed by its parameters")
+    lo.add_argument("--theta", type=float, default=30.0, metavar="DEG",
+                    help="θo, angle of ωo from the normal in degrees (default 30)")
+    lo.add_argument("--phi", type=float, default=0.0, metavar="DEG", help="φo, azimuth of ωo in degrees (default 0)")
+    lo.add_argument("-o", "--output", default="lobes.png", metavar="PATH", help="output PNG (default: lobes.png)")
+    lo.add_argument("--size", default="1800x1100", metavar="WxH", help="image size in pixels (default 1800x1100)")
+    lo.add_argument("--dpi", type=float, default=100.0, help="dots per inch: text size (default 100)")
+    lo.add_argument("--views", default=",".join(VIEWS), metavar="LIST",
+                    help=f"comma-separated views (default: all: {','.join(VIEWS)})")
+    lo.add_argument("--log", action="store_true", help="logarithmic value scales")
+    lo.add_argument("--cosine", action="store_true", help="plot f·|cos θi| instead of f")
+    lo.add_argument("--channel", default="luminance", choices=("luminance", "r", "g", "b", "rgb"))
+    lo.add_argument("--samples", type=int, default=100_000, metavar="N",
+                    help="samples of the sampling view (default 100000)")
+
+
+def _run_lobes_command(args) -> int:
+    import math
+    import os
+
+    from ._spec import parse_specs
+
+    def fail(msg):
+        sys.stderr.write(f"bsdfkit lobes: {msg}\n")
+        return 2
+
+    try:
+        models = parse_specs(args.spec)
+    except ValueError as e:
+        return fail(e)
+    try:
+        w, h = (int(v) for v in args.size.lower().split("x"))
+        if not (16 <= w <= 10000 and 16 <= h <= 10000):
+            raise ValueError
+    except ValueError:
+        return fail(f"--size: expected WIDTHxHEIGHT in pixels (16..10000), got {args.size!r}")
+    if not (math.isfinite(args.theta) and 0.0 <= args.theta <= 180.0):
+        return fail(f"--theta: expected degrees in [0, 180], got {args.theta:g}")
+    if not math.isfinite(args.phi):
+        return fail(f"--phi: expected a finite number of degrees, got {args.phi:g}")
+    if not (args.dpi > 0 and math.isfinite(args.dpi)):
+        return fail(f"--dpi: expected a positive number, got {args.dpi:g}")
+    if args.samples < 1:
+        return fail(f"--samples: expected a positive integer, got {args.samples}")
+    views = [v.strip() for v in args.views.split(",") if v.strip()]
+    from matplotlib.figure import Figure
+
+    from .plot import VIEWS, overview
+
+    bad = [v for v in views if v not in VIEWS]
+    if bad or not views:
+        return fail(f"--views: unknown view {bad[0]!r}; valid views: {', '.join(VIEWS)}" if bad else
+                    f"--views: name at least one of {', '.join(VIEWS)}")
+    fig = Figure(figsize=(w / args.dpi, h / args.dpi), dpi=args.dpi)
+    overview(models, theta_o=args.theta, phi_o=args.phi, views=views, log=args.log, cosine=args.cosine,
+             channel=args.channel, fig=fig, ncols=min(3, len(views)), n_samples=args.samples)
+    try:
+        fig.savefig(args.output, dpi=args.dpi)
+    except (OSError, ValueError) as e:
+        return fail(e)
+    print(os.path.abspath(args.output))
+    return 0
 
 
 def main(argv=None) -> int:
@@ -38,6 +121,8 @@ def main(argv=None) -> int:
 
         run_demo(args.outdir)
         return 0
+    if args.command == "lobes":
+        return _run_lobes_command(args)
     if args.command == "render":
         from .render import _run_render_command
         return _run_render_command(args)

@@ -19,6 +19,9 @@ THETAS = (0, 30, 60, 80)
 #: Samples per θo for the albedo figure and the albedo table.
 PLOT_SAMPLES = 8192
 TABLE_SAMPLES = 65536
+#: Incident angle (degrees) and sample count of views.png.
+VIEWS_THETA = 40
+VIEWS_SAMPLES = 50_000
 
 
 def configurations():
@@ -66,12 +69,12 @@ def _lobes_figure(configs, path):
             ax = axes[i, j]
             if _anisotropic(m):
                 p = m._params
-                _plot.polar(m, theta_o=th, phi_plane=0, ax=ax, title="", legend=False,
+                _plot.polar(m, theta_o=th, phi_plane=0, cosine=True, ax=ax, title="", legend=False,
                             label=f"φ=0° plane (αx={p['alpha_x']:g})", colors=["C4"])
-                _plot.polar(m, theta_o=th, phi_plane=90, ax=ax, title="", legend=False,
+                _plot.polar(m, theta_o=th, phi_plane=90, cosine=True, ax=ax, title="", legend=False,
                             label=f"φ=90° plane (αy={p['alpha_y']:g})", colors=["C1"], linestyle="--")
             else:
-                _plot.polar(m, theta_o=th, ax=ax, title="", legend=False, colors=[f"C{i % 10}"])
+                _plot.polar(m, theta_o=th, cosine=True, ax=ax, title="", legend=False, colors=[f"C{i % 10}"])
             ax.set_title(f"θo = {th}°", fontsize="medium", pad=8)
             if j == 0:
                 row = _plot.describe(m)
@@ -125,6 +128,35 @@ def _albedo_figure(configs, path):
     fig.savefig(path, dpi=90)
 
 
+def _views_figure(configs, path, theta_o=VIEWS_THETA):
+    """One row per configuration: 3D lobe, hemisphere image, θh × θd image and sampling check."""
+    from matplotlib.figure import Figure
+
+    cols = ("lobe3d", "hemisphere", "halfdiff", "samples")
+    nrow = len(configs)
+    w, h = 22.0, 4.3 * nrow + 1.5
+    fig = Figure(figsize=(w, h))   # fixed margins: constrained layout triples the drawing time here
+    fig.subplots_adjust(left=0.5 / w, right=1 - 0.3 / w, top=1 - 1.5 / h, bottom=0.4 / h, wspace=0.45, hspace=0.45)
+    for i, (name, m) in enumerate(configs):
+        for j, view in enumerate(cols):
+            ax = fig.add_subplot(nrow, len(cols), i * len(cols) + j + 1,
+                                 projection="3d" if view == "lobe3d" else None)
+            if view == "lobe3d":
+                _plot.lobe3d(m, theta_o=theta_o, ax=ax, n_theta=25, n_phi=49, legend=False,
+                             title=f"{_plot.describe(m)}\n3D lobe, radius = f [1/sr]")
+            elif view == "hemisphere":
+                _plot.hemisphere(m, theta_o=theta_o, ax=ax, res=90, title="f [1/sr] over ωi (disks seen from above)")
+            elif view == "halfdiff":
+                _plot.halfdiff(m, ax=ax, res=90, title="f [1/sr] (log), θh × θd at φd = 90°")
+            else:
+                _plot.samples(m, theta_o=theta_o, n=VIEWS_SAMPLES, ax=ax,
+                              title=f"sampling: θi histogram vs pdf ({VIEWS_SAMPLES} samples)")
+    fig.suptitle(f"Views of every configuration at θo = {theta_o}° (φo = 0°): 3D lobe, image over directions "
+                 "(reflection disk, transmission disk),\nRusinkiewicz θh × θd slice (log), sampled θi vs the pdf "
+                 "(χ² p-value)", fontsize="xx-large", y=1 - 0.2 / h, va="top")
+    fig.savefig(path, dpi=60)
+
+
 def _albedo_table(configs, path, n_samples=TABLE_SAMPLES):
     wo = np.stack([np.sin(np.radians(THETAS)), np.zeros(len(THETAS)), np.cos(np.radians(THETAS))], -1)
     lines = ["# bsdfkit directional albedo", "",
@@ -152,15 +184,16 @@ def _albedo_table(configs, path, n_samples=TABLE_SAMPLES):
 
 
 def run_demo(outdir="bsdfkit-demo", *, verbose=True):
-    """Write ``lobes.png``, ``albedo.png``, ``albedo.md``, ``gallery.exr`` and ``gallery.png`` into
-    ``outdir`` (created if missing); returns the list of written paths."""
+    """Write ``lobes.png``, ``albedo.png``, ``albedo.md``, ``views.png``, ``gallery.exr`` and
+    ``gallery.png`` into ``outdir`` (created if missing); returns the list of written paths."""
     t0 = time.perf_counter()
     os.makedirs(outdir, exist_ok=True)
     configs = configurations()
-    paths = [os.path.join(outdir, f) for f in ("lobes.png", "albedo.png", "albedo.md")]
+    paths = [os.path.join(outdir, f) for f in ("lobes.png", "albedo.png", "albedo.md", "views.png")]
     _lobes_figure(configs, paths[0])
     _albedo_figure(configs, paths[1])
     _albedo_table(configs, paths[2])
+    _views_figure(configs, paths[3])
     from .render import write_gallery  # gallery.exr / gallery.png: one path-traced sphere per configuration
     paths += write_gallery(outdir, configs, verbose=verbose, progress=verbose)
     if verbose:
