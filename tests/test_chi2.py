@@ -27,6 +27,10 @@ def _models():
         cases.append((f"conductor_a{a}", bk.Conductor([0.2, 0.9, 1.1], [3.9, 2.4, 2.1], alpha=a), res, ires))
         cases.append((f"dielectric_a{a}", bk.Dielectric(1.5, alpha=a), res, ires))
     cases.append(("conductor_aniso", bk.Conductor(2.0, 4.0, alpha_x=0.5, alpha_y=0.1, masking="separable"), 101, 16))
+    # Fresnel approximations: same VNDF sampler, the pdf must still match
+    cases.append(("conductor_schlick", bk.Conductor.from_metal("Cr", alpha=0.2, fresnel="schlick"), 101, 16))
+    cases.append(("conductor_f82_aniso", bk.Conductor.from_metal("Al", alpha_x=0.1, alpha_y=0.5, fresnel="f82"),
+                  101, 16))
     cases.append(("dielectric_inv", bk.Dielectric(1 / 1.5, alpha=0.3), 101, 16))
     cases.append(("dielectric_aniso", bk.Dielectric(1.33, alpha_x=0.08, alpha_y=0.6), 101, 24))
     return cases

@@ -138,6 +138,8 @@ def _extreme_models():
     for a in ALPHAS:
         for eta, k in ((0.2, 3.9), (1.0, 0.0), (1e-3, 100.0), (4.0, 100.0), (1.5, 0.0)):
             ms.append(bk.Conductor(eta, k, alpha=a))
+            for fr in ("schlick", "f82"):
+                ms.append(bk.Conductor(eta, k, alpha=a, fresnel=fr))
         ms.append(bk.Conductor(0.2, 3.9, alpha_x=a, alpha_y=1.0, masking="separable"))
         for eta in ETAS:
             ms.append(bk.Dielectric(eta, alpha=a))
@@ -194,8 +196,9 @@ rgb01 = st.lists(st.floats(0, 1), min_size=3, max_size=3)
 models = st.one_of(
     st.builds(bk.Diffuse, rgb01),
     st.builds(bk.DiffuseTransmission, rgb01, rgb01),
-    st.builds(lambda e, k, ax, ay, ms: bk.Conductor(e, k, alpha_x=ax, alpha_y=ay, masking=ms),
-              st.floats(1e-3, 10), st.floats(0, 100), alpha, alpha, st.sampled_from(["correlated", "separable"])),
+    st.builds(lambda e, k, ax, ay, ms, fr: bk.Conductor(e, k, alpha_x=ax, alpha_y=ay, masking=ms, fresnel=fr),
+              st.floats(1e-3, 10), st.floats(0, 100), alpha, alpha, st.sampled_from(["correlated", "separable"]),
+              st.sampled_from(["exact", "schlick", "f82"])),
     st.builds(lambda e, ax, ay, ms: bk.Dielectric(e, alpha_x=ax, alpha_y=ay, masking=ms),
               st.floats(0.1, 10), alpha, alpha, st.sampled_from(["correlated", "separable"])),
     st.builds(bk.ThinDielectric, st.floats(0.1, 10)),

@@ -14,7 +14,7 @@ import numpy as np
 from . import _core, io
 from ._enums import BxDFFlags, ReflTrans, TransportMode
 from ._models import (METALS, BxDF, Conductor, Dielectric, Diffuse, DiffuseTransmission, SampleResult,
-                      ThinDielectric, roughness_to_alpha)
+                      ThinDielectric, conductor_fresnel, roughness_to_alpha)
 from . import render  # noqa: E402  (preview renderer: bk.render.preview)
 from . import filament
 from ._filament_models import FilamentCloth, FilamentStandard
@@ -23,7 +23,7 @@ __version__ = "0.1.0"
 
 __all__ = ["BxDF", "BxDFFlags", "Conductor", "Dielectric", "Diffuse", "DiffuseTransmission", "METALS",
            "ReflTrans", "SampleResult", "ThinDielectric", "TransportMode", "direction", "get_num_threads",
-           "hemisphere_grid", "roughness_to_alpha", "set_num_threads", "MODELS"]
+           "hemisphere_grid", "roughness_to_alpha", "conductor_fresnel", "set_num_threads", "MODELS"]
 __all__ += ["FilamentStandard", "FilamentCloth", "filament"]
 
 #: Every model class, in gallery order.

@@ -8,11 +8,13 @@ from ._enums import BxDFFlags, ReflTrans, TransportMode
 ArrayLike = npt.ArrayLike
 RGB = Union[float, npt.ArrayLike]
 Masking = Literal["correlated", "separable"]
+ConductorFresnel = Literal["exact", "schlick", "f82"]
 ModeLike = Union[TransportMode, int, Literal["radiance", "importance", "Radiance", "Importance"]]
 
 METALS: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]]
 
 def roughness_to_alpha(roughness: npt.ArrayLike) -> Union[float, np.ndarray]: ...
+def conductor_fresnel(cos_theta: ArrayLike, eta: RGB, k: RGB, fresnel: ConductorFresnel = ...) -> np.ndarray: ...
 
 class SampleResult:
     wi: np.ndarray
@@ -53,16 +55,17 @@ class Conductor(BxDF):
     alpha_x: float
     alpha_y: float
     masking: Masking
+    fresnel: ConductorFresnel
     def __init__(self, eta: RGB, k: RGB, alpha: float = ..., alpha_x: Optional[float] = ...,
-                 alpha_y: Optional[float] = ..., masking: Masking = ...) -> None: ...
+                 alpha_y: Optional[float] = ..., masking: Masking = ..., fresnel: ConductorFresnel = ...) -> None: ...
     @classmethod
     def from_metal(cls, name: str, roughness: Optional[float] = ..., *, alpha: Optional[float] = ...,
                    alpha_x: Optional[float] = ..., alpha_y: Optional[float] = ...,
-                   masking: Masking = ...) -> "Conductor": ...
+                   masking: Masking = ..., fresnel: ConductorFresnel = ...) -> "Conductor": ...
     @classmethod
     def from_reflectance(cls, reflectance: RGB, roughness: Optional[float] = ..., *, alpha: Optional[float] = ...,
                          alpha_x: Optional[float] = ..., alpha_y: Optional[float] = ...,
-                         masking: Masking = ...) -> "Conductor": ...
+                         masking: Masking = ..., fresnel: ConductorFresnel = ...) -> "Conductor": ...
 
 class Dielectric(BxDF):
     eta: float

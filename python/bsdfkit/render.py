@@ -607,77 +607,19 @@ def preview(model_or_scene, envmap=None, width=256, height=256, spp=64, max_dept
 
 # ---------------------------------------------------------------- model specs (CLI)
 
-_SPEC_NAMES = {
-    "diffuse": "Diffuse", "lambert": "Diffuse",
-    "diffusetransmission": "DiffuseTransmission", "difftrans": "DiffuseTransmission",
-    "conductor": "Conductor", "metal": "Conductor",
-    "dielectric": "Dielectric", "glass": "Dielectric",
-    "thindielectric": "ThinDielectric", "thin": "ThinDielectric",
-}
-
-
-def _spec_value(text):
-    parts = text.split(",")
-    try:
-        vals = [float(p) for p in parts]
-    except ValueError:
-        return text
-    return vals[0] if len(vals) == 1 else vals
-
-
 def parse_spec(spec):
     """A model from a readable spec: ``"conductor metal=Cu alpha=0.2"``, ``"diffuse 0.8,0.5,0.2"``,
-    ``"dielectric eta=1.5 alpha=0.1"``, ``"thindielectric"``, ``"difftrans 0.5 0.4"``.
+    ``"dielectric eta=1.5 alpha=0.1"``, ``"thin_dielectric"``, ``"difftrans 0.5 0.4"``.
 
-    The first word names the model (class name, case-insensitive, or an alias: lambert, metal,
-    glass, thin, difftrans); then positional values and ``key=value`` pairs of the constructor
-    (RGB as ``r,g,b``). For conductors ``metal=NAME`` uses ``Conductor.from_metal`` and
-    ``reflectance=`` ``Conductor.from_reflectance``. Raises ValueError on anything else."""
-    from . import _models
-
-    words = spec.split() if isinstance(spec, str) else list(spec)
-    if not words:
-        raise ValueError("spec: empty model spec")
-    name = words[0].lower().replace("_", "").replace("-", "")
-    if name not in _SPEC_NAMES:
-        raise ValueError(f"spec: unknown model {words[0]!r}; known: {', '.join(sorted(set(_SPEC_NAMES)))}")
-    cls = getattr(_models, _SPEC_NAMES[name])
-    args, kwargs = [], {}
-    for w in words[1:]:
-        if "=" in w:
-            k, v = w.split("=", 1)
-            if not k:
-                raise ValueError(f"spec: bad parameter {w!r}")
-            kwargs[k] = _spec_value(v)
-        else:
-            if kwargs:
-                raise ValueError(f"spec: positional value {w!r} after key=value parameters")
-            args.append(_spec_value(w))
-    try:
-        if cls is _models.Conductor and "metal" in kwargs:
-            return cls.from_metal(str(kwargs.pop("metal")), *args, **kwargs)
-        if cls is _models.Conductor and "reflectance" in kwargs:
-            return cls.from_reflectance(kwargs.pop("reflectance"), *args, **kwargs)
-        return cls(*args, **kwargs)
-    except TypeError as e:
-        raise ValueError(f"spec: {e}") from None
+    The same parser as ``python -m bsdfkit lobes`` (``bsdfkit._spec.parse_spec``): a model name
+    (or alias), then positional values and ``key=value`` constructor parameters (RGB as
+    ``r,g,b``); ``metal=`` / ``reflectance=`` select ``Conductor.from_metal`` /
+    ``from_reflectance``. Raises ValueError listing the valid models or parameters."""
+    from ._spec import parse_spec as shared
+    return shared(spec)
 
 
 # ---------------------------------------------------------------- command line (python -m bsdfkit render)
-
-def _spec_parser():
-    """The model-spec parser: the shared one of ``bsdfkit._spec`` (the ``lobes`` command's) when
-    present, else :func:`parse_spec` (same format)."""
-    try:
-        from ._spec import parse_spec as shared
-    except ImportError:
-        return parse_spec
-
-    def parse(text):
-        m = shared(text)
-        return m if hasattr(m, "_core") else parse_spec(text)
-    return parse
-
 
 def _add_render_command(sub) -> None:
     r = sub.add_parser("render", help="path-trace one material on a sphere (or a mesh) under an environment",
@@ -705,7 +647,7 @@ def _run_render_command(args) -> int:
     from .io import write_image
 
     try:
-        model = _spec_parser()(" ".join(args.spec))
+        model = parse_spec(" ".join(args.spec))
     except ValueError as e:
         sys.stderr.write(f"bsdfkit render: {e}\n")
         return 2

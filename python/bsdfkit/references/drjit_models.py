@@ -25,7 +25,8 @@ from . import _configure_llvm_env
 
 __all__ = [
     "tr_D", "tr_lambda", "tr_G1", "tr_G_correlated", "tr_G_separable", "tr_vndf_pdf",
-    "fr_dielectric", "fr_complex", "conductor_f", "conductor_pdf", "dielectric_f_pdf",
+    "fr_dielectric", "fr_complex", "fr_schlick_conductor", "fr_f82_conductor", "conductor_fresnel",
+    "conductor_f", "conductor_pdf", "dielectric_f_pdf",
     "diffuse_f_pdf", "diffuse_transmission_f_pdf", "thin_dielectric_R",
 ]
 
@@ -334,6 +335,45 @@ def _fr_complex(cos_i, eta, k):
     return 0.5 * (_cnorm2(r_par) + _cnorm2(r_perp))              # F = (|r_par|^2 + |r_perp|^2)/2
 
 
+# Conductor Fresnel approximations (bsdfkit ``Conductor(fresnel=...)``), restated from the papers.
+F82_COS = 1.0 / 7.0  # F82-tint's fitting cosine (theta ~ 81.79 deg), where mu (1 - mu)^6 peaks
+
+
+def _f0_conductor(eta, k):
+    # normal-incidence reflectance of eta + i k: |(eta~ - 1) / (eta~ + 1)|^2
+    return ((eta - 1.0) * (eta - 1.0) + k * k) / ((eta + 1.0) * (eta + 1.0) + k * k)
+
+
+def _schlick(c, f0):
+    m = 1.0 - c
+    return f0 + (1.0 - f0) * (m * m * m * m * m)  # Schlick 1994: F0 + (1 - F0)(1 - mu)^5
+
+
+def _fr_schlick_conductor(cos_i, eta, k):
+    return _schlick(_clamp(cos_i, 0.0, 1.0), _f0_conductor(eta, k))
+
+
+def _fr_f82_conductor(cos_i, eta, k):
+    c = _clamp(cos_i, 0.0, 1.0)
+    f0 = _f0_conductor(eta, k)
+    mb = 1.0 - F82_COS
+    # Hoffman 2019 / Kutz et al. 2021: F = Schlick(mu) - a mu (1 - mu)^6, with a fitted so that
+    # F(mu_bar) = FrComplex(mu_bar): a = (Schlick(mu_bar) - F_exact(mu_bar)) / (mu_bar (1 - mu_bar)^6)
+    mu_bar = F82_COS + 0.0 * eta
+    a = (_schlick(mu_bar, f0) - _fr_complex(mu_bar, eta, k)) / (F82_COS * mb ** 6)
+    m = 1.0 - c
+    return _clamp(_schlick(c, f0) - a * c * (m * m * m * m * m * m), 0.0, 1.0)  # clamped to [0, 1]
+
+
+_CONDUCTOR_FRESNEL = {"exact": _fr_complex, "schlick": _fr_schlick_conductor, "f82": _fr_f82_conductor}
+
+
+def _fresnel_fn(fresnel):
+    if fresnel not in _CONDUCTOR_FRESNEL:
+        raise ValueError(f"fresnel must be one of {list(_CONDUCTOR_FRESNEL)}, got {fresnel!r}")
+    return _CONDUCTOR_FRESNEL[fresnel]
+
+
 @_outputs(())
 def fr_dielectric(cos_i, eta):
     """pbrt-v4 ``FrDielectric(cos_i, eta)``: unpolarised dielectric Fresnel reflectance; ``cos_i
@@ -351,18 +391,50 @@ def fr_complex(cos_i, eta, k):
     return _out(batch, _fr_complex(*fs))
 
 
+@_outputs(())
+def fr_schlick_conductor(cos_i, eta, k):
+    """Schlick 1994 with the exact normal-incidence reflectance of ``eta + i k``:
+    ``F0 + (1 - F0)(1 - cos)^5``, ``F0 = ((eta-1)^2 + k^2) / ((eta+1)^2 + k^2)``, ``cos_i`` clamped
+    to [0, 1]. Elementwise numpy broadcasting."""
+    batch, n, fs, _, _ = _prep([cos_i, eta, k])
+    return _out(batch, _fr_schlick_conductor(*fs))
+
+
+@_outputs(())
+def fr_f82_conductor(cos_i, eta, k):
+    """F82-tint conductor Fresnel (Hoffman 2019; Kutz et al. 2021): Schlick minus
+    ``a cos (1 - cos)^6`` with ``a`` fitted to ``FrComplex`` at ``cos = 1/7``, clamped to [0, 1].
+    Elementwise numpy broadcasting."""
+    batch, n, fs, _, _ = _prep([cos_i, eta, k])
+    return _out(batch, _fr_f82_conductor(*fs))
+
+
+def conductor_fresnel(cos_i, eta, k, fresnel="exact"):
+    """``fr_complex`` / ``fr_schlick_conductor`` / ``fr_f82_conductor`` by name, RGB: ``cos_i``
+    of any shape, ``eta``/``k`` scalar or ``(3,)`` -> ``cos_i.shape + (3,)``."""
+    fn = {"exact": fr_complex, "schlick": fr_schlick_conductor, "f82": fr_f82_conductor}
+    if fresnel not in fn:
+        raise ValueError(f"fresnel must be one of {list(fn)}, got {fresnel!r}")
+    c = np.asarray(cos_i, dtype=np.float64)[..., None]
+    return fn[fresnel](c, np.broadcast_to(np.asarray(eta, np.float64), (3,)),
+                       np.broadcast_to(np.asarray(k, np.float64), (3,)))
+
+
 # ---------------------------------------------------------------------------------------------
 # Models
 # ---------------------------------------------------------------------------------------------
 
 @_outputs((3,))
-def conductor_f(eta, k, ax, ay, wo, wi, masking="correlated"):
+def conductor_f(eta, k, ax, ay, wo, wi, masking="correlated", fresnel="exact"):
     """pbrt-v4 ``ConductorBxDF::f`` (rough GGX conductor, cosine excluded), RGB ``(..., 3)``.
 
     ``eta``, ``k``: ``(..., 3)`` (typically ``(3,)``); ``ax``, ``ay`` scalars or arrays;
-    ``masking``: ``"correlated"`` (pbrt) or ``"separable"`` (Mitsuba). Zero unless ``wo`` and
-    ``wi`` are strictly in the same hemisphere (either side), zero for smooth alphas."""
+    ``masking``: ``"correlated"`` (pbrt) or ``"separable"`` (Mitsuba); ``fresnel``: ``"exact"``
+    (pbrt's ``FrComplex``), ``"schlick"`` or ``"f82"`` (bsdfkit's approximation knob, see
+    ``conductor_fresnel``). Zero unless ``wo`` and ``wi`` are strictly in the same hemisphere
+    (either side), zero for smooth alphas."""
     masking = _masking(masking)
+    fr = _fresnel_fn(fresnel)
     batch, n, (a, b), (o, i), (e, kk) = _prep([ax, ay], [wo, wi], [eta, k])
     smooth, a, b = _max_alpha_rules(a, b)
     co, ci = o[2], i[2]
@@ -372,14 +444,17 @@ def conductor_f(eta, k, ax, ay, wo, wi, masking="correlated"):
     wm = _scale(wm, 1.0 / _bk()[0].sqrt(_sel(ok, len2, 1.0)))
     g = _D(a, b, wm) * _G(a, b, o, i, masking) / (4.0 * ci * co)  # f = D G F / (4 cos_i cos_o)
     cos_h = _abs(_dot(o, wm))
-    f = tuple(_sel(ok, g * _fr_complex(cos_h, e[c], kk[c]), 0.0) for c in range(3))
+    f = tuple(_sel(ok, g * fr(cos_h, e[c], kk[c]), 0.0) for c in range(3))
     return _out3(batch, f)
 
 
 @_outputs(())
-def conductor_pdf(ax, ay, wo, wi):
+def conductor_pdf(ax, ay, wo, wi, fresnel="exact"):
     """pbrt-v4 ``ConductorBxDF::PDF``: ``D_wo(wm) / (4 |wo . wm|)`` with ``wm = normalize(wo + wi)``
-    faced to +z; 0 unless same hemisphere, for smooth alphas or when ``wo + wi = 0``."""
+    faced to +z; 0 unless same hemisphere, for smooth alphas or when ``wo + wi = 0``.
+    ``fresnel`` is accepted (and checked) for symmetry with ``conductor_f``: visible-normal
+    sampling does not depend on the Fresnel term."""
+    _fresnel_fn(fresnel)
     dr, _ = _bk()
     batch, n, (a, b), (o, i), _ = _prep([ax, ay], [wo, wi])
     smooth, a, b = _max_alpha_rules(a, b)

@@ -163,7 +163,8 @@ def to_mitsuba(model) -> dict:
     * ``Diffuse(reflectance)`` -> ``twosided{diffuse}``.
     * ``Conductor(eta, k, alpha_x, alpha_y, masking)`` -> ``twosided{conductor}`` if
       ``max(alpha) < 1e-3`` else ``twosided{roughconductor}`` (ggx, ``alpha_u`` = alpha_x on
-      local x, ``alpha_v`` = alpha_y, visible-normal sampling).
+      local x, ``alpha_v`` = alpha_y, visible-normal sampling). ``fresnel`` other than
+      ``"exact"`` -> ``ValueError`` (Mitsuba has no Schlick / F82 conductor).
     * ``Dielectric(eta, alpha_x, alpha_y, masking)`` -> ``dielectric`` / ``roughdielectric``
       (ggx) with ``int_ior = eta``, ``ext_ior = 1.0``; eta < 1 is passed through unchanged
       (Mitsuba accepts int_ior < ext_ior). eta == 1 -> ``null`` (pbrt's pass-through).
@@ -181,6 +182,12 @@ def to_mitsuba(model) -> dict:
         return {"type": "twosided",
                 "bsdf": {"type": "diffuse", "reflectance": _rgb(model.reflectance)}}
     if kind == "Conductor":
+        fresnel = getattr(model, "fresnel", "exact")
+        if fresnel != "exact":
+            raise ValueError(
+                f"fresnel: Mitsuba 3's conductors only have the exact complex Fresnel term, got "
+                f"fresnel={fresnel!r}; use bsdfkit.references.drjit_models.conductor_f(..., "
+                f"fresnel={fresnel!r}) as the reference")
         smooth, ax, ay = _alphas(model)
         if smooth:
             inner = {"type": "conductor", "eta": _rgb(model.eta), "k": _rgb(model.k)}

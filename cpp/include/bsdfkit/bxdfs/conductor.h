@@ -1,20 +1,47 @@
-// Conductor: perfect mirror or Trowbridge-Reitz microfacet reflection with the complex
-// Fresnel term (pbrt-v4 ConductorBxDF; Torrance & Sparrow 1967, Walter et al. 2007).
+// Conductor: perfect mirror or Trowbridge-Reitz microfacet reflection with a conductor Fresnel
+// term (pbrt-v4 ConductorBxDF; Torrance & Sparrow 1967, Walter et al. 2007).
 //   eta, k     real and imaginary index of refraction per channel (eta > 0, k >= 0)
 //   mfd        anisotropic GGX; max(alpha) < 1e-3 makes the lobe a delta
+//   FR         the Fresnel term, a compile-time knob (one loop per variant, each vectorizes):
+//              Exact    complex Fresnel of eta + i k (FrComplex)
+//              Schlick  Schlick 1994 with the exact normal-incidence reflectance F0
+//              F82      F82-tint (Hoffman 2019; Kutz et al. 2021): Schlick minus a
+//                       mu (1 - mu)^6 term fitted to the exact value at mu = 1/7
 // Two-sided: a wo below the surface sees the same conductor. Symmetric in wo and wi.
 #pragma once
+#include <cstdint>
+
 #include "../core/bsdf_sample.h"
 #include "../core/fresnel.h"
 #include "../core/microfacet.h"
 
 namespace bsdfkit {
 
-template <typename F> struct ConductorBxDF {
+enum class ConductorFresnel : uint8_t { Exact = 0, Schlick = 1, F82 = 2 };
+
+template <typename F, ConductorFresnel FR = ConductorFresnel::Exact> struct ConductorBxDF {
     TrowbridgeReitz<F> mfd;
     Spectrum<F> eta, k;
+    // Per-channel Schlick F0 and F82-tint a, computed in double at construction (unused by Exact).
+    Spectrum<F> f0{F(0)}, f82_a{F(0)};
+
+    ConductorBxDF() = default;
+    ConductorBxDF(const TrowbridgeReitz<F> &mfd_, const Spectrum<F> &eta_, const Spectrum<F> &k_)
+        : mfd(mfd_), eta(eta_), k(k_) {
+        for (int i = 0; i < Spectrum<F>::Size; ++i) {
+            f0[i] = F(ConductorF0(double(eta[i]), double(k[i])));
+            f82_a[i] = F(ConductorF82A(double(eta[i]), double(k[i])));
+        }
+    }
 
     uint8_t flags() const { return mfd.effectively_smooth() ? SpecularReflection : GlossyReflection; }
+
+    // The Fresnel reflectance at |wo.wm| = cos_i, per channel (the FR knob).
+    Spectrum<F> fresnel(F cos_i) const {
+        if constexpr (FR == ConductorFresnel::Schlick) return FrSchlick(cos_i, f0);
+        else if constexpr (FR == ConductorFresnel::F82) return FrF82Tint(cos_i, f0, f82_a);
+        else return FrComplex(cos_i, eta, k);
+    }
 
     // Torrance-Sparrow: f = D(wm) F(wo.wm) G(wo, wi) / (4 cos_o cos_i), wm = normalize(wo + wi).
     Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode) const {
@@ -25,7 +52,7 @@ template <typename F> struct ConductorBxDF {
         bool active = SameHemisphere(wo, wi) && !mfd.effectively_smooth() && len2 > F(0) && denom > F(0);
         wm = wm / std::sqrt(active ? len2 : F(1));
         F scale = mfd.D(wm) * mfd.G(wo, wi) / denom;
-        Spectrum<F> fr = FrComplex(absdot(wo, wm), eta, k);
+        Spectrum<F> fr = fresnel(absdot(wo, wm));
         return select(active, fr * scale, Spectrum<F>(F(0)));
     }
 
@@ -37,7 +64,7 @@ template <typename F> struct ConductorBxDF {
             // Delta mirror: f = Fr / |cos_i|, discrete probability 1.
             s.wi = Vec3<F>(-wo.x, -wo.y, wo.z);
             F cos_i = DeltaAbsCos(s.wi);
-            s.f = FrComplex(cos_i, eta, k) / cos_i;
+            s.f = fresnel(cos_i) / cos_i;
             s.pdf = F(1);
             s.flags = SpecularReflection;
             s.valid = allowed && cos_i > F(0);
@@ -49,7 +76,7 @@ template <typename F> struct ConductorBxDF {
         F cos_o = AbsCosTheta(wo), cos_i = AbsCosTheta(wi);
         bool ok = allowed && SameHemisphere(wo, wi) && cos_o > F(0) && cos_i > F(0);
         F pdf = mfd.PDF(wo, wm) / (F(4) * absdot(wo, wm));
-        Spectrum<F> fr = FrComplex(absdot(wo, wm), eta, k);
+        Spectrum<F> fr = fresnel(absdot(wo, wm));
         s.f = fr * (mfd.D(wm) * mfd.G(wo, wi) / (F(4) * cos_o * cos_i));
         s.wi = wi;
         s.pdf = pdf;
@@ -71,5 +98,9 @@ template <typename F> struct ConductorBxDF {
 
     void regularize() { mfd.regularize(); }
 };
+
+// The Fresnel variants under their own names (the bindings and the renderer register each).
+template <typename F> using ConductorSchlickBxDF = ConductorBxDF<F, ConductorFresnel::Schlick>;
+template <typename F> using ConductorF82BxDF = ConductorBxDF<F, ConductorFresnel::F82>;
 
 } // namespace bsdfkit

@@ -62,4 +62,45 @@ inline Spectrum<F, N> FrComplex(F cos_i, const Spectrum<F, N> &eta, const Spectr
     return r;
 }
 
+// ---- Approximations of the conductor term (the Conductor 'fresnel' knob)
+
+// F82-tint's fitting cosine, mu_bar = 1/7 (theta ~ 81.79 deg), where mu (1 - mu)^6 peaks.
+inline constexpr double kF82Cos = 1.0 / 7.0;
+
+// Normal-incidence reflectance of eta + i k: F0 = ((eta-1)^2 + k^2) / ((eta+1)^2 + k^2).
+inline double ConductorF0(double eta, double k) {
+    return (sqr(eta - 1.0) + k * k) / (sqr(eta + 1.0) + k * k);
+}
+
+// F82-tint coefficient a (Kutz et al. 2021 eq. for a, with the tinted target replaced by the
+// exact Fresnel): a = (Schlick(mu_bar) - F_exact(mu_bar)) / (mu_bar (1 - mu_bar)^6).
+inline double ConductorF82A(double eta, double k) {
+    double f0 = ConductorF0(eta, k), m = 1.0 - kF82Cos;
+    double schlick = f0 + (1.0 - f0) * (m * m * m * m * m);
+    return (schlick - FrComplex(kF82Cos, eta, k)) / (kF82Cos * (m * m * m * m * m * m));
+}
+
+// Schlick 1994: F = F0 + (1 - F0)(1 - cos)^5, per channel.
+template <typename F, int N>
+inline Spectrum<F, N> FrSchlick(F cos_i, const Spectrum<F, N> &f0) {
+    F m = F(1) - clamp(cos_i, F(0), F(1));
+    F m2 = m * m, m5 = m2 * m2 * m;
+    Spectrum<F, N> r;
+    for (int i = 0; i < N; ++i) r[i] = f0[i] + (F(1) - f0[i]) * m5;
+    return r;
+}
+
+// F82-tint (Hoffman 2019, "Fresnel Equations Considered Harmful"; Kutz et al. 2021, Adobe
+// Standard Material): F = F0 + (1 - F0)(1 - cos)^5 - a cos (1 - cos)^6, clamped to [0, 1]
+// (the polynomial leaves [0, 1] for non-metallic eta + i k, e.g. eta ~ 1 with k ~ 0).
+template <typename F, int N>
+inline Spectrum<F, N> FrF82Tint(F cos_i, const Spectrum<F, N> &f0, const Spectrum<F, N> &a) {
+    F c = clamp(cos_i, F(0), F(1));
+    F m = F(1) - c;
+    F m2 = m * m, m5 = m2 * m2 * m, cm6 = c * m5 * m;
+    Spectrum<F, N> r;
+    for (int i = 0; i < N; ++i) r[i] = clamp(f0[i] + (F(1) - f0[i]) * m5 - a[i] * cm6, F(0), F(1));
+    return r;
+}
+
 } // namespace bsdfkit

@@ -28,6 +28,8 @@ template <template <typename> class... Models> struct ModelList {
 using RenderModels = ModelList<DiffuseBxDF,
                                DiffuseTransmissionBxDF,
                                ConductorBxDF,
+                               ConductorSchlickBxDF,
+                               ConductorF82BxDF,
                                DielectricBxDF,
                                ThinDielectricBxDF,
                                FilamentStandardBxDF,
