@@ -40,7 +40,7 @@ fi
 
 # Rebuild only when a source file changed since the last install.
 stamp_dir=build; mkdir -p "$stamp_dir"
-hash=$(cat CMakeLists.txt pyproject.toml $(find cpp python -type f \( -name '*.h' -o -name '*.cpp' -o -name '*.py' -o -name '*.pyi' -o -name 'py.typed' \) | sort) | sha1sum | cut -d' ' -f1)
+hash=$(cat CMakeLists.txt pyproject.toml $(find cpp python -type f \( -name '*.h' -o -name '*.cpp' -o -name '*.py' -o -name '*.pyi' -o -name 'py.typed' -o -name '*.json' \) | sort) | sha1sum | cut -d' ' -f1)
 if [ "$(cat "$stamp_dir/.installed" 2>/dev/null)" != "$hash" ] || ! $PY -c "import bsdfkit._core" 2>/dev/null; then
   echo "[setup] building and installing bsdfkit"
   $PY -m pip install -q --disable-pip-version-check --no-build-isolation --no-deps .

@@ -1,5 +1,6 @@
 """Command line: ``python -m bsdfkit demo [-o DIR]``, ``python -m bsdfkit lobes MODEL-SPEC --theta 30 -o lobes.png``,
-``python -m bsdfkit render MODEL-SPEC -o x.png`` (also installed as ``bsdfkit``)."""
+``python -m bsdfkit render MODEL-SPEC -o x.png``, ``python -m bsdfkit simplify scene.pbrt --tol 1e-3``
+(also installed as ``bsdfkit``)."""
 from __future__ import annotations
 
 import argparse
@@ -23,6 +24,7 @@ def _parser() -> argparse.ArgumentParser:
     _add_lobes_command(sub)
     from .render import _add_render_command
     _add_render_command(sub)
+    _add_simplify_command(sub)
     return p
 
 
@@ -106,6 +108,69 @@ def _run_lobes_command(args) -> int:
     return 0
 
 
+# ---------------------------------------------------------------- python -m bsdfkit simplify
+
+def _add_simplify_command(sub) -> None:
+    si = sub.add_parser(
+        "simplify", help="cheapest knob configuration of every material of a pbrt-v4 scene within a tolerance",
+        description="Read the materials of a pbrt-v4 scene file (bsdfkit.from_pbrt) and print, per material, the "
+                    "configuration bsdfkit.simplify chooses (knob settings and the precision to call it with), its "
+                    "error against the most accurate configuration and the speedup the cost table expects.")
+    si.add_argument("scene", metavar="SCENE.pbrt", help="pbrt-v4 scene file")
+    si.add_argument("--tol", type=float, default=1e-3, help="error tolerance (default 1e-3)")
+    si.add_argument("--metric", default="p99", choices=("p99", "max", "albedo"),
+                    help="error metric (default p99: 99th percentile of the relative error of f·|cos θi|)")
+    si.add_argument("--seed", type=int, default=0, help="seed of the direction set (default 0)")
+    si.add_argument("-n", type=int, default=8192, metavar="N", help="direction pairs per material (default 8192)")
+    si.add_argument("--skip-unsupported", action="store_true",
+                    help="skip materials bsdfkit cannot represent instead of failing")
+    si.add_argument("-v", "--verbose", action="store_true", help="print the full report of every material")
+
+
+def _run_simplify_command(args) -> int:
+    import math
+
+    def fail(msg):
+        sys.stderr.write(f"bsdfkit simplify: {msg}\n")
+        return 2
+
+    if not (math.isfinite(args.tol) and args.tol >= 0):
+        return fail(f"--tol: expected a finite number >= 0, got {args.tol:g}")
+    if args.seed < 0:
+        return fail(f"--seed: expected an integer >= 0, got {args.seed}")
+    if args.n < 16:
+        return fail(f"-n: expected an integer >= 16, got {args.n}")
+    try:
+        with open(args.scene, encoding="utf-8") as fh:
+            text = fh.read()
+    except OSError as e:
+        return fail(f"{args.scene}: {e.strerror or e}")
+    from . import from_pbrt
+    from .plot import describe
+    from .tradeoff import simplify
+
+    try:
+        materials = from_pbrt(text, skip_unsupported=args.skip_unsupported)
+    except ValueError as e:
+        return fail(f"{args.scene}: {e}")
+    if not materials:
+        return fail(f"{args.scene}: no materials found")
+    print(f"{args.scene}: {len(materials)} material(s), tol {args.tol:g}, metric {args.metric}, seed {args.seed}")
+    width = max(len(name) for name in materials)
+    for name, model in materials.items():
+        _, rep = simplify(model, args.tol, metric=args.metric, seed=args.seed, n=args.n)
+        sp = "unknown" if rep.expected_speedup is None else f"{rep.expected_speedup:.2f}x"
+        changes = ", ".join(f"{k} {a}->{b}" for k, a, b, _ in rep.changes) or "unchanged"
+        print(f"{name:<{width}}  {describe(model)}")
+        print(f"{'':<{width}}  chosen: {changes}; call with {rep.dtype.__name__}")
+        print(f"{'':<{width}}  error: {args.metric} {rep.error[args.metric]:.2e} (max {rep.error['max']:.2e}, "
+              f"p99 {rep.error['p99']:.2e}, albedo {rep.error['albedo']:.2e}); expected speedup {sp} "
+              f"over the most accurate configuration")
+        if args.verbose:
+            print("\n".join(f"{'':<{width}}  " + line for line in str(rep).splitlines()))
+    return 0
+
+
 def main(argv=None) -> int:
     """Run the command line with ``argv`` (default: ``sys.argv[1:]``); returns the exit code."""
     parser = _parser()
@@ -126,6 +191,8 @@ def main(argv=None) -> int:
     if args.command == "render":
         from .render import _run_render_command
         return _run_render_command(args)
+    if args.command == "simplify":
+        return _run_simplify_command(args)
     parser.error(f"unknown command {args.command!r}")  # unreachable: argparse rejects it first
     return 2
 

@@ -22,7 +22,7 @@ import numpy as np
 from ._enums import BxDFFlags, ReflTrans, TransportMode
 from ._models import METALS, BxDF, Conductor, Dielectric, Diffuse, DiffuseTransmission, ThinDielectric
 
-__all__ = ["polar", "lobe3d", "hemisphere", "halfdiff", "albedo", "samples", "sample_stats", "overview", "gallery",
+__all__ = ["pareto", "polar", "lobe3d", "hemisphere", "halfdiff", "albedo", "samples", "sample_stats", "overview", "gallery",
            "explore",
            "Explorer", "describe", "luminance", "LUMINANCE_WEIGHTS", "VIEWS"]
 
@@ -1665,3 +1665,12 @@ def explore(model_factory, theta_o=30.0, phi_o=0.0, views=VIEWS, *, params=None,
         _check_choice(v, "views", VIEWS)
     return Explorer(factory, defaults, views, _finite(theta_o, "theta_o"), _finite(phi_o, "phi_o"), choices,
                     overview_kw)
+
+
+# ---------------------------------------------------------------- speed vs accuracy
+
+def pareto(table, ax=None, metric="p99"):
+    """Throughput against error of every configuration in a ``bsdfkit.tradeoff`` table, with the
+    Pareto front highlighted (see :func:`bsdfkit.tradeoff.pareto`). Returns the Axes."""
+    from .tradeoff import pareto as _pareto
+    return _pareto(table, ax=ax, metric=metric)
