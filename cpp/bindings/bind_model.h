@@ -35,6 +35,13 @@ T *checked(const py::array &a, const char *name, std::initializer_list<int64_t> 
     return static_cast<T *>(const_cast<void *>(a.data()));
 }
 
+// Whether two (C-contiguous, already checked) arrays share any byte.
+inline bool overlaps(const py::array &a, const py::array &b) {
+    if (a.nbytes() == 0 || b.nbytes() == 0) return false;
+    auto pa = reinterpret_cast<uintptr_t>(a.data()), pb = reinterpret_cast<uintptr_t>(b.data());
+    return pa < pb + uintptr_t(b.nbytes()) && pb < pa + uintptr_t(a.nbytes());
+}
+
 inline int64_t broadcast_rows(int64_t a, int64_t b, const char *na, const char *nb) {
     if (a != b && a != 1 && b != 1)
         value_error(std::string(na) + " and " + nb + " have incompatible lengths");
@@ -121,6 +128,13 @@ template <template <typename> class Model> struct PyModel {
         o.valid = checked<bool>(valid_out, "valid", {}, &r, true); if (r != n) value_error("valid: wrong shape");
         o.proportional = checked<bool>(prop_out, "pdf_is_proportional", {}, &r, true);
         if (r != n) value_error("pdf_is_proportional: wrong shape");
+        // sample_batch's pointers are restrict: no output may overlap an input or another output.
+        {
+            const py::array *arrs[] = {&wo, &uc, &u, &wi_out, &f_out, &pdf_out, &flags_out, &eta_out, &valid_out, &prop_out};
+            for (int a = 3; a < 10; ++a)
+                for (int c = 0; c < a; ++c)
+                    if (overlaps(*arrs[a], *arrs[c])) value_error("sample: output arrays must not overlap the inputs or each other");
+        }
         TransportMode md = to_mode(mode);
         uint8_t s = to_sflags(sf);
         BadCounts bad;

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdint>
+#include <limits>
+#include <type_traits>
 #include <vector>
 
 #include "core/bsdf.h"
@@ -41,16 +43,23 @@ struct BadCounts {
 };
 
 // f(wo, wi) for N pairs; SO / SI are 3 for a full array, 0 for one broadcast direction.
+// A per-chunk local copy of a (trivially copyable) model: its parameters then cannot alias the
+// outputs, so they stay in registers instead of being reloaded, and alias-checked, every
+// iteration. Models holding resources (Filament's table pointer) are used by reference.
+template <typename Model>
+using LocalModel = std::conditional_t<std::is_trivially_copyable_v<Model>, const Model, const Model &>;
+
 template <int SO, int SI, typename Model, typename F>
 void eval_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMode mode, F *out, int nthreads,
                 BadCounts &bad) {
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
         int64_t bo = 0, bi = 0;
+        LocalModel<Model> mloc = m;
         for (int64_t i = b; i < e; ++i) {
             Vec3<F> o = load3<F, SO>(wo, i), w = load3<F, SI>(wi, i);
             bo += not_unit(o);
             bi += not_unit(w);
-            Spectrum<F> v = bsdf_f(m, o, w, mode);
+            Spectrum<F> v = bsdf_f(mloc, o, w, mode);
             out[3 * i] = v[0];
             out[3 * i + 1] = v[1];
             out[3 * i + 2] = v[2];
@@ -65,11 +74,12 @@ void pdf_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMod
                int nthreads, BadCounts &bad) {
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
         int64_t bo = 0, bi = 0;
+        LocalModel<Model> mloc = m;
         for (int64_t i = b; i < e; ++i) {
             Vec3<F> o = load3<F, SO>(wo, i), w = load3<F, SI>(wi, i);
             bo += not_unit(o);
             bi += not_unit(w);
-            out[i] = bsdf_pdf(m, o, w, mode, sf);
+            out[i] = bsdf_pdf(mloc, o, w, mode, sf);
         }
         bad.wo += bo;
         bad.wi += bi;
@@ -82,27 +92,94 @@ template <typename F> struct SampleOut {
     bool *valid, *proportional;
 };
 
+// Models whose sample_f branches on a loop-invariant smoothness test (Conductor, Dielectric)
+// expose is_smooth(), sample_smooth(wo, uc, mode, sf) and sample_rough(wo, uc, u, mode, sf);
+// sample_batch then runs one branch-free loop per case.
+template <typename M, typename = void> struct has_split_sample : std::false_type {};
+template <typename M>
+struct has_split_sample<M, std::void_t<decltype(&M::is_smooth), decltype(&M::sample_rough)>> : std::true_type {};
+
+// Mask forms (bitwise &, no short-circuit) of the bsdf_sample checks, for the vectorized loop.
+template <typename F> inline bool nonzero_mask(const Spectrum<F> &s) {
+    bool b = false;
+    for (int c = 0; c < Spectrum<F>::Size; ++c) b = b | (s[c] != F(0));
+    return b;
+}
+template <typename F> inline bool finite_nonneg_mask(const Spectrum<F> &s) {
+    bool ok = true;
+    for (int c = 0; c < Spectrum<F>::Size; ++c)
+        ok = ok & (s[c] >= F(0)) & (s[c] <= std::numeric_limits<F>::max());
+    return ok;
+}
+
+// The same results as bsdf_sample per element, over one chunk [b, e). The main loop stores only
+// float outputs (an invalid sample has pdf = 0; validity is folded into float selects) and
+// stages flags and pdf_is_proportional as F, so it vectorizes; a second pass writes the
+// byte-wide outputs (valid = pdf > 0, exactly bsdf_sample's rule). The pointers are restrict:
+// the outputs overlap neither each other nor the inputs (bind_model.h checks); without it the
+// loop needs more run-time alias checks than GCC emits (--param vect-max-version-for-alias-checks).
+template <int SO, typename Model, typename F, typename Sampler>
+inline void sample_chunk(const Model &m, const Sampler &smp, bool model_ok, int64_t b, int64_t e,
+                         const F *__restrict wo, const F *__restrict uc, const F *__restrict u, F *__restrict owi,
+                         F *__restrict of, F *__restrict opdf, F *__restrict oeta, F *__restrict stage,
+                         uint8_t *__restrict ofl, bool *__restrict ovalid, bool *__restrict oprop, int64_t *bo_out) {
+    int64_t bo = 0;
+    for (int64_t i = b; i < e; ++i) {
+        Vec3<F> o = load3<F, SO>(wo, i);
+        bo += not_unit(o);
+        BSDFSample<F> s = smp(m, o, uc[i], Point2<F>{u[2 * i], u[2 * i + 1]});
+        bool ok = s.valid & (o.z != F(0)) & model_ok & nonzero_mask(s.f) & (s.pdf > F(0)) & (s.wi.z != F(0)) &
+                  finite_nonneg_mask(s.f) & (s.pdf <= std::numeric_limits<F>::max());
+        for (int c = 0; c < 3; ++c) of[3 * i + c] = ok ? s.f[c] : F(0);
+        owi[3 * i] = ok ? s.wi.x : F(0);
+        owi[3 * i + 1] = ok ? s.wi.y : F(0);
+        owi[3 * i + 2] = ok ? s.wi.z : F(0);
+        opdf[i] = ok ? s.pdf : F(0);
+        oeta[i] = ok ? s.eta : F(1);
+        F tag = F(s.flags) + (s.pdf_is_proportional ? F(256) : F(0)); // flags + 256 * proportional
+        stage[i - b] = ok ? tag : F(0);
+    }
+    for (int64_t i = b; i < e; ++i) {
+        int32_t t = int32_t(stage[i - b]);
+        ofl[i] = uint8_t(t & 255);
+        oprop[i] = (t >> 8) != 0;
+        ovalid[i] = opdf[i] > F(0);
+    }
+    *bo_out = bo;
+}
+
+template <int SO, typename Model, typename F, typename Sampler>
+void sample_batch_loop(const Model &m, const Sampler &sampler, const F *wo, const F *uc, const F *u, int64_t n,
+                       uint8_t sf, const SampleOut<F> &out, int nthreads, BadCounts &bad) {
+    const bool model_ok = (m.flags() & sf) != 0;
+    parallel_chunks(n, nthreads, kChunk, [&, model_ok](int64_t b, int64_t e) __attribute__((flatten)) {
+        F stage[kChunk];
+        LocalModel<Model> mloc = m;
+        int64_t bo = 0;
+        sample_chunk<SO>(mloc, sampler, model_ok, b, e, wo, uc, u, out.wi, out.f, out.pdf, out.eta, stage,
+                         out.flags, out.valid, out.proportional, &bo);
+        bad.wo += bo;
+    });
+}
+
 template <int SO, typename Model, typename F>
 void sample_batch(const Model &m, const F *wo, const F *uc, const F *u, int64_t n, TransportMode mode, uint8_t sf,
                   const SampleOut<F> &out, int nthreads, BadCounts &bad) {
-    parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
-        int64_t bo = 0;
-        for (int64_t i = b; i < e; ++i) {
-            Vec3<F> o = load3<F, SO>(wo, i);
-            bo += not_unit(o);
-            BSDFSample<F> s = bsdf_sample(m, o, uc[i], Point2<F>{u[2 * i], u[2 * i + 1]}, mode, sf);
-            for (int c = 0; c < 3; ++c) out.f[3 * i + c] = s.f[c];
-            out.wi[3 * i] = s.wi.x;
-            out.wi[3 * i + 1] = s.wi.y;
-            out.wi[3 * i + 2] = s.wi.z;
-            out.pdf[i] = s.pdf;
-            out.eta[i] = s.eta;
-            out.flags[i] = s.flags;
-            out.valid[i] = s.valid;
-            out.proportional[i] = s.pdf_is_proportional;
-        }
-        bad.wo += bo;
-    });
+    if constexpr (has_split_sample<Model>::value) {
+        auto smooth = [mode, sf](const Model &mm, const Vec3<F> &o, F c, Point2<F>) {
+            return mm.sample_smooth(o, c, mode, sf);
+        };
+        auto rough = [mode, sf](const Model &mm, const Vec3<F> &o, F c, Point2<F> p) {
+            return mm.sample_rough(o, c, p, mode, sf);
+        };
+        if (m.is_smooth()) sample_batch_loop<SO>(m, smooth, wo, uc, u, n, sf, out, nthreads, bad);
+        else sample_batch_loop<SO>(m, rough, wo, uc, u, n, sf, out, nthreads, bad);
+    } else {
+        auto any = [mode, sf](const Model &mm, const Vec3<F> &o, F c, Point2<F> p) {
+            return mm.sample_f(o, c, p, mode, sf);
+        };
+        sample_batch_loop<SO>(m, any, wo, uc, u, n, sf, out, nthreads, bad);
+    }
 }
 
 // Directional albedo rho(wo) = E[f |cos wi| / pdf] (pbrt-v4 BxDF::rho), skipping pdf = 0

@@ -56,25 +56,34 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact> struct Cond
         return select(active, fr * scale, Spectrum<F>(F(0)));
     }
 
-    BSDFSample<F> sample_f(const Vec3<F> &wo, F /*uc*/, Point2<F> u, TransportMode mode,
-                           uint8_t sample_flags) const {
+    bool is_smooth() const { return mfd.effectively_smooth(); }
+
+    BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode, uint8_t sample_flags) const {
+        return is_smooth() ? sample_smooth(wo, uc, mode, sample_flags) : sample_rough(wo, uc, u, mode, sample_flags);
+    }
+
+    // Delta mirror: f = Fr / |cos_i|, discrete probability 1.
+    BSDFSample<F> sample_smooth(const Vec3<F> &wo, F /*uc*/, TransportMode, uint8_t sample_flags) const {
         BSDFSample<F> s;
         bool allowed = (sample_flags & RT_Reflection) != 0;
-        if (mfd.effectively_smooth()) {
-            // Delta mirror: f = Fr / |cos_i|, discrete probability 1.
-            s.wi = Vec3<F>(-wo.x, -wo.y, wo.z);
-            F cos_i = DeltaAbsCos(s.wi);
-            s.f = fresnel(cos_i) / cos_i;
-            s.pdf = F(1);
-            s.flags = SpecularReflection;
-            s.valid = allowed && cos_i > F(0);
-            return s;
-        }
-        // Sample a visible normal on wo's side and mirror wo about it.
+        s.wi = Vec3<F>(-wo.x, -wo.y, wo.z);
+        F cos_i = DeltaAbsCos(s.wi);
+        s.f = fresnel(cos_i) / cos_i;
+        s.pdf = F(1);
+        s.flags = SpecularReflection;
+        s.valid = allowed; // cos_i >= the smallest normal number (DeltaAbsCos), even for a NaN wo
+        return s;
+    }
+
+    // Sample a visible normal on wo's side and mirror wo about it.
+    BSDFSample<F> sample_rough(const Vec3<F> &wo, F /*uc*/, Point2<F> u, TransportMode,
+                               uint8_t sample_flags) const {
+        BSDFSample<F> s;
+        bool allowed = (sample_flags & RT_Reflection) != 0;
         Vec3<F> wm = mfd.Sample_wm(wo, u);
         Vec3<F> wi = Reflect(wo, wm);
         F cos_o = AbsCosTheta(wo), cos_i = AbsCosTheta(wi);
-        bool ok = allowed && SameHemisphere(wo, wi) && cos_o > F(0) && cos_i > F(0);
+        bool ok = allowed & SameHemisphere(wo, wi) & (cos_o > F(0)) & (cos_i > F(0));
         F pdf = mfd.PDF(wo, wm) / (F(4) * absdot(wo, wm));
         Spectrum<F> fr = fresnel(absdot(wo, wm));
         s.f = fr * (mfd.D(wm) * mfd.G(wo, wi) / (F(4) * cos_o * cos_i));
@@ -89,11 +98,12 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact> struct Cond
     F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
         Vec3<F> wm = wo + wi;
         F len2 = length_squared(wm);
-        bool active = (sample_flags & RT_Reflection) && SameHemisphere(wo, wi) &&
-                      !mfd.effectively_smooth() && len2 > F(0);
+        bool active = SameHemisphere(wo, wi) & (len2 > F(0));
         wm = face_forward(wm / std::sqrt(active ? len2 : F(1)), Vec3<F>(0, 0, 1));
         F p = mfd.PDF(wo, wm) / (F(4) * absdot(wo, wm));
-        return active ? p : F(0);
+        // The loop-invariant tests as a bit mask: a select on them does not vectorize in float64.
+        p = keep_or_zero(active ? p : F(0), (sample_flags & RT_Reflection) != 0);
+        return keep_or_zero(p, !mfd.effectively_smooth());
     }
 
     void regularize() { mfd.regularize(); }

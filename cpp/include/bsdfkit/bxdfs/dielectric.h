@@ -11,6 +11,8 @@
 
 namespace bsdfkit {
 
+static_assert(SpecularTransmission == SpecularReflection + 1 && GlossyTransmission == GlossyReflection + 1);
+
 template <typename F> struct DielectricBxDF {
     F eta;
     TrowbridgeReitz<F> mfd;
@@ -25,8 +27,9 @@ template <typename F> struct DielectricBxDF {
 
     // Lobe probabilities restricted by sample_flags.
     static void lobe_probs(F R, uint8_t sample_flags, F *pr, F *pt) {
-        *pr = (sample_flags & RT_Reflection) ? R : F(0);
-        *pt = (sample_flags & RT_Transmission) ? F(1) - R : F(0);
+        // Bit masks, not selects on the invariant flag test (GCC 12 does not vectorize those in float64).
+        *pr = keep_or_zero(R, (sample_flags & RT_Reflection) != 0);
+        *pt = keep_or_zero(F(1) - R, (sample_flags & RT_Transmission) != 0);
     }
 
     // Generalized half vector of a pair, facing +z, and the relative IOR etap along wi.
@@ -79,7 +82,7 @@ template <typename F> struct DielectricBxDF {
     BSDFSample<F> sample_smooth(const Vec3<F> &wo, F uc, TransportMode mode, uint8_t sample_flags) const {
         BSDFSample<F> s;
         // eta == 1 is a pure pass-through; force R = 0 rather than trusting rounding.
-        F R = eta == F(1) ? F(0) : FrDielectric(CosTheta(wo), eta), pr, pt;
+        F R = keep_or_zero(FrDielectric(CosTheta(wo), eta), eta != F(1)), pr, pt;
         lobe_probs(R, sample_flags, &pr, &pt);
         bool reflect = uc < pr / (pr + pt);
         // Specular reflection about +z, or refraction through the flat interface.
@@ -92,9 +95,11 @@ template <typename F> struct DielectricBxDF {
         ft = mode == TransportMode::Radiance ? ft / sqr(etap) : ft;
         s.f = Spectrum<F>(reflect ? R / cos_i : ft);
         s.pdf = (reflect ? pr : pt) / (pr + pt);
-        s.flags = reflect ? SpecularReflection : SpecularTransmission;
+        // Flags by arithmetic, not a byte select (vectorizes): Transmission = Reflection + 1.
+        s.flags = uint8_t(SpecularReflection + int(!reflect));
         s.eta = reflect ? F(1) : etap;
-        s.valid = (pr + pt) > F(0) && cos_i > F(0) && (reflect || refr_ok);
+        // Masks with & / | (no short-circuit; vectorizes). cos_i > 0 always holds (DeltaAbsCos).
+        s.valid = ((pr + pt) > F(0)) & (reflect | refr_ok);
         return s;
     }
 
@@ -118,7 +123,9 @@ template <typename F> struct DielectricBxDF {
         Vec3<F> wt;
         F etap;
         bool ok_t = Refract(wo, wm, eta, &etap, &wt);
-        ok_t = ok_t && !SameHemisphere(wo, wt) && wt.z != F(0);
+        // wt.z == 0 is left to the BSDF-level check on wi.z (bsdf_sample): testing it here too
+        // lets GCC's PRE turn the batch loop's wi.z test into a bool select it cannot vectorize.
+        ok_t = ok_t & !SameHemisphere(wo, wt);
         F denom = sqr(dot(wt, wm) + dot(wo, wm) / etap);
         F dwm_dwi = absdot(wt, wm) / denom;
         F pdf_t = pdf_wm * dwm_dwi * pt / (pr + pt);
@@ -128,10 +135,14 @@ template <typename F> struct DielectricBxDF {
 
         s.wi = reflect ? wr : wt;
         s.f = Spectrum<F>(reflect ? f_r : f_t);
+        // The chosen lobe's validity is folded into its pdf (0 = invalid) with float selects:
+        // a bool select (reflect ? ok_r : ok_t) does not vectorize under GCC 12.
+        pdf_r = ok_r ? pdf_r : F(0);
+        pdf_t = ok_t ? pdf_t : F(0);
         s.pdf = reflect ? pdf_r : pdf_t;
-        s.flags = reflect ? GlossyReflection : GlossyTransmission;
+        s.flags = uint8_t(GlossyReflection + int(!reflect));
         s.eta = reflect ? F(1) : etap;
-        s.valid = (pr + pt) > F(0) && cos_o != F(0) && (reflect ? ok_r : ok_t);
+        s.valid = ((pr + pt) > F(0)) & (cos_o != F(0)) & (s.pdf > F(0));
         return s;
     }
 
@@ -147,7 +158,7 @@ template <typename F> struct DielectricBxDF {
         F denom = sqr(dot(wi, wm) + dot(wo, wm) / etap);
         F p_t = pdf_wm * absdot(wi, wm) / denom * pt;
         F p = (reflect ? p_r : p_t) / (pr + pt);
-        ok = ok && (pr + pt) > F(0) && (reflect ? true : denom > F(0));
+        ok = ok & ((pr + pt) > F(0)) & (reflect | (denom > F(0))); // & / |: vectorizes (float64 too)
         return ok ? p : F(0);
     }
 

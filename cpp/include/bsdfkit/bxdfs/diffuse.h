@@ -17,22 +17,25 @@ template <typename F> struct DiffuseBxDF {
         return select(SameHemisphere(wo, wi), R * InvPi<F>, Spectrum<F>(F(0)));
     }
 
-    BSDFSample<F> sample_f(const Vec3<F> &wo, F /*uc*/, Point2<F> u, TransportMode mode,
+    BSDFSample<F> sample_f(const Vec3<F> &wo, F /*uc*/, Point2<F> u, TransportMode /*mode*/,
                            uint8_t sample_flags) const {
         BSDFSample<F> s;
         Vec3<F> wi = SampleCosineHemisphere(u);
         wi.z = wo.z < F(0) ? -wi.z : wi.z; // two-sided: sample wo's side
         s.wi = wi;
-        s.pdf = CosineHemispherePDF(AbsCosTheta(wi));
-        s.f = f(wo, wi, mode);
+        // wi is on wo's side unless one of them lies on the horizon: that case is folded into the
+        // pdf (0 = invalid) with a float select, which vectorizes (f(wo, wi)'s select does not
+        // once GCC pushes the later f != 0 tests into it).
+        s.pdf = SameHemisphere(wo, wi) ? CosineHemispherePDF(AbsCosTheta(wi)) : F(0);
+        s.f = R * InvPi<F>;
         s.flags = DiffuseReflection;
-        s.valid = (sample_flags & RT_Reflection) != 0;
+        s.valid = ((sample_flags & RT_Reflection) != 0) & (s.pdf > F(0));
         return s;
     }
 
     F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
-        bool ok = (sample_flags & RT_Reflection) && SameHemisphere(wo, wi);
-        return ok ? CosineHemispherePDF(AbsCosTheta(wi)) : F(0);
+        F p = SameHemisphere(wo, wi) ? CosineHemispherePDF(AbsCosTheta(wi)) : F(0);
+        return keep_or_zero(p, (sample_flags & RT_Reflection) != 0); // bit mask: vectorizes in float64
     }
 
     void regularize() {}

@@ -8,16 +8,21 @@ namespace bsdfkit {
 template <typename F> inline Point2<F> SampleUniformDiskConcentric(Point2<F> u) {
     F ox = F(2) * u.x - F(1), oy = F(2) * u.y - F(1);
     bool first = std::abs(ox) > std::abs(oy);
-    F r = first ? ox : oy;
-    F ratio = first ? safe_div(oy, ox) : safe_div(ox, oy);
+    F r = first ? ox : oy, num = first ? oy : ox;
+    // den == 0 only at the centre (num == 0 too), where ratio = 0 as in safe_div. One division
+    // of selected operands: two safe_divs let GCC's PRE build bool selects that do not vectorize.
+    F ratio = num / (r != F(0) ? r : F(1));
     F theta = first ? PiOver4<F> * ratio : PiOver2<F> - PiOver4<F> * ratio;
-    return {r * std::cos(theta), r * std::sin(theta)};
+    F st, ct;
+    sincos_(theta, &st, &ct);
+    return {r * ct, r * st};
 }
 
 // r = sqrt(u0), phi = 2 pi u1.
 template <typename F> inline Point2<F> SampleUniformDiskPolar(Point2<F> u) {
-    F r = std::sqrt(u.x), phi = F(2) * Pi<F> * u.y;
-    return {r * std::cos(phi), r * std::sin(phi)};
+    F r = std::sqrt(u.x), phi = F(2) * Pi<F> * u.y, sp, cp;
+    sincos_(phi, &sp, &cp);
+    return {r * cp, r * sp};
 }
 
 // Malley's method: project the concentric disk up to the hemisphere.
@@ -30,13 +35,17 @@ template <typename F> inline F CosineHemispherePDF(F cos_theta) { return cos_the
 
 template <typename F> inline Vec3<F> SampleUniformHemisphere(Point2<F> u) {
     F z = u.x, r = safe_sqrt(F(1) - z * z), phi = F(2) * Pi<F> * u.y;
-    return {r * std::cos(phi), r * std::sin(phi), z};
+    F sp, cp;
+    sincos_(phi, &sp, &cp);
+    return {r * cp, r * sp, z};
 }
 template <typename F> inline F UniformHemispherePDF() { return Inv2Pi<F>; }
 
 template <typename F> inline Vec3<F> SampleUniformSphere(Point2<F> u) {
     F z = F(1) - F(2) * u.x, r = safe_sqrt(F(1) - z * z), phi = F(2) * Pi<F> * u.y;
-    return {r * std::cos(phi), r * std::sin(phi), z};
+    F sp, cp;
+    sincos_(phi, &sp, &cp);
+    return {r * cp, r * sp, z};
 }
 template <typename F> inline F UniformSpherePDF() { return F(0.25) * InvPi<F>; }
 
