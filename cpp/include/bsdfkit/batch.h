@@ -45,9 +45,13 @@ struct BadCounts {
 // f(wo, wi) for N pairs; SO / SI are 3 for a full array, 0 for one broadcast direction.
 // A per-chunk local copy of a (trivially copyable) model: its parameters then cannot alias the
 // outputs, so they stay in registers instead of being reloaded, and alias-checked, every
-// iteration. Models holding resources (Filament's table pointer) are used by reference.
+// iteration. A model holding a resource (Filament's table pointer) names a trivially copyable
+// base `Kernel` with all its methods; the copy is of that base. Others are used by reference.
+template <typename M, typename = void> struct KernelOf { using type = M; };
+template <typename M> struct KernelOf<M, std::void_t<typename M::Kernel>> { using type = typename M::Kernel; };
 template <typename Model>
-using LocalModel = std::conditional_t<std::is_trivially_copyable_v<Model>, const Model, const Model &>;
+using LocalModel = std::conditional_t<std::is_trivially_copyable_v<typename KernelOf<Model>::type>,
+                                      const typename KernelOf<Model>::type, const Model &>;
 
 template <int SO, int SI, typename Model, typename F>
 void eval_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMode mode, F *out, int nthreads,
@@ -166,16 +170,16 @@ template <int SO, typename Model, typename F>
 void sample_batch(const Model &m, const F *wo, const F *uc, const F *u, int64_t n, TransportMode mode, uint8_t sf,
                   const SampleOut<F> &out, int nthreads, BadCounts &bad) {
     if constexpr (has_split_sample<Model>::value) {
-        auto smooth = [mode, sf](const Model &mm, const Vec3<F> &o, F c, Point2<F>) {
+        auto smooth = [mode, sf](const auto &mm, const Vec3<F> &o, F c, Point2<F>) {
             return mm.sample_smooth(o, c, mode, sf);
         };
-        auto rough = [mode, sf](const Model &mm, const Vec3<F> &o, F c, Point2<F> p) {
+        auto rough = [mode, sf](const auto &mm, const Vec3<F> &o, F c, Point2<F> p) {
             return mm.sample_rough(o, c, p, mode, sf);
         };
         if (m.is_smooth()) sample_batch_loop<SO>(m, smooth, wo, uc, u, n, sf, out, nthreads, bad);
         else sample_batch_loop<SO>(m, rough, wo, uc, u, n, sf, out, nthreads, bad);
     } else {
-        auto any = [mode, sf](const Model &mm, const Vec3<F> &o, F c, Point2<F> p) {
+        auto any = [mode, sf](const auto &mm, const Vec3<F> &o, F c, Point2<F> p) {
             return mm.sample_f(o, c, p, mode, sf);
         };
         sample_batch_loop<SO>(m, any, wo, uc, u, n, sf, out, nthreads, bad);

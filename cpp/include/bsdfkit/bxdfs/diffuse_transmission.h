@@ -8,6 +8,8 @@
 
 namespace bsdfkit {
 
+static_assert(DiffuseTransmission == DiffuseReflection + 1);
+
 template <typename F> struct DiffuseTransmissionBxDF {
     Spectrum<F> R, T;
 
@@ -21,8 +23,9 @@ template <typename F> struct DiffuseTransmissionBxDF {
 
     // Lobe probabilities from the largest channel, restricted by sample_flags.
     void lobe_probs(uint8_t sample_flags, F *pr, F *pt) const {
-        *pr = (sample_flags & RT_Reflection) ? R.max_component() : F(0);
-        *pt = (sample_flags & RT_Transmission) ? T.max_component() : F(0);
+        // Bit masks, not selects on the invariant flag tests (GCC 12 does not vectorize those in float64).
+        *pr = keep_or_zero(R.max_component(), (sample_flags & RT_Reflection) != 0);
+        *pt = keep_or_zero(T.max_component(), (sample_flags & RT_Transmission) != 0);
     }
 
     BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode,
@@ -34,12 +37,14 @@ template <typename F> struct DiffuseTransmissionBxDF {
         bool reflect = uc < pr / sum;
         Vec3<F> wi = SampleCosineHemisphere(u);
         // reflection stays on wo's side, transmission goes to the other side
-        bool below = (wo.z < F(0)) == reflect;
-        wi.z = below ? -wi.z : wi.z;
+        // (float selects, not a bool compare of the two tests: vectorizes)
+        F zo = wo.z < F(0) ? -wi.z : wi.z; // on wo's side
+        wi.z = reflect ? zo : -zo;
         s.wi = wi;
         s.pdf = CosineHemispherePDF(AbsCosTheta(wi)) * (reflect ? pr : pt) / sum;
         s.f = f(wo, wi, mode);
-        s.flags = reflect ? DiffuseReflection : DiffuseTransmission;
+        // Flags by arithmetic, not a byte select (vectorizes): Transmission = Reflection + 1.
+        s.flags = uint8_t(DiffuseReflection + int(!reflect));
         s.valid = sum > F(0);
         return s;
     }

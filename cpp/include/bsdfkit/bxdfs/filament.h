@@ -165,8 +165,9 @@ inline double f0ClearCoatToSurface(double f0) {
 template <typename F> inline Vec3<F> SampleCharlie(F alpha, Point2<F> u) {
     F sin_t = std::pow(u.x, alpha / (F(2) * alpha + F(1)));
     F cos_t = safe_sqrt(F(1) - sin_t * sin_t);
-    F phi = F(2) * Pi<F> * u.y;
-    return {sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t};
+    F phi = F(2) * Pi<F> * u.y, sp, cp;
+    sincos_(phi, &sp, &cp);  // vectorizes (core/math.h)
+    return {sin_t * cp, sin_t * sp, cos_t};
 }
 template <typename F> inline F CharliePDF(F alpha, const Vec3<F> &h) {
     return D_CharlieExact_sin2(alpha, h.x * h.x + h.y * h.y) * max_(h.z, F(0));
@@ -178,8 +179,9 @@ template <typename F> inline F CharliePDF(F alpha, const Vec3<F> &h) {
 template <typename F> inline Vec3<F> SampleWrapHemisphere(Point2<F> u, F w) {
     F c = u.x * (F(1) + F(2) * w);
     F mu = c / (w + std::sqrt(w * w + c));
-    F r = safe_sqrt(F(1) - mu * mu), phi = F(2) * Pi<F> * u.y;
-    return {r * std::cos(phi), r * std::sin(phi), mu};
+    F r = safe_sqrt(F(1) - mu * mu), phi = F(2) * Pi<F> * u.y, sp, cp;
+    sincos_(phi, &sp, &cp);  // vectorizes (core/math.h)
+    return {r * cp, r * sp, mu};
 }
 template <typename F> inline F WrapHemispherePDF(F mu, F w) {
     return (max_(mu, F(0)) + w) * (Inv2Pi<F> / (F(0.5) + w));
@@ -209,7 +211,9 @@ struct FilamentStandardParams {
 // mask a float vector), and the optional lobes are compile-time variants: Coat (a lobe the
 // common case should not pay for) and Sheen (whose pow() has no vector form), so the common
 // case has no call and no branch per element.
-template <typename F, bool Coat, bool Sheen> struct FilamentStandardT {
+static_assert(DiffuseReflection == GlossyReflection - (Glossy - Diffuse));
+
+template <typename F, bool Coat, bool Sheen> struct FilamentStandardKernel {
     // Derived at construction (surface_shading_lit.fs getPixelParams), see make().
     Spectrum<F> diffuse_color{F(0)}, f0{F(0)}, sheen_color{F(0)};
     F f90 = 1;
@@ -220,52 +224,7 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardT {
     // knobs as 0/1 factors
     F anisotropic = 0, fast_v = 0, burley = 0, energy_compensation = 1, doc_layering = 0;
     DFGRow<F> dfg_base, dfg_coat, dfg_sheen;   // DFG rows at the base / coat / sheen roughness
-    std::shared_ptr<const FilamentDFG> dfg;    // keeps the table alive
 
-    static FilamentStandardT make(const FilamentStandardParams &p, std::shared_ptr<const FilamentDFG> table) {
-        using namespace filament;
-        FilamentStandardT m;
-        double min_pr = p.min_perceptual_roughness, min_alpha = min_pr * min_pr;
-        double cc = p.clear_coat;
-        double f0d = 0.16 * p.reflectance * p.reflectance;  // computeDielectricF0
-        for (int c = 0; c < 3; ++c) {
-            double f0 = p.base_color[c] * p.metallic + f0d * (1 - p.metallic);  // computeF0
-            if (p.clear_coat_ior_change) f0 = lerp(cc, f0, f0ClearCoatToSurface(f0));  // CLEAR_COAT_IOR_CHANGE
-            m.f0[c] = F(f0);
-            m.diffuse_color[c] = F(p.base_color[c] * (1 - p.metallic));  // computeDiffuseColor
-            m.sheen_color[c] = Sheen ? F(p.sheen_color[c]) : F(0);
-        }
-        double sum_f0 = double(m.f0[0]) + double(m.f0[1]) + double(m.f0[2]);
-        m.f90 = p.f90_filament ? F(saturate(kF90Scale * sum_f0)) : F(1);  // fresnel(), quality > LOW
-        // getClearCoatPixelParams / getRoughnessPixelParams
-        double cc_pr = clamp(p.clear_coat_roughness, min_pr, 1.0);
-        double pr = lerp(cc, p.roughness, p.roughness > cc_pr ? p.roughness : cc_pr);
-        pr = clamp(pr, min_pr, 1.0);
-        double a = pr * pr;
-        // anisotropicLobe: at = max(a (1 + aniso), MIN_ROUGHNESS), ab = max(a (1 - aniso), MIN_ROUGHNESS)
-        double at = a * (1 + p.anisotropy), ab = a * (1 - p.anisotropy);
-        at = at > min_alpha ? at : min_alpha;
-        ab = ab > min_alpha ? ab : min_alpha;
-        m.alpha = F(a);
-        m.spec = TrowbridgeReitz<F>(F(at), F(ab), Masking::Correlated);
-        m.coat = TrowbridgeReitz<F>(F(cc_pr * cc_pr), F(cc_pr * cc_pr), Masking::Correlated);
-        m.clear_coat = Coat ? F(cc) : F(0);
-        double s_pr = clamp(p.sheen_roughness, min_pr, 1.0);  // getSheenPixelParams
-        m.sheen_alpha = F(s_pr * s_pr);
-        m.sheen_max = m.sheen_color.max_component();
-        m.diffuse_max = m.diffuse_color.max_component();
-        m.anisotropic = p.anisotropy != 0 ? F(1) : F(0);
-        m.fast_v = p.visibility == VisibilityTerm::Fast ? F(1) : F(0);
-        m.burley = p.diffuse == DiffuseTerm::Burley ? F(1) : F(0);
-        m.energy_compensation = p.energy_compensation ? F(1) : F(0);
-        m.doc_layering = p.layering == Layering::Doc ? F(1) : F(0);
-        const F *d = table->template data<F>();
-        m.dfg_base = DFGRow<F>(d, table->size, pr);
-        m.dfg_coat = DFGRow<F>(d, table->size, cc_pr);
-        m.dfg_sheen = DFGRow<F>(d, table->size, s_pr);
-        m.dfg = std::move(table);
-        return m;
-    }
 
     uint8_t flags() const { return diffuse_max > F(0) ? uint8_t(GlossyReflection | Diffuse) : uint8_t(GlossyReflection); }
 
@@ -286,7 +245,7 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardT {
         using namespace filament;
         Vec3<F> h = wo + wi;
         F len2 = length_squared(h);
-        bool active = wo.z > F(0) && wi.z > F(0) && len2 > F(0);
+        bool active = (wo.z > F(0)) & (wi.z > F(0)) & (len2 > F(0));  // & (no short-circuit): vectorizes
         h = h / std::sqrt(active ? len2 : F(1));
         F NoV = max_(wo.z, F(kMinNoV));  // clampNoV
         F NoL = saturate(wi.z);
@@ -352,15 +311,16 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardT {
         Lobes l = lobes(NoV);
         F c_diff = l.diffuse, c_cos = c_diff + l.sheen_cos, c_ggx = c_cos + l.ggx, c_coat = c_ggx + l.coat;
         bool pick_cos = uc < c_cos;
-        bool pick_ggx = !pick_cos && uc < c_ggx;
-        bool pick_coat = Coat && !pick_cos && !pick_ggx && uc < c_coat && l.coat > F(0);
+        // & / | (no short-circuit): vectorizes
+        bool pick_ggx = !pick_cos & (uc < c_ggx);
+        bool pick_coat = Coat & !pick_cos & !pick_ggx & (uc < c_coat) & (l.coat > F(0));
         // One visible-normal sample for whichever GGX lobe was picked
         TrowbridgeReitz<F> d;
         d.alpha_x = pick_coat ? coat.alpha_x : spec.alpha_x;
         d.alpha_y = pick_coat ? coat.alpha_y : spec.alpha_y;
         Vec3<F> wi = Reflect(wo, d.Sample_wm(wo, u));
         if constexpr (Sheen) {
-            bool pick_charlie = !pick_cos && !pick_ggx && !pick_coat && l.charlie > F(0);
+            bool pick_charlie = !pick_cos & !pick_ggx & !pick_coat & (l.charlie > F(0));
             wi = select(pick_charlie, Reflect(wo, SampleCharlie(sheen_alpha, u)), wi);
         }
         wi = select(pick_cos, SampleCosineHemisphere(u), wi);
@@ -368,8 +328,9 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardT {
         s.wi = wi;
         s.f = f(wo, wi, mode);
         s.pdf = pdf(wo, wi, mode, sample_flags);
-        s.flags = (pick_cos && uc < c_diff) ? uint8_t(DiffuseReflection) : uint8_t(GlossyReflection);
-        s.valid = (sample_flags & RT_Reflection) != 0 && wo.z > F(0) && wi.z > F(0);
+        // Flags by arithmetic, not a byte select (vectorizes); masks with & (no short-circuit).
+        s.flags = uint8_t(GlossyReflection - (Glossy - Diffuse) * int(pick_cos & (uc < c_diff)));
+        s.valid = ((sample_flags & RT_Reflection) != 0) & (wo.z > F(0)) & (wi.z > F(0));
         return s;
     }
 
@@ -378,19 +339,72 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardT {
         using namespace filament;
         Vec3<F> h = wo + wi;
         F len2 = length_squared(h);
-        bool active = (sample_flags & RT_Reflection) && wo.z > F(0) && wi.z > F(0) && len2 > F(0);
+        bool active = (wo.z > F(0)) & (wi.z > F(0)) & (len2 > F(0));
         h = h / std::sqrt(active ? len2 : F(1));
         Lobes l = lobes(max_(wo.z, F(kMinNoV)));
         F jac = F(1) / (F(4) * absdot(wo, h));  // reflection Jacobian dwm/dwi
         F p = (l.diffuse + l.sheen_cos) * CosineHemispherePDF(wi.z) + l.ggx * spec.PDF(wo, h) * jac;
         if constexpr (Coat) p += l.coat * coat.PDF(wo, h) * jac;
         if constexpr (Sheen) p += l.charlie * CharliePDF(sheen_alpha, h) * jac;
-        return active ? p : F(0);
+        // The loop-invariant flag test as a bit mask: a select on it does not vectorize in float64.
+        return keep_or_zero(active ? p : F(0), (sample_flags & RT_Reflection) != 0);
     }
 
     void regularize() {
         spec.regularize();
         coat.regularize();
+    }
+};
+
+// The model: the kernel (trivially copyable, so the batch kernels work on a per-chunk local copy
+// whose parameters stay in registers) plus the shared DFG table it points into.
+template <typename F, bool Coat, bool Sheen> struct FilamentStandardT : FilamentStandardKernel<F, Coat, Sheen> {
+    using Kernel = FilamentStandardKernel<F, Coat, Sheen>;
+    std::shared_ptr<const FilamentDFG> dfg;  // keeps the table alive
+
+    static FilamentStandardT make(const FilamentStandardParams &p, std::shared_ptr<const FilamentDFG> table) {
+        using namespace filament;
+        FilamentStandardT m;
+        double min_pr = p.min_perceptual_roughness, min_alpha = min_pr * min_pr;
+        double cc = p.clear_coat;
+        double f0d = 0.16 * p.reflectance * p.reflectance;  // computeDielectricF0
+        for (int c = 0; c < 3; ++c) {
+            double f0 = p.base_color[c] * p.metallic + f0d * (1 - p.metallic);  // computeF0
+            if (p.clear_coat_ior_change) f0 = lerp(cc, f0, f0ClearCoatToSurface(f0));  // CLEAR_COAT_IOR_CHANGE
+            m.f0[c] = F(f0);
+            m.diffuse_color[c] = F(p.base_color[c] * (1 - p.metallic));  // computeDiffuseColor
+            m.sheen_color[c] = Sheen ? F(p.sheen_color[c]) : F(0);
+        }
+        double sum_f0 = double(m.f0[0]) + double(m.f0[1]) + double(m.f0[2]);
+        m.f90 = p.f90_filament ? F(saturate(kF90Scale * sum_f0)) : F(1);  // fresnel(), quality > LOW
+        // getClearCoatPixelParams / getRoughnessPixelParams
+        double cc_pr = clamp(p.clear_coat_roughness, min_pr, 1.0);
+        double pr = lerp(cc, p.roughness, p.roughness > cc_pr ? p.roughness : cc_pr);
+        pr = clamp(pr, min_pr, 1.0);
+        double a = pr * pr;
+        // anisotropicLobe: at = max(a (1 + aniso), MIN_ROUGHNESS), ab = max(a (1 - aniso), MIN_ROUGHNESS)
+        double at = a * (1 + p.anisotropy), ab = a * (1 - p.anisotropy);
+        at = at > min_alpha ? at : min_alpha;
+        ab = ab > min_alpha ? ab : min_alpha;
+        m.alpha = F(a);
+        m.spec = TrowbridgeReitz<F>(F(at), F(ab), Masking::Correlated);
+        m.coat = TrowbridgeReitz<F>(F(cc_pr * cc_pr), F(cc_pr * cc_pr), Masking::Correlated);
+        m.clear_coat = Coat ? F(cc) : F(0);
+        double s_pr = clamp(p.sheen_roughness, min_pr, 1.0);  // getSheenPixelParams
+        m.sheen_alpha = F(s_pr * s_pr);
+        m.sheen_max = m.sheen_color.max_component();
+        m.diffuse_max = m.diffuse_color.max_component();
+        m.anisotropic = p.anisotropy != 0 ? F(1) : F(0);
+        m.fast_v = p.visibility == VisibilityTerm::Fast ? F(1) : F(0);
+        m.burley = p.diffuse == DiffuseTerm::Burley ? F(1) : F(0);
+        m.energy_compensation = p.energy_compensation ? F(1) : F(0);
+        m.doc_layering = p.layering == Layering::Doc ? F(1) : F(0);
+        const F *d = table->template data<F>();
+        m.dfg_base = DFGRow<F>(d, table->size, pr);
+        m.dfg_coat = DFGRow<F>(d, table->size, cc_pr);
+        m.dfg_sheen = DFGRow<F>(d, table->size, s_pr);
+        m.dfg = std::move(table);
+        return m;
     }
 };
 
@@ -417,30 +431,12 @@ struct FilamentClothParams {
 // energy compensation); Fd = diffuse baseColor, or with a subsurface color
 // Fd = diffuse Fd_Wrap(NoL, 0.5) saturate(subsurfaceColor + NoL) baseColor, which Filament does not
 // multiply by NoL: here f = Fd / NoL + Fr (f <NoL> is bounded; f itself grows as 1/NoL at the horizon).
-template <typename F> struct FilamentClothBxDF {
+template <typename F> struct FilamentClothKernel {
     Spectrum<F> base_color{F(0)}, sheen_color{F(0)}, subsurface_color{F(0)};
     F alpha = 0.25, base_max = 0, sheen_max = 0;
     F subsurface = 0, burley = 0;  // knobs as 0/1 factors (see FilamentStandardT)
     DFGRow<F> dfg_row;
-    std::shared_ptr<const FilamentDFG> dfg;
 
-    static FilamentClothBxDF make(const FilamentClothParams &p, std::shared_ptr<const FilamentDFG> table) {
-        FilamentClothBxDF m;
-        for (int c = 0; c < 3; ++c) {
-            m.base_color[c] = F(p.base_color[c]);
-            m.sheen_color[c] = F(p.sheen_color[c]);
-            m.subsurface_color[c] = F(p.subsurface_color[c]);
-        }
-        m.subsurface = p.has_subsurface ? F(1) : F(0);
-        double pr = clamp(p.roughness, p.min_perceptual_roughness, 1.0);  // getRoughnessPixelParams
-        m.alpha = F(pr * pr);
-        m.base_max = m.base_color.max_component();
-        m.sheen_max = m.sheen_color.max_component();
-        m.burley = p.diffuse == filament::DiffuseTerm::Burley ? F(1) : F(0);
-        m.dfg_row = DFGRow<F>(table->template data<F>(), table->size, pr);
-        m.dfg = std::move(table);
-        return m;
-    }
 
     uint8_t flags() const { return base_max > F(0) ? uint8_t(GlossyReflection | Diffuse) : uint8_t(GlossyReflection); }
 
@@ -448,7 +444,7 @@ template <typename F> struct FilamentClothBxDF {
         using namespace filament;
         Vec3<F> h = wo + wi;
         F len2 = length_squared(h);
-        bool active = wo.z > F(0) && wi.z > F(0) && len2 > F(0);
+        bool active = (wo.z > F(0)) & (wi.z > F(0)) & (len2 > F(0));  // & (no short-circuit): vectorizes
         h = h / std::sqrt(active ? len2 : F(1));
         F NoV = max_(wo.z, F(kMinNoV));
         F NoL = saturate(wi.z);
@@ -498,8 +494,9 @@ template <typename F> struct FilamentClothBxDF {
         s.wi = wi;
         s.f = f(wo, wi, mode);
         s.pdf = pdf(wo, wi, mode, sample_flags);
-        s.flags = (pick_base && uc < l.diffuse) ? uint8_t(DiffuseReflection) : uint8_t(GlossyReflection);
-        s.valid = (sample_flags & RT_Reflection) != 0 && wo.z > F(0) && wi.z > F(0);
+        // Flags by arithmetic, not a byte select (vectorizes); masks with & (no short-circuit).
+        s.flags = uint8_t(GlossyReflection - (Glossy - Diffuse) * int(pick_base & (uc < l.diffuse)));
+        s.valid = ((sample_flags & RT_Reflection) != 0) & (wo.z > F(0)) & (wi.z > F(0));
         return s;
     }
 
@@ -507,14 +504,40 @@ template <typename F> struct FilamentClothBxDF {
         using namespace filament;
         Vec3<F> h = wo + wi;
         F len2 = length_squared(h);
-        bool active = (sample_flags & RT_Reflection) && wo.z > F(0) && wi.z > F(0) && len2 > F(0);
+        bool active = (wo.z > F(0)) & (wi.z > F(0)) & (len2 > F(0));
         h = h / std::sqrt(active ? len2 : F(1));
         Lobes l = lobes(max_(wo.z, F(kMinNoV)));
         F p = (l.diffuse + l.sheen_base) * base_pdf(wi.z) + l.charlie * CharliePDF(alpha, h) / (F(4) * absdot(wo, h));
-        return active ? p : F(0);
+        // The loop-invariant flag test as a bit mask: a select on it does not vectorize in float64.
+        return keep_or_zero(active ? p : F(0), (sample_flags & RT_Reflection) != 0);
     }
 
     void regularize() {}
+};
+
+// The model: the kernel (trivially copyable, so the batch kernels work on a per-chunk local copy
+// whose parameters stay in registers) plus the shared DFG table it points into.
+template <typename F> struct FilamentClothBxDF : FilamentClothKernel<F> {
+    using Kernel = FilamentClothKernel<F>;
+    std::shared_ptr<const FilamentDFG> dfg;  // keeps the table alive
+
+    static FilamentClothBxDF make(const FilamentClothParams &p, std::shared_ptr<const FilamentDFG> table) {
+        FilamentClothBxDF m;
+        for (int c = 0; c < 3; ++c) {
+            m.base_color[c] = F(p.base_color[c]);
+            m.sheen_color[c] = F(p.sheen_color[c]);
+            m.subsurface_color[c] = F(p.subsurface_color[c]);
+        }
+        m.subsurface = p.has_subsurface ? F(1) : F(0);
+        double pr = clamp(p.roughness, p.min_perceptual_roughness, 1.0);  // getRoughnessPixelParams
+        m.alpha = F(pr * pr);
+        m.base_max = m.base_color.max_component();
+        m.sheen_max = m.sheen_color.max_component();
+        m.burley = p.diffuse == filament::DiffuseTerm::Burley ? F(1) : F(0);
+        m.dfg_row = DFGRow<F>(table->template data<F>(), table->size, pr);
+        m.dfg = std::move(table);
+        return m;
+    }
 };
 
 } // namespace bsdfkit

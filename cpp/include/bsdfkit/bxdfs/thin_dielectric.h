@@ -8,6 +8,8 @@
 
 namespace bsdfkit {
 
+static_assert(SpecularTransmission == SpecularReflection + 1);
+
 template <typename F> struct ThinDielectricBxDF {
     F eta;
 
@@ -21,16 +23,19 @@ template <typename F> struct ThinDielectricBxDF {
         // Geometric series of inter-reflections: R' = R + T^2 R / (1 - R^2)
         F T = F(1) - R;
         F Rs = R < F(1) ? R + sqr(T) * R / (F(1) - sqr(R)) : R;
-        F pr = (sample_flags & RT_Reflection) ? Rs : F(0);
-        F pt = (sample_flags & RT_Transmission) ? F(1) - Rs : F(0);
+        // Bit masks, not selects on the invariant flag tests (GCC 12 does not vectorize those).
+        F pr = keep_or_zero(Rs, (sample_flags & RT_Reflection) != 0);
+        F pt = keep_or_zero(F(1) - Rs, (sample_flags & RT_Transmission) != 0);
         bool reflect = uc < pr / (pr + pt);
-        s.wi = reflect ? Vec3<F>(-wo.x, -wo.y, wo.z) : -wo;
+        s.wi = Vec3<F>(-wo.x, -wo.y, reflect ? wo.z : -wo.z);
         F cos_i = DeltaAbsCos(s.wi);
         s.f = Spectrum<F>((reflect ? Rs : F(1) - Rs) / cos_i);
         s.pdf = (reflect ? pr : pt) / (pr + pt);
-        s.flags = reflect ? SpecularReflection : SpecularTransmission;
+        // Flags by arithmetic, not a byte select (vectorizes): Transmission = Reflection + 1.
+        s.flags = uint8_t(SpecularReflection + int(!reflect));
         s.eta = F(1);
-        s.valid = (pr + pt) > F(0) && cos_i > F(0);
+        // & (no short-circuit; vectorizes). cos_i > 0 always holds (DeltaAbsCos).
+        s.valid = (pr + pt) > F(0);
         return s;
     }
 
