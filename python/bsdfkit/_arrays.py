@@ -31,7 +31,8 @@ def as_uniform(x, name: str, tail: tuple) -> np.ndarray:
     a = _as_real_array(x, name)
     if a.shape[a.ndim - len(tail):] != tail or a.ndim < len(tail):
         raise ValueError(f"{name}: expected trailing shape {tail}, got {a.shape}")
-    if a.size and not (np.all(a >= 0) and np.all(a <= 1)):
+    # min/max: one pass each and no temporary bool arrays; a NaN propagates and fails the test
+    if a.size and not (a.min() >= 0 and a.max() <= 1):
         raise ValueError(f"{name}: sample values must lie in [0, 1] (and not be NaN)")
     return a
 
