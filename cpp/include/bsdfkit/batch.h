@@ -103,19 +103,6 @@ template <typename M, typename = void> struct has_split_sample : std::false_type
 template <typename M>
 struct has_split_sample<M, std::void_t<decltype(&M::is_smooth), decltype(&M::sample_rough)>> : std::true_type {};
 
-// Mask forms (bitwise &, no short-circuit) of the bsdf_sample checks, for the vectorized loop.
-template <typename F> inline bool nonzero_mask(const Spectrum<F> &s) {
-    bool b = false;
-    for (int c = 0; c < Spectrum<F>::Size; ++c) b = b | (s[c] != F(0));
-    return b;
-}
-template <typename F> inline bool finite_nonneg_mask(const Spectrum<F> &s) {
-    bool ok = true;
-    for (int c = 0; c < Spectrum<F>::Size; ++c)
-        ok = ok & (s[c] >= F(0)) & (s[c] <= std::numeric_limits<F>::max());
-    return ok;
-}
-
 // The same results as bsdf_sample per element, over one chunk [b, e). The main loop stores only
 // float outputs (an invalid sample has pdf = 0; validity is folded into float selects) and
 // stages flags and pdf_is_proportional as F, so it vectorizes; a second pass writes the
@@ -132,8 +119,7 @@ inline void sample_chunk(const Model &m, const Sampler &smp, bool model_ok, int6
         Vec3<F> o = load3<F, SO>(wo, i);
         bo += not_unit(o);
         BSDFSample<F> s = smp(m, o, uc[i], Point2<F>{u[2 * i], u[2 * i + 1]});
-        bool ok = s.valid & (o.z != F(0)) & model_ok & nonzero_mask(s.f) & (s.pdf > F(0)) & (s.wi.z != F(0)) &
-                  finite_nonneg_mask(s.f) & (s.pdf <= std::numeric_limits<F>::max());
+        bool ok = sample_accepted(s, o) & model_ok;   // bsdf_sample's rule (core/bsdf.h)
         for (int c = 0; c < 3; ++c) of[3 * i + c] = ok ? s.f[c] : F(0);
         owi[3 * i] = ok ? s.wi.x : F(0);
         owi[3 * i + 1] = ok ? s.wi.y : F(0);

@@ -21,10 +21,23 @@ template <typename F> inline Spectrum<F> finite_or_zero(const Spectrum<F> &s) {
     for (int i = 0; i < Spectrum<F>::Size; ++i) r[i] = finite_or_zero(s[i]);
     return r;
 }
-template <typename F> inline bool is_finite_nonneg(const Spectrum<F> &s) {
+// Mask forms (bitwise &/|, no short-circuit), so the checks vectorize in the sample kernels.
+template <typename F> inline bool nonzero_mask(const Spectrum<F> &s) {
+    bool b = false;
+    for (int i = 0; i < Spectrum<F>::Size; ++i) b = b | (s[i] != F(0));
+    return b;
+}
+template <typename F> inline bool finite_nonneg_mask(const Spectrum<F> &s) {
     bool ok = true;
-    for (int i = 0; i < Spectrum<F>::Size; ++i) ok = ok && s[i] >= F(0) && s[i] <= std::numeric_limits<F>::max();
+    for (int i = 0; i < Spectrum<F>::Size; ++i) ok = ok & (s[i] >= F(0)) & (s[i] <= std::numeric_limits<F>::max());
     return ok;
+}
+
+// Whether a raw BxDF sample survives pbrt-v4's BSDF-level rules (the lobe-flag test against
+// sample_flags aside, which the batch kernel hoists out of its loop).
+template <typename F> inline bool sample_accepted(const BSDFSample<F> &s, const Vec3<F> &wo) {
+    return s.valid & (wo.z != F(0)) & nonzero_mask(s.f) & (s.pdf > F(0)) & (s.wi.z != F(0)) &
+           finite_nonneg_mask(s.f) & (s.pdf <= std::numeric_limits<F>::max());
 }
 
 template <typename Model, typename F>
@@ -43,8 +56,7 @@ template <typename Model, typename F>
 inline BSDFSample<F> bsdf_sample(const Model &m, const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode,
                                  uint8_t sf) {
     BSDFSample<F> s = m.sample_f(wo, uc, u, mode, sf);
-    bool ok = s.valid && wo.z != F(0) && (m.flags() & sf) != 0 && !s.f.is_black() && s.pdf > F(0) &&
-              s.wi.z != F(0) && is_finite_nonneg(s.f) && s.pdf <= std::numeric_limits<F>::max();
+    bool ok = sample_accepted(s, wo) & ((m.flags() & sf) != 0);
     // Every output of a rejected sample is a defined value, never a NaN from a dead branch.
     BSDFSample<F> r;
     r.f = select(ok, s.f, Spectrum<F>(F(0)));
