@@ -121,20 +121,10 @@ def checksum(inputs):
 
 def best_time(fn, repeats=5, min_time=0.02, warmup=1):
     """Min over `repeats` of the mean time of `inner` back-to-back calls; `inner` is chosen so
-    that one repeat takes >= min_time (1 for the N = 1e6 calls)."""
-    for _ in range(warmup):
-        fn()
-    t0 = time.perf_counter()
-    fn()
-    dt = time.perf_counter() - t0
-    inner = max(1, int(math.ceil(min_time / max(dt, 1e-9)))) if dt < min_time else 1
-    best = math.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(inner):
-            fn()
-        best = min(best, (time.perf_counter() - t0) / inner)
-    return best
+    that one repeat takes >= min_time (1 for the N = 1e6 calls). bsdfkit.tradeoff's timer."""
+    from bsdfkit.tradeoff import best_time as timer   # lazily: the Mitsuba subprocesses never load bsdfkit
+
+    return timer(fn, repeats=repeats, min_time=min_time, warmup=warmup)
 
 
 def machine_info():

@@ -692,8 +692,12 @@ def _pick(cands, costs, configs, err):
 
 # ============================================================================ timing
 
-def _best_time(fn, repeats, min_time=0.005):
-    fn()
+def best_time(fn, repeats=5, min_time=0.005, warmup=1):
+    """Min over ``repeats`` of the mean time of ``inner`` back-to-back calls of ``fn`` after
+    ``warmup`` calls; ``inner`` is chosen so that one repeat takes >= ``min_time`` seconds.
+    Also the timer of ``bench/throughput.py`` and ``bench/filament.py``."""
+    for _ in range(warmup):
+        fn()
     t0 = time.perf_counter()
     fn()
     dt = time.perf_counter() - t0
@@ -746,9 +750,9 @@ def _measure(configs, op, n_timing, repeats, rounds, seed):
     t_ref, t = math.inf, [math.inf] * len(configs)
     for _ in range(rounds):
         for i, call in enumerate(calls):
-            tr = _best_time(calls[0], repeats)
+            tr = best_time(calls[0], repeats)
             t_ref = min(t_ref, tr)
-            t[i] = min(t[i], tr if i == 0 else _best_time(call, repeats))
+            t[i] = min(t[i], tr if i == 0 else best_time(call, repeats))
     t[0] = t_ref
     return [n_timing / x for x in t], [t_ref / x for x in t]
 
