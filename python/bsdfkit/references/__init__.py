@@ -66,3 +66,23 @@ def _configure_llvm_env():
     elif os.path.exists(_LLVM15):
         os.environ["DRJIT_LIBLLVM_PATH"] = _LLVM15
     return os.environ.get("DRJIT_LIBLLVM_PATH")
+
+
+_DRJIT = None
+
+
+def _drjit_backend():
+    """``(dr, B)``: Dr.Jit and its LLVM array module (``drjit.scalar`` where the LLVM backend is
+    missing), with FastMath off so the references keep full float64 accuracy. Imported and
+    configured once per process, after :func:`_configure_llvm_env`."""
+    global _DRJIT
+    if _DRJIT is None:
+        _configure_llvm_env()
+        import drjit as dr
+        if dr.has_backend(dr.JitBackend.LLVM):
+            import drjit.llvm as B
+        else:  # pragma: no cover - machine dependent
+            import drjit.scalar as B
+        dr.set_flag(dr.JitFlag.FastMath, False)
+        _DRJIT = (dr, B)
+    return _DRJIT

@@ -28,7 +28,7 @@ Public functions take and return float64 numpy arrays (inputs broadcast with num
 """
 import numpy as np
 
-from . import _configure_llvm_env
+from . import _drjit_backend
 
 __all__ = [
     "D_GGX", "D_GGX_Anisotropic", "D_Charlie", "D_Ashikhmin", "V_SmithGGXCorrelated",
@@ -42,21 +42,9 @@ MIN_PERCEPTUAL_ROUGHNESS = {"desktop": 0.045, "mobile": 0.089}  # common_materia
 CHARLIE_SIN2_FLOOR = 0.0078125           # brdf.fs D_Charlie / D_Ashikhmin: 2^-7
 PI = np.pi
 
-_BK = None
-
-
 def _bk():
-    global _BK
-    if _BK is None:
-        _configure_llvm_env()
-        import drjit as dr
-        if dr.has_backend(dr.JitBackend.LLVM):
-            import drjit.llvm as B
-        else:  # pragma: no cover - machine dependent
-            import drjit.scalar as B
-        dr.set_flag(dr.JitFlag.FastMath, False)
-        _BK = (dr, B)
-    return _BK
+    """(dr, Dr.Jit array module), shared with the other references."""
+    return _drjit_backend()
 
 
 def _F(a):

@@ -21,7 +21,7 @@ purpose (they emit ``llvm.maximum``, which LLVM 15/16 cannot compile on x86); se
 
 import numpy as np
 
-from . import _configure_llvm_env
+from . import _drjit_backend
 
 __all__ = [
     "tr_D", "tr_lambda", "tr_G1", "tr_G_correlated", "tr_G_separable", "tr_vndf_pdf",
@@ -34,24 +34,10 @@ SMOOTH_ALPHA = 1e-3  # pbrt-v4 TrowbridgeReitzDistribution::EffectivelySmooth
 MIN_ALPHA = 1e-4     # pbrt-v4 TrowbridgeReitzDistribution constructor floor
 INV_PI = 1.0 / np.pi
 
-_BK = None
-
-
 def _bk():
-    """(dr, Float64 type) -- initialised once; disables FastMath for accuracy."""
-    global _BK
-    if _BK is None:
-        _configure_llvm_env()
-        import drjit as dr
-        if dr.has_backend(dr.JitBackend.LLVM):
-            import drjit.llvm as B
-            F = B.Float64
-        else:  # pragma: no cover - machine dependent
-            import drjit.scalar as B
-            F = B.ArrayXf64
-        dr.set_flag(dr.JitFlag.FastMath, False)
-        _BK = (dr, F)
-    return _BK
+    """(dr, Float64 array type) of the shared backend (references._drjit_backend)."""
+    dr, B = _drjit_backend()
+    return dr, (B.Float64 if dr.has_backend(dr.JitBackend.LLVM) else B.ArrayXf64)
 
 
 # ---------------------------------------------------------------------------------------------
