@@ -20,6 +20,8 @@ from . import filament
 from ._filament_models import FilamentCloth, FilamentStandard
 from .tradeoff import Table, knobs, simplify, tradeoff  # speed vs accuracy (bk.tradeoff is the function)
 from .interop import from_mitsuba, from_pbrt, parse_pbrt_materials  # scene materials in
+from . import spectral
+from .spectral import Spectrum, sample_wavelengths, spectrum_to_rgb  # spectral values (issue 15)
 
 __version__ = "0.1.0"
 
@@ -29,6 +31,7 @@ __all__ = ["BxDF", "BxDFFlags", "Conductor", "Dielectric", "Diffuse", "DiffuseTr
 __all__ += ["FilamentStandard", "FilamentCloth", "filament"]
 __all__ += ["tradeoff", "simplify", "knobs", "Table"]
 __all__ += ["from_mitsuba", "from_pbrt", "parse_pbrt_materials", "interop"]
+__all__ += ["spectral", "Spectrum", "sample_wavelengths", "spectrum_to_rgb"]
 
 #: Every model class, in gallery order.
 MODELS = (Diffuse, DiffuseTransmission, Conductor, Dielectric, ThinDielectric, FilamentStandard, FilamentCloth)
