@@ -179,7 +179,7 @@ def _to_nm(c):
 def fit_table(res: int = RES, *, progress=None):
     """Fit the sRGB table: coefficients (3, res z, res y, res x, 3) in nm units, and the final
     CIELAB residual of every entry (3, res, res, res). ``progress(done, total)`` per z slice."""
-    prob = _Problem()
+    prob = _problem()
     zs = z_nodes(res)
     coeffs = np.zeros((res, 3 * res * res, 3))
     resid = np.zeros((res, 3 * res * res))
@@ -277,10 +277,34 @@ def _lookup(rgb, res=RES):
                     + dy * ((1 - dx) * co(1, 1, 0) + dx * co(1, 1, 1))))
 
 
-def reflectance_coefficients(rgb) -> np.ndarray:
+def _to_unit(c):
+    """Coefficients in lambda (nm) -> coefficients in t = (lambda - 360) / 470 (inverse of _to_nm)."""
+    a, L = _LAMBDA0, _LAMBDA_SPAN
+    return np.stack([c[..., 0] * L * L, (c[..., 1] + 2 * c[..., 0] * a) * L,
+                     (c[..., 0] * a + c[..., 1]) * a + c[..., 2]], -1)
+
+
+@functools.lru_cache(maxsize=1)
+def _problem():
+    return _Problem()
+
+
+def refine(rgb, coeffs, tol: float = 1e-7) -> np.ndarray:
+    """Newton-polish table coefficients (m, 3) (nm units) for the exact colours rgb (m, 3) (not
+    grey): a few steps of the fit itself, so the round trip is exact to the fit tolerance
+    instead of the table's interpolation error (<= 4e-3 near the gamut boundary)."""
+    prob = _problem()
+    c = _to_unit(np.asarray(coeffs, dtype=np.float64).reshape(-1, 3)).copy()
+    target = np.maximum(np.asarray(rgb, dtype=np.float64).reshape(-1, 3) @ colorimetry.SRGB_TO_XYZ.T, 1e-12)
+    _solve_slice(prob, target, c, tol=tol)
+    return _to_nm(c)
+
+
+def reflectance_coefficients(rgb, *, exact: bool = False) -> np.ndarray:
     """Sigmoid coefficients (..., 3) (nm units) of linear sRGB reflectances rgb (..., 3) in [0, 1]
     (pbrt-v4 ``RGBAlbedoSpectrum``). Greys (r == g == b) use the closed form; 0 and 1 give
-    c2 = -inf / +inf (the spectra 0 and 1)."""
+    c2 = -inf / +inf (the spectra 0 and 1). ``exact``: polish the table lookup with
+    :func:`refine` (bsdfkit's default for parameter values; pbrt-v4 uses the lookup as is)."""
     a = np.asarray(rgb, dtype=np.float64)
     flat = a.reshape(-1, 3)
     out = np.zeros(flat.shape)
@@ -290,10 +314,12 @@ def reflectance_coefficients(rgb) -> np.ndarray:
         out[grey, 2] = np.where(g <= 0, -np.inf, np.where(g >= 1, np.inf, (g - 0.5) / np.sqrt(g * (1 - g))))
     if np.any(~grey):
         out[~grey] = _lookup(flat[~grey])
+        if exact:
+            out[~grey] = refine(flat[~grey], out[~grey])
     return out.reshape(a.shape)
 
 
-def rgb_coefficients(rgb, kind: str = "reflectance"):
+def rgb_coefficients(rgb, kind: str = "reflectance", *, exact: bool = False):
     """(coefficients (..., 3), scale (...,)) of the spectrum of rgb: value(lambda) =
     scale * s(poly(lambda)) [* D65(lambda) normalised to unit luminance for "illuminant"].
 
@@ -301,13 +327,15 @@ def rgb_coefficients(rgb, kind: str = "reflectance"):
     * ``"unbounded"`` (``RGBUnboundedSpectrum``): rgb >= 0; m = max(rgb), scale = 2 m, the
       coefficients of rgb / scale (so the sigmoid stays in its middle range).
     * ``"illuminant"`` (``RGBIlluminantSpectrum``): as unbounded, times the illuminant.
+
+    ``exact``: see :func:`reflectance_coefficients`.
     """
     a = np.asarray(rgb, dtype=np.float64)
     if kind == "reflectance":
-        return reflectance_coefficients(a), np.ones(a.shape[:-1])
+        return reflectance_coefficients(a, exact=exact), np.ones(a.shape[:-1])
     if kind in ("unbounded", "illuminant"):
         scale = 2.0 * a.max(axis=-1)
         safe = np.where(scale > 0, scale, 1.0)[..., None]
-        c = reflectance_coefficients(np.where(scale[..., None] > 0, a / safe, 0.0))
+        c = reflectance_coefficients(np.where(scale[..., None] > 0, a / safe, 0.0), exact=exact)
         return c, scale
     raise ValueError(f"kind: expected 'reflectance', 'unbounded' or 'illuminant', got {kind!r}")
