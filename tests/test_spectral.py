@@ -299,6 +299,20 @@ def test_uplift_table_fit_residual():
     np.testing.assert_allclose(c, uplift.table()[0, 40, 50, 10], rtol=1e-12)
 
 
+def test_uplift_table_cache(tmp_path, monkeypatch, capsys):
+    """A small table (res 8) is fitted with progress on stderr, cached under $BSDFKIT_CACHE_DIR,
+    and loaded (silently, identical) by the next call."""
+    monkeypatch.setenv("BSDFKIT_CACHE_DIR", str(tmp_path))
+    t1 = uplift.table.__wrapped__(8)
+    err = capsys.readouterr().err
+    assert "fitting the sRGB -> spectrum table" in err and "8/8 slices" in err
+    assert uplift.cache_path(8).parent == tmp_path and uplift.cache_path(8).exists()
+    t2 = uplift.table.__wrapped__(8)
+    assert capsys.readouterr().err == ""
+    np.testing.assert_array_equal(t1, t2)
+    assert t1.shape == (3, 8, 8, 8, 3) and not t1.flags.writeable
+
+
 def _mi_model_eval(mi, coeffs, lam):
     """mi.srgb_model_eval at any number of wavelengths (scalar_spectral takes 4 at a time)."""
     pad = np.concatenate([lam, np.full(-lam.size % 4, lam[-1])])

@@ -22,6 +22,7 @@ pbrt-v4's three RGB spectrum kinds (``RGBAlbedoSpectrum``, ``RGBUnboundedSpectru
 """
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import os
@@ -227,26 +228,55 @@ def _stderr_progress():
     return report
 
 
+def _load(path, res):
+    try:
+        with np.load(path) as f:
+            t = f["coeffs"]
+    except (OSError, KeyError, ValueError):
+        return None
+    if t.shape != (3, res, res, res, 3) or not np.all(np.isfinite(t)):
+        return None
+    return t
+
+
+@contextlib.contextmanager
+def _fit_lock(path):
+    """An exclusive lock beside the cache file, so parallel processes (pytest-xdist workers) fit
+    the table once; a no-op where fcntl or the directory is unavailable."""
+    try:
+        import fcntl
+        path.parent.mkdir(parents=True, exist_ok=True)
+        f = open(path.with_suffix(".lock"), "w")
+    except (ImportError, OSError):
+        yield
+        return
+    with f:
+        fcntl.flock(f, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(f, fcntl.LOCK_UN)
+
+
 @functools.lru_cache(maxsize=None)
 def table(res: int = RES):
     """The fitted table (3, res, res, res, 3) float64, read-only: from the cache, else fitted
     now (progress on stderr) and cached. The z nodes are :func:`z_nodes`."""
     path = cache_path(res)
-    try:
-        with np.load(path) as f:
-            t = f["coeffs"]
-        if t.shape != (3, res, res, res, 3) or not np.all(np.isfinite(t)):
-            raise OSError("bad cache")
-    except (OSError, KeyError, ValueError):
-        t, resid = fit_table(res, progress=_stderr_progress())
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz.tmp")
-            with os.fdopen(fd, "wb") as f:
-                np.savez(f, coeffs=t, residual=resid)
-            os.replace(tmp, path)
-        except OSError as e:                     # read-only home: keep the table in memory only
-            print(f"bsdfkit: could not cache the RGB -> spectrum table at {path}: {e}", file=sys.stderr)
+    t = _load(path, res)
+    if t is None:
+        with _fit_lock(path):
+            t = _load(path, res)             # another process may have fitted it meanwhile
+            if t is None:
+                t, resid = fit_table(res, progress=_stderr_progress())
+                try:
+                    path.parent.mkdir(parents=True, exist_ok=True)
+                    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz.tmp")
+                    with os.fdopen(fd, "wb") as f:
+                        np.savez(f, coeffs=t, residual=resid)
+                    os.replace(tmp, path)
+                except OSError as e:         # read-only home: keep the table in memory only
+                    print(f"bsdfkit: could not cache the RGB -> spectrum table at {path}: {e}", file=sys.stderr)
     t.setflags(write=False)
     return t
 
