@@ -22,7 +22,7 @@ Spectrum = bk.Spectrum
 @contextlib.contextmanager
 def _mitsuba_spectral():
     """Mitsuba in scalar_spectral for the block, then back to the suite's variant."""
-    from bsdfkit.references import mitsuba as ref
+    from bsdfkit.testing import mitsuba as ref
     ref.variant()                       # configures Dr.Jit's LLVM path once per process
     import mitsuba as mi
     mi.set_variant("scalar_spectral")
