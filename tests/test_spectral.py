@@ -388,6 +388,9 @@ def test_monte_carlo_colour_converges(method):
     x = np.linspace(360, 830, 47001)
     f = s(x)[:, None] * colorimetry.cmfs(x) * colorimetry.d65(x)[:, None] * colorimetry._grid("pbrt")[4]
     want = np.sum((f[1:] + f[:-1]) / 2 * np.diff(x)[:, None], 0) / colorimetry.cie_y_integral()
+    # The same integral as pbrt-v4's 1 nm sum (Spectrum.to_rgb, normalization="pbrt").
+    np.testing.assert_allclose(s.to_rgb("unbounded", normalization="pbrt") @ colorimetry.SRGB_TO_XYZ.T, want,
+                               atol=1e-4)
     mean, se = est.mean(0), est.std(0) / math.sqrt(est.shape[0])
     z = (mean - want) / se
     assert np.all(np.abs(z) < 4.5), (z, mean, want)

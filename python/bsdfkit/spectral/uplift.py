@@ -7,11 +7,11 @@ per "largest channel" (pbrt-v4's ``RGBToSpectrumTable``, res = 64): the largest 
 smoothstep(smoothstep(.)) grid, the other two divided by z on a uniform grid, trilinearly
 interpolated. Greys use the closed form (0, 0, (c - 1/2) / sqrt(c (1 - c))) (a constant c).
 
-The table is fitted here, by a vectorized Gauss-Newton (Newton: 3 residuals, 3 unknowns) on the
-CIELAB difference between the target and the spectrum's colour under D65 (paper, Sec. 4), with
+The table is fitted here, by a vectorized Newton iteration with step halving (3 residuals,
+3 unknowns; the paper's Gauss-Newton) on the CIELAB difference between the target and the spectrum's colour under D65 (paper, Sec. 4), with
 the "pbrt" projection of :mod:`.colorimetry` (so constant c -> grey c), continuing from slice to
-slice of z as the paper's optimizer does. It is generated at first use (about a minute on one
-idle core; progress on stderr) and cached under the user cache directory
+slice of z as the paper's optimizer does. It is generated at first use (about a minute of CPU,
+measured 65 s; progress on stderr) and cached under the user cache directory
 (``$BSDFKIT_CACHE_DIR``, else ``$XDG_CACHE_HOME/bsdfkit``, else ``~/.cache/bsdfkit``) keyed by a
 hash of everything it depends on. Why not at build time: the build is CMake-only (no numpy or
 colour-science at build time), and a content-keyed cache regenerates exactly when the CMFs,
@@ -35,7 +35,8 @@ import numpy as np
 
 from . import colorimetry
 
-__all__ = ["RES", "sigmoid", "eval_coefficients", "rgb_coefficients", "table", "z_nodes", "cache_path"]
+__all__ = ["RES", "sigmoid", "eval_coefficients", "rgb_coefficients", "reflectance_coefficients", "refine",
+           "table", "fit_table", "z_nodes", "cache_path"]
 
 #: Table resolution per axis (pbrt-v4's ``RGBToSpectrumTable::res``).
 RES = 64
@@ -48,8 +49,8 @@ _LAMBDA0, _LAMBDA_SPAN = colorimetry.LAMBDA_MIN, colorimetry.LAMBDA_MAX - colori
 def sigmoid(x):
     """s(x) = 1/2 + x / (2 sqrt(1 + x^2)), with s(+-inf) = 1, 0 (Jakob & Hanika 2019, Eq. 3)."""
     x = np.asarray(x, dtype=np.float64)
-    with np.errstate(invalid="ignore", over="ignore"):
-        s = 0.5 + x / (2.0 * np.sqrt(1.0 + x * x))
+    with np.errstate(invalid="ignore"):
+        s = 0.5 + 0.5 * x / np.hypot(1.0, x)            # hypot: no overflow for huge |x|
     return np.where(np.isinf(x), (x > 0).astype(np.float64), s)
 
 
