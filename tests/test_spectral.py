@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 import bsdfkit as bk
 from bsdfkit.spectral import colorimetry, named, uplift
@@ -85,6 +86,22 @@ def test_value_semantics():
     s = Spectrum([400, 500], [1, 2])
     with pytest.raises(ValueError):
         s.values[0] = 5.0
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.floats(100, 2000), st.floats(-1e6, 1e6)), min_size=1, max_size=40,
+                unique_by=lambda t: t[0]))
+def test_sampled_round_trips_and_interpolates(pairs):
+    pairs.sort()
+    lam, val = np.array(pairs).T
+    s = Spectrum(lam, val)
+    assert eval(repr(s), {"Spectrum": Spectrum}) == s and pickle.loads(pickle.dumps(s)) == s
+    np.testing.assert_array_equal(s(lam), val)
+    x = np.linspace(50, 2100, 257)
+    v = s(x)
+    assert np.all(v >= val.min()) and np.all(v <= val.max())           # piecewise linear: no overshoot
+    np.testing.assert_array_equal(v[x <= lam[0]], val[0])               # clamped at both ends
+    np.testing.assert_array_equal(v[x >= lam[-1]], val[-1])
 
 
 @pytest.mark.parametrize("args, words", [
