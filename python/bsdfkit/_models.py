@@ -309,7 +309,7 @@ class Diffuse(BxDF):
         return cls(p["reflectance"])
 
     def _make_core(self):
-        return _core.Diffuse(self._params["reflectance"].tolist())
+        return _core.Diffuse(reflectance=self._params["reflectance"].tolist())
 
 
 class DiffuseTransmission(BxDF):
@@ -330,7 +330,8 @@ class DiffuseTransmission(BxDF):
         return cls(p["reflectance"], p["transmittance"])
 
     def _make_core(self):
-        return _core.DiffuseTransmission(self._params["reflectance"].tolist(), self._params["transmittance"].tolist())
+        return _core.DiffuseTransmission(reflectance=self._params["reflectance"].tolist(),
+                                         transmittance=self._params["transmittance"].tolist())
 
 
 # RGB eta / k of common metals: Mitsuba 3's RGB projection (CIE 1931 -> linear sRGB, no D65
@@ -416,7 +417,8 @@ class Conductor(BxDF):
     def _make_core(self):
         p = self._params
         core_cls = getattr(_core, _FRESNEL[p["fresnel"]][0])
-        return core_cls(p["eta"].tolist(), p["k"].tolist(), p["alpha_x"], p["alpha_y"], _MASKING[p["masking"]])
+        return core_cls(eta=p["eta"].tolist(), k=p["k"].tolist(), alpha_x=p["alpha_x"], alpha_y=p["alpha_y"],
+                        masking=_MASKING[p["masking"]])
 
 
 def conductor_fresnel(cos_theta, eta, k, fresnel="exact") -> np.ndarray:
@@ -472,7 +474,7 @@ class Dielectric(BxDF):
 
     def _make_core(self):
         p = self._params
-        return _core.Dielectric(p["eta"], p["alpha_x"], p["alpha_y"], _MASKING[p["masking"]])
+        return _core.Dielectric(eta=p["eta"], alpha_x=p["alpha_x"], alpha_y=p["alpha_y"], masking=_MASKING[p["masking"]])
 
 
 class ThinDielectric(BxDF):
@@ -492,4 +494,4 @@ class ThinDielectric(BxDF):
         return cls(p["eta"])
 
     def _make_core(self):
-        return _core.ThinDielectric(self._params["eta"])
+        return _core.ThinDielectric(eta=self._params["eta"])
