@@ -102,7 +102,8 @@ class Conductor(BxDF):
     def _make_core(self):
         p = self._params
         core_cls = getattr(_core, _FRESNEL[p["fresnel"]][0])
-        return core_cls(p["eta"].tolist(), p["k"].tolist(), p["alpha_x"], p["alpha_y"], _MASKING[p["masking"]])
+        return core_cls(eta=p["eta"].tolist(), k=p["k"].tolist(), alpha_x=p["alpha_x"], alpha_y=p["alpha_y"],
+                        masking=_MASKING[p["masking"]])
 
 
 def conductor_fresnel(cos_theta, eta, k, fresnel="exact") -> np.ndarray:

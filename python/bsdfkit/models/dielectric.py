@@ -29,7 +29,7 @@ class Dielectric(BxDF):
 
     def _make_core(self):
         p = self._params
-        return _core.Dielectric(p["eta"], p["alpha_x"], p["alpha_y"], _MASKING[p["masking"]])
+        return _core.Dielectric(eta=p["eta"], alpha_x=p["alpha_x"], alpha_y=p["alpha_y"], masking=_MASKING[p["masking"]])
 
 
 class ThinDielectric(BxDF):
@@ -49,4 +49,4 @@ class ThinDielectric(BxDF):
         return cls(p["eta"])
 
     def _make_core(self):
-        return _core.ThinDielectric(self._params["eta"])
+        return _core.ThinDielectric(eta=self._params["eta"])

@@ -23,7 +23,7 @@ class Diffuse(BxDF):
         return cls(p["reflectance"])
 
     def _make_core(self):
-        return _core.Diffuse(self._params["reflectance"].tolist())
+        return _core.Diffuse(reflectance=self._params["reflectance"].tolist())
 
 
 class DiffuseTransmission(BxDF):
@@ -44,4 +44,5 @@ class DiffuseTransmission(BxDF):
         return cls(p["reflectance"], p["transmittance"])
 
     def _make_core(self):
-        return _core.DiffuseTransmission(self._params["reflectance"].tolist(), self._params["transmittance"].tolist())
+        return _core.DiffuseTransmission(reflectance=self._params["reflectance"].tolist(),
+                                         transmittance=self._params["transmittance"].tolist())

@@ -141,11 +141,14 @@ class FilamentStandard(BxDF):
         coat, sheen = p["clear_coat"] > 0, float(np.max(p["sheen_color"])) > 0
         cls = {(False, False): _core.FilamentStandard, (True, False): _core.FilamentStandardCoat,
                (False, True): _core.FilamentStandardSheen, (True, True): _core.FilamentStandardCoatSheen}[coat, sheen]
-        return cls(p["base_color"].tolist(), p["metallic"], p["roughness"], p["reflectance"], p["anisotropy"],
-                   p["clear_coat"], p["clear_coat_roughness"], p["sheen_color"].tolist(), p["sheen_roughness"],
-                   _DIFFUSE[p["diffuse"]], _VISIBILITY[p["visibility"]], _F90[p["f90"]], p["energy_compensation"],
-                   _min_pr(p["min_roughness"]), _LAYERING[p["clear_coat_layering"]], p["clear_coat_ior_change"],
-                   _fil._table(p["dfg_lut_size"]))
+        return cls(base_color=p["base_color"].tolist(), metallic=p["metallic"], roughness=p["roughness"],
+                   reflectance=p["reflectance"], anisotropy=p["anisotropy"], clear_coat=p["clear_coat"],
+                   clear_coat_roughness=p["clear_coat_roughness"], sheen_color=p["sheen_color"].tolist(),
+                   sheen_roughness=p["sheen_roughness"], diffuse=_DIFFUSE[p["diffuse"]],
+                   visibility=_VISIBILITY[p["visibility"]], f90_filament=_F90[p["f90"]],
+                   energy_compensation=p["energy_compensation"], min_perceptual_roughness=_min_pr(p["min_roughness"]),
+                   layering=_LAYERING[p["clear_coat_layering"]], clear_coat_ior_change=p["clear_coat_ior_change"],
+                   dfg=_fil._table(p["dfg_lut_size"]))
 
 
 class FilamentCloth(BxDF):
@@ -201,9 +204,10 @@ class FilamentCloth(BxDF):
         p = self._params
         ss = p["subsurface_color"]
         return _core.FilamentCloth(
-            p["base_color"].tolist(), self.effective_sheen_color.tolist(),
-            [0.0, 0.0, 0.0] if ss is None else ss.tolist(), ss is not None, p["roughness"],
-            _DIFFUSE[p["diffuse"]], _min_pr(p["min_roughness"]), _fil._table(p["dfg_lut_size"]))
+            base_color=p["base_color"].tolist(), sheen_color=self.effective_sheen_color.tolist(),
+            subsurface_color=[0.0, 0.0, 0.0] if ss is None else ss.tolist(), has_subsurface=ss is not None,
+            roughness=p["roughness"], diffuse=_DIFFUSE[p["diffuse"]],
+            min_perceptual_roughness=_min_pr(p["min_roughness"]), dfg=_fil._table(p["dfg_lut_size"]))
 
 
 def examples() -> dict:
