@@ -3,7 +3,7 @@
 // Parameters (ConductorParams; Python: bsdfkit.Conductor)
 //   eta, k     real and imaginary index of refraction per channel (eta > 0, k >= 0); default Cu
 //   alpha_x, alpha_y, masking   anisotropic GGX; max(alpha) < 1e-3 makes the lobe a delta
-//   FR         the Fresnel term, a compile-time knob (one loop per variant, each vectorizes):
+//   FR         the Fresnel term, a compile-time knob (one loop per variant):
 //              Exact    complex Fresnel of eta + i k (FrComplex)
 //              Schlick  Schlick 1994 with the exact normal-incidence reflectance F0
 //              F82      F82-tint (Hoffman 2019; Kutz et al. 2021): Schlick minus a
@@ -70,11 +70,9 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact> struct Cond
     // Torrance-Sparrow: f = D(wm) F(wo.wm) G(wo, wi) / (4 cos_o cos_i), wm = normalize(wo + wi).
     Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode) const {
         F cos_o = AbsCosTheta(wo), cos_i = AbsCosTheta(wi);
-        Vec3<F> wm = wi + wo;
-        F len2 = length_squared(wm);
         F denom = F(4) * cos_o * cos_i;
-        bool active = SameHemisphere(wo, wi) && !mfd.effectively_smooth() && len2 > F(0) && denom > F(0);
-        wm = wm / std::sqrt(active ? len2 : F(1));
+        bool active = SameHemisphere(wo, wi) & !mfd.effectively_smooth() & (denom > F(0));
+        Vec3<F> wm = reflection_half_vector(wi, wo, active);
         F scale = mfd.D(wm) * mfd.G(wo, wi) / denom;
         Spectrum<F> fr = fresnel(absdot(wo, wm));
         return select(active, fr * scale, Spectrum<F>(F(0)));
@@ -125,7 +123,6 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact> struct Cond
         bool active = SameHemisphere(wo, wi) & (len2 > F(0));
         wm = face_forward(wm / std::sqrt(active ? len2 : F(1)), Vec3<F>(0, 0, 1));
         F p = mfd.PDF(wo, wm) / (F(4) * absdot(wo, wm));
-        // The loop-invariant tests as a bit mask: a select on them does not vectorize in float64.
         p = keep_or_zero(active ? p : F(0), (sample_flags & RT_Reflection) != 0);
         return keep_or_zero(p, !mfd.effectively_smooth());
     }

@@ -13,8 +13,6 @@
 
 namespace bsdfkit {
 
-static_assert(SpecularTransmission == SpecularReflection + 1 && GlossyTransmission == GlossyReflection + 1);
-
 struct DielectricParams {
     double eta = 1.5, alpha_x = 0, alpha_y = 0;
     Masking masking = Masking::Correlated;
@@ -45,11 +43,7 @@ template <typename F> struct DielectricBxDF {
     }
 
     // Lobe probabilities restricted by sample_flags.
-    static void lobe_probs(F R, uint8_t sample_flags, F *pr, F *pt) {
-        // Bit masks, not selects on the invariant flag test (GCC 12 does not vectorize those in float64).
-        *pr = keep_or_zero(R, (sample_flags & RT_Reflection) != 0);
-        *pt = keep_or_zero(F(1) - R, (sample_flags & RT_Transmission) != 0);
-    }
+    static void lobe_probs(F R, uint8_t sample_flags, F *pr, F *pt) { restrict_lobes(R, F(1) - R, sample_flags, pr, pt); }
 
     // Generalized half vector of a pair, facing +z, and the relative IOR etap along wi.
     // Returns false where pbrt-v4 returns 0: a horizon direction, a degenerate half vector,
@@ -61,7 +55,6 @@ template <typename F> struct DielectricBxDF {
         *etap = reflect ? F(1) : eta_side;
         Vec3<F> h = wi * *etap + wo;
         F len2 = length_squared(h);
-        // Bitwise & keeps the mask free of short-circuit branches (vectorizes).
         bool ok = (cos_i != F(0)) & (cos_o != F(0)) & (len2 > F(0));
         F inv_len = F(1) / std::sqrt(ok ? len2 : F(1));
         F sgn = h.z < F(0) ? -inv_len : inv_len; // normalize and face +z in one scale
@@ -73,7 +66,7 @@ template <typename F> struct DielectricBxDF {
     }
 
     Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode) const {
-        // Delta lobes evaluate to 0; folded into the mask (no early return) so the loop vectorizes.
+        // Delta lobes evaluate to 0: folded into the mask (no early return).
         Vec3<F> wm;
         F etap;
         bool ok = half_vector(wo, wi, &wm, &etap) & !is_smooth();
@@ -114,10 +107,9 @@ template <typename F> struct DielectricBxDF {
         ft = mode == TransportMode::Radiance ? ft / sqr(etap) : ft;
         s.f = Spectrum<F>(reflect ? R / cos_i : ft);
         s.pdf = (reflect ? pr : pt) / (pr + pt);
-        // Flags by arithmetic, not a byte select (vectorizes): Transmission = Reflection + 1.
-        s.flags = uint8_t(SpecularReflection + int(!reflect));
+        s.flags = lobe_flag(SpecularReflection, !reflect);
         s.eta = reflect ? F(1) : etap;
-        // Masks with & / | (no short-circuit; vectorizes). cos_i > 0 always holds (DeltaAbsCos).
+        // cos_i > 0 always holds (DeltaAbsCos).
         s.valid = ((pr + pt) > F(0)) & (reflect | refr_ok);
         return s;
     }
@@ -142,8 +134,7 @@ template <typename F> struct DielectricBxDF {
         Vec3<F> wt;
         F etap;
         bool ok_t = Refract(wo, wm, eta, &etap, &wt);
-        // wt.z == 0 is left to the BSDF-level check on wi.z (bsdf_sample): testing it here too
-        // lets GCC's PRE turn the batch loop's wi.z test into a bool select it cannot vectorize.
+        // wt.z == 0 is left to the BSDF-level check on wi.z (bsdf_sample; rule V5, core/math.h).
         ok_t = ok_t & !SameHemisphere(wo, wt);
         F denom = sqr(dot(wt, wm) + dot(wo, wm) / etap);
         F dwm_dwi = absdot(wt, wm) / denom;
@@ -154,12 +145,11 @@ template <typename F> struct DielectricBxDF {
 
         s.wi = reflect ? wr : wt;
         s.f = Spectrum<F>(reflect ? f_r : f_t);
-        // The chosen lobe's validity is folded into its pdf (0 = invalid) with float selects:
-        // a bool select (reflect ? ok_r : ok_t) does not vectorize under GCC 12.
+        // The chosen lobe's validity is folded into its pdf (0 = invalid; rule V2, core/math.h).
         pdf_r = ok_r ? pdf_r : F(0);
         pdf_t = ok_t ? pdf_t : F(0);
         s.pdf = reflect ? pdf_r : pdf_t;
-        s.flags = uint8_t(GlossyReflection + int(!reflect));
+        s.flags = lobe_flag(GlossyReflection, !reflect);
         s.eta = reflect ? F(1) : etap;
         s.valid = ((pr + pt) > F(0)) & (cos_o != F(0)) & (s.pdf > F(0));
         return s;
@@ -177,7 +167,7 @@ template <typename F> struct DielectricBxDF {
         F denom = sqr(dot(wi, wm) + dot(wo, wm) / etap);
         F p_t = pdf_wm * absdot(wi, wm) / denom * pt;
         F p = (reflect ? p_r : p_t) / (pr + pt);
-        ok = ok & ((pr + pt) > F(0)) & (reflect | (denom > F(0))); // & / |: vectorizes (float64 too)
+        ok &= ((pr + pt) > F(0)) & (reflect | (denom > F(0)));
         return ok ? p : F(0);
     }
 

@@ -33,9 +33,8 @@ template <typename F> struct DiffuseBxDF {
         Vec3<F> wi = SampleCosineHemisphere(u);
         wi.z = wo.z < F(0) ? -wi.z : wi.z; // two-sided: sample wo's side
         s.wi = wi;
-        // wi is on wo's side unless one of them lies on the horizon: that case is folded into the
-        // pdf (0 = invalid) with a float select, which vectorizes (f(wo, wi)'s select does not
-        // once GCC pushes the later f != 0 tests into it).
+        // wi is on wo's side unless one of them lies on the horizon: folded into the pdf
+        // (0 = invalid; rules V2, V5 of core/math.h).
         s.pdf = SameHemisphere(wo, wi) ? CosineHemispherePDF(AbsCosTheta(wi)) : F(0);
         s.f = R * InvPi<F>;
         s.flags = DiffuseReflection;
@@ -45,7 +44,7 @@ template <typename F> struct DiffuseBxDF {
 
     F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
         F p = SameHemisphere(wo, wi) ? CosineHemispherePDF(AbsCosTheta(wi)) : F(0);
-        return keep_or_zero(p, (sample_flags & RT_Reflection) != 0); // bit mask: vectorizes in float64
+        return keep_or_zero(p, (sample_flags & RT_Reflection) != 0);
     }
 
     void regularize() {}
