@@ -5,6 +5,7 @@
 #pragma once
 #include "../core/bsdf_sample.h"
 #include "../core/fresnel.h"
+#include "../core/sampling.h"
 
 namespace bsdfkit {
 
@@ -26,7 +27,7 @@ template <typename F> struct ThinDielectricBxDF {
         // Bit masks, not selects on the invariant flag tests (GCC 12 does not vectorize those).
         F pr = keep_or_zero(Rs, (sample_flags & RT_Reflection) != 0);
         F pt = keep_or_zero(F(1) - Rs, (sample_flags & RT_Transmission) != 0);
-        bool reflect = uc < pr / (pr + pt);
+        bool reflect = ChooseFirstLobe(uc, pr, pt);
         s.wi = Vec3<F>(-wo.x, -wo.y, reflect ? wo.z : -wo.z);
         F cos_i = DeltaAbsCos(s.wi);
         s.f = Spectrum<F>((reflect ? Rs : F(1) - Rs) / cos_i);
