@@ -95,6 +95,7 @@ import math
 import numbers
 import os
 import time
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -658,6 +659,26 @@ def knob_costs(path=None) -> dict:
     return data
 
 
+def cost_deviations(shipped: dict, measured: dict, tol: float = 0.5) -> list:
+    """Entries of a cost table that a fresh measurement contradicts: ``[(family, config key,
+    table cost, measured cost)]`` for every entry present in both whose measured relative cost
+    differs from the table's by more than ``tol`` (0.5: a factor outside [1/1.5, 1.5]).
+    ``shipped``: a :func:`knob_costs` table; ``measured``: ``{family: {config key: cost}}``
+    (``bench/tradeoff.py --check`` measures it)."""
+    out = []
+    fams = shipped.get("families", {})
+    for fam, costs in measured.items():
+        table = fams.get(fam, {}).get("costs", {})
+        for key, got in costs.items():
+            want = table.get(key)
+            if want is None or not want > 0 or not got > 0:
+                continue
+            r = got / want
+            if r > 1 + tol or r < 1 / (1 + tol):
+                out.append((fam, key, float(want), float(got)))
+    return out
+
+
 def _check_costs(costs) -> dict:
     if costs is None:
         return knob_costs()
@@ -692,23 +713,41 @@ def _pick(cands, costs, configs, err):
 
 # ============================================================================ timing
 
-def best_time(fn, repeats=5, min_time=0.005, warmup=1):
-    """Min over ``repeats`` of the mean time of ``inner`` back-to-back calls of ``fn`` after
-    ``warmup`` calls; ``inner`` is chosen so that one repeat takes >= ``min_time`` seconds.
-    Also the timer of ``bench/throughput.py`` and ``bench/filament.py``."""
+def time_repeats(fn, repeats=5, min_time=0.005, warmup=1) -> list:
+    """Per-call times of ``repeats`` repeats, each the mean of ``inner`` back-to-back calls of
+    ``fn`` after ``warmup`` calls; ``inner`` is chosen so that one repeat takes >= ``min_time``
+    seconds."""
     for _ in range(warmup):
         fn()
     t0 = time.perf_counter()
     fn()
     dt = time.perf_counter() - t0
     inner = max(1, int(math.ceil(min_time / max(dt, 1e-9)))) if dt < min_time else 1
-    best = math.inf
+    out = []
     for _ in range(repeats):
         t0 = time.perf_counter()
         for _ in range(inner):
             fn()
-        best = min(best, (time.perf_counter() - t0) / inner)
-    return best
+        out.append((time.perf_counter() - t0) / inner)
+    return out
+
+
+def best_time(fn, repeats=5, min_time=0.005, warmup=1):
+    """Min over ``repeats`` of the mean time of ``inner`` back-to-back calls of ``fn`` after
+    ``warmup`` calls (:func:`time_repeats`).
+    Also the timer of ``bench/throughput.py`` and ``bench/filament.py``."""
+    return min(time_repeats(fn, repeats, min_time, warmup))
+
+
+def spread(times) -> float:
+    """Timing spread of repeats: median / min (1 on a quiet machine; a load spike or a stalled
+    thread makes it large)."""
+    t = sorted(times)
+    return float(np.median(t) / t[0]) if t and t[0] > 0 else math.inf
+
+
+#: Above this spread (median / min of the repeats) a live timing is reported as unreliable.
+SPREAD_WARN = 1.5
 
 
 def _timing_inputs(model, n, seed):
@@ -741,20 +780,26 @@ def _op(model) -> str:
 
 
 def _measure(configs, op, n_timing, repeats, rounds, seed):
-    """Live throughput: every configuration timed right after the most accurate one (best of
-    ``repeats``), in ``rounds`` interleaved rounds; returns (evals/s, speedup) lists, speedup =
-    smallest reference time of the run / smallest time of the configuration (a load spike during
-    one reference timing then cannot inflate a ratio)."""
+    """Live throughput: every configuration timed right after the most accurate one (``repeats``
+    repeats each), in ``rounds`` interleaved rounds; returns (evals/s, speedup, spread) lists,
+    speedup = smallest reference time of the run / smallest time of the configuration (a load
+    spike during one reference timing then cannot inflate a ratio), spread = the larger of the
+    configuration's and the reference's :func:`spread` over all its repeats."""
     inputs = _timing_inputs(configs[0].model, n_timing, seed)
     calls = [_timed_call(c, op, inputs) for c in configs]
-    t_ref, t = math.inf, [math.inf] * len(configs)
+    ref_times = []
+    times = [[] for _ in configs]
     for _ in range(rounds):
         for i, call in enumerate(calls):
-            tr = best_time(calls[0], repeats)
-            t_ref = min(t_ref, tr)
-            t[i] = min(t[i], tr if i == 0 else best_time(call, repeats))
-    t[0] = t_ref
-    return [n_timing / x for x in t], [t_ref / x for x in t]
+            ref_times += time_repeats(calls[0], repeats)
+            if i:
+                times[i] += time_repeats(call, repeats)
+    times[0] = ref_times
+    t = [min(x) for x in times]
+    t_ref = t[0]
+    s_ref = spread(ref_times)
+    spreads = [max(s_ref, spread(x)) for x in times]
+    return [n_timing / x for x in t], [t_ref / x for x in t], spreads
 
 
 # ============================================================================ Table
@@ -778,6 +823,8 @@ def _fmt_cell(v, col):
         return f"{v / 1e6:.1f}M"
     if col in ("speedup", "expected_speedup"):
         return f"{v:.2f}×"
+    if col == "spread":
+        return f"{v:.2f}" + ("!" if v > SPREAD_WARN else "")
     if isinstance(v, float):
         return "0" if v == 0 else f"{v:.2e}"
     return str(v)
@@ -789,7 +836,9 @@ class Table:
     Columns: ``config`` (what differs from the most accurate configuration), one column per
     reachable knob, ``dtype``, ``op`` (timed operation: eval, or sample for delta-only models),
     ``evals_per_s`` and ``speedup`` (live, this run, ratio to the most accurate configuration
-    timed back to back; ``None`` with ``measure=False``), ``expected_speedup`` (from the shipped
+    timed back to back; ``None`` with ``measure=False``), ``spread`` (median / min of the repeats
+    of that row and the reference, 1 on a quiet machine; marked ``!`` above ``SPREAD_WARN``, and
+    :func:`tradeoff` warns), ``expected_speedup`` (from the shipped
     cost table, ``None`` if the configuration is not in it), ``max_err``, ``p99_err``,
     ``albedo_err`` (see the module docstring) and ``pareto`` (on the front of throughput vs
     p99 error; throughput = live speedup, else expected speedup).
@@ -801,7 +850,7 @@ class Table:
     reference_albedo, directions (the :class:`DirectionSet`), seed, family, measured.
     """
 
-    def __init__(self, model, evaluation: _Evaluation, rates, speedups, expected, info):
+    def __init__(self, model, evaluation: _Evaluation, rates, speedups, expected, info, spreads=None):
         self.model = model
         self.configs = evaluation.configs
         self.reference = evaluation.reference.model
@@ -814,7 +863,7 @@ class Table:
         self.info = info
         self.seed = info.get("seed")
         self.columns = (["config"] + [k.name for k in self.knobs if k.reachable and k.kind != "precision"] +
-                        ["dtype", "op", "evals_per_s", "speedup", "expected_speedup", "max_err", "p99_err",
+                        ["dtype", "op", "evals_per_s", "speedup", "spread", "expected_speedup", "max_err", "p99_err",
                          "albedo_err", "pareto"])
         op = _op(model)
         rows = []
@@ -826,6 +875,7 @@ class Table:
             r.update(dtype=c.labels["precision"], op=op,
                      evals_per_s=None if rates is None else rates[i],
                      speedup=None if speedups is None else speedups[i],
+                     spread=None if spreads is None else spreads[i],
                      expected_speedup=None if expected[i] is None else 1.0 / expected[i], **e)
             rows.append(r)
         thr = [r["speedup"] if r["speedup"] is not None else (r["expected_speedup"] or 1.0) for r in rows]
@@ -942,7 +992,7 @@ def _check_tol(tol) -> float:
 
 
 def tradeoff(model, directions=None, n: int = 8192, seed: int = 0, *, n_albedo: int = 4096, measure: bool = True,
-             n_timing: int = 65536, repeats: int = 3, rounds: int = 1, costs: dict | None = None) -> Table:
+             n_timing: int = 65536, repeats: int = 5, rounds: int = 1, costs: dict | None = None) -> Table:
     """Throughput and error of every reachable knob configuration of ``model``.
 
     directions: ``None`` (the default set, :func:`direction_set` with ``n`` rows and ``seed``),
@@ -965,14 +1015,20 @@ def tradeoff(model, directions=None, n: int = 8192, seed: int = 0, *, n_albedo: 
     n_timing, repeats, rounds = (_check_int(n_timing, "n_timing", 1), _check_int(repeats, "repeats", 1),
                                  _check_int(rounds, "rounds", 1))
     ev = _Evaluation(model, directions, n, seed, n_albedo)
-    rates = speedups = None
+    rates = speedups = spreads = None
     if measure:
-        rates, speedups = _measure(ev.configs, _op(model), n_timing, repeats, rounds, seed)
+        rates, speedups, spreads = _measure(ev.configs, _op(model), n_timing, repeats, rounds, seed)
+        worst = max(spreads)
+        if worst > SPREAD_WARN:
+            warnings.warn(f"tradeoff: live timings are noisy (spread median/min of repeats up to {worst:.2f}x, "
+                          f"above {SPREAD_WARN}): the machine is busy and the speedup column is unreliable; "
+                          "rerun with more repeats= / rounds= on a quiet machine, or rank by expected_speedup",
+                          RuntimeWarning, stacklevel=2)
     costs = _check_costs(costs)
     expected = _costs_for(model, ev.configs, costs)
     info = {"seed": seed, "n": n, "n_albedo": n_albedo, "n_timing": n_timing, "repeats": repeats, "rounds": rounds,
             "threads": _threads(), "cost_table": costs.get("machine")}
-    return Table(model, ev, rates, speedups, expected, info)
+    return Table(model, ev, rates, speedups, expected, info, spreads)
 
 
 def _threads():
