@@ -646,6 +646,9 @@ def _run_render_command(args) -> int:
     from . import set_num_threads
     from .io import write_image
 
+    if args.quiet:  # also silences the Filament DFG table's first-use progress
+        from . import filament
+        filament.PROGRESS_DEFAULT = False
     try:
         model = parse_spec(" ".join(args.spec))
     except ValueError as e:
