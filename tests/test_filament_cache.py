@@ -10,7 +10,7 @@ import textwrap
 import numpy as np
 
 import bsdfkit as bk
-from bsdfkit import filament
+from bsdfkit.models.filament import dfg as filament
 
 
 def _run(code, cache):
@@ -27,7 +27,7 @@ FIRST_EVAL = """
     m = bk.FilamentStandard([0.8, 0.5, 0.3])
     f = m.eval(bk.direction(theta=0.5, phi=0.0), bk.direction(theta=0.3, phi=2.0))
     t2 = time.perf_counter()
-    from bsdfkit import filament
+    from bsdfkit.models.filament import dfg as filament
     print(repr(float(f[0])), t2 - t1, filament._cache_path(128, filament.DFG_LUT_SAMPLES))
 """
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import bsdfkit as bk
-from bsdfkit.references import mitsuba as ref
+from bsdfkit.testing import mitsuba as ref
 
 R, T, ALL = bk.ReflTrans.Reflection, bk.ReflTrans.Transmission, bk.ReflTrans.All
 

@@ -23,7 +23,7 @@ import pytest
 import bsdfkit as bk
 import importlib
 
-to = importlib.import_module("bsdfkit.tradeoff")  # the module (bk.tradeoff is the function)
+to = importlib.import_module("bsdfkit.tuning.costs")
 
 
 @pytest.fixture
