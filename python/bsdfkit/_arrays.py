@@ -22,6 +22,9 @@ def _as_real_array(x, name: str) -> np.ndarray:
 def as_dirs(x, name: str) -> np.ndarray:
     """`x` as an array of directions with last axis 3 (dtype kept; checked later by the kernel)."""
     a = _as_real_array(x, name)
+    if a.dtype == np.float16:
+        raise TypeError(f"{name}: float16 is not supported (its 11-bit significand cannot hold a unit vector to "
+                        "the 1e-4 the kernels require); pass float32 (e.g. .astype(np.float32)) or float64")
     if a.ndim == 0 or a.shape[-1] != 3:
         raise ValueError(f"{name}: expected an array of directions with last axis of length 3, got shape {a.shape}")
     return a

@@ -50,10 +50,19 @@ def _rgb(x, name: str, *, lo=None, hi=None, lo_open=False) -> np.ndarray:
 
 
 def _alphas(alpha, alpha_x, alpha_y):
-    a = _scalar(alpha, "alpha", lo=0.0)
-    ax = a if alpha_x is None else _scalar(alpha_x, "alpha_x", lo=0.0)
-    ay = a if alpha_y is None else _scalar(alpha_y, "alpha_y", lo=0.0)
-    return ax, ay
+    """(alpha_x, alpha_y) from either ``alpha`` (isotropic; None = 0, smooth) or both of
+    ``alpha_x`` and ``alpha_y``: one of the pair alone would silently leave the other at 0, and
+    ``alpha`` with the pair would silently ignore one of them."""
+    if (alpha_x is None) != (alpha_y is None):
+        given, missing = ("alpha_x", "alpha_y") if alpha_y is None else ("alpha_y", "alpha_x")
+        raise ValueError(f"{missing}: give alpha_x and alpha_y together (only {given} was given), "
+                         "or alpha alone for an isotropic lobe")
+    if alpha_x is not None:
+        if alpha is not None:
+            raise ValueError("alpha: give either alpha (isotropic) or alpha_x and alpha_y (anisotropic), not both")
+        return _scalar(alpha_x, "alpha_x", lo=0.0), _scalar(alpha_y, "alpha_y", lo=0.0)
+    a = 0.0 if alpha is None else _scalar(alpha, "alpha", lo=0.0)
+    return a, a
 
 
 def _masking(m) -> str:
@@ -181,11 +190,12 @@ class BxDF:
         return hash((type(self).__name__, self._key()))
 
     def __repr__(self):
+        # Python's shortest round-trip float repr, not a rounded one: eval(repr(m)) == m.
         def fmt(v):
             if isinstance(v, np.ndarray):
-                return "[" + ", ".join(f"{x:.6g}" for x in v) + "]"
+                return "[" + ", ".join(repr(float(x)) for x in v) + "]"
             if isinstance(v, float):
-                return f"{v:.6g}"
+                return repr(v)
             return repr(v)
         args = ", ".join(f"{k}={fmt(v)}" for k, v in self._params.items())
         return f"{type(self).__name__}({args})"
@@ -333,4 +343,4 @@ def _pick_alpha(roughness, alpha) -> float:
         raise ValueError("roughness, alpha: give one of them, not both")
     if roughness is not None:
         return roughness_to_alpha(_scalar(roughness, "roughness", lo=0.0))
-    return 0.0 if alpha is None else alpha
+    return alpha
