@@ -25,6 +25,7 @@ from ._enums import BxDFFlags, ReflTrans, TransportMode
 from ._version import __version__
 from .directions import direction, hemisphere_grid
 from .interop import from_mitsuba, from_pbrt, parse_pbrt_materials
+from .models.custom import Custom
 from .models import (METALS, MODELS, BxDF, Conductor, Dielectric, Diffuse, DiffuseTransmission, FilamentCloth,
                      FilamentStandard, SampleResult, ThinDielectric, conductor_fresnel, roughness_to_alpha)
 from .spectral import Spectrum, sample_wavelengths, spectrum_to_rgb
@@ -34,6 +35,6 @@ from .tuning import Table, knobs, simplify, tradeoff
 __all__ = ["BxDF", "BxDFFlags", "Conductor", "Dielectric", "Diffuse", "DiffuseTransmission", "METALS",
            "ReflTrans", "SampleResult", "ThinDielectric", "TransportMode", "direction", "get_num_threads",
            "hemisphere_grid", "roughness_to_alpha", "conductor_fresnel", "set_num_threads", "MODELS",
-           "FilamentStandard", "FilamentCloth", "filament", "models", "plot", "tuning", "render", "io",
+           "FilamentStandard", "FilamentCloth", "Custom", "filament", "models", "plot", "tuning", "render", "io",
            "tradeoff", "simplify", "knobs", "Table", "from_mitsuba", "from_pbrt", "parse_pbrt_materials", "interop",
            "spectral", "Spectrum", "sample_wavelengths", "spectrum_to_rgb", "__version__"]

@@ -46,6 +46,8 @@ def describe(model: BxDF) -> str:
         return f"Dielectric η={p['eta']:.3g}{alpha}"
     if isinstance(model, ThinDielectric):
         return f"ThinDielectric η={p['eta']:.3g}"
+    if type(model).__name__ == "Custom":
+        return p["name"]
     from .spec import to_spec
 
     rest = to_spec(model).split()[1:]
