@@ -85,3 +85,26 @@ def test_difference_is_relative_and_zero_for_equal_models(tmp_path):
         plt.close(ax.figure)
     with pytest.raises(ValueError, match="view"):
         bk.plot.difference(a, b, "3d")
+
+
+def test_log_polar_overlay_says_when_a_lobe_is_clipped():
+    import matplotlib.pyplot as plt
+    strong = bk.Conductor.from_metal("Ag", alpha=0.05)
+    weak = bk.Diffuse(1e-6)
+    ax = bk.plot.polar(strong, log=True, log_decades=3)
+    bk.plot.polar(weak, log=True, ax=ax)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any("clipped to the centre" in t for t in labels), labels  # silently dropped before
+    plt.close(ax.figure)
+
+
+def test_albedo_view_says_the_mode():
+    import matplotlib.pyplot as plt
+    g = bk.Dielectric(1.5)
+    ax = bk.plot.albedo(g, n_theta=4, n_samples=256)
+    assert "radiance mode" in ax.get_title() and "1/η²" in ax.get_title()
+    plt.close(ax.figure)
+    ax = bk.plot.albedo(g, n_theta=4, n_samples=256, mode="importance")
+    assert "importance mode" in ax.get_title()
+    np.testing.assert_allclose(np.asarray(ax.bsdfkit_data["value"][0]), 1.0, rtol=1e-6)  # lossless glass
+    plt.close(ax.figure)
