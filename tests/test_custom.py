@@ -102,7 +102,7 @@ def test_albedo_view_says_the_mode():
     import matplotlib.pyplot as plt
     g = bk.Dielectric(1.5)
     ax = bk.plot.albedo(g, n_theta=4, n_samples=256)
-    assert "radiance mode" in ax.get_title() and "1/η²" in ax.get_title()
+    assert "radiance mode" in ax.get_title() and "1/η²" in ax.get_title() and "importance" in ax.get_title()
     plt.close(ax.figure)
     ax = bk.plot.albedo(g, n_theta=4, n_samples=256, mode="importance")
     assert "importance mode" in ax.get_title()

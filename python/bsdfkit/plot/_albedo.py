@@ -77,7 +77,7 @@ def albedo(model_or_list, n_theta=46, n_samples=8192, ax=None, channel="luminanc
         refr = any(int(m.flags) & 2 and getattr(m, "eta", 1.0) != 1.0 and type(m).__name__ == "Dielectric"
                    for m in models)
         if refr and mname == "radiance":
-            title += "\nradiance mode: refraction scales radiance by 1/η², so glass stays below ρ = 1 (mode='importance')"
+            title += "\nrefraction scales radiance by 1/η²: glass < 1 (mode='importance': ρ = 1)"
     if title:
         ax.set_title(title, fontsize="medium")
     if legend:
