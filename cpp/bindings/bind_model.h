@@ -62,9 +62,11 @@ inline uint8_t to_sflags(int s) {
     return uint8_t(s);
 }
 
+// One bound model (core/bxdf.h): both precisions, built from one Params (kept for `params`).
 template <template <typename> class Model> struct PyModel {
     Model<float> m32;
     Model<double> m64;
+    typename Model<double>::Params params;
 
     template <typename F> const Model<F> &get() const {
         if constexpr (std::is_same_v<F, float>) return m32; else return m64;
@@ -198,17 +200,6 @@ py::class_<PyModel<Model>> bind_model(py::module_ &m, const char *name) {
         })
         .def_property_readonly("flags", [](const P &self) { return int(self.m64.flags()); });
     return c;
-}
-
-inline Masking to_masking(int m) {
-    if (m != 0 && m != 1) value_error("masking: must be 'correlated' or 'separable'");
-    return Masking(m);
-}
-
-template <typename F> inline Spectrum<F> to_spectrum(const std::array<double, 3> &a) {
-    Spectrum<F> s;
-    for (int i = 0; i < 3; ++i) s[i] = F(a[i]);
-    return s;
 }
 
 } // namespace bsdfkit::py_bind

@@ -17,6 +17,7 @@ namespace bsdfkit::py_bind {
 static std::atomic<int> g_threads{int(std::max(1u, std::thread::hardware_concurrency()))};
 int num_threads() { return g_threads.load(); }
 
+void bind_all(py::module_ &m);
 void bind_pbrt_models(py::module_ &m);
 void bind_filament_models(py::module_ &m);
 void bind_render(py::module_ &m);
@@ -40,8 +41,9 @@ PYBIND11_MODULE(_core, m) {
     m.def("get_num_threads", [] { return py_bind::g_threads.load(); });
     m.def("hardware_concurrency", [] { return int(std::max(1u, std::thread::hardware_concurrency())); });
 
+    py_bind::bind_filament_models(m);  // first: the models' Params refer to its FilamentDFG
+    py_bind::bind_all(m);
     py_bind::bind_pbrt_models(m);
-    py_bind::bind_filament_models(m);
     py_bind::bind_render(m);
 
     m.def("read_image", [](const std::string &path) {

@@ -30,8 +30,12 @@ def _parser() -> argparse.ArgumentParser:
 
 # ---------------------------------------------------------------- python -m bsdfkit lobes
 
-_LOBES_EXAMPLES = ("conductor metal=Cu alpha=0.2", "dielectric eta=1.5 alpha=0.3", "diffuse 0.8,0.5,0.2",
-                   "difftrans 0.5 0.4", "conductor metal=Au alpha=0.1 + diffuse 0.5")
+def _lobes_examples() -> list:
+    """Spec examples for the help text: each registered class's first example, and an overlay."""
+    from .models import registry
+
+    first = [next(iter(c.examples.values())) for c in registry.classes()]
+    return first + ([f"{first[1]} + {first[0]}"] if len(first) > 1 else [])
 
 
 def _add_lobes_command(sub) -> None:
@@ -43,7 +47,7 @@ def _add_lobes_command(sub) -> None:
         description="Write the views of bsdfkit.plot.overview for MODEL-SPEC at one incident direction ωo.\n"
                     "MODEL-SPEC: a model name and its parameters (key=value or positional; RGB as r,g,b);\n"
                     "overlay several models by separating their specs with a '+' word. Examples:\n  "
-                    + "\n  ".join(_LOBES_EXAMPLES) + "\nRun with a bad spec to see every model and its parameters.")
+                    + "\n  ".join(_lobes_examples()) + "\nRun with a bad spec to see every model and its parameters.")
     lo.add_argument("spec", nargs="+", metavar="MODEL-SPEC", help="model name followed by its parameters")
     lo.add_argument("--theta", type=float, default=30.0, metavar="DEG",
                     help="θo, angle of ωo from the normal in degrees (default 30)")

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/bsdf.h"
+#include "core/bxdf.h"
 #include "core/rng.h"
 #include "pool.h"
 
@@ -43,15 +44,10 @@ struct BadCounts {
 };
 
 // f(wo, wi) for N pairs; SO / SI are 3 for a full array, 0 for one broadcast direction.
-// A per-chunk local copy of a (trivially copyable) model: its parameters then cannot alias the
-// outputs, so they stay in registers instead of being reloaded, and alias-checked, every
-// iteration. A model holding a resource (Filament's table pointer) names a trivially copyable
-// base `Kernel` with all its methods; the copy is of that base. Others are used by reference.
-template <typename M, typename = void> struct KernelOf { using type = M; };
-template <typename M> struct KernelOf<M, std::void_t<typename M::Kernel>> { using type = typename M::Kernel; };
-template <typename Model>
-using LocalModel = std::conditional_t<std::is_trivially_copyable_v<typename KernelOf<Model>::type>,
-                                      const typename KernelOf<Model>::type, const Model &>;
+// A per-chunk local copy of the model's trivially copyable kernel (core/bxdf.h: the model, or
+// its `Kernel` base when it holds a shared table): its parameters then cannot alias the outputs,
+// so they stay in registers instead of being reloaded, and alias-checked, every iteration.
+template <typename Model> using LocalModel = const KernelOf_t<Model>;
 
 template <int SO, int SI, typename Model, typename F>
 void eval_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMode mode, F *out, int nthreads,
@@ -97,11 +93,8 @@ template <typename F> struct SampleOut {
 };
 
 // Models whose sample_f branches on a loop-invariant smoothness test (Conductor, Dielectric)
-// expose is_smooth(), sample_smooth(wo, uc, mode, sf) and sample_rough(wo, uc, u, mode, sf);
-// sample_batch then runs one branch-free loop per case.
-template <typename M, typename = void> struct has_split_sample : std::false_type {};
-template <typename M>
-struct has_split_sample<M, std::void_t<decltype(&M::is_smooth), decltype(&M::sample_rough)>> : std::true_type {};
+// expose is_smooth(), sample_smooth and sample_rough (core/bxdf.h); sample_batch then runs one
+// branch-free loop per case.
 
 // The same results as bsdf_sample per element, over one chunk [b, e). The main loop stores only
 // float outputs (an invalid sample has pdf = 0; validity is folded into float selects) and

@@ -10,6 +10,7 @@ import numpy as np
 from .._arrays import (as_dirs, as_uniform, broadcast_batch, check_int, check_out, fast_dirs, fast_pair,
                        fast_sample_args, flatten_to, kernel_dtype)
 from .._enums import BxDFFlags, ReflTrans, TransportMode
+from . import registry as _registry
 
 __all__ = ["roughness_to_alpha", "SampleResult", "BxDF"]
 
@@ -65,10 +66,52 @@ def _alphas(alpha, alpha_x, alpha_y):
     return a, a
 
 
+#: The masking knob of the microfacet models (a modelling choice: which material it is).
+def masking_knob(moot):
+    return _registry.KnobDecl("masking", ("correlated", "separable"), "modelling",
+                              "Smith masking-shadowing: height-correlated (pbrt-v4) or separable G1 G1 (Mitsuba 3)",
+                              moot=moot)
+
+
 def _masking(m) -> str:
     if m not in _MASKING:
         raise ValueError(f"masking: must be one of {sorted(_MASKING)}, got {m!r}")
     return m
+
+
+def is_smooth(p) -> bool:
+    """pbrt-v4's ``EffectivelySmooth`` on a parameter dict with alpha_x / alpha_y."""
+    return max(p["alpha_x"], p["alpha_y"]) < 1e-3
+
+
+def fmt_value(v) -> str:
+    """A number or an RGB triple, short (one number when the channels agree)."""
+    v = np.asarray(v, dtype=np.float64)
+    if v.ndim and np.allclose(v, v.flat[0]):
+        v = v.flat[0]
+    if v.ndim == 0:
+        return f"{float(v):.3g}"
+    return "(" + ", ".join(f"{x:.2g}" for x in v) + ")"
+
+
+def alpha_text(p) -> str:
+    """``", smooth"``, ``", α=0.2"`` or ``", αx=.., αy=.."`` for a parameter dict with alphas."""
+    ax, ay = p["alpha_x"], p["alpha_y"]
+    if max(ax, ay) < 1e-3:
+        return ", smooth"
+    if ax == ay:
+        return f", α={ax:.3g}"
+    return f", αx={ax:.3g}, αy={ay:.3g}"
+
+
+def rgb_dict(v) -> dict:
+    """A Mitsuba ``rgb`` texture of a scalar or RGB value."""
+    a = np.broadcast_to(np.asarray(v, dtype=np.float64), (3,))
+    return {"type": "rgb", "value": [float(x) for x in a]}
+
+
+#: pbrt-v4 / Mitsuba 3 alpha floor of the rough microfacet lobes.
+MIN_ALPHA = 1e-4
 
 
 def roughness_to_alpha(roughness):
@@ -162,6 +205,35 @@ class BxDF:
 
     _fields: tuple = ()
     __slots__ = ("_core", "_params")
+
+    # ---- declarations read by the registry (see bsdfkit.models.registry); subclasses set them
+    #: Short names accepted by the spec parser besides the class name.
+    aliases: tuple = ()
+    #: One-line description.
+    description: str = ""
+    #: Accuracy knobs (``KnobDecl``), most influential first; precision is every model's last knob.
+    knobs: tuple = ()
+
+    def __init_subclass__(cls, register: bool = True, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if register:
+            _registry.register(cls)
+
+    def cost_family(self) -> str:
+        """Cost-table family: the class plus the structural variant that selects a different
+        compiled kernel (smooth/rough, optional lobes). Models override it."""
+        return type(self).__name__
+
+    def describe(self) -> str:
+        """A short human-readable name, e.g. ``"Conductor Au, α=0.2"`` (legends and titles)."""
+        from .spec import to_spec
+        rest = to_spec(self).split()[1:]
+        return type(self).__name__ + (" " + ", ".join(rest) if rest else "")
+
+    def to_mitsuba(self) -> dict:
+        """The Mitsuba 3 plugin dictionary (``mi.load_dict``) of this model. Raises
+        NotImplementedError naming the reason when Mitsuba has no equivalent plugin."""
+        raise NotImplementedError(f"{type(self).__name__}: Mitsuba 3 has no equivalent plugin")
 
     def __init__(self, **params):
         object.__setattr__(self, "_params", params)

@@ -126,7 +126,7 @@ class _PyCore:
         return _bad(wo)
 
 
-class Custom(BxDF):
+class Custom(BxDF, register=False):  # a user model: not in the registry of shipped models
     __doc__ = __doc__
 
     __slots__ = ()
@@ -152,6 +152,9 @@ class Custom(BxDF):
 
     def _key(self):
         return tuple((k, v) for k, v in self._params.items())
+
+    def describe(self) -> str:
+        return self._params["name"]
 
     def __repr__(self):
         def fn(v):

@@ -60,7 +60,10 @@ COST_RESOLUTION = 0.05
 def _pick(cands, costs, configs, err):
     """Index of the chosen candidate and how it was ranked (see :func:`simplify`)."""
     if all(c is None for c in costs):
-        return min(cands, key=lambda i: configs[i].registry_rank), "registry order (no cost table for this family)"
+        def rank(i):   # most knobs at cheaper settings; ties: the most lobes dropped, then the closest
+            r = configs[i].registry_rank
+            return (r[0], -sum(v == "drop" for v in configs[i].labels.values()), err[i], r[1])
+        return min(cands, key=rank), "registry order (no cost table for this family)"
     c = {i: 1.0 if costs[i] is None else float(costs[i]) for i in cands}
     cmin = min(c.values())
     near = [i for i in cands if c[i] <= cmin * (1 + COST_RESOLUTION)]

@@ -1,7 +1,8 @@
 // Conductor: perfect mirror or Trowbridge-Reitz microfacet reflection with a conductor Fresnel
 // term (pbrt-v4 ConductorBxDF; Torrance & Sparrow 1967, Walter et al. 2007).
-//   eta, k     real and imaginary index of refraction per channel (eta > 0, k >= 0)
-//   mfd        anisotropic GGX; max(alpha) < 1e-3 makes the lobe a delta
+// Parameters (ConductorParams; Python: bsdfkit.Conductor)
+//   eta, k     real and imaginary index of refraction per channel (eta > 0, k >= 0); default Cu
+//   alpha_x, alpha_y, masking   anisotropic GGX; max(alpha) < 1e-3 makes the lobe a delta
 //   FR         the Fresnel term, a compile-time knob (one loop per variant, each vectorizes):
 //              Exact    complex Fresnel of eta + i k (FrComplex)
 //              Schlick  Schlick 1994 with the exact normal-incidence reflectance F0
@@ -12,6 +13,7 @@
 #include <cstdint>
 
 #include "../core/bsdf_sample.h"
+#include "../core/bxdf.h"
 #include "../core/fresnel.h"
 #include "../core/microfacet.h"
 
@@ -19,7 +21,24 @@ namespace bsdfkit {
 
 enum class ConductorFresnel : uint8_t { Exact = 0, Schlick = 1, F82 = 2 };
 
+struct ConductorParams {
+    std::array<double, 3> eta{0.201006, 0.923749, 1.102215}, k{3.913262, 2.453045, 2.142090};  // Cu (bk.METALS)
+    double alpha_x = 0, alpha_y = 0;
+    Masking masking = Masking::Correlated;
+    template <class V> void fields(V &&v) {
+        v("eta", eta);
+        v("k", k);
+        v("alpha_x", alpha_x);
+        v("alpha_y", alpha_y);
+        v("masking", masking);
+    }
+};
+
 template <typename F, ConductorFresnel FR = ConductorFresnel::Exact> struct ConductorBxDF {
+    using Params = ConductorParams;
+    static constexpr const char *Name = FR == ConductorFresnel::Schlick ? "ConductorSchlick"
+                                        : FR == ConductorFresnel::F82   ? "ConductorF82"
+                                                                        : "Conductor";
     TrowbridgeReitz<F> mfd;
     Spectrum<F> eta, k;
     // Per-channel Schlick F0 and F82-tint a, computed in double at construction (unused by Exact).
@@ -32,6 +51,11 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact> struct Cond
             f0[i] = F(ConductorF0(double(eta[i]), double(k[i])));
             f82_a[i] = F(ConductorF82A(double(eta[i]), double(k[i])));
         }
+    }
+
+    static ConductorBxDF make(const Params &p) {
+        return ConductorBxDF(TrowbridgeReitz<F>(F(p.alpha_x), F(p.alpha_y), p.masking), to_spectrum<F>(p.eta),
+                             to_spectrum<F>(p.k));
     }
 
     uint8_t flags() const { return mfd.effectively_smooth() ? SpecularReflection : GlossyReflection; }

@@ -1,11 +1,13 @@
 // Dielectric interface: smooth (delta) or Trowbridge-Reitz rough reflection and transmission
 // (pbrt-v4 DielectricBxDF; Walter et al. 2007 "Microfacet models for refraction").
-//   eta   relative IOR inside / outside (> 0; < 1 means the outside is denser)
-//   mfd   anisotropic GGX; max(alpha) < 1e-3 (or eta == 1) makes both lobes deltas
+// Parameters (DielectricParams; Python: bsdfkit.Dielectric)
+//   eta                  relative IOR inside / outside (> 0; < 1 means the outside is denser)
+//   alpha_x, alpha_y, masking   anisotropic GGX; max(alpha) < 1e-3 (or eta == 1) makes both lobes deltas
 // wo may lie on either side. In Radiance mode transmitted radiance is scaled by 1/etap^2,
 // in Importance mode it is not (Veach 1997 ch. 5), so f is not symmetric for transmission.
 #pragma once
 #include "../core/bsdf_sample.h"
+#include "../core/bxdf.h"
 #include "../core/fresnel.h"
 #include "../core/microfacet.h"
 
@@ -13,9 +15,26 @@ namespace bsdfkit {
 
 static_assert(SpecularTransmission == SpecularReflection + 1 && GlossyTransmission == GlossyReflection + 1);
 
+struct DielectricParams {
+    double eta = 1.5, alpha_x = 0, alpha_y = 0;
+    Masking masking = Masking::Correlated;
+    template <class V> void fields(V &&v) {
+        v("eta", eta);
+        v("alpha_x", alpha_x);
+        v("alpha_y", alpha_y);
+        v("masking", masking);
+    }
+};
+
 template <typename F> struct DielectricBxDF {
+    using Params = DielectricParams;
+    static constexpr const char *Name = "Dielectric";
     F eta;
     TrowbridgeReitz<F> mfd;
+
+    static DielectricBxDF make(const Params &p) {
+        return {F(p.eta), TrowbridgeReitz<F>(F(p.alpha_x), F(p.alpha_y), p.masking)};
+    }
 
     // Bitwise | (not ||): a short-circuit here becomes control flow in every batch loop.
     bool is_smooth() const { return (eta == F(1)) | mfd.effectively_smooth(); }

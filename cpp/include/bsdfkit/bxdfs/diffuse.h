@@ -1,14 +1,24 @@
 // Lambertian reflection, two-sided (pbrt-v4 DiffuseBxDF).
-//   R  reflectance per channel, in [0, 1]
+//   reflectance  R per channel, in [0, 1]
 #pragma once
 #include "../core/bsdf_sample.h"
+#include "../core/bxdf.h"
 #include "../core/frame.h"
 #include "../core/sampling.h"
 
 namespace bsdfkit {
 
+struct DiffuseParams {
+    std::array<double, 3> reflectance{0.5, 0.5, 0.5};
+    template <class V> void fields(V &&v) { v("reflectance", reflectance); }
+};
+
 template <typename F> struct DiffuseBxDF {
+    using Params = DiffuseParams;
+    static constexpr const char *Name = "Diffuse";
     Spectrum<F> R;
+
+    static DiffuseBxDF make(const Params &p) { return {to_spectrum<F>(p.reflectance)}; }
 
     uint8_t flags() const { return R.is_black() ? Unset : DiffuseReflection; }
 

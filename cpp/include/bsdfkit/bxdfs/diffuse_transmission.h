@@ -1,8 +1,9 @@
 // Lambertian reflection plus Lambertian transmission (pbrt-v4 DiffuseTransmissionBxDF).
-//   R  reflectance per channel, T  transmittance per channel, each in [0, 1]
+//   reflectance  R per channel, transmittance  T per channel, each in [0, 1]
 // Symmetric: the transport mode does not change the value.
 #pragma once
 #include "../core/bsdf_sample.h"
+#include "../core/bxdf.h"
 #include "../core/frame.h"
 #include "../core/sampling.h"
 
@@ -10,8 +11,22 @@ namespace bsdfkit {
 
 static_assert(DiffuseTransmission == DiffuseReflection + 1);
 
+struct DiffuseTransmissionParams {
+    std::array<double, 3> reflectance{0.25, 0.25, 0.25}, transmittance{0.25, 0.25, 0.25};
+    template <class V> void fields(V &&v) {
+        v("reflectance", reflectance);
+        v("transmittance", transmittance);
+    }
+};
+
 template <typename F> struct DiffuseTransmissionBxDF {
+    using Params = DiffuseTransmissionParams;
+    static constexpr const char *Name = "DiffuseTransmission";
     Spectrum<F> R, T;
+
+    static DiffuseTransmissionBxDF make(const Params &p) {
+        return {to_spectrum<F>(p.reflectance), to_spectrum<F>(p.transmittance)};
+    }
 
     uint8_t flags() const {
         return uint8_t((R.is_black() ? Unset : DiffuseReflection) | (T.is_black() ? Unset : DiffuseTransmission));

@@ -47,6 +47,7 @@
 #include <memory>
 
 #include "../core/bsdf_sample.h"
+#include "../core/bxdf.h"
 #include "../core/microfacet.h"
 #include "../core/sampling.h"
 #include "filament_dfg.h"
@@ -66,6 +67,9 @@ inline constexpr double kClothWrap = 0.5;                 // Fd_Wrap(NoL, 0.5) (
 enum class DiffuseTerm : uint8_t { Lambert = 0, Burley = 1 };
 enum class VisibilityTerm : uint8_t { Correlated = 0, Fast = 1 };
 enum class Layering : uint8_t { Code = 0, Doc = 1 };
+inline constexpr std::array<const char *, 2> enum_names(DiffuseTerm) { return {"lambert", "burley"}; }
+inline constexpr std::array<const char *, 2> enum_names(VisibilityTerm) { return {"correlated", "fast"}; }
+inline constexpr std::array<const char *, 2> enum_names(Layering) { return {"code", "doc"}; }
 
 template <typename F> inline F pow5(F x) {
     F x2 = x * x;
@@ -204,6 +208,27 @@ struct FilamentStandardParams {
     double min_perceptual_roughness = filament::kMinPerceptualRoughnessDesktop;
     filament::Layering layering = filament::Layering::Code;
     bool clear_coat_ior_change = true;
+    SharedTable<FilamentDFG> dfg;  // required (bsdfkit.filament's cached table)
+
+    template <class V> void fields(V &&v) {
+        v("base_color", base_color);
+        v("metallic", metallic);
+        v("roughness", roughness);
+        v("reflectance", reflectance);
+        v("anisotropy", anisotropy);
+        v("clear_coat", clear_coat);
+        v("clear_coat_roughness", clear_coat_roughness);
+        v("sheen_color", sheen_color);
+        v("sheen_roughness", sheen_roughness);
+        v("diffuse", diffuse);
+        v("visibility", visibility);
+        v("f90_filament", f90_filament);
+        v("energy_compensation", energy_compensation);
+        v("min_perceptual_roughness", min_perceptual_roughness);
+        v("layering", layering);
+        v("clear_coat_ior_change", clear_coat_ior_change);
+        v("dfg", dfg);
+    }
 };
 
 // Written for the batch kernels' vectorizer: uniform switches are stored as F (0 or 1) and
@@ -357,13 +382,17 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardKernel {
 };
 
 // The model: the kernel (trivially copyable, so the batch kernels work on a per-chunk local copy
-// whose parameters stay in registers) plus the shared DFG table it points into.
+// whose parameters stay in registers) plus the shared DFG table it points into (core/table.h).
 template <typename F, bool Coat, bool Sheen> struct FilamentStandardT : FilamentStandardKernel<F, Coat, Sheen> {
     using Kernel = FilamentStandardKernel<F, Coat, Sheen>;
-    std::shared_ptr<const FilamentDFG> dfg;  // keeps the table alive
+    using Params = FilamentStandardParams;
+    static constexpr const char *Name = Coat ? (Sheen ? "FilamentStandardCoatSheen" : "FilamentStandardCoat")
+                                             : (Sheen ? "FilamentStandardSheen" : "FilamentStandard");
+    SharedTable<FilamentDFG> dfg;  // keeps the table alive
 
-    static FilamentStandardT make(const FilamentStandardParams &p, std::shared_ptr<const FilamentDFG> table) {
+    static FilamentStandardT make(const Params &p) {
         using namespace filament;
+        const FilamentDFG *table = p.dfg.get();
         FilamentStandardT m;
         double min_pr = p.min_perceptual_roughness, min_alpha = min_pr * min_pr;
         double cc = p.clear_coat;
@@ -403,7 +432,7 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardT : Filament
         m.dfg_base = DFGRow<F>(d, table->size, pr);
         m.dfg_coat = DFGRow<F>(d, table->size, cc_pr);
         m.dfg_sheen = DFGRow<F>(d, table->size, s_pr);
-        m.dfg = std::move(table);
+        m.dfg = p.dfg;
         return m;
     }
 };
@@ -425,6 +454,18 @@ struct FilamentClothParams {
     double roughness = 0.5;
     filament::DiffuseTerm diffuse = filament::DiffuseTerm::Lambert;
     double min_perceptual_roughness = filament::kMinPerceptualRoughnessDesktop;
+    SharedTable<FilamentDFG> dfg;  // required (bsdfkit.filament's cached table)
+
+    template <class V> void fields(V &&v) {
+        v("base_color", base_color);
+        v("sheen_color", sheen_color);
+        v("subsurface_color", subsurface_color);
+        v("has_subsurface", has_subsurface);
+        v("roughness", roughness);
+        v("diffuse", diffuse);
+        v("min_perceptual_roughness", min_perceptual_roughness);
+        v("dfg", dfg);
+    }
 };
 
 // Cloth (surface_shading_model_cloth.fs): Fr = D_Charlie V_Neubelt sheenColor (no Fresnel, no
@@ -519,9 +560,12 @@ template <typename F> struct FilamentClothKernel {
 // whose parameters stay in registers) plus the shared DFG table it points into.
 template <typename F> struct FilamentClothBxDF : FilamentClothKernel<F> {
     using Kernel = FilamentClothKernel<F>;
-    std::shared_ptr<const FilamentDFG> dfg;  // keeps the table alive
+    using Params = FilamentClothParams;
+    static constexpr const char *Name = "FilamentCloth";
+    SharedTable<FilamentDFG> dfg;  // keeps the table alive
 
-    static FilamentClothBxDF make(const FilamentClothParams &p, std::shared_ptr<const FilamentDFG> table) {
+    static FilamentClothBxDF make(const Params &p) {
+        const FilamentDFG *table = p.dfg.get();
         FilamentClothBxDF m;
         for (int c = 0; c < 3; ++c) {
             m.base_color[c] = F(p.base_color[c]);
@@ -535,7 +579,7 @@ template <typename F> struct FilamentClothBxDF : FilamentClothKernel<F> {
         m.sheen_max = m.sheen_color.max_component();
         m.burley = p.diffuse == filament::DiffuseTerm::Burley ? F(1) : F(0);
         m.dfg_row = DFGRow<F>(table->template data<F>(), table->size, pr);
-        m.dfg = std::move(table);
+        m.dfg = p.dfg;
         return m;
     }
 };

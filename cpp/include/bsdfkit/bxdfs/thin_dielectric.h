@@ -4,6 +4,7 @@
 // The ray leaves into the medium it came from, so the sample's eta is 1 and no 1/eta^2 applies.
 #pragma once
 #include "../core/bsdf_sample.h"
+#include "../core/bxdf.h"
 #include "../core/fresnel.h"
 #include "../core/sampling.h"
 
@@ -11,8 +12,17 @@ namespace bsdfkit {
 
 static_assert(SpecularTransmission == SpecularReflection + 1);
 
+struct ThinDielectricParams {
+    double eta = 1.5;
+    template <class V> void fields(V &&v) { v("eta", eta); }
+};
+
 template <typename F> struct ThinDielectricBxDF {
+    using Params = ThinDielectricParams;
+    static constexpr const char *Name = "ThinDielectric";
     F eta;
+
+    static ThinDielectricBxDF make(const Params &p) { return {F(p.eta)}; }
 
     uint8_t flags() const { return Reflection | Transmission | Specular; }
 
