@@ -46,7 +46,7 @@ from throughput import QUIET, machine_info, wait_quiet  # noqa: E402  (same dire
 
 import bsdfkit as bk  # noqa: E402
 from bsdfkit.tuning import best_time as _best_time, configurations, family, simplify, tradeoff  # noqa: E402
-from bsdfkit.tuning.costs import _op, _timed_call, _timing_inputs  # noqa: E402
+from bsdfkit.tuning.costs import _op, _timed_call, _timing_inputs, cost_deviations, knob_costs  # noqa: E402
 from bsdfkit.tuning.report import _pareto_mask  # noqa: E402
 
 SEED = 0
@@ -102,6 +102,27 @@ def measure_family(model, n, repeats, rounds):
     return op, cfgs, best
 
 
+def check(args) -> int:
+    """--check: the shipped cost table against a fresh single-threaded timing of every family."""
+    bk.set_num_threads(args.threads)
+    n = args.n or 2**15
+    shipped = knob_costs()
+    measured = {}
+    for label, model in representatives():
+        fam = family(model)
+        if args.families and fam not in args.families.split(","):
+            continue
+        _, cfgs, best = measure_family(model, n, args.repeats, args.rounds or 2)
+        ref = best[cfgs[0].key]
+        measured[fam] = {k: t / ref for k, t in best.items()}
+    bad = cost_deviations(shipped, measured, tol=0.5)
+    for fam, key, want, got in bad:
+        print(f"STALE {fam} {key}: table {want:.3f}, measured {got:.3f} ({got / want:.2f}x)")
+    print(f"{len(bad)} stale cost entr{'y' if len(bad) == 1 else 'ies'} of "
+          f"{sum(len(v) for v in measured.values())} checked (tolerance 50 %)")
+    return 1 if bad else 0
+
+
 def fmt_e(x):
     return "0" if x == 0 else f"{x:.1e}"
 
@@ -119,7 +140,12 @@ def main():
     ap.add_argument("--costs-out", default=None,
                     help="cost table path (default python/bsdfkit/_knob_costs.json; none with --quick)")
     ap.add_argument("--families", default=None, help="comma-separated subset of family names")
+    ap.add_argument("--check", action="store_true",
+                    help="only re-time every family and compare with the shipped cost table: exit status 1 if an "
+                         "entry is off by more than 50 %% (a kernel change made it stale); writes nothing")
     args = ap.parse_args()
+    if args.check:
+        return check(args)
     n = args.n or (2**15 if args.quick else 2**18)
     rounds = args.rounds or (1 if args.quick else 3)
     n_err = 4096 if args.quick else 8192
@@ -264,4 +290,4 @@ def write_md(path, info, results, headline, n, rounds, repeats, n_err, elapsed, 
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

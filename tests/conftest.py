@@ -39,3 +39,11 @@ def any_model(request):
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _bsdfkit_disk_cache(tmp_path_factory):
+    """The suite's on-disk cache (Filament DFG tables): a fresh directory per session, shared by
+    its subprocesses (notebooks, CLI), unless BSDFKIT_CACHE_DIR already names one (CI may keep it)."""
+    import os
+    os.environ.setdefault("BSDFKIT_CACHE_DIR", str(tmp_path_factory.mktemp("bsdfkit-cache")))

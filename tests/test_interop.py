@@ -513,7 +513,7 @@ def test_pbrt_malformed(text, words):
 
 
 def test_pbrt_type_error():
-    with pytest.raises(TypeError, match="text"):
+    with pytest.raises(TypeError, match="scene text"):
         bk.from_pbrt(b'Material "diffuse"')
 
 

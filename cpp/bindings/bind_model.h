@@ -18,6 +18,11 @@ int num_threads();
 
 template <typename F> inline bool is_dtype(const py::array &a) { return a.dtype().is(py::dtype::of<F>()); }
 
+// A batch stopped by the interrupt hook (module.cpp: Ctrl-C) left the Python error set.
+inline void raise_if_interrupted() {
+    if (PyErr_Occurred()) throw py::error_already_set();
+}
+
 [[noreturn]] inline void value_error(const std::string &msg) { throw py::value_error(msg); }
 
 // Checks dtype, C-contiguity and the trailing shape; returns the data pointer.
@@ -85,6 +90,7 @@ template <template <typename> class Model> struct PyModel {
             else if (ni == n) eval_batch<0, 3>(m, po, pi, n, md, pout, nt, bad);
             else eval_batch<0, 0>(m, po, pi, n, md, pout, nt, bad);
         }
+        raise_if_interrupted();
         return py::make_tuple(bad.wo.load(), bad.wi.load());
     }
 
@@ -107,6 +113,7 @@ template <template <typename> class Model> struct PyModel {
             else if (ni == n) pdf_batch<0, 3>(m, po, pi, n, md, s, pout, nt, bad);
             else pdf_batch<0, 0>(m, po, pi, n, md, s, pout, nt, bad);
         }
+        raise_if_interrupted();
         return py::make_tuple(bad.wo.load(), bad.wi.load());
     }
 
@@ -146,6 +153,7 @@ template <template <typename> class Model> struct PyModel {
             if (no == n) sample_batch<3>(m, po, puc, pu, n, md, s, o, num_threads(), bad);
             else sample_batch<0>(m, po, puc, pu, n, md, s, o, num_threads(), bad);
         }
+        raise_if_interrupted();
         return bad.wo.load();
     }
 
@@ -162,6 +170,7 @@ template <template <typename> class Model> struct PyModel {
             py::gil_scoped_release release;
             albedo_batch(get<F>(), po, no, n_samples, seed, md, pout, num_threads(), bad);
         }
+        raise_if_interrupted();
         return bad.wo.load();
     }
 };

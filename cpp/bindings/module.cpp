@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "bsdfkit/io.h"
+#include "bsdfkit/pool.h"
 
 namespace py = pybind11;
 
@@ -27,6 +28,12 @@ using namespace bsdfkit;
 
 PYBIND11_MODULE(_core, m) {
     m.doc() = "bsdfkit compiled core (use the bsdfkit package, not this module directly)";
+    // Batch kernels poll this between chunks (pool.h): Ctrl-C stops a long eval / albedo call
+    // and the binding re-raises the KeyboardInterrupt.
+    interrupt_hook() = +[]() -> bool {
+        py::gil_scoped_acquire gil;
+        return PyErr_CheckSignals() != 0;
+    };
     m.def("set_num_threads", [](int n) {
         if (n < 1) throw py::value_error("n: number of threads must be >= 1");
         py_bind::g_threads = n;

@@ -101,7 +101,8 @@ def test_extremes_sweep_finite(dtype):
     wi = np.concatenate([wi, d, -d, -wo[-n:]])
     ok_rows = np.abs(np.linalg.norm(wo.astype(np.float64), axis=1) - 1) < 1e-5
     wo, wi = wo[ok_rows], wi[ok_rows]
-    us = np.array([0.0, 1e-7, 0.5, 0.999, np.nextafter(dtype(1), dtype(0))], dtype)
+    # both closed ends of [0, 1] for every uniform (issue 11 item 4)
+    us = np.array([0.0, 1e-7, 0.5, 0.999, np.nextafter(dtype(1), dtype(0)), 1.0], dtype)
     uc = np.resize(us, len(wo))
     u = np.stack([np.resize(us, len(wo)), np.resize(us[::-1], len(wo))[::-1]], 1)
     for m in _extreme_models():
@@ -110,11 +111,15 @@ def test_extremes_sweep_finite(dtype):
             p = m.pdf(wo, wi, mode=mode)
             assert np.all(np.isfinite(f)) and np.all(f >= 0), m
             assert np.all(np.isfinite(p)) and np.all(p >= 0), m
-            s = m.sample(wo, uc, u, mode=mode)
-            for arr in (s.f, s.pdf, s.wi, s.eta, s.weight):
-                assert np.all(np.isfinite(arr)), (m, mode)
-            assert np.all(s.f >= 0) and np.all(s.pdf >= 0)
-            assert np.all(s.pdf[s.valid] > 0)
+            for sf in (bk.ReflTrans.All, bk.ReflTrans.Reflection, bk.ReflTrans.Transmission):
+                s = m.sample(wo, uc, u, mode=mode, sample_flags=sf)
+                for arr in (s.f, s.pdf, s.wi, s.eta, s.weight):
+                    assert np.all(np.isfinite(arr)), (m, mode)
+                assert np.all(s.f >= 0) and np.all(s.pdf >= 0)
+                assert np.all(s.pdf[s.valid] > 0)
+                # every sampled wi, valid or not, is a valid eval / pdf input (issue 10)
+                assert np.all(np.isfinite(m.eval(wo, s.wi, mode=mode)))
+                assert np.all(np.isfinite(m.pdf(wo, s.wi, mode=mode, sample_flags=sf)))
         a = m.albedo(d, n_samples=64, seed=1)
         assert np.all(np.isfinite(a)) and np.all(a >= 0), m
 

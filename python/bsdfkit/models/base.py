@@ -7,7 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._arrays import as_dirs, as_uniform, broadcast_batch, check_int, check_out, flatten_to, kernel_dtype
+from .._arrays import (as_dirs, as_uniform, broadcast_batch, check_int, check_out, fast_dirs, fast_pair,
+                       fast_sample_args, flatten_to, kernel_dtype)
 from .._enums import BxDFFlags, ReflTrans, TransportMode
 from . import registry as _registry
 
@@ -50,10 +51,19 @@ def _rgb(x, name: str, *, lo=None, hi=None, lo_open=False) -> np.ndarray:
 
 
 def _alphas(alpha, alpha_x, alpha_y):
-    a = _scalar(alpha, "alpha", lo=0.0)
-    ax = a if alpha_x is None else _scalar(alpha_x, "alpha_x", lo=0.0)
-    ay = a if alpha_y is None else _scalar(alpha_y, "alpha_y", lo=0.0)
-    return ax, ay
+    """(alpha_x, alpha_y) from either ``alpha`` (isotropic; None = 0, smooth) or both of
+    ``alpha_x`` and ``alpha_y``: one of the pair alone would silently leave the other at 0, and
+    ``alpha`` with the pair would silently ignore one of them."""
+    if (alpha_x is None) != (alpha_y is None):
+        given, missing = ("alpha_x", "alpha_y") if alpha_y is None else ("alpha_y", "alpha_x")
+        raise ValueError(f"{missing}: give alpha_x and alpha_y together (only {given} was given), "
+                         "or alpha alone for an isotropic lobe")
+    if alpha_x is not None:
+        if alpha is not None:
+            raise ValueError("alpha: give either alpha (isotropic) or alpha_x and alpha_y (anisotropic), not both")
+        return _scalar(alpha_x, "alpha_x", lo=0.0), _scalar(alpha_y, "alpha_y", lo=0.0)
+    a = 0.0 if alpha is None else _scalar(alpha, "alpha", lo=0.0)
+    return a, a
 
 
 #: The masking knob of the microfacet models (a modelling choice: which material it is).
@@ -126,7 +136,8 @@ class SampleResult:
     wi: (..., 3) sampled directions (outward, local frame); f: (..., 3) BSDF value (cosine
     excluded); pdf: (...) solid-angle density, or the discrete probability for a specular lobe;
     flags: (...) uint8 ``BxDFFlags`` of the sampled lobe; eta: (...) relative IOR along wi
-    (1 for reflection); valid: (...) bool, False where no sample exists (then f = pdf = 0);
+    (1 for reflection); valid: (...) bool, False where no sample exists (then f = pdf = 0,
+    wi = (0, 0, 1), the shading normal, and eta = 1: every wi is a valid ``eval`` / ``pdf`` input);
     pdf_is_proportional: (...) bool (layered models only).
     """
 
@@ -144,6 +155,20 @@ class SampleResult:
         with np.errstate(divide="ignore", invalid="ignore"):
             w = self.f * (np.abs(self.wi[..., 2]) / self.pdf)[..., None]
         return np.where(self.valid[..., None], w, 0.0).astype(self.f.dtype)
+
+
+_RADIANCE = TransportMode.Radiance
+_ALL = ReflTrans.All
+
+
+def _new_sample_result(batch, dtype) -> SampleResult:
+    """An uninitialized SampleResult of the batch shape (filled by the kernel). Built without the
+    frozen dataclass's __init__ (seven object.__setattr__ calls): part of a small call's fixed cost."""
+    r = object.__new__(SampleResult)
+    r.__dict__.update(wi=np.empty(batch + (3,), dtype), f=np.empty(batch + (3,), dtype), pdf=np.empty(batch, dtype),
+                      flags=np.empty(batch, np.uint8), eta=np.empty(batch, dtype), valid=np.empty(batch, bool),
+                      pdf_is_proportional=np.empty(batch, bool))
+    return r
 
 
 def _mode(mode) -> int:
@@ -237,11 +262,12 @@ class BxDF:
         return hash((type(self).__name__, self._key()))
 
     def __repr__(self):
+        # Python's shortest round-trip float repr, not a rounded one: eval(repr(m)) == m.
         def fmt(v):
             if isinstance(v, np.ndarray):
-                return "[" + ", ".join(f"{x:.6g}" for x in v) + "]"
+                return "[" + ", ".join(repr(float(x)) for x in v) + "]"
             if isinstance(v, float):
-                return f"{v:.6g}"
+                return repr(v)
             return repr(v)
         args = ", ".join(f"{k}={fmt(v)}" for k, v in self._params.items())
         return f"{type(self).__name__}({args})"
@@ -261,6 +287,16 @@ class BxDF:
         Specular (delta) lobes evaluate to 0 for every given pair, as in pbrt-v4; use
         ``sample`` to reach them.
         """
+        fp = fast_pair(wo, wi) if out is None else None
+        if fp is not None:  # the common case, without the general path's fixed cost
+            o, i, batch, dtype = fp
+            out = np.empty(batch + (3,), dtype)
+            if out.size:
+                bo, bi = self._core.eval(o, i, 0 if mode is _RADIANCE else _mode(mode), out.reshape(-1, 3))
+                if bo or bi:
+                    _raise_bad("wo", bo)
+                    _raise_bad("wi", bi)
+            return out
         wo, wi = as_dirs(wo, "wo"), as_dirs(wi, "wi")
         dtype = kernel_dtype(wo, wi)
         batch = broadcast_batch(("wo", "wi"), wo.shape[:-1], wi.shape[:-1])
@@ -274,6 +310,17 @@ class BxDF:
 
     def pdf(self, wo, wi, mode=TransportMode.Radiance, sample_flags=ReflTrans.All, out=None) -> np.ndarray:
         """Solid-angle density of ``sample`` producing wi from wo: shape (...). 0 for delta lobes."""
+        fp = fast_pair(wo, wi) if out is None else None
+        if fp is not None:  # the common case, without the general path's fixed cost
+            o, i, batch, dtype = fp
+            out = np.empty(batch, dtype)
+            if out.size:
+                bo, bi = self._core.pdf(o, i, 0 if mode is _RADIANCE else _mode(mode),
+                                        3 if sample_flags is _ALL else _sflags(sample_flags), out.reshape(-1))
+                if bo or bi:
+                    _raise_bad("wo", bo)
+                    _raise_bad("wi", bi)
+            return out
         wo, wi = as_dirs(wo, "wo"), as_dirs(wi, "wi")
         dtype = kernel_dtype(wo, wi)
         batch = broadcast_batch(("wo", "wi"), wo.shape[:-1], wi.shape[:-1])
@@ -293,6 +340,18 @@ class BxDF:
         [0, 1], or pass ``n`` (number of samples) and an optional integer ``seed``; then uniforms
         come from ``numpy.random.default_rng(seed)`` and the batch shape is broadcast(wo, (n,)).
         """
+        fs = fast_sample_args(wo, uc, u) if n is None and uc is not None and u is not None else None
+        if fs is not None:  # the common case, without the general path's fixed cost
+            o, ucf, uf, batch, dtype = fs
+            res = _new_sample_result(batch, dtype)
+            if res.pdf.size:
+                bo = self._core.sample(o, ucf, uf, 0 if mode is _RADIANCE else _mode(mode),
+                                       3 if sample_flags is _ALL else _sflags(sample_flags),
+                                       res.wi.reshape(-1, 3), res.f.reshape(-1, 3), res.pdf.reshape(-1),
+                                       res.flags.reshape(-1), res.eta.reshape(-1), res.valid.reshape(-1),
+                                       res.pdf_is_proportional.reshape(-1))
+                _raise_bad("wo", bo)
+            return res
         wo = as_dirs(wo, "wo")
         if n is not None:
             if uc is not None or u is not None:
@@ -300,7 +359,12 @@ class BxDF:
             n = check_int(n, "n", 0)
             batch = broadcast_batch(("wo", "n"), wo.shape[:-1], (n,))
             dtype = kernel_dtype(wo)
-            rng = np.random.default_rng(seed)
+            if isinstance(seed, numbers.Integral) and not isinstance(seed, bool) and seed < 0:
+                raise ValueError(f"seed: must be >= 0 (or None), got {seed}")
+            try:
+                rng = np.random.default_rng(seed)
+            except (TypeError, ValueError) as e:
+                raise type(e)(f"seed: {e}") from None
             uc = rng.random(batch, dtype=dtype)
             u = rng.random(batch + (2,), dtype=dtype)
         else:
@@ -309,10 +373,7 @@ class BxDF:
             uc, u = as_uniform(uc, "uc", ()), as_uniform(u, "u", (2,))
             dtype = kernel_dtype(wo, uc, u)
             batch = broadcast_batch(("wo", "uc", "u"), wo.shape[:-1], uc.shape, u.shape[:-1])
-        res = SampleResult(wi=np.empty(batch + (3,), dtype), f=np.empty(batch + (3,), dtype),
-                           pdf=np.empty(batch, dtype), flags=np.empty(batch, np.uint8),
-                           eta=np.empty(batch, dtype), valid=np.empty(batch, bool),
-                           pdf_is_proportional=np.empty(batch, bool))
+        res = _new_sample_result(batch, dtype)
         if res.pdf.size:
             ucf = np.ascontiguousarray(np.broadcast_to(uc, batch), dtype=dtype).reshape(-1)
             uf = np.ascontiguousarray(np.broadcast_to(u, batch + (2,)), dtype=dtype).reshape(-1, 2)
@@ -333,11 +394,13 @@ class BxDF:
         wo = as_dirs(wo, "wo")
         n_samples = check_int(n_samples, "n_samples", 1)
         seed = check_int(seed, "seed", 0)
-        dtype = kernel_dtype(wo)
-        batch = wo.shape[:-1]
+        fd = fast_dirs(wo)
+        rows, batch, dtype = fd if fd is not None else (None, wo.shape[:-1], kernel_dtype(wo))
         out = np.empty(batch + (3,), dtype)
         if out.size:
-            bo = self._core.albedo(np.ascontiguousarray(wo, dtype=dtype).reshape(-1, 3), n_samples,
+            if rows is None:
+                rows = np.ascontiguousarray(wo, dtype=dtype).reshape(-1, 3)
+            bo = self._core.albedo(rows, n_samples,
                                    seed & 0xFFFFFFFFFFFFFFFF, _mode(mode), out.reshape(-1, 3))
             _raise_bad("wo", bo)
         return out
@@ -352,4 +415,4 @@ def _pick_alpha(roughness, alpha) -> float:
         raise ValueError("roughness, alpha: give one of them, not both")
     if roughness is not None:
         return roughness_to_alpha(_scalar(roughness, "roughness", lo=0.0))
-    return 0.0 if alpha is None else alpha
+    return alpha

@@ -38,8 +38,9 @@ class Conductor(BxDF):
     conductor Fresnel term (pbrt-v4 ``ConductorBxDF``; the complex Fresnel term by default).
 
     eta, k: real and imaginary IOR per RGB channel (eta > 0, k >= 0).
-    alpha: GGX roughness (alpha, not pbrt's remapped "roughness"); alpha_x / alpha_y override it
-    per tangent axis (local x / y). max(alpha_x, alpha_y) < 1e-3 makes the lobe a delta mirror
+    alpha: GGX roughness (alpha, not pbrt's remapped "roughness"), isotropic; or alpha_x and
+    alpha_y together, per tangent axis (local x / y) -- one of them alone, or alpha with them, is
+    a ValueError. max(alpha_x, alpha_y) < 1e-3 makes the lobe a delta mirror
     (pbrt-v4 ``EffectivelySmooth``); otherwise each alpha is floored at 1e-4.
     masking: "correlated" (height-correlated Smith, pbrt-v4) or "separable" (G1 G1, Mitsuba 3).
     fresnel: the Fresnel term F(cos), cos = |wo . wm|, from most accurate to cheapest-ish:
@@ -88,7 +89,7 @@ class Conductor(BxDF):
         masking_knob(lambda q: "smooth conductor (max alpha < 1e-3): a mirror has no masking" if is_smooth(q) else None),
     )
 
-    def __init__(self, eta, k, alpha=0.0, alpha_x=None, alpha_y=None, masking="correlated", fresnel="exact"):
+    def __init__(self, eta, k, alpha=None, alpha_x=None, alpha_y=None, masking="correlated", fresnel="exact"):
         ax, ay = _alphas(alpha, alpha_x, alpha_y)
         super().__init__(eta=_rgb(eta, "eta", lo=0.0, lo_open=True), k=_rgb(k, "k", lo=0.0),
                          alpha_x=ax, alpha_y=ay, masking=_masking(masking), fresnel=_fresnel(fresnel))

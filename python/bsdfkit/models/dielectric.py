@@ -38,7 +38,7 @@ class Dielectric(BxDF):
     mitsuba = "roughdielectric"
     knobs = (masking_knob(_dielectric_masking_moot),)
 
-    def __init__(self, eta=1.5, alpha=0.0, alpha_x=None, alpha_y=None, masking="correlated"):
+    def __init__(self, eta=1.5, alpha=None, alpha_x=None, alpha_y=None, masking="correlated"):
         ax, ay = _alphas(alpha, alpha_x, alpha_y)
         super().__init__(eta=_scalar(eta, "eta", lo=0.0, lo_open=True), alpha_x=ax, alpha_y=ay,
                          masking=_masking(masking))

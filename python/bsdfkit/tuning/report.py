@@ -4,12 +4,13 @@ from __future__ import annotations
 import html as _html
 import math
 import numbers
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..models import BxDF
-from .costs import _check_costs, _costs_for, _measure, _op, _pick, _threads
+from .costs import SPREAD_WARN, _check_costs, _costs_for, _measure, _op, _pick, _threads
 from .errors import _Evaluation, _check_int
 from .configs import _check_allow, _check_model, _knobs_from, _label, _specs, family
 
@@ -39,6 +40,8 @@ def _fmt_cell(v, col):
         return f"{v / 1e6:.1f}M"
     if col in ("speedup", "expected_speedup"):
         return f"{v:.2f}×"
+    if col == "spread":
+        return f"{v:.2f}" + ("!" if v > SPREAD_WARN else "")
     if isinstance(v, float):
         return "0" if v == 0 else f"{v:.2e}"
     return str(v)
@@ -50,7 +53,9 @@ class Table:
     Columns: ``config`` (what differs from the most accurate configuration), one column per
     reachable knob, ``dtype``, ``op`` (timed operation: eval, or sample for delta-only models),
     ``evals_per_s`` and ``speedup`` (live, this run, ratio to the most accurate configuration
-    timed back to back; ``None`` with ``measure=False``), ``expected_speedup`` (from the shipped
+    timed back to back; ``None`` with ``measure=False``), ``spread`` (median / min of the repeats
+    of that row and the reference, 1 on a quiet machine; marked ``!`` above ``SPREAD_WARN``, and
+    :func:`tradeoff` warns), ``expected_speedup`` (from the shipped
     cost table, ``None`` if the configuration is not in it), ``max_err``, ``p99_err``,
     ``albedo_err`` (see the module docstring) and ``pareto`` (on the front of throughput vs
     p99 error; throughput = live speedup, else expected speedup).
@@ -62,7 +67,7 @@ class Table:
     reference_albedo, directions (the :class:`DirectionSet`), seed, family, measured.
     """
 
-    def __init__(self, model, evaluation: _Evaluation, rates, speedups, expected, info):
+    def __init__(self, model, evaluation: _Evaluation, rates, speedups, expected, info, spreads=None):
         self.model = model
         self.configs = evaluation.configs
         self.reference = evaluation.reference.model
@@ -75,7 +80,7 @@ class Table:
         self.info = info
         self.seed = info.get("seed")
         self.columns = (["config"] + [k.name for k in self.knobs if k.reachable and k.name != "precision"] +
-                        ["dtype", "op", "evals_per_s", "speedup", "expected_speedup", "max_err", "p99_err",
+                        ["dtype", "op", "evals_per_s", "speedup", "spread", "expected_speedup", "max_err", "p99_err",
                          "albedo_err", "pareto"])
         op = _op(model)
         rows = []
@@ -87,6 +92,7 @@ class Table:
             r.update(dtype=c.labels["precision"], op=op,
                      evals_per_s=None if rates is None else rates[i],
                      speedup=None if speedups is None else speedups[i],
+                     spread=None if spreads is None else spreads[i],
                      expected_speedup=None if expected[i] is None else 1.0 / expected[i], **e)
             rows.append(r)
         thr = [r["speedup"] if r["speedup"] is not None else (r["expected_speedup"] or 1.0) for r in rows]
@@ -193,7 +199,7 @@ def _check_tol(tol) -> float:
 
 
 def tradeoff(model, directions=None, n: int = 8192, seed: int = 0, *, n_albedo: int = 4096, measure: bool = True,
-             n_timing: int = 65536, repeats: int = 3, rounds: int = 1, costs: dict | None = None) -> Table:
+             n_timing: int = 65536, repeats: int = 5, rounds: int = 1, costs: dict | None = None) -> Table:
     """Throughput and error of every reachable knob configuration of ``model``.
 
     directions: ``None`` (the default set, :func:`direction_set` with ``n`` rows and ``seed``),
@@ -216,14 +222,20 @@ def tradeoff(model, directions=None, n: int = 8192, seed: int = 0, *, n_albedo: 
     n_timing, repeats, rounds = (_check_int(n_timing, "n_timing", 1), _check_int(repeats, "repeats", 1),
                                  _check_int(rounds, "rounds", 1))
     ev = _Evaluation(model, directions, n, seed, n_albedo)
-    rates = speedups = None
+    rates = speedups = spreads = None
     if measure:
-        rates, speedups = _measure(ev.configs, _op(model), n_timing, repeats, rounds, seed)
+        rates, speedups, spreads = _measure(ev.configs, _op(model), n_timing, repeats, rounds, seed)
+        worst = max(spreads)
+        if worst > SPREAD_WARN:
+            warnings.warn(f"tradeoff: live timings are noisy (spread median/min of repeats up to {worst:.2f}x, "
+                          f"above {SPREAD_WARN}): the machine is busy and the speedup column is unreliable; "
+                          "rerun with more repeats= / rounds= on a quiet machine, or rank by expected_speedup",
+                          RuntimeWarning, stacklevel=2)
     costs = _check_costs(costs)
     expected = _costs_for(model, ev.configs, costs)
     info = {"seed": seed, "n": n, "n_albedo": n_albedo, "n_timing": n_timing, "repeats": repeats, "rounds": rounds,
             "threads": _threads(), "cost_table": costs.get("machine")}
-    return Table(model, ev, rates, speedups, expected, info)
+    return Table(model, ev, rates, speedups, expected, info, spreads)
 
 
 @dataclass

@@ -43,18 +43,21 @@ template <typename F> struct DielectricBxDF {
     }
 
     // Lobe probabilities restricted by sample_flags.
-    static void lobe_probs(F R, uint8_t sample_flags, F *pr, F *pt) { restrict_lobes(R, F(1) - R, sample_flags, pr, pt); }
+    static void lobe_probs(F R, F T, uint8_t sample_flags, F *pr, F *pt) { restrict_lobes(R, T, sample_flags, pr, pt); }
 
     // Generalized half vector of a pair, facing +z, and the relative IOR etap along wi.
     // Returns false where pbrt-v4 returns 0: a horizon direction, a degenerate half vector,
     // or a back-facing microfacet.
-    bool half_vector(const Vec3<F> &wo, const Vec3<F> &wi, Vec3<F> *wm, F *etap) const {
+    // *len2 = |wi etap + wo|^2, from which the transmission Jacobian's denominator follows
+    // without cancellation: (wi.wm + wo.wm / etap)^2 = (h.wm / etap)^2 = |h|^2 / etap^2.
+    bool half_vector(const Vec3<F> &wo, const Vec3<F> &wi, Vec3<F> *wm, F *etap, F *len2_out) const {
         F cos_o = CosTheta(wo), cos_i = CosTheta(wi);
         bool reflect = cos_i * cos_o > F(0);
         F eta_side = cos_o > F(0) ? eta : F(1) / eta;
         *etap = reflect ? F(1) : eta_side;
         Vec3<F> h = wi * *etap + wo;
         F len2 = length_squared(h);
+        *len2_out = len2;
         bool ok = (cos_i != F(0)) & (cos_o != F(0)) & (len2 > F(0));
         F inv_len = F(1) / std::sqrt(ok ? len2 : F(1));
         F sgn = h.z < F(0) ? -inv_len : inv_len; // normalize and face +z in one scale
@@ -68,20 +71,22 @@ template <typename F> struct DielectricBxDF {
     Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode) const {
         // Delta lobes evaluate to 0: folded into the mask (no early return).
         Vec3<F> wm;
-        F etap;
-        bool ok = half_vector(wo, wi, &wm, &etap) & !is_smooth();
+        F etap, len2;
+        bool ok = half_vector(wo, wi, &wm, &etap, &len2) & !is_smooth();
         bool reflect = CosTheta(wi) * CosTheta(wo) > F(0);
         F cos_o = CosTheta(wo), cos_i = CosTheta(wi);
-        F Fr = FrDielectric(dot(wo, wm), eta);
+        F Fr, Ft;
+        FrDielectricRT(dot(wo, wm), eta, &Fr, &Ft); // Ft = 1 - Fr without cancellation
         F dg = mfd.D(wm) * mfd.G(wo, wi);
+        F cc = std::abs(cos_i * cos_o);
         // Reflection: D G F / |4 cos_i cos_o|
-        F fr = dg * Fr / std::abs(F(4) * cos_i * cos_o);
-        // Transmission: D G (1 - F) |wi.wm wo.wm / (cos_i cos_o (wi.wm + wo.wm / etap)^2)|
-        F denom = sqr(dot(wi, wm) + dot(wo, wm) / etap) * cos_i * cos_o;
-        F ft = dg * (F(1) - Fr) * std::abs(dot(wi, wm) * dot(wo, wm) / denom);
-        ft = mode == TransportMode::Radiance ? ft / sqr(etap) : ft;
+        F fr = dg * Fr / (F(4) * cc);
+        // Transmission (Walter 2007 eq. 21): D G (1 - F) |wi.wm wo.wm| / (|cos_i cos_o| (wi.wm + wo.wm/etap)^2),
+        // the squared sum being |h|^2 / etap^2 (half_vector); Radiance mode divides by etap^2,
+        // which cancels the etap^2 of that denominator.
+        F ft = dg * Ft * std::abs(dot(wi, wm) * dot(wo, wm)) / (len2 * cc);
+        ft = mode == TransportMode::Radiance ? ft : ft * sqr(etap);
         F v = reflect ? fr : ft;
-        ok = ok & (reflect | (denom != F(0)));
         return Spectrum<F>(ok ? v : F(0));
     }
 
@@ -95,8 +100,8 @@ template <typename F> struct DielectricBxDF {
         BSDFSample<F> s;
         // eta == 1 is a pure pass-through; force R = 0 rather than trusting rounding.
         F R = keep_or_zero(FrDielectric(CosTheta(wo), eta), eta != F(1)), pr, pt;
-        lobe_probs(R, sample_flags, &pr, &pt);
-        bool reflect = uc < pr / (pr + pt);
+        lobe_probs(R, F(1) - R, sample_flags, &pr, &pt);
+        bool reflect = ChooseFirstLobe(uc, pr, pt);
         // Specular reflection about +z, or refraction through the flat interface.
         Vec3<F> wr(-wo.x, -wo.y, wo.z), wt;
         F etap;
@@ -118,9 +123,10 @@ template <typename F> struct DielectricBxDF {
                                uint8_t sample_flags) const {
         BSDFSample<F> s;
         Vec3<F> wm = mfd.Sample_wm(wo, u);
-        F R = FrDielectric(dot(wo, wm), eta), pr, pt;
-        lobe_probs(R, sample_flags, &pr, &pt);
-        bool reflect = uc < pr / (pr + pt);
+        F R, T, pr, pt;
+        FrDielectricRT(dot(wo, wm), eta, &R, &T);
+        lobe_probs(R, T, sample_flags, &pr, &pt);
+        bool reflect = ChooseFirstLobe(uc, pr, pt);
         F cos_o = CosTheta(wo);
         F pdf_wm = mfd.PDF(wo, wm);
 
@@ -139,7 +145,7 @@ template <typename F> struct DielectricBxDF {
         F denom = sqr(dot(wt, wm) + dot(wo, wm) / etap);
         F dwm_dwi = absdot(wt, wm) / denom;
         F pdf_t = pdf_wm * dwm_dwi * pt / (pr + pt);
-        F f_t = (F(1) - R) * mfd.D(wm) * mfd.G(wo, wt) *
+        F f_t = T * mfd.D(wm) * mfd.G(wo, wt) *
                 std::abs(dot(wt, wm) * dot(wo, wm) / (CosTheta(wt) * cos_o * denom));
         f_t = mode == TransportMode::Radiance ? f_t / sqr(etap) : f_t;
 
@@ -157,17 +163,18 @@ template <typename F> struct DielectricBxDF {
 
     F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
         Vec3<F> wm;
-        F etap;
-        bool ok = half_vector(wo, wi, &wm, &etap) & !is_smooth();
+        F etap, len2;
+        bool ok = half_vector(wo, wi, &wm, &etap, &len2) & !is_smooth();
         bool reflect = CosTheta(wi) * CosTheta(wo) > F(0);
-        F R = FrDielectric(dot(wo, wm), eta), pr, pt;
-        lobe_probs(R, sample_flags, &pr, &pt);
+        F R, T, pr, pt;
+        FrDielectricRT(dot(wo, wm), eta, &R, &T);
+        lobe_probs(R, T, sample_flags, &pr, &pt);
         F pdf_wm = mfd.PDF(wo, wm);
         F p_r = pdf_wm / (F(4) * absdot(wo, wm)) * pr;
-        F denom = sqr(dot(wi, wm) + dot(wo, wm) / etap);
-        F p_t = pdf_wm * absdot(wi, wm) / denom * pt;
+        // dwm/dwi = |wi.wm| / (wi.wm + wo.wm/etap)^2 = |wi.wm| etap^2 / |h|^2 (half_vector)
+        F p_t = pdf_wm * absdot(wi, wm) * sqr(etap) / len2 * pt;
         F p = (reflect ? p_r : p_t) / (pr + pt);
-        ok &= ((pr + pt) > F(0)) & (reflect | (denom > F(0)));
+        ok &= ((pr + pt) > F(0)); // len2 > 0 is in half_vector's ok
         return ok ? p : F(0);
     }
 

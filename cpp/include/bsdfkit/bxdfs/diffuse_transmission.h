@@ -45,7 +45,7 @@ template <typename F> struct DiffuseTransmissionBxDF {
         lobe_probs(sample_flags, &pr, &pt);
         BSDFSample<F> s;
         F sum = pr + pt;
-        bool reflect = uc < pr / sum;
+        bool reflect = ChooseFirstLobe(uc, pr, pt);
         Vec3<F> wi = SampleCosineHemisphere(u);
         // reflection stays on wo's side, transmission goes to the other side (float selects, V2)
         F zo = wo.z < F(0) ? -wi.z : wi.z; // on wo's side

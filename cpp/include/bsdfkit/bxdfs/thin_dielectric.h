@@ -6,6 +6,7 @@
 #include "../core/bsdf_sample.h"
 #include "../core/bxdf.h"
 #include "../core/fresnel.h"
+#include "../core/sampling.h"
 
 namespace bsdfkit {
 
@@ -33,7 +34,7 @@ template <typename F> struct ThinDielectricBxDF {
         F Rs = R < F(1) ? R + sqr(T) * R / (F(1) - sqr(R)) : R;
         F pr, pt;
         restrict_lobes(Rs, F(1) - Rs, sample_flags, &pr, &pt);
-        bool reflect = uc < pr / (pr + pt);
+        bool reflect = ChooseFirstLobe(uc, pr, pt);
         s.wi = Vec3<F>(-wo.x, -wo.y, reflect ? wo.z : -wo.z);
         F cos_i = DeltaAbsCos(s.wi);
         s.f = Spectrum<F>((reflect ? Rs : F(1) - Rs) / cos_i);
