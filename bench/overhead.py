@@ -14,31 +14,16 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
-import time
 
 import numpy as np
 
 import bsdfkit as bk
+from bsdfkit.tuning.costs import time_repeats
 
 
 def _per_call(fn, repeats: int, min_time: float = 0.05) -> list:
-    fn()
-    inner = 1
-    while True:
-        t0 = time.perf_counter()
-        for _ in range(inner):
-            fn()
-        dt = time.perf_counter() - t0
-        if dt >= min_time:
-            break
-        inner *= 2
-    out = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(inner):
-            fn()
-        out.append((time.perf_counter() - t0) / inner)
-    return out
+    """Per-call seconds of ``repeats`` repeats (the package's own timer, tuning.costs.time_repeats)."""
+    return time_repeats(fn, repeats=repeats, min_time=min_time)
 
 
 MODELS = {
