@@ -61,7 +61,10 @@ def test_warp_inverse_and_density():
     u = rng.random((20000, 2))
     p, pdf = w.sample(u, False)
     u2, pdf2 = w.sample(p, True)
-    np.testing.assert_allclose(u2, u, atol=2e-7)
+    # exact up to the sampler's near-constant-segment shortcut (|v0 - v1| <= 1e-4 (v0 + v1) is
+    # sampled as constant, as Mitsuba / pbrt-v4 do): a few 1e-6
+    np.testing.assert_allclose(u2, u, atol=1e-5)
+    assert np.median(np.abs(u2 - u)) < 1e-12
     np.testing.assert_allclose(pdf2, pdf, rtol=1e-9)
     np.testing.assert_allclose(w.eval(p), pdf, rtol=1e-9)
     g = (np.arange(400) + 0.5) / 400
@@ -195,8 +198,10 @@ def test_consistency_extremes_pickle(tabulated):
         s = tab.sample(wo, n=3000, seed=1)
         v = s.valid
         assert np.all(np.isfinite(s.f)) and np.all(np.isfinite(s.pdf))
-        np.testing.assert_allclose(tab.eval(wo, s.wi[v]), s.f[v], rtol=1e-9)
-        np.testing.assert_allclose(tab.pdf(wo, s.wi[v]), s.pdf[v], rtol=1e-9)
+        # eval / pdf go through the warp's inverse: exact but for the near-constant-segment
+        # shortcut of the sampler (see test_warp_inverse_and_density)
+        np.testing.assert_allclose(tab.eval(wo, s.wi[v]), s.f[v], rtol=1e-5)
+        np.testing.assert_allclose(tab.pdf(wo, s.wi[v]), s.pdf[v], rtol=1e-5)
         assert np.all(tab.eval(wo, -wo) == 0) and tab.pdf(wo, -wo) == 0
     m = bk.Measured(path)
     assert m == bk.Measured.load(path) and eval(repr(m), {"Measured": bk.Measured}) == m
