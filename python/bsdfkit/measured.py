@@ -151,7 +151,8 @@ def projected_area(ndf: np.ndarray, dirs: np.ndarray, n: int = 96) -> np.ndarray
 
 
 def tabulate(model, resolution: int = 32, *, n_theta: int | None = None, n_phi: int | None = None,
-             isotropic: bool | None = None, iterations: int = 8, description: str | None = None):
+             isotropic: bool | None = None, reduction: int = 1, iterations: int = 8,
+             description: str | None = None):
     """The Dupuy & Jakob (2018) representation of any bsdfkit model, as an in-memory
     :class:`bsdfkit.Measured` (``.save(path)`` writes an RGB tensor file that Mitsuba's
     ``measured`` plugin loads).
@@ -159,7 +160,9 @@ def tabulate(model, resolution: int = 32, *, n_theta: int | None = None, n_phi: 
     resolution: side N of every 2-D table (ndf, sigma, vndf, luminance, rgb are N x N).
     n_theta: incidence elevations theta_i (default max(6, N / 4)), u-spaced (theta = u^2 pi/2)
     from 0 to 88 degrees. n_phi: incidence azimuths for anisotropic models (default 2 n_theta + 1,
-    spanning [-pi, pi]: reduction 1). isotropic: None detects it (:func:`check_isotropic`).
+    spanning [-pi, pi]). isotropic: None detects it (:func:`check_isotropic`). reduction: 1, or
+    2 / 4 for an anisotropic model symmetric under y -> -y (and x -> -x): the incidence azimuths
+    then span [-pi, 0] or [-pi, -pi/2] and readers fold wo into that range (Mitsuba's reductions).
 
     Construction (the paper's pipeline with the model in place of the goniophotometer):
     1. NDF from retro-reflection: with f(w, w) = F D(w) G1(w) / (4 cos^2) and G1 = cos / sigma,
@@ -192,6 +195,10 @@ def tabulate(model, resolution: int = 32, *, n_theta: int | None = None, n_phi: 
     nph = 1 if isotropic else (2 * nth + 1 if n_phi is None else int(n_phi))
     if not isotropic and not 3 <= nph <= 512:
         raise ValueError(f"n_phi: must be in [3, 512] for an anisotropic table, got {n_phi!r}")
+    if reduction not in (1, 2, 4):
+        raise ValueError(f"reduction: must be 1, 2 or 4, got {reduction!r}")
+    if isotropic and reduction != 1:
+        raise ValueError("reduction: only anisotropic tables are reduced")
     node = np.arange(N) / (N - 1)
     # ---- 1. NDF from retro-reflection (power iteration)
     ux, uy = np.meshgrid(node, node, indexing="xy")            # (N rows = u_phi, N cols = u_theta)
@@ -215,7 +222,7 @@ def tabulate(model, resolution: int = 32, *, n_theta: int | None = None, n_phi: 
     sigma = (np.maximum(w_exact.reshape(-1, 3) @ m_q.T, 0) @ (_bilinear(ndf, pts) * w_q)).reshape(N, N)
     # ---- incidence grid
     theta_i = _u2theta(np.linspace(0, _theta2u(np.radians(88.0)), nth))
-    phi_i = np.array([0.0]) if isotropic else np.linspace(-np.pi, np.pi, nph)
+    phi_i = np.array([0.0]) if isotropic else np.linspace(-np.pi, -np.pi + 2 * np.pi / reduction, nph)
     vndf = np.zeros((nph, nth, N, N))
     rgb = np.zeros((nph, nth, 3, N, N))
     lum = np.zeros((nph, nth, N, N))

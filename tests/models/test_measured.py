@@ -269,3 +269,56 @@ def test_hostile_tensor_files(tabulated, tmp_path):
     huge = data[:shape_at] + (2**62).to_bytes(8, "little") + data[shape_at + 8:]
     with pytest.raises(ValueError, match="'vndf': data"):
         bk.Measured.from_bytes(huge)
+
+
+@pytest.mark.parametrize("reduction", [2, 4])
+def test_reduced_anisotropic_vs_mitsuba(tmp_path, reduction):
+    """Mitsuba's 2- and 4-fold reductions: wo and wi mirrored into the stored azimuth range."""
+    src = bk.Conductor([0.2, 0.9, 1.1], [3.9, 2.4, 2.1], alpha_x=0.2, alpha_y=0.5)
+    tab = bk.measured.tabulate(src, resolution=16, n_theta=6, n_phi=5, reduction=reduction)
+    assert tab.reduction == reduction and not tab.isotropic
+    path = tab.save(tmp_path / f"red{reduction}_rgb.bsdf")
+    rng = np.random.default_rng(reduction)
+    wo, wi = pairs(rng, 10000)
+    f_ref, pdf_ref = ref.eval_pdf(_mitsuba_measured(path), wo, wi)
+    f, pdf = tab.eval(wo, wi), tab.pdf(wo, wi)
+    fc, fc_ref = f * wi[:, 2:3], f_ref * wi[:, 2:3]
+    err_f = np.abs(fc - fc_ref) / np.maximum(np.abs(fc_ref), 1e-3 * np.abs(fc_ref).max())
+    err_p = np.abs(pdf - pdf_ref) / np.maximum(pdf_ref, 1e-3 * pdf_ref.max())
+    assert np.quantile(err_f, 0.999) <= 1e-4 and np.quantile(err_p, 0.999) <= 1e-4
+    # the folded table still describes the source (all four quadrants)
+    a, b = src.eval(wo, wi) @ LUM, f @ LUM
+    keep = (a > 1e-2 * a.max()) & (wo[:, 2] > 0.15) & (wi[:, 2] > 0.15)
+    assert np.median(np.abs(b[keep] - a[keep]) / a[keep]) < 0.05
+
+
+def test_spectral_file_projection(tabulated, tmp_path):
+    """A spectral file: projected to linear sRGB under D65 with the CIE 1931 observer, checked
+    against colour-science's own spectral -> XYZ -> sRGB on a smooth spectrum."""
+    import colour
+    _, tab, _ = tabulated["iso"]
+    f = {k: np.array(v) for k, v in tab.fields.items()}
+    wl = np.linspace(360, 1000, 33).astype(np.float32)
+    refl = (0.2 + 0.6 * np.exp(-0.5 * ((wl - 600) / 40) ** 2)).astype(np.float32)   # a reddish spectrum
+    lum = f["rgb"] @ LUM if False else np.einsum("c,ptcyx->ptyx", LUM, f["rgb"])
+    f["spectra"] = (lum[:, :, None] * refl[None, None, :, None, None]).astype(np.float32)
+    f["wavelengths"] = wl
+    del f["rgb"]
+    p = mm.write_tensor(tmp_path / "x_spec.bsdf", f)
+    m = bk.Measured.load(p)
+    assert m.spectral
+    sd = colour.SpectralDistribution(dict(zip(wl.astype(float), refl.astype(float)))).copy()
+    sd.interpolator = colour.LinearInterpolator
+    sd = sd.align(colour.SpectralShape(360, 830, 1), interpolator=colour.LinearInterpolator)
+    xyz = colour.sd_to_XYZ(sd, illuminant=colour.SDS_ILLUMINANTS["D65"], method="Integration") / 100
+    rgb = colour.XYZ_to_RGB(xyz, colour.models.RGB_COLOURSPACE_sRGB, apply_cctf_encoding=False)
+    white = colour.XYZ_to_RGB(colour.sd_to_XYZ(colour.sd_ones(colour.SpectralShape(360, 830, 1)),
+                                              illuminant=colour.SDS_ILLUMINANTS["D65"], method="Integration") / 100,
+                              colour.models.RGB_COLOURSPACE_sRGB, apply_cctf_encoding=False)
+    rng = np.random.default_rng(9)
+    wo, wi = pairs(rng, 500, zmin=0.3)
+    got = m.eval(wo, wi)
+    base = tab.eval(wo, wi) @ LUM
+    keep = base > 1e-3 * base.max()
+    np.testing.assert_allclose(got[keep] / base[keep, None], np.broadcast_to(rgb / white, got[keep].shape),
+                               rtol=2e-3)

@@ -21,7 +21,7 @@ import numpy as np
 from .. import _core
 from .._models import BxDF
 
-__all__ = ["MERL", "MERL_SCALE", "MERL_DIMS", "read_merl", "Measured", "read_tensor", "write_tensor", "parse_tensor",
+__all__ = ["MERL", "MERL_SCALE", "MERL_DIMS", "read_merl", "parse_merl", "Measured", "read_tensor", "write_tensor", "parse_tensor",
            "tensor_bytes", "validate_measured"]
 
 #: MERL's channel scale factors (RED_SCALE, GREEN_SCALE, BLUE_SCALE of BRDFRead.cpp): stored
@@ -72,6 +72,11 @@ def read_merl(path) -> tuple[np.ndarray, np.ndarray, str, str]:
     dimensions, a payload of the wrong length, or NaN/infinite values.
     """
     ap, data = _read_bytes(path, "MERL")
+    return parse_merl(data, ap)
+
+
+def parse_merl(data: bytes, ap: str = "<bytes>") -> tuple[np.ndarray, np.ndarray, str, str]:
+    """:func:`read_merl` on the bytes of a file (``ap`` names it in the messages)."""
     if len(data) < 12:
         raise ValueError(f"{ap}: dims: truncated header ({len(data)} bytes; a MERL file starts with 3 int32)")
     dims = tuple(int(d) for d in np.frombuffer(data, "<i4", 3))
