@@ -34,7 +34,8 @@ __all__ += ["tradeoff", "simplify", "knobs", "Table"]
 __all__ += ["from_mitsuba", "from_pbrt", "parse_pbrt_materials", "interop"]
 
 #: Every model class, in gallery order.
-MODELS = (Diffuse, DiffuseTransmission, Conductor, Dielectric, ThinDielectric, FilamentStandard, FilamentCloth)
+MODELS = (Diffuse, DiffuseTransmission, Conductor, Dielectric, ThinDielectric, FilamentStandard, FilamentCloth, MERL,
+          Measured)
 
 
 def set_num_threads(n: int) -> None:

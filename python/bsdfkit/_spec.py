@@ -34,7 +34,8 @@ ALIASES = {"lambert": "Diffuse", "difftrans": "DiffuseTransmission", "metal": "C
            "glass": "Dielectric", "thin": "ThinDielectric"}
 
 #: Example specs for classes whose constructor has required parameters (the gallery's row).
-EXAMPLES = {"Conductor": "conductor metal=Cu alpha=0.2"}
+EXAMPLES = {"Conductor": "conductor metal=Cu alpha=0.2", "MERL": "merl metal=Cu alpha=0.2 interpolation=linear",
+            "Measured": "measured metal=Au alpha=0.15 alpha_y=0.4"}
 
 
 class SpecError(ValueError):

@@ -16,6 +16,7 @@ transmission below it. 0 deg (the normal) is at the top of the plot.
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 
@@ -120,6 +121,10 @@ def describe(model: BxDF) -> str:
         return f"Dielectric η={p['eta']:.3g}{alpha}"
     if isinstance(model, ThinDielectric):
         return f"ThinDielectric η={p['eta']:.3g}"
+    if type(model).__name__ == "MERL":
+        return f"MERL {os.path.basename(p['path'])} ({p['interpolation']})"
+    if type(model).__name__ == "Measured":
+        return f"Measured {os.path.basename(p['path'])}" if p["path"] else "Measured (tabulated)"
     from ._spec import to_spec
 
     rest = to_spec(model).split()[1:]

@@ -21,7 +21,7 @@ import numpy as np
 from .. import _core
 from .._models import BxDF
 
-__all__ = ["MERL", "MERL_SCALE", "MERL_DIMS", "read_merl", "parse_merl", "Measured", "read_tensor", "write_tensor", "parse_tensor",
+__all__ = ["example_dir", "MERL", "MERL_SCALE", "MERL_DIMS", "read_merl", "parse_merl", "Measured", "read_tensor", "write_tensor", "parse_tensor",
            "tensor_bytes", "validate_measured"]
 
 #: MERL's channel scale factors (RED_SCALE, GREEN_SCALE, BLUE_SCALE of BRDFRead.cpp): stored
@@ -36,6 +36,30 @@ _INTERPOLATION = {"nearest": "MERLNearest", "linear": "MERLLinear"}
 _LOCK = threading.Lock()
 _TABLES: "collections.OrderedDict" = collections.OrderedDict()   # (digest, linear) -> _core.MERLTable
 _MAX_TABLES = 6
+
+
+def example_dir() -> str:
+    """Where ``from_metal`` writes its files: ``$BSDFKIT_CACHE`` or ``<tmp>/bsdfkit-<user>``/measured."""
+    import getpass
+    import tempfile
+    try:
+        user = getpass.getuser()
+    except Exception:  # pragma: no cover - no user name on some containers
+        user = "user"
+    root = os.environ.get("BSDFKIT_CACHE") or os.path.join(tempfile.gettempdir(), f"bsdfkit-{user}")
+    d = os.path.join(root, "measured")
+    os.makedirs(d, exist_ok=True)
+    return d
+
+
+def _example_file(stem: str, ext: str, write) -> str:
+    """A cached example file: written once (atomically) by ``write(path)``."""
+    path = os.path.join(example_dir(), f"{stem}{ext}")
+    if not os.path.isfile(path):
+        tmp = f"{path}.{os.getpid()}.{threading.get_ident()}.tmp"
+        write(tmp)
+        os.replace(tmp, path)
+    return path
 
 
 def _read_bytes(path, what: str) -> tuple[str, bytes]:
@@ -134,6 +158,19 @@ class MERL(BxDF):
     Pickles by (path, digest): unpickling re-reads the file and refuses a changed one.
     """
 
+    # registry declarations (issue 10)
+    aliases = ("merl",)
+    examples = {"Cu α=0.2, linear": "merl metal=Cu alpha=0.2 interpolation=linear",
+                "Cu α=0.2, nearest (MERL's lookup)": "merl metal=Cu alpha=0.2"}
+    description = "MERL measured isotropic BRDF table (.binary), nearest or trilinear lookup"
+    energy_conserving = False   # measured data: not guaranteed
+    exact_eval = True
+    two_sided = True
+    transmission = False
+    mitsuba = None              # Mitsuba 3 has no MERL plugin
+    knobs = (("interpolation", ("linear", "nearest"), "approximation"),)
+    cost_family = "measured"
+
     __slots__ = ("_keep",)
 
     def __init__(self, path, interpolation="nearest", *, digest=None):
@@ -150,6 +187,16 @@ class MERL(BxDF):
     @classmethod
     def load(cls, path, interpolation="nearest") -> "MERL":
         """Load a MERL ``.binary`` file (same as ``MERL(path, interpolation)``)."""
+        return cls(path, interpolation)
+
+    @classmethod
+    def from_metal(cls, name: str, alpha: float = 0.2, interpolation="nearest") -> "MERL":
+        """A MERL table of ``Conductor.from_metal(name, alpha=alpha)`` (written once by
+        :func:`bsdfkit.measured.write_merl` into :func:`example_dir`): an example file."""
+        from .._models import Conductor
+        from ..measured import write_merl
+        src = Conductor.from_metal(name, alpha=alpha)
+        path = _example_file(f"merl_{name}_a{float(alpha):.6g}", ".binary", lambda p: write_merl(p, src))
         return cls(path, interpolation)
 
     @classmethod
@@ -458,6 +505,18 @@ class Measured(BxDF):
     pickles by value (its serialized tensor file).
     """
 
+    # registry declarations (issue 10)
+    aliases = ("measured", "rgl")
+    examples = {"tabulated Au, αx=0.15, αy=0.4": "measured metal=Au alpha=0.15 alpha_y=0.4"}
+    description = "RGL measured BRDF tensor file (.bsdf, Dupuy & Jakob 2018), as pbrt-v4 and Mitsuba read it"
+    energy_conserving = False   # measured data: not guaranteed
+    exact_eval = True
+    two_sided = True
+    transmission = False
+    mitsuba = "measured"
+    knobs = ()                  # the tabulation resolution is a knob of bk.measured.tabulate
+    cost_family = "measured"
+
     __slots__ = ("_keep",)
 
     def __init__(self, path=None, *, digest=None, data=None):
@@ -479,6 +538,18 @@ class Measured(BxDF):
     @classmethod
     def load(cls, path) -> "Measured":
         """Load an RGL tensor file (same as ``Measured(path)``)."""
+        return cls(path)
+
+    @classmethod
+    def from_metal(cls, name: str, alpha: float = 0.2, alpha_y: float | None = None, resolution: int = 32) -> "Measured":
+        """The tabulation (:func:`bsdfkit.measured.tabulate`) of ``Conductor.from_metal(name, alpha,
+        alpha_y)`` saved once into :func:`example_dir` and loaded from there: an example file."""
+        from .._models import Conductor
+        from ..measured import tabulate
+        ay = alpha if alpha_y is None else alpha_y
+        src = Conductor.from_metal(name, alpha_x=alpha, alpha_y=ay)
+        stem = f"tensor_{name}_a{float(alpha):.6g}_{float(ay):.6g}_r{int(resolution)}_rgb"
+        path = _example_file(stem, ".bsdf", lambda p: tabulate(src, resolution=resolution).save(p))
         return cls(path)
 
     @classmethod
@@ -513,7 +584,8 @@ class Measured(BxDF):
         return dict(self._entry()[0])
 
     @property
-    def description(self) -> str:
+    def file_description(self) -> str:
+        """The file's ``description`` field (text)."""
         return self._entry()[1]["description"]
 
     @property

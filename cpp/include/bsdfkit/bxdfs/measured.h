@@ -19,6 +19,10 @@
 // Mitsuba does (pbrt-v4 always applies the ndf / (4 sigma) factor). Elevation as Mitsuba:
 // 2 asin(|d - z| / 2) (stable near the pole).
 // Conventions: reflection only; two-sided by flipping both directions when wo.z < 0 (pbrt-v4).
+// f = (f cos) / max(cos(theta_i), kMinCos): the tables do not make f cos vanish exactly at the
+// horizon (bilinear interpolation leaks a little of the last measured value), so the exact
+// quotient (pbrt-v4's f, Mitsuba's eval / cos) grows without bound in the last fraction of a
+// degree; bsdfkit bounds it there. f cos equals Mitsuba's eval for theta_i < 89.43 degrees.
 #pragma once
 #include <memory>
 
@@ -46,6 +50,7 @@ template <typename F> inline F elevation(const Vec3<F> &d) {
 }
 // x with its sign flipped unless s is negative (dr::mulsign_neg): folds into the stored domain.
 template <typename F> inline F mulsign_neg(F x, F s) { return std::signbit(s) ? x : -x; }
+inline constexpr double kMinCos = 1e-2;
 } // namespace measured
 
 template <typename F> struct MeasuredKernel {
@@ -104,7 +109,7 @@ template <typename F> struct MeasuredKernel {
         fold(wo, wi, &sx, &sy);
         Coords c = coords(wo, wi);
         Point2<F> s = vndf.invert(c.u_wm, c.params).first;
-        Spectrum<F> v = f_cos(s, c) * (F(1) / max_(wi.z, std::numeric_limits<F>::min()));
+        Spectrum<F> v = f_cos(s, c) * (F(1) / max_(wi.z, F(measured::kMinCos)));
         return select(active & (wi.z > F(0)), v, Spectrum<F>(F(0)));
     }
 
@@ -155,7 +160,7 @@ template <typename F> struct MeasuredKernel {
         Vec3<F> wi = Reflect(wo, m);
         BSDFSample<F> r;
         r.pdf = vndf_pdf * lum_pdf / jac;
-        r.f = f_cos(s, c) * (F(1) / max_(wi.z, std::numeric_limits<F>::min()));
+        r.f = f_cos(s, c) * (F(1) / max_(wi.z, F(kMinCos)));
         wi.x = mulsign_neg(wi.x, sx);
         wi.y = mulsign_neg(wi.y, sy);
         r.wi = select(flip, -wi, wi);
@@ -170,6 +175,14 @@ template <typename F> struct MeasuredKernel {
 template <typename F> struct MeasuredBxDF : MeasuredKernel<F> {
     using Kernel = MeasuredKernel<F>;
     std::shared_ptr<const MeasuredTable> table;  // keeps the data alive
+
+    // The model concept of the registry (core/bxdf.h): named parameters, Name, make(Params).
+    struct Params {
+        std::shared_ptr<const MeasuredTable> table;
+        template <class V> void fields(V &&v) { v("table", table); }
+    };
+    static constexpr const char *Name = "Measured";
+    static MeasuredBxDF make(const Params &p) { return make(p.table); }
 
     static MeasuredBxDF make(std::shared_ptr<const MeasuredTable> t) {
         MeasuredBxDF m;

@@ -279,6 +279,14 @@ template <typename F, bool Linear> struct MERLT : MERLKernel<F, Linear> {
     using Kernel = MERLKernel<F, Linear>;
     std::shared_ptr<const MERLTable> table;  // keeps the data alive
 
+    // The model concept of the registry (core/bxdf.h): named parameters, Name, make(Params).
+    struct Params {
+        std::shared_ptr<const MERLTable> table;
+        template <class V> void fields(V &&v) { v("table", table); }
+    };
+    static constexpr const char *Name = Linear ? "MERLLinear" : "MERLNearest";
+    static MERLT make(const Params &p) { return make(p.table); }
+
     static MERLT make(std::shared_ptr<const MERLTable> t) {
         MERLT m;
         m.values = t->template values<F>();
