@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 import bsdfkit as bk
-from bsdfkit.tradeoff import best_time
+from bsdfkit.tuning.costs import best_time
 
 HERE = Path(__file__).resolve().parent
 LUM = np.array([0.2126, 0.7152, 0.0722])
@@ -74,7 +74,7 @@ def load_rows(tmp, resolutions):
 
 def mitsuba_timer(path, wo, wi, what):
     """A callable running Mitsuba's measured eval (or pdf, or sample) on the arrays (float32, llvm_ad_rgb)."""
-    from bsdfkit.references import mitsuba as ref
+    from bsdfkit.testing import mitsuba as ref
     mi, dr = ref._mi()
     bsdf = ref.load({"type": "measured", "filename": path})
     si = ref._make_si(wo.astype(np.float32))

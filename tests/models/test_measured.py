@@ -8,7 +8,7 @@ import pytest
 
 import bsdfkit as bk
 from bsdfkit.models import measured as mm
-from bsdfkit.references import mitsuba as ref
+from bsdfkit.testing import mitsuba as ref
 
 LUM = np.array([0.2126, 0.7152, 0.0722])
 SOURCES = {

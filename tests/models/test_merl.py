@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import bsdfkit as bk
-from bsdfkit.references import mitsuba as ref
+from bsdfkit.testing import mitsuba as ref
 
 SCALE = np.array([1.0 / 1500, 1.15 / 1500, 1.66 / 1500])
 

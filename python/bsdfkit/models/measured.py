@@ -19,7 +19,7 @@ import threading
 import numpy as np
 
 from .. import _core
-from .._models import BxDF
+from .base import BxDF
 
 __all__ = ["example_dir", "MERL", "MERL_SCALE", "MERL_DIMS", "read_merl", "parse_merl", "Measured", "read_tensor", "write_tensor", "parse_tensor",
            "tensor_bytes", "validate_measured"]
@@ -193,7 +193,7 @@ class MERL(BxDF):
     def from_metal(cls, name: str, alpha: float = 0.2, interpolation="nearest") -> "MERL":
         """A MERL table of ``Conductor.from_metal(name, alpha=alpha)`` (written once by
         :func:`bsdfkit.measured.write_merl` into :func:`example_dir`): an example file."""
-        from .._models import Conductor
+        from .conductor import Conductor
         from ..measured import write_merl
         src = Conductor.from_metal(name, alpha=alpha)
         path = _example_file(f"merl_{name}_a{float(alpha):.6g}", ".binary", lambda p: write_merl(p, src))
@@ -544,7 +544,7 @@ class Measured(BxDF):
     def from_metal(cls, name: str, alpha: float = 0.2, alpha_y: float | None = None, resolution: int = 32) -> "Measured":
         """The tabulation (:func:`bsdfkit.measured.tabulate`) of ``Conductor.from_metal(name, alpha,
         alpha_y)`` saved once into :func:`example_dir` and loaded from there: an example file."""
-        from .._models import Conductor
+        from .conductor import Conductor
         from ..measured import tabulate
         ay = alpha if alpha_y is None else alpha_y
         src = Conductor.from_metal(name, alpha_x=alpha, alpha_y=ay)
