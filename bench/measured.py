@@ -49,26 +49,39 @@ def errors(model, ref, wo, wi):
     return float(np.median(e)), float(np.quantile(e, 0.9)), float(np.quantile(e, 0.99))
 
 
+def _clear_caches():
+    from bsdfkit.models import measured as mm
+    mm._TABLES.clear()
+    mm._MEASURED.clear()
+
+
 def load_rows(tmp, resolutions):
+    """Cold loads (the shared-table caches cleared first). Table memory is computed from the
+    sizes: float64 + float32 copies of every table, plus the CDFs of the sampled warps."""
     rows = []
-    src = bk.Conductor.from_metal("Cu", alpha=0.25)
-    p = bk.measured.write_merl(os.path.join(tmp, "cu.binary"), src)
+    src = bk.Conductor.from_metal("Cu", alpha=0.2)
+    p = bk.measured.write_merl(os.path.join(tmp, "cu_load.binary"), src)
+    _clear_caches()
     r0 = rss_mb()
     t0 = time.perf_counter()
     m = bk.MERL.load(p, interpolation="linear")
     dt = time.perf_counter() - t0
-    rows.append(dict(kind="MERL (nearest or linear: one table each)", size_mb=os.path.getsize(p) / 2**20,
-                     load_s=dt, rss_mb=rss_mb() - r0))
+    mem = (90 * 90 * 180 * 3 + 3 * 32 * 90 * 64) * 12 / 2**20
+    rows.append(dict(kind="MERL (one table per interpolation knob)", size_mb=os.path.getsize(p) / 2**20,
+                     load_s=dt, rss_mb=rss_mb() - r0, table_mb=mem))
     del m
     for N in resolutions:
-        t = bk.measured.tabulate(src, resolution=N)
-        path = t.save(os.path.join(tmp, f"cu{N}_rgb.bsdf"))
+        path = bk.measured.tabulate(src, resolution=N).save(os.path.join(tmp, f"cu{N}_rgb.bsdf"))
+        _clear_caches()
+        f = bk.measured.read_tensor(path)
+        elems = sum(f[k].size for k in ("ndf", "sigma", "rgb")) + 2 * sum(f[k].size for k in ("vndf", "luminance"))
         r0 = rss_mb()
         t0 = time.perf_counter()
-        bk.Measured.load(path)
+        m = bk.Measured.load(path)
         dt = time.perf_counter() - t0
         rows.append(dict(kind=f"tensor file, tabulate(resolution={N})", size_mb=os.path.getsize(path) / 2**20,
-                         load_s=dt, rss_mb=rss_mb() - r0))
+                         load_s=dt, rss_mb=rss_mb() - r0, table_mb=elems * 12 / 2**20))
+        del m
     return rows
 
 
@@ -198,11 +211,13 @@ def write_md(res, path):
         L.append(f"| {r['model']} | {r['theta_o']}° | {r['rv_tab']:.3f} | {r['rv_cos']:.3f} | "
                  f"{r['rv_cos'] / max(r['rv_tab'], 1e-12):.1f} | {r['albedo_tab']:.4f}, {r['albedo_cos']:.4f} |")
     L.append("\n## Load time and memory\n")
-    L.append("Load = read, validate, digest (SHA-256), build the shared tables (MERL: + the sampler). Memory: growth "
-             "of the process's resident set (rough).\n")
-    L.append("| file | size | load | RSS growth |\n|---|---:|---:|---:|")
+    L.append("Cold load (caches cleared) = read, validate, digest (SHA-256), build the shared tables (MERL: + the "
+             "sampler; tensor: the warps' CDFs). Table memory is computed from the sizes (float64 and float32 copies); "
+             "the RSS growth is the process's resident-set change (rough: freed buffers are reused).\n")
+    L.append("| file | size | load | shared tables | RSS growth |\n|---|---:|---:|---:|---:|")
     for r in res["load"]:
-        L.append(f"| {r['kind']} | {r['size_mb']:.2f} MB | {r['load_s'] * 1e3:.0f} ms | {r['rss_mb']:.0f} MB |")
+        L.append(f"| {r['kind']} | {r['size_mb']:.2f} MB | {r['load_s'] * 1e3:.0f} ms | {r['table_mb']:.1f} MB | "
+                 f"{r['rss_mb']:.0f} MB |")
     L.append(f"\n## Throughput (M elements/s, {res['n']} pairs)\n")
     L.append("| model | dtype | eval | pdf | sample |\n|---|---|---:|---:|---:|")
     for r in res["throughput"]:

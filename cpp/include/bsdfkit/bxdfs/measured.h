@@ -95,7 +95,8 @@ template <typename F> struct MeasuredKernel {
     // rgb at sample-space point s, times ndf / (4 sigma) if the file says so: f cos(theta_i).
     Spectrum<F> f_cos(Point2<F> s, const Coords &c) const {
         Spectrum<F> v;
-        for (int ch = 0; ch < 3; ++ch) v[ch] = rgb.eval(s, c.params, ch);
+        auto w = rgb.weights(c.params);  // one parameter search for the three channels
+        for (int ch = 0; ch < 3; ++ch) v[ch] = rgb.eval(s, w, ch);
         F scale = jacobian ? ndf.eval(c.u_wm, nullptr) / (F(4) * sigma.eval(c.u_wo, nullptr)) : F(1);
         return v * scale;
     }

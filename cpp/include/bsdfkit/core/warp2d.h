@@ -24,10 +24,12 @@ template <typename F> inline F table_at(const F *p, int64_t k) {
 }
 
 // Number of leading indices in [0, n) for which the monotone predicate holds (n if all):
-// branch-free bisection with a fixed iteration count (n <= 2^20).
+// branch-free bisection, floor(log2 n) + 1 iterations (the count depends on n only, which is
+// uniform per table, never on the data).
 template <typename Pred> inline int count_leading(int n, const Pred &pred) {
-    int i = 0;
-    for (int s = 1 << 20; s > 0; s >>= 1) {
+    int i = 0, top = 1;
+    while (top * 2 <= n) top *= 2;
+    for (int s = top; s > 0; s >>= 1) {
         int j = i + s;
         bool in = j <= n;
         int jj = in ? j : n;
@@ -171,8 +173,9 @@ template <typename F, int Dim> struct Warp2D {
     F C(const Params &p, int64_t i) const { return lookup(cond, n_cond(), p, i); }
 
     // Bilinear value at pos in [0,1]^2 (channel c of the slice).
-    F eval(Point2<F> pos, const F *param, int c = 0) const {
-        Params p = weights(param);
+    F eval(Point2<F> pos, const F *param, int c = 0) const { return eval(pos, weights(param), c); }
+    // The same with the parameter weights already computed (several channels at one point).
+    F eval(Point2<F> pos, const Params &p, int c) const {
         F x = clamp(pos.x, F(0), F(1)) * inv_patch_x, y = clamp(pos.y, F(0), F(1)) * inv_patch_y;
         int ix = min_(int(x), W - 2), iy = min_(int(y), H - 2);
         x -= F(ix), y -= F(iy);
