@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "bind_model.h"
+#include "bsdfkit/core/table.h"
 #include "bsdfkit/bxdfs/measured.h"
 #include "bsdfkit/bxdfs/merl.h"
 
@@ -12,14 +13,19 @@ namespace bsdfkit::py_bind {
 
 namespace {
 
-// Immutable, shared table; every model built from it holds a reference.
-struct PyMERLTable {
-    std::shared_ptr<const MERLTable> table;
-};
+// Immutable, shared tables (core/table.h); every model built from one holds a reference. The
+// models themselves are bound generically from bxdfs/all.h (models.cpp), with keyword `table`.
+using PyMERLTable = SharedTable<MERLTable>;
+using PyMeasuredTable = SharedTable<MeasuredTable>;
 
-struct PyMeasuredTable {
-    std::shared_ptr<const MeasuredTable> table;
-};
+template <typename T> void bind_table_identity(py::class_<SharedTable<T>> &c) {
+    c.def_property_readonly("digest", [](const SharedTable<T> &d) { return d.digest(); },
+                            "64-bit content digest of the table's values (core/table.h)")
+        .def("__eq__", [](const SharedTable<T> &a, const py::object &b) {
+            return py::isinstance<SharedTable<T>>(b) && a == b.cast<const SharedTable<T> &>();
+        })
+        .def("__hash__", [](const SharedTable<T> &d) { return py::hash(py::int_(d.digest())); });
+}
 
 using Arr = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
@@ -49,7 +55,9 @@ void build_warp(Warp2DData &w, const char *name, const Arr &a, int n_params, int
 } // namespace
 
 void bind_measured_models(py::module_ &m) {
-    py::class_<PyMERLTable>(m, "MERLTable")
+    py::class_<PyMERLTable> merl_table(m, "MERLTable");
+    bind_table_identity(merl_table);
+    merl_table
         .def(py::init([](py::array_t<double, py::array::c_style | py::array::forcecast> a, int K, int n_phi,
                          bool linear) {
             using namespace merl;
@@ -66,17 +74,17 @@ void bind_measured_models(py::module_ &m) {
                 py::gil_scoped_release release;
                 t = make_merl_table(std::move(v), K, n_phi, linear, num_threads());
             }
-            return PyMERLTable{t};
+            return PyMERLTable(t);
         }))
-        .def_property_readonly("K", [](const PyMERLTable &t) { return t.table->K; })
-        .def_property_readonly("n_phi", [](const PyMERLTable &t) { return t.table->n_phi; })
+        .def_property_readonly("K", [](const PyMERLTable &t) { return t->K; })
+        .def_property_readonly("n_phi", [](const PyMERLTable &t) { return t->n_phi; })
         .def("values", [](const PyMERLTable &t) {
             py::array_t<double> out({merl::kThetaH, merl::kThetaD, merl::kPhiD, 3});
-            std::copy(t.table->v64.begin(), t.table->v64.end(), out.mutable_data());
+            std::copy(t->v64.begin(), t->v64.end(), out.mutable_data());
             return out;
         })
         .def("sampler", [](const PyMERLTable &t) {
-            const MERLTable &T = *t.table;
+            const MERLTable &T = *t;
             auto arr = [&](const std::vector<double> &v, std::vector<py::ssize_t> shape) {
                 py::array_t<double> out(shape);
                 std::copy(v.begin(), v.end(), out.mutable_data());
@@ -86,7 +94,9 @@ void bind_measured_models(py::module_ &m) {
                                   arr(T.dens64, {T.K, merl::kThetaH, T.n_phi}));
         });
 
-    py::class_<PyMeasuredTable>(m, "MeasuredTable")
+    py::class_<PyMeasuredTable> measured_table(m, "MeasuredTable");
+    bind_table_identity(measured_table);
+    measured_table
         .def(py::init([](const Arr &ndf, const Arr &sigma, const Arr &vndf, const Arr &luminance, const Arr &rgb,
                          const std::vector<double> &phi_i, const std::vector<double> &theta_i, bool isotropic,
                          bool jacobian, int reduction) {
@@ -102,12 +112,8 @@ void bind_measured_models(py::module_ &m) {
             t->isotropic = isotropic;
             t->jacobian = jacobian;
             t->reduction = reduction;
-            return PyMeasuredTable{t};
+            return PyMeasuredTable(std::shared_ptr<const MeasuredTable>(std::move(t)));
         }));
-    bind_model<MeasuredBxDF>(m, "Measured").def(py::init([](const PyMeasuredTable &t) {
-        return PyModel<MeasuredBxDF>{MeasuredBxDF<float>::make(t.table), MeasuredBxDF<double>::make(t.table)};
-    }));
-
     // One unconditioned warp, float64, for tabulation and tests: eval / sample / invert over (n, 2) arrays.
     struct PyWarp {
         std::shared_ptr<Warp2DData> d;
@@ -141,12 +147,6 @@ void bind_measured_models(py::module_ &m) {
             return py::make_tuple(pts, pdf);
         });
 
-    bind_model<MERLNearestBxDF>(m, "MERLNearest").def(py::init([](const PyMERLTable &t) {
-        return PyModel<MERLNearestBxDF>{MERLNearestBxDF<float>::make(t.table), MERLNearestBxDF<double>::make(t.table)};
-    }));
-    bind_model<MERLLinearBxDF>(m, "MERLLinear").def(py::init([](const PyMERLTable &t) {
-        return PyModel<MERLLinearBxDF>{MERLLinearBxDF<float>::make(t.table), MERLLinearBxDF<double>::make(t.table)};
-    }));
 }
 
 } // namespace bsdfkit::py_bind

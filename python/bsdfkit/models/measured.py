@@ -20,6 +20,7 @@ import numpy as np
 
 from .. import _core
 from .base import BxDF
+from .registry import KnobDecl
 
 __all__ = ["example_dir", "MERL", "MERL_SCALE", "MERL_DIMS", "read_merl", "parse_merl", "Measured", "read_tensor", "write_tensor", "parse_tensor",
            "tensor_bytes", "validate_measured"]
@@ -165,11 +166,19 @@ class MERL(BxDF):
     description = "MERL measured isotropic BRDF table (.binary), nearest or trilinear lookup"
     energy_conserving = False   # measured data: not guaranteed
     exact_eval = True
+    reciprocal = True           # the lookup is symmetric in (wo, wi): MERL's phi_d fold
     two_sided = True
     transmission = False
+    delta_only = False
     mitsuba = None              # Mitsuba 3 has no MERL plugin
-    knobs = (("interpolation", ("linear", "nearest"), "approximation"),)
-    cost_family = "measured"
+    knobs = (KnobDecl("interpolation", ("linear", "nearest"), "approximation",
+                      "table lookup: trilinear between bin centres, or MERL's nearest bin"),)
+
+    def cost_family(self) -> str:
+        return _INTERPOLATION[self._params["interpolation"]]
+
+    def describe(self) -> str:
+        return f"MERL {os.path.basename(self._params['path'])} ({self._params['interpolation']})"
 
     __slots__ = ("_keep",)
 
@@ -204,7 +213,7 @@ class MERL(BxDF):
         return cls(p["path"], p["interpolation"], digest=p["digest"])
 
     def _make_core(self):
-        return getattr(_core, _INTERPOLATION[self._params["interpolation"]])(self._keep[0])
+        return getattr(_core, _INTERPOLATION[self._params["interpolation"]])(table=self._keep[0])
 
     @property
     def values(self) -> np.ndarray:
@@ -511,11 +520,27 @@ class Measured(BxDF):
     description = "RGL measured BRDF tensor file (.bsdf, Dupuy & Jakob 2018), as pbrt-v4 and Mitsuba read it"
     energy_conserving = False   # measured data: not guaranteed
     exact_eval = True
+    reciprocal = False          # the warps are conditioned on wo: f(wo, wi) != f(wi, wo) between grid points
     two_sided = True
     transmission = False
+    delta_only = False
     mitsuba = "measured"
     knobs = ()                  # the tabulation resolution is a knob of bk.measured.tabulate
-    cost_family = "measured"
+
+    def cost_family(self) -> str:
+        return "Measured"
+
+    def to_mitsuba(self) -> dict:
+        """Mitsuba 3's ``measured`` plugin on the same file (Mitsuba's plugin is one-sided: it
+        agrees with this model for wo.z > 0)."""
+        if self._params["path"] is None:
+            raise ValueError("to_mitsuba: a Measured model built from bytes has no file for Mitsuba's "
+                             "measured plugin; save() it first")
+        return {"type": "measured", "filename": self._params["path"]}
+
+    def describe(self) -> str:
+        p = self._params
+        return f"Measured {os.path.basename(p['path'])}" if p["path"] else "Measured (tabulated)"
 
     __slots__ = ("_keep",)
 
@@ -576,7 +601,7 @@ class Measured(BxDF):
         return self._keep
 
     def _make_core(self):
-        return _core.Measured(self._entry()[2])
+        return _core.Measured(table=self._entry()[2])
 
     @property
     def fields(self) -> dict:

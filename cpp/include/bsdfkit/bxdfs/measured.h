@@ -27,6 +27,7 @@
 #include <memory>
 
 #include "../core/bsdf_sample.h"
+#include "../core/table.h"
 #include "../core/frame.h"
 #include "../core/warp2d.h"
 
@@ -173,29 +174,45 @@ template <typename F> struct MeasuredKernel {
     void regularize() {}
 };
 
+// Content digest of a table (core/table.h): every warp's values and parameter grids, and the flags.
+inline uint64_t content_digest(const Warp2DData &w, uint64_t h) {
+    int head[4] = {w.W, w.H, w.channels, w.n_params};
+    h = digest_bytes(head, sizeof head, h);
+    for (const auto &pv : w.params64) h = digest_bytes(pv.data(), pv.size() * sizeof(double), h);
+    return digest_bytes(w.data64.data(), w.data64.size() * sizeof(double), h);
+}
+inline uint64_t content_digest(const MeasuredTable &t) {
+    int head[3] = {int(t.isotropic), int(t.jacobian), t.reduction};
+    uint64_t h = digest_bytes(head, sizeof head);
+    for (const Warp2DData *w : {&t.ndf, &t.sigma, &t.vndf, &t.luminance, &t.rgb}) h = content_digest(*w, h);
+    return h;
+}
+
+// Parameters (core/bxdf.h): the table read from an RGL tensor file (Python: bsdfkit.Measured).
+struct MeasuredParams {
+    SharedTable<MeasuredTable> table;  // required
+    template <class V> void fields(V &&v) { v("table", table); }
+};
+
 template <typename F> struct MeasuredBxDF : MeasuredKernel<F> {
     using Kernel = MeasuredKernel<F>;
-    std::shared_ptr<const MeasuredTable> table;  // keeps the data alive
+    using Params = MeasuredParams;
+    SharedTable<MeasuredTable> table;  // keeps the data alive
 
-    // The model concept of the registry (core/bxdf.h): named parameters, Name, make(Params).
-    struct Params {
-        std::shared_ptr<const MeasuredTable> table;
-        template <class V> void fields(V &&v) { v("table", table); }
-    };
     static constexpr const char *Name = "Measured";
-    static MeasuredBxDF make(const Params &p) { return make(p.table); }
 
-    static MeasuredBxDF make(std::shared_ptr<const MeasuredTable> t) {
+    static MeasuredBxDF make(const Params &p) {
         MeasuredBxDF m;
-        m.ndf = Warp2D<F, 0>(t->ndf);
-        m.sigma = Warp2D<F, 0>(t->sigma);
-        m.vndf = Warp2D<F, 2>(t->vndf);
-        m.luminance = Warp2D<F, 2>(t->luminance);
-        m.rgb = Warp2D<F, 2>(t->rgb);
-        m.isotropic = t->isotropic;
-        m.jacobian = t->jacobian;
-        m.reduction = t->reduction;
-        m.table = std::move(t);
+        const MeasuredTable &t = *p.table;
+        m.ndf = Warp2D<F, 0>(t.ndf);
+        m.sigma = Warp2D<F, 0>(t.sigma);
+        m.vndf = Warp2D<F, 2>(t.vndf);
+        m.luminance = Warp2D<F, 2>(t.luminance);
+        m.rgb = Warp2D<F, 2>(t.rgb);
+        m.isotropic = t.isotropic;
+        m.jacobian = t.jacobian;
+        m.reduction = t.reduction;
+        m.table = p.table;
         return m;
     }
 };

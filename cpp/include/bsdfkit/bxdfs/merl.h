@@ -34,6 +34,7 @@
 #include <vector>
 
 #include "../core/bsdf_sample.h"
+#include "../core/table.h"
 #include "../core/frame.h"
 #include "../core/sampling.h"
 #include "../core/warp2d.h"
@@ -275,27 +276,35 @@ template <typename F, bool Linear> struct MERLKernel {
     void regularize() {}
 };
 
+// Content digest of a table (core/table.h): its values and sampler resolution.
+inline uint64_t content_digest(const MERLTable &t) {
+    int head[2] = {t.K, t.n_phi};
+    return digest_bytes(t.v64.data(), t.v64.size() * sizeof(double), digest_bytes(head, sizeof head));
+}
+
+// Parameters (core/bxdf.h), shared by MERLNearest and MERLLinear: the table (Python: bsdfkit.MERL).
+struct MERLParams {
+    SharedTable<MERLTable> table;  // required
+    template <class V> void fields(V &&v) { v("table", table); }
+};
+
 template <typename F, bool Linear> struct MERLT : MERLKernel<F, Linear> {
     using Kernel = MERLKernel<F, Linear>;
-    std::shared_ptr<const MERLTable> table;  // keeps the data alive
+    using Params = MERLParams;
+    SharedTable<MERLTable> table;  // keeps the data alive
 
-    // The model concept of the registry (core/bxdf.h): named parameters, Name, make(Params).
-    struct Params {
-        std::shared_ptr<const MERLTable> table;
-        template <class V> void fields(V &&v) { v("table", table); }
-    };
     static constexpr const char *Name = Linear ? "MERLLinear" : "MERLNearest";
-    static MERLT make(const Params &p) { return make(p.table); }
 
-    static MERLT make(std::shared_ptr<const MERLTable> t) {
+    static MERLT make(const Params &p) {
         MERLT m;
-        m.values = t->template values<F>();
-        m.marg = t->template marg<F>();
-        m.cond = t->template cond<F>();
-        m.dens = t->template dens<F>();
-        m.K = t->K;
-        m.n_phi = t->n_phi;
-        m.table = std::move(t);
+        const MERLTable &t = *p.table;
+        m.values = t.template values<F>();
+        m.marg = t.template marg<F>();
+        m.cond = t.template cond<F>();
+        m.dens = t.template dens<F>();
+        m.K = t.K;
+        m.n_phi = t.n_phi;
+        m.table = p.table;
         return m;
     }
 };
