@@ -136,8 +136,9 @@ template <typename F> struct MeasuredKernel {
         return keep_or_zero(active ? p : F(0), (sample_flags & RT_Reflection) != 0);
     }
 
-    BSDFSample<F> sample_f(Vec3<F> wo, F, Point2<F> u, TransportMode, uint8_t sample_flags) const {
+    BSDFSample<F> sample_f(Vec3<F> wo, F, Point2<F> u, TransportMode mode, uint8_t sample_flags) const {
         using namespace measured;
+        const Vec3<F> wo_in = wo;
         bool flip = wo.z < F(0);
         wo = select(flip, -wo, wo);
         Vec3<F> dummy(0, 0, 1);
@@ -149,8 +150,10 @@ template <typename F> struct MeasuredKernel {
         c.params[1] = theta_o;
         c.u_wo = {theta2u(theta_o), phi2u(phi_o)};
         // luminance warp, then the VNDF warp (Mitsuba swaps the uniforms first)
-        auto [s, lum_pdf] = luminance.sample(Point2<F>{u.y, u.x}, c.params);
-        auto [um, vndf_pdf] = vndf.sample(s, c.params);
+        auto [s, lum_pdf_unused] = luminance.sample(Point2<F>{u.y, u.x}, c.params);
+        auto [um, vndf_pdf_unused] = vndf.sample(s, c.params);
+        (void)lum_pdf_unused;
+        (void)vndf_pdf_unused;
         F phi_m = u2phi(um.y) + (isotropic ? phi_o : F(0)), theta_m = u2theta(um.x);
         F sp, cp, st, ct;
         sincos_(phi_m, &sp, &cp);
@@ -158,14 +161,15 @@ template <typename F> struct MeasuredKernel {
         Vec3<F> m(cp * st, sp * st, ct);
         c.wm = m;
         c.u_wm = um;
-        F jac = max_(F(2) * sqr(Pi<F>) * um.x * st, F(1e-6)) * F(4) * dot(wo, m);
         Vec3<F> wi = Reflect(wo, m);
         BSDFSample<F> r;
-        r.pdf = vndf_pdf * lum_pdf / jac;
-        r.f = f_cos(s, c) * (F(1) / max_(wi.z, F(kMinCos)));
         wi.x = mulsign_neg(wi.x, sx);
         wi.y = mulsign_neg(wi.y, sy);
         r.wi = select(flip, -wi, wi);
+        // f and pdf of the final direction through eval's own path (the warp inverse), so that
+        // sample() agrees with eval()/pdf() to the last bit, not only to the inverse's round trip.
+        r.f = f(wo_in, r.wi, mode);
+        r.pdf = pdf(wo_in, r.wi, mode, uint8_t(RT_All));
         r.flags = uint8_t(GlossyReflection);
         r.valid = ((sample_flags & RT_Reflection) != 0) & (wo.z > F(0)) & (wi.z > F(0));
         return r;
