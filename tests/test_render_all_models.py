@@ -15,13 +15,16 @@ from bsdfkit import _core
 
 NAMES = _core.model_names()
 
-# Params fields that hold a shared table (core/table.h) have no default: the test supplies one.
-TABLES = {"dfg": lambda: bk.filament._table(32)}
+# Params fields that hold a shared table (core/table.h) have no default: the test supplies one
+# (by field name; `table` by the model: MERL tables for MERLNearest/MERLLinear, a tensor file's for Measured).
+TABLES = {"dfg": lambda name: bk.filament._table(32),
+          "table": lambda name: (bk.MERL.from_metal("Cu", alpha=0.3)._keep[0] if name.startswith("MERL")
+                                 else bk.Measured.from_metal("Au", alpha=0.3, resolution=8)._keep[2])}
 
 
 def _default_core(name):
     cls = getattr(_core, name)
-    return cls(**{f: make() for f, make in TABLES.items() if f in cls.fields})
+    return cls(**{f: make(name) for f, make in TABLES.items() if f in cls.fields})
 
 
 def _preview(core_or_model):

@@ -20,6 +20,7 @@ int num_threads() { return g_threads.load(); }
 void bind_all(py::module_ &m);
 void bind_pbrt_models(py::module_ &m);
 void bind_filament_models(py::module_ &m);
+void bind_measured_models(py::module_ &m);
 void bind_render(py::module_ &m);
 
 } // namespace bsdfkit::py_bind
@@ -42,6 +43,7 @@ PYBIND11_MODULE(_core, m) {
     m.def("hardware_concurrency", [] { return int(std::max(1u, std::thread::hardware_concurrency())); });
 
     py_bind::bind_filament_models(m);  // first: the models' Params refer to its FilamentDFG
+    py_bind::bind_measured_models(m);  // likewise: MERLTable, MeasuredTable
     py_bind::bind_all(m);
     py_bind::bind_pbrt_models(m);
     py_bind::bind_render(m);

@@ -14,6 +14,8 @@ Subpackages, by concern:
 ``tuning``    speed versus accuracy: knobs, errors, costs, ``tradeoff`` and ``simplify``
 ``interop``   scene materials in: Mitsuba 3 dictionaries, pbrt-v4 scene text
 ``render``    the path-traced preview renderer
+``spectral``  spectra as values: named, sampled, RGB uplift; wavelength sampling, colour estimates
+``measured``  writers and tabulation of measured materials (MERL tables, RGL tensor files)
 ``testing``   independent references (Dr.Jit float64 oracles, the Mitsuba 3 harness)
 ``io``        images in and out
 
@@ -26,6 +28,7 @@ from .directions import direction, hemisphere_grid
 from .interop import from_mitsuba, from_pbrt, parse_pbrt_materials
 from .models import *  # noqa: F401,F403  (every model class; a new family is re-exported by models/__init__.py)
 from .models.custom import Custom
+from . import measured  # noqa: E402  (writers and tabulation of measured materials: bk.measured)
 from .spectral import Spectrum, sample_wavelengths, spectrum_to_rgb
 from .threads import get_num_threads, set_num_threads
 from .tuning import Table, knobs, simplify, tradeoff
@@ -34,4 +37,4 @@ __all__ = models.__all__ + [
     "BxDFFlags", "ReflTrans", "TransportMode", "direction", "get_num_threads", "hemisphere_grid", "set_num_threads",
     "Custom", "filament", "models", "plot", "tuning", "render", "io", "tradeoff", "simplify", "knobs", "Table", "from_mitsuba",
     "from_pbrt", "parse_pbrt_materials", "interop", "spectral", "Spectrum", "sample_wavelengths", "spectrum_to_rgb",
-    "__version__"]
+    "__version__", "measured"]

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['Conductor', 'ConductorF82', 'ConductorSchlick', 'Dielectric', 'Diffuse', 'DiffuseTransmission', 'FilamentCloth', 'FilamentDFG', 'FilamentStandard', 'FilamentStandardCoat', 'FilamentStandardCoatSheen', 'FilamentStandardSheen', 'RenderScene', 'ThinDielectric', 'conductor_fresnel', 'embree_version', 'filament_dfg_rows', 'filament_term', 'get_num_threads', 'hardware_concurrency', 'load_mesh', 'model_names', 'openimageio_version', 'read_image', 'set_num_threads', 'write_image']
+__all__: list[str] = ['Conductor', 'ConductorF82', 'ConductorSchlick', 'Dielectric', 'Diffuse', 'DiffuseTransmission', 'FilamentCloth', 'FilamentDFG', 'FilamentStandard', 'FilamentStandardCoat', 'FilamentStandardCoatSheen', 'FilamentStandardSheen', 'MERLLinear', 'MERLNearest', 'MERLTable', 'Measured', 'MeasuredTable', 'RenderScene', 'ThinDielectric', 'Warp2D', 'conductor_fresnel', 'embree_version', 'filament_dfg_rows', 'filament_term', 'get_num_threads', 'hardware_concurrency', 'load_mesh', 'model_names', 'openimageio_version', 'read_image', 'set_num_threads', 'write_image']
 class FilamentDFG:
     def __eq__(self, arg0: typing.Any) -> bool:
         ...
@@ -26,6 +26,47 @@ class FilamentDFG:
         ...
     @property
     def size(self) -> int:
+        ...
+class MERLTable:
+    def __eq__(self, arg0: typing.Any) -> bool:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __init__(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], arg1: typing.SupportsInt | typing.SupportsIndex, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: bool) -> None:
+        ...
+    def sampler(self) -> tuple[numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
+        ...
+    def values(self) -> numpy.typing.NDArray[numpy.float64]:
+        ...
+    @property
+    def K(self) -> int:
+        ...
+    @property
+    def digest(self) -> int:
+        """
+        64-bit content digest of the table's values (core/table.h)
+        """
+    @property
+    def n_phi(self) -> int:
+        ...
+class MeasuredTable:
+    def __eq__(self, arg0: typing.Any) -> bool:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __init__(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], arg1: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], arg2: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], arg3: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], arg4: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], arg5: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], arg6: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], arg7: bool, arg8: bool, arg9: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def digest(self) -> int:
+        """
+        64-bit content digest of the table's values (core/table.h)
+        """
+class Warp2D:
+    def __init__(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], arg1: bool) -> None:
+        ...
+    def eval(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> numpy.typing.NDArray[numpy.float64]:
+        ...
+    def sample(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], arg1: bool) -> tuple[numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
         ...
 class Diffuse:
     """
@@ -263,6 +304,69 @@ class FilamentCloth:
     bsdfkit model FilamentCloth (bxdfs/all.h); keyword arguments: base_color, sheen_color, subsurface_color, has_subsurface, roughness, diffuse, min_perceptual_roughness, dfg (a missing one keeps its C++ Params default).
     """
     fields: typing.ClassVar[tuple] = ('base_color', 'sheen_color', 'subsurface_color', 'has_subsurface', 'roughness', 'diffuse', 'min_perceptual_roughness', 'dfg')
+    def __init__(self, *args, **kwargs) -> None:
+        ...
+    def albedo(self, arg0: numpy.ndarray, arg1: typing.SupportsInt | typing.SupportsIndex, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> int:
+        ...
+    def eval(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: numpy.ndarray) -> tuple:
+        ...
+    def pdf(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> tuple:
+        ...
+    def sample(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: numpy.ndarray, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: typing.SupportsInt | typing.SupportsIndex, arg5: numpy.ndarray, arg6: numpy.ndarray, arg7: numpy.ndarray, arg8: numpy.ndarray, arg9: numpy.ndarray, arg10: numpy.ndarray, arg11: numpy.ndarray) -> int:
+        ...
+    @property
+    def flags(self) -> int:
+        ...
+    @property
+    def params(self) -> dict:
+        ...
+class MERLNearest:
+    """
+    bsdfkit model MERLNearest (bxdfs/all.h); keyword arguments: table (a missing one keeps its C++ Params default).
+    """
+    fields: typing.ClassVar[tuple] = ('table')
+    def __init__(self, *args, **kwargs) -> None:
+        ...
+    def albedo(self, arg0: numpy.ndarray, arg1: typing.SupportsInt | typing.SupportsIndex, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> int:
+        ...
+    def eval(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: numpy.ndarray) -> tuple:
+        ...
+    def pdf(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> tuple:
+        ...
+    def sample(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: numpy.ndarray, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: typing.SupportsInt | typing.SupportsIndex, arg5: numpy.ndarray, arg6: numpy.ndarray, arg7: numpy.ndarray, arg8: numpy.ndarray, arg9: numpy.ndarray, arg10: numpy.ndarray, arg11: numpy.ndarray) -> int:
+        ...
+    @property
+    def flags(self) -> int:
+        ...
+    @property
+    def params(self) -> dict:
+        ...
+class MERLLinear:
+    """
+    bsdfkit model MERLLinear (bxdfs/all.h); keyword arguments: table (a missing one keeps its C++ Params default).
+    """
+    fields: typing.ClassVar[tuple] = ('table')
+    def __init__(self, *args, **kwargs) -> None:
+        ...
+    def albedo(self, arg0: numpy.ndarray, arg1: typing.SupportsInt | typing.SupportsIndex, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> int:
+        ...
+    def eval(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: numpy.ndarray) -> tuple:
+        ...
+    def pdf(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> tuple:
+        ...
+    def sample(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: numpy.ndarray, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: typing.SupportsInt | typing.SupportsIndex, arg5: numpy.ndarray, arg6: numpy.ndarray, arg7: numpy.ndarray, arg8: numpy.ndarray, arg9: numpy.ndarray, arg10: numpy.ndarray, arg11: numpy.ndarray) -> int:
+        ...
+    @property
+    def flags(self) -> int:
+        ...
+    @property
+    def params(self) -> dict:
+        ...
+class Measured:
+    """
+    bsdfkit model Measured (bxdfs/all.h); keyword arguments: table (a missing one keeps its C++ Params default).
+    """
+    fields: typing.ClassVar[tuple] = ('table')
     def __init__(self, *args, **kwargs) -> None:
         ...
     def albedo(self, arg0: numpy.ndarray, arg1: typing.SupportsInt | typing.SupportsIndex, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> int:

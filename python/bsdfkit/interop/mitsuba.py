@@ -31,7 +31,7 @@ MIRROR_ETA = 1e-6
 
 
 _MI_SUPPORTED = ("diffuse", "conductor", "roughconductor", "dielectric", "roughdielectric",
-                 "thindielectric", "twosided", "null")
+                 "thindielectric", "measured", "twosided", "null")
 
 
 _MI_CONSTANT_TEXTURES = ("rgb", "spectrum", "uniform", "srgb")
@@ -47,6 +47,7 @@ _MI_PARAMS = {
                         "distribution", "alpha", "alpha_u", "alpha_v", "sample_visible"),
     "thindielectric": ("int_ior", "ext_ior", "specular_reflectance", "specular_transmittance"),
     "null": (),
+    "measured": ("filename",),
 }
 
 
@@ -266,6 +267,12 @@ def _mi_bsdf(d, where):
         return _mi_conductor(d, label, kind == "roughconductor")
     if kind == "null":
         return Dielectric(1.0)
+    if kind == "measured":
+        from ..models.measured import Measured
+        fn = d.get("filename")
+        if not isinstance(fn, str):
+            _mi_fail(label, f"filename: expected the path of an RGL tensor file (str), got {type(fn).__name__}")
+        return Measured(fn)
     eta = _mi_eta(d, label)
     if kind == "dielectric":
         return _mi_build(label, lambda: Dielectric(eta))
@@ -300,6 +307,7 @@ def from_mitsuba(d) -> BxDF:
     ``thindielectric``   ``int_ior``/``ext_ior`` -> ``ThinDielectric(int_ior / ext_ior)``
     ``twosided``         one nested diffuse/conductor/roughconductor (or two identical ones):
                          unwrapped, bsdfkit's Diffuse and Conductor are two-sided
+    ``measured``         ``filename`` (an RGL tensor file) -> ``Measured(filename)``
     ``null``             -> ``Dielectric(1.0)`` (pbrt's straight pass-through; ``to_mitsuba``
                          writes eta = 1 dielectrics and thin dielectrics as ``null``)
     ==================  ======================================================================

@@ -2,7 +2,7 @@
 
 ``diffuse`` (Diffuse, DiffuseTransmission), ``conductor`` (Conductor, METALS, conductor_fresnel),
 ``dielectric`` (Dielectric, ThinDielectric), ``filament`` (FilamentStandard, FilamentCloth, the
-DFG table). A new family is a new module here whose classes subclass :class:`BxDF`.
+DFG table), ``measured`` (MERL, Measured: measured tables and tensor files). A new family is a new module here whose classes subclass :class:`BxDF`.
 """
 from . import registry
 from .base import BxDF, SampleResult, roughness_to_alpha
@@ -11,7 +11,8 @@ from .diffuse import Diffuse, DiffuseTransmission  # noqa: I001
 from .conductor import METALS, Conductor, conductor_fresnel
 from .dielectric import Dielectric, ThinDielectric
 from .filament import FilamentCloth, FilamentStandard
+from .measured import MERL, Measured
 from .registry import MODELS, KnobDecl
 
 __all__ = ["BxDF", "SampleResult", "roughness_to_alpha", "METALS", "Conductor", "conductor_fresnel", "Dielectric",
-           "ThinDielectric", "Diffuse", "DiffuseTransmission", "FilamentStandard", "FilamentCloth", "MODELS", "KnobDecl"]
+           "ThinDielectric", "Diffuse", "DiffuseTransmission", "FilamentStandard", "FilamentCloth", "MERL", "Measured", "MODELS", "KnobDecl"]

@@ -10,6 +10,8 @@
 #include "diffuse.h"
 #include "diffuse_transmission.h"
 #include "filament.h"
+#include "measured.h"
+#include "merl.h"
 #include "thin_dielectric.h"
 
 namespace bsdfkit {
@@ -25,7 +27,10 @@ using AllModels = ModelList<DiffuseBxDF,
                             FilamentStandardCoatBxDF,
                             FilamentStandardSheenBxDF,
                             FilamentStandardCoatSheenBxDF,
-                            FilamentClothBxDF>;
+                            FilamentClothBxDF,
+                            MERLNearestBxDF,           // measured: MERL table, nearest / trilinear lookup
+                            MERLLinearBxDF,
+                            MeasuredBxDF>;             // measured: RGL tensor file
 
 static_assert(AllModels::check(), "a model of AllModels does not follow core/bxdf.h");
 static_assert(AllModels::names_unique(), "two models of AllModels have the same Name");

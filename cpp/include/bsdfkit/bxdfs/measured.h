@@ -1,0 +1,224 @@
+// RGL measured BRDFs (Dupuy & Jakob 2018, "An Adaptive Parameterization for Efficient Material
+// Acquisition and Rendering"): the tensor files of the RGL material database, as pbrt-v4's
+// MeasuredBxDF and Mitsuba 3's `measured` plugin read them.
+//
+// Tables (MeasuredTable; read and validated by bsdfkit/models/measured.py), over the unit square
+// u = (u_theta, u_phi) with theta = u_theta^2 pi/2, phi = (2 u_phi - 1) pi:
+//   ndf        D(wm)                        2-D, evaluation only
+//   sigma      projected area sigma(wo)     2-D, evaluation only
+//   vndf       D_wo(wm) in u space          conditioned on (phi_o, theta_o), sampled and inverted
+//   luminance  luminance in sample space    conditioned on (phi_o, theta_o), sampled
+//   rgb        reflectance in sample space  conditioned on (phi_o, theta_o), 3 channels (spectral
+//                                           files are projected to RGB on load, in Python)
+// wo is the conditioning direction (the one toward the viewer: Mitsuba's si.wi), wi the other.
+//   f(wo, wi) cos(theta_i) = rgb(vndf^-1(u_wm)) [ndf(u_wm) / (4 sigma(u_wo)) if jacobian]
+//   pdf(wi) = vndf_pdf luminance_pdf / (4 (wo.wm) max(2 pi^2 u_theta sin(theta_m), 1e-6))
+// Isotropic files (n_phi <= 2) index wm's azimuth relative to wo's; anisotropic files with a
+// reduction (2 pi / (phi_last - phi_first) = 2 or 4) mirror wo and wi into the stored
+// half-plane or quadrant first (Mitsuba's sign folding). The `jacobian` flag is honoured as
+// Mitsuba does (pbrt-v4 always applies the ndf / (4 sigma) factor). Elevation as Mitsuba:
+// 2 asin(|d - z| / 2) (stable near the pole).
+// Conventions: reflection only; two-sided by flipping both directions when wo.z < 0 (pbrt-v4).
+// f = (f cos) / max(cos(theta_i), kMinCos): the tables do not make f cos vanish exactly at the
+// horizon (bilinear interpolation leaks a little of the last measured value), so the exact
+// quotient (pbrt-v4's f, Mitsuba's eval / cos) grows without bound in the last fraction of a
+// degree; bsdfkit bounds it there. f cos equals Mitsuba's eval for theta_i < 89.43 degrees.
+#pragma once
+#include <memory>
+
+#include "../core/bsdf_sample.h"
+#include "../core/table.h"
+#include "../core/frame.h"
+#include "../core/warp2d.h"
+
+namespace bsdfkit {
+
+struct MeasuredTable {
+    Warp2DData ndf, sigma, vndf, luminance, rgb;
+    bool isotropic = true, jacobian = true;
+    int reduction = 1;
+};
+
+namespace measured {
+template <typename F> inline F theta2u(F theta) { return std::sqrt(max_(theta, F(0)) * F(2 / 3.14159265358979323846)); }
+template <typename F> inline F phi2u(F phi) { return (phi + Pi<F>) * Inv2Pi<F>; }
+template <typename F> inline F u2theta(F u) { return u * u * PiOver2<F>; }
+template <typename F> inline F u2phi(F u) { return (F(2) * u - F(1)) * Pi<F>; }
+// Elevation of a unit vector, 2 asin(|d - z| / 2) (Mitsuba measured.cpp: stable near theta = 0).
+template <typename F> inline F elevation(const Vec3<F> &d) {
+    F dist = std::sqrt(d.x * d.x + d.y * d.y + sqr(d.z - F(1)));
+    return F(2) * std::asin(clamp(F(0.5) * dist, F(-1), F(1)));
+}
+// x with its sign flipped unless s is negative (dr::mulsign_neg): folds into the stored domain.
+template <typename F> inline F mulsign_neg(F x, F s) { return std::signbit(s) ? x : -x; }
+inline constexpr double kMinCos = 1e-2;
+} // namespace measured
+
+template <typename F> struct MeasuredKernel {
+    Warp2D<F, 0> ndf, sigma;
+    Warp2D<F, 2> vndf, luminance, rgb;
+    bool isotropic = true, jacobian = true;
+    int reduction = 1;
+
+    uint8_t flags() const { return uint8_t(GlossyReflection); }
+
+    // Folds (wo, wi) into the stored azimuth range of a reduced anisotropic file.
+    void fold(Vec3<F> &wo, Vec3<F> &wi, F *sx, F *sy) const {
+        using measured::mulsign_neg;
+        bool red = reduction >= 2;
+        *sy = red ? wo.y : F(-1);
+        *sx = red ? (reduction == 4 ? wo.x : *sy) : F(-1);
+        wo.x = mulsign_neg(wo.x, *sx), wo.y = mulsign_neg(wo.y, *sy);
+        wi.x = mulsign_neg(wi.x, *sx), wi.y = mulsign_neg(wi.y, *sy);
+    }
+
+    struct Coords {
+        F params[2];     // (phi_o, theta_o)
+        Point2<F> u_wo, u_wm;
+        Vec3<F> wm;
+    };
+    Coords coords(const Vec3<F> &wo, const Vec3<F> &wi) const {
+        using namespace measured;
+        Coords c;
+        Vec3<F> m = wo + wi;
+        F len2 = length_squared(m);
+        c.wm = m * (F(1) / std::sqrt(len2 > F(0) ? len2 : F(1)));
+        F theta_o = elevation(wo), phi_o = std::atan2(wo.y, wo.x);
+        F theta_m = elevation(c.wm), phi_m = std::atan2(c.wm.y, c.wm.x);
+        c.params[0] = phi_o;
+        c.params[1] = theta_o;
+        c.u_wo = {theta2u(theta_o), phi2u(phi_o)};
+        F up = phi2u(isotropic ? phi_m - phi_o : phi_m);
+        c.u_wm = {theta2u(theta_m), up - std::floor(up)};
+        return c;
+    }
+
+    // rgb at sample-space point s, times ndf / (4 sigma) if the file says so: f cos(theta_i).
+    Spectrum<F> f_cos(Point2<F> s, const Coords &c) const {
+        Spectrum<F> v;
+        auto w = rgb.weights(c.params);  // one parameter search for the three channels
+        for (int ch = 0; ch < 3; ++ch) v[ch] = rgb.eval(s, w, ch);
+        F scale = jacobian ? ndf.eval(c.u_wm, nullptr) / (F(4) * sigma.eval(c.u_wo, nullptr)) : F(1);
+        return v * scale;
+    }
+
+    Spectrum<F> f(Vec3<F> wo, Vec3<F> wi, TransportMode) const {
+        bool active = SameHemisphere(wo, wi);
+        bool flip = wo.z < F(0);
+        wo = select(flip, -wo, wo);
+        wi = select(flip, -wi, wi);
+        F sx, sy;
+        fold(wo, wi, &sx, &sy);
+        Coords c = coords(wo, wi);
+        Point2<F> s = vndf.invert(c.u_wm, c.params).first;
+        Spectrum<F> v = f_cos(s, c) * (F(1) / max_(wi.z, F(measured::kMinCos)));
+        return select(active & (wi.z > F(0)), v, Spectrum<F>(F(0)));
+    }
+
+    // pdf of wi (upper hemisphere, folded) as sample_f produces it.
+    F pdf_folded(const Vec3<F> &wo, const Vec3<F> &wi, const Coords &c) const {
+        auto [s, vndf_pdf] = vndf.invert(c.u_wm, c.params);
+        F lum_pdf = luminance.eval(s, c.params);
+        F sin_m = std::sqrt(c.wm.x * c.wm.x + c.wm.y * c.wm.y);
+        F jac = max_(F(2) * sqr(Pi<F>) * c.u_wm.x * sin_m, F(1e-6)) * F(4) * dot(wo, c.wm);
+        return vndf_pdf * lum_pdf / jac;
+    }
+
+    F pdf(Vec3<F> wo, Vec3<F> wi, TransportMode, uint8_t sample_flags) const {
+        bool active = SameHemisphere(wo, wi);
+        bool flip = wo.z < F(0);
+        wo = select(flip, -wo, wo);
+        wi = select(flip, -wi, wi);
+        F sx, sy;
+        fold(wo, wi, &sx, &sy);
+        Coords c = coords(wo, wi);
+        F p = pdf_folded(wo, wi, c);
+        return keep_or_zero(active ? p : F(0), (sample_flags & RT_Reflection) != 0);
+    }
+
+    BSDFSample<F> sample_f(Vec3<F> wo, F, Point2<F> u, TransportMode mode, uint8_t sample_flags) const {
+        using namespace measured;
+        const Vec3<F> wo_in = wo;
+        bool flip = wo.z < F(0);
+        wo = select(flip, -wo, wo);
+        Vec3<F> dummy(0, 0, 1);
+        F sx, sy;
+        fold(wo, dummy, &sx, &sy);
+        F theta_o = elevation(wo), phi_o = std::atan2(wo.y, wo.x);
+        Coords c;
+        c.params[0] = phi_o;
+        c.params[1] = theta_o;
+        c.u_wo = {theta2u(theta_o), phi2u(phi_o)};
+        // luminance warp, then the VNDF warp (Mitsuba swaps the uniforms first)
+        auto [s, lum_pdf_unused] = luminance.sample(Point2<F>{u.y, u.x}, c.params);
+        auto [um, vndf_pdf_unused] = vndf.sample(s, c.params);
+        (void)lum_pdf_unused;
+        (void)vndf_pdf_unused;
+        F phi_m = u2phi(um.y) + (isotropic ? phi_o : F(0)), theta_m = u2theta(um.x);
+        F sp, cp, st, ct;
+        sincos_(phi_m, &sp, &cp);
+        sincos_(theta_m, &st, &ct);
+        Vec3<F> m(cp * st, sp * st, ct);
+        c.wm = m;
+        c.u_wm = um;
+        Vec3<F> wi = Reflect(wo, m);
+        BSDFSample<F> r;
+        wi.x = mulsign_neg(wi.x, sx);
+        wi.y = mulsign_neg(wi.y, sy);
+        r.wi = select(flip, -wi, wi);
+        // f and pdf of the final direction through eval's own path (the warp inverse), so that
+        // sample() agrees with eval()/pdf() to the last bit, not only to the inverse's round trip.
+        r.f = f(wo_in, r.wi, mode);
+        r.pdf = pdf(wo_in, r.wi, mode, uint8_t(RT_All));
+        r.flags = uint8_t(GlossyReflection);
+        r.valid = ((sample_flags & RT_Reflection) != 0) & (wo.z > F(0)) & (wi.z > F(0));
+        return r;
+    }
+
+    void regularize() {}
+};
+
+// Content digest of a table (core/table.h): every warp's values and parameter grids, and the flags.
+inline uint64_t content_digest(const Warp2DData &w, uint64_t h) {
+    int head[4] = {w.W, w.H, w.channels, w.n_params};
+    h = digest_bytes(head, sizeof head, h);
+    for (const auto &pv : w.params64) h = digest_bytes(pv.data(), pv.size() * sizeof(double), h);
+    return digest_bytes(w.data64.data(), w.data64.size() * sizeof(double), h);
+}
+inline uint64_t content_digest(const MeasuredTable &t) {
+    int head[3] = {int(t.isotropic), int(t.jacobian), t.reduction};
+    uint64_t h = digest_bytes(head, sizeof head);
+    for (const Warp2DData *w : {&t.ndf, &t.sigma, &t.vndf, &t.luminance, &t.rgb}) h = content_digest(*w, h);
+    return h;
+}
+
+// Parameters (core/bxdf.h): the table read from an RGL tensor file (Python: bsdfkit.Measured).
+struct MeasuredParams {
+    SharedTable<MeasuredTable> table;  // required
+    template <class V> void fields(V &&v) { v("table", table); }
+};
+
+template <typename F> struct MeasuredBxDF : MeasuredKernel<F> {
+    using Kernel = MeasuredKernel<F>;
+    using Params = MeasuredParams;
+    SharedTable<MeasuredTable> table;  // keeps the data alive
+
+    static constexpr const char *Name = "Measured";
+
+    static MeasuredBxDF make(const Params &p) {
+        MeasuredBxDF m;
+        const MeasuredTable &t = *p.table;
+        m.ndf = Warp2D<F, 0>(t.ndf);
+        m.sigma = Warp2D<F, 0>(t.sigma);
+        m.vndf = Warp2D<F, 2>(t.vndf);
+        m.luminance = Warp2D<F, 2>(t.luminance);
+        m.rgb = Warp2D<F, 2>(t.rgb);
+        m.isotropic = t.isotropic;
+        m.jacobian = t.jacobian;
+        m.reduction = t.reduction;
+        m.table = p.table;
+        return m;
+    }
+};
+
+} // namespace bsdfkit
