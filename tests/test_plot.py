@@ -342,7 +342,7 @@ def test_parse_spec(spec, expect):
 
 @pytest.mark.parametrize("spec, message", [
     ("", "empty"),
-    ("plastic 0.5", "unknown model 'plastic'"),
+    ("velvet 0.5", "unknown model 'velvet'"),
     ("conductor beta=1", "conductor has no parameter 'beta'"),
     ("conductor alpha=0.2", "missing a required argument: 'eta'"),
     ("conductor metal=Xx", "unknown metal 'Xx'"),
@@ -362,7 +362,7 @@ def test_parse_spec_errors_name_the_problem(spec, message):
 
 
 def test_new_model_without_example_fails_loudly(monkeypatch):
-    class Plastic(bk.BxDF):
+    class Velvet(bk.BxDF):
         __slots__ = ()
 
         def __init__(self, kd, ks=0.5):
@@ -371,13 +371,13 @@ def test_new_model_without_example_fails_loudly(monkeypatch):
         def _make_core(self):
             return None
 
-    monkeypatch.setattr(bk, "MODELS", bk.MODELS + (Plastic,))
-    assert _spec.model_names()["plastic"] is Plastic          # new classes are parsed automatically...
-    assert "plastic kd ks=0.5" in _spec.usage()
+    monkeypatch.setattr(bk, "MODELS", bk.MODELS + (Velvet,))
+    assert _spec.model_names()["velvet"] is Velvet          # new classes are parsed automatically...
+    assert "velvet kd ks=0.5" in _spec.usage()
     with pytest.raises(LookupError, match="EXAMPLES"):       # ...but the gallery needs an example
-        _spec.example_model(Plastic)
-    monkeypatch.setitem(_spec.EXAMPLES, "Plastic", "plastic 0.3")
-    assert _spec.example_spec(Plastic) == "plastic 0.3"
+        _spec.example_model(Velvet)
+    monkeypatch.setitem(_spec.EXAMPLES, "Velvet", "velvet 0.3")
+    assert _spec.example_spec(Velvet) == "velvet 0.3"
 
 
 def test_to_spec_round_trips():

@@ -78,6 +78,9 @@ FURNACE = {
     "conductor_rough_F1_separable": (lambda: bk.Conductor(alpha=0.5, masking="separable", **F_ONE), "albedo"),
     "conductor_cu_rough": (lambda: bk.Conductor.from_metal("Cu", alpha=0.3), "albedo"),
     "diffuse_absorbing": (lambda: bk.Diffuse(0.5), "albedo"),
+    # stochastic layered model: sample() has pdf_is_proportional, MIS asks pdf() (an approximate
+    # density); a white base under a smooth coat with a non-absorbing medium loses nothing
+    "coated_diffuse_lossless": (lambda: bk.CoatedDiffuse(1.0, albedo=1.0, thickness=0.1, max_depth=100), "lossless"),
 }
 FURNACE_RES, FURNACE_SPP, FURNACE_SEEDS = 32, 64, (0, 1, 2, 3)
 

@@ -18,6 +18,8 @@ int num_threads() { return g_threads.load(); }
 
 void bind_pbrt_models(py::module_ &m);
 void bind_filament_models(py::module_ &m);
+void bind_plastic_models(py::module_ &m);
+void bind_layered_models(py::module_ &m);
 void bind_render(py::module_ &m);
 
 } // namespace bsdfkit::py_bind
@@ -35,6 +37,8 @@ PYBIND11_MODULE(_core, m) {
 
     py_bind::bind_pbrt_models(m);
     py_bind::bind_filament_models(m);
+    py_bind::bind_plastic_models(m);
+    py_bind::bind_layered_models(m);
     py_bind::bind_render(m);
 
     m.def("read_image", [](const std::string &path) {

@@ -31,10 +31,12 @@ __all__ = ["parse_spec", "parse_specs", "example_model", "example_spec", "model_
 
 #: Short names accepted besides the class names (they are also the render command's).
 ALIASES = {"lambert": "Diffuse", "difftrans": "DiffuseTransmission", "metal": "Conductor",
-           "glass": "Dielectric", "thin": "ThinDielectric"}
+           "glass": "Dielectric", "thin": "ThinDielectric",
+           "roughplastic": "Plastic"}
 
 #: Example specs for classes whose constructor has required parameters (the gallery's row).
-EXAMPLES = {"Conductor": "conductor metal=Cu alpha=0.2"}
+EXAMPLES = {"Conductor": "conductor metal=Cu alpha=0.2",
+            "CoatedConductor": "coated_conductor metal=Cu conductor_alpha=0.3 interface_alpha=0.05"}
 
 
 class SpecError(ValueError):

@@ -215,6 +215,18 @@ def to_mitsuba(model) -> dict:
         if eta == 1.0:
             return {"type": "null"}
         return {"type": "thindielectric", "int_ior": eta, "ext_ior": 1.0}
+    if kind == "Plastic":
+        # Mitsuba's plastics are one-sided; bsdfkit's is two-sided like pbrt's BxDFs
+        inner = {"diffuse_reflectance": _rgb(model.reflectance), "int_ior": float(model.eta), "ext_ior": 1.0,
+                 "nonlinear": bool(model.nonlinear)}
+        if np.any(np.asarray(model.specular_reflectance) != 1.0):
+            inner["specular_reflectance"] = _rgb(model.specular_reflectance)
+        if float(model.alpha) < SMOOTH_ALPHA:
+            inner["type"] = "plastic"
+        else:
+            inner.update(type="roughplastic", distribution="ggx", alpha=max(float(model.alpha), MIN_ALPHA),
+                         sample_visible=True)
+        return {"type": "twosided", "bsdf": inner}
     if kind == "DiffuseTransmission":
         raise NotImplementedError(
             "Mitsuba 3 has no diffuse-transmission BSDF plugin; use "

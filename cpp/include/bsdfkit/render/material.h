@@ -9,6 +9,8 @@
 #include "../bxdfs/diffuse.h"
 #include "../bxdfs/diffuse_transmission.h"
 #include "../bxdfs/filament.h"
+#include "../bxdfs/layered.h"
+#include "../bxdfs/plastic.h"
 #include "../bxdfs/thin_dielectric.h"
 #include "../core/bsdf.h"
 
@@ -34,7 +36,10 @@ using RenderModels = ModelList<DiffuseBxDF,
                                ThinDielectricBxDF,
                                FilamentStandardBxDF,
                                FilamentStandardSheenBxDF,
-                               FilamentClothBxDF>;
+                               FilamentClothBxDF,
+                               PlasticBxDF,
+                               CoatedDiffuseBxDF,
+                               CoatedConductorBxDF>;
 using Material = RenderModels::Variant<Float>;
 
 // The renderer only solves the light transport equation for radiance (camera paths).
