@@ -218,12 +218,14 @@ def simulate(slab: Slab, wo, n_photons, *, seed=0, n_cos=6, n_phi=8, max_events=
             zp = z + s * d[:, 2]
             inside = (zp > 0) & (zp < slab.thickness)
             # scattering in the medium (albedo 0 absorbs)
+            # which boundary each non-scattering photon reaches (before any direction changes)
             sc = np.flatnonzero(inside)
+            bo = np.flatnonzero(~inside & (d[:, 2] < 0))
+            tp = np.flatnonzero(~inside & (d[:, 2] > 0))
             w[sc] *= alb
             d[sc] = _hg(d[sc], slab.g, rng)
             z[sc] = zp[sc]
             # the base
-            bo = np.flatnonzero(~inside & (d[:, 2] < 0))
             z[bo] = 0.0
             if slab.base == "diffuse":
                 d[bo] = _cosine_up(rng, len(bo))
@@ -232,7 +234,6 @@ def simulate(slab: Slab, wo, n_photons, *, seed=0, n_cos=6, n_phi=8, max_events=
                 d[bo], fw = _conductor(d[bo], slab, rng)
                 w[bo] *= fw
             # the coating from inside
-            tp = np.flatnonzero(~inside & (d[:, 2] > 0))
             z[tp] = slab.thickness
             nd, wg, tr = _interface(d[tp], 1.0 / slab.eta, slab.alpha, rng, slab.masking)
             d[tp] = nd
