@@ -23,6 +23,8 @@ import numpy as np
 
 from ._models import (METALS, BxDF, Conductor, Dielectric, Diffuse, DiffuseTransmission, ThinDielectric,
                       roughness_to_alpha)
+from .models.layered import CoatedConductor, CoatedDiffuse
+from .models.plastic import Plastic
 
 __all__ = ["from_mitsuba", "from_pbrt", "parse_pbrt_materials", "PbrtMaterial", "PbrtParam",
            "spectrum_to_rgb", "MITSUBA_IOR", "PBRT_GLASS_ETA", "MIRROR_ETA"]
@@ -170,7 +172,7 @@ MITSUBA_IOR = {
 MIRROR_ETA = 1e-6
 
 _MI_SUPPORTED = ("diffuse", "conductor", "roughconductor", "dielectric", "roughdielectric",
-                 "thindielectric", "twosided", "null")
+                 "thindielectric", "plastic", "roughplastic", "twosided", "null")
 _MI_CONSTANT_TEXTURES = ("rgb", "spectrum", "uniform", "srgb")
 _MI_PARAMS = {
     "diffuse": ("reflectance",),
@@ -181,6 +183,9 @@ _MI_PARAMS = {
     "roughdielectric": ("int_ior", "ext_ior", "specular_reflectance", "specular_transmittance",
                         "distribution", "alpha", "alpha_u", "alpha_v", "sample_visible"),
     "thindielectric": ("int_ior", "ext_ior", "specular_reflectance", "specular_transmittance"),
+    "plastic": ("diffuse_reflectance", "specular_reflectance", "nonlinear", "int_ior", "ext_ior"),
+    "roughplastic": ("diffuse_reflectance", "specular_reflectance", "nonlinear", "int_ior", "ext_ior",
+                     "distribution", "alpha", "sample_visible"),
     "null": (),
 }
 
@@ -382,9 +387,9 @@ def _mi_bsdf(d, where):
         models = []
         for key, sub in _mi_nested(d, label):
             subkind = sub.get("type")
-            if subkind not in ("diffuse", "conductor", "roughconductor"):
+            if subkind not in ("diffuse", "conductor", "roughconductor", "plastic", "roughplastic"):
                 _mi_fail(label, f"nested plugin {subkind!r} is not supported inside twosided (only the "
-                         "reflection-only diffuse, conductor and roughconductor are)")
+                         "reflection-only diffuse, conductor, roughconductor, plastic and roughplastic are)")
             models.append(_mi_bsdf(sub, f"{label}.{key}"))
         if len(models) == 2 and models[0] != models[1]:
             _mi_fail(label, "different front and back BSDFs are not supported (bsdfkit models are "
@@ -401,6 +406,8 @@ def _mi_bsdf(d, where):
         return _mi_conductor(d, label, kind == "roughconductor")
     if kind == "null":
         return Dielectric(1.0)
+    if kind in ("plastic", "roughplastic"):
+        return _mi_plastic(d, label, kind == "roughplastic")
     eta = _mi_eta(d, label)
     if kind == "dielectric":
         return _mi_build(label, lambda: Dielectric(eta))
@@ -408,6 +415,26 @@ def _mi_bsdf(d, where):
         ax, ay = _mi_alphas(d, label)
         return _mi_build(label, lambda: Dielectric(eta, alpha_x=ax, alpha_y=ay, masking="separable"))
     return _mi_build(label, lambda: ThinDielectric(eta))
+
+
+def _mi_plastic(d, where, rough):
+    r = _mi_color(d.get("diffuse_reflectance", 0.5), where, "diffuse_reflectance", bounded=True)
+    ks = _mi_color(d.get("specular_reflectance", 1.0), where, "specular_reflectance", bounded=False)
+    nl = d.get("nonlinear", False)
+    if not isinstance(nl, (bool, np.bool_)):
+        _mi_fail(where, f"parameter 'nonlinear': expected True or False, got {nl!r}")
+    eta_int = _mi_ior(d, where, "int_ior", "polypropylene")
+    eta_ext = _mi_ior(d, where, "ext_ior", "air")
+    if eta_ext == 0:
+        _mi_fail(where, "parameter 'ext_ior': must be > 0")
+    alpha = 0.0
+    if rough:
+        ax, ay = _mi_alphas(d, where)
+        if ax != ay:
+            _mi_fail(where, "roughplastic is isotropic (Mitsuba refuses alpha_u != alpha_v)")
+        alpha = ax
+    return _mi_build(where, lambda: Plastic(r, eta_int / eta_ext, alpha=alpha, nonlinear=bool(nl),
+                                            masking="separable", specular_reflectance=ks))
 
 
 def from_mitsuba(d: dict) -> BxDF:
@@ -430,6 +457,11 @@ def from_mitsuba(d: dict) -> BxDF:
     ``roughdielectric``  as dielectric, plus distribution/alpha as roughconductor
                          -> ``Dielectric(..., masking="separable")``
     ``thindielectric``   ``int_ior``/``ext_ior`` -> ``ThinDielectric(int_ior / ext_ior)``
+    ``plastic``          ``diffuse_reflectance`` (0.5), ``specular_reflectance`` (1),
+                         ``nonlinear`` (false), ``int_ior`` ("polypropylene"), ``ext_ior``
+                         ("air") -> ``Plastic(..., masking="separable")``
+    ``roughplastic``     as plastic, plus ``distribution`` ("ggx" only), ``alpha`` (0.1)
+                         -> ``Plastic(..., alpha=alpha, masking="separable")``
     ``twosided``         one nested diffuse/conductor/roughconductor (or two identical ones):
                          unwrapped, bsdfkit's Diffuse and Conductor are two-sided
     ``null``             -> ``Dielectric(1.0)`` (pbrt's straight pass-through; ``to_mitsuba``
@@ -484,9 +516,9 @@ _PBRT_OTHER_METALS = ("CuZn", "MgO", "TiO2")
 #: Wavelength at which dielectric eta spectra are evaluated.
 _ETA_WAVELENGTH = 550.0
 
-_PBRT_SUPPORTED = ("diffuse", "diffusetransmission", "conductor", "dielectric", "thindielectric")
-_PBRT_UNSUPPORTED = ("coateddiffuse", "coatedconductor", "hair", "measured", "mix", "subsurface",
-                     "interface", "none", "")
+_PBRT_SUPPORTED = ("diffuse", "diffusetransmission", "conductor", "dielectric", "thindielectric",
+                   "coateddiffuse", "coatedconductor")
+_PBRT_UNSUPPORTED = ("hair", "measured", "mix", "subsurface", "interface", "none", "")
 _PBRT_ROUGH = ("roughness", "uroughness", "vroughness", "remaproughness")
 _PBRT_PARAMS = {
     "diffuse": ("reflectance",),
@@ -494,6 +526,11 @@ _PBRT_PARAMS = {
     "conductor": ("eta", "k", "reflectance") + _PBRT_ROUGH,
     "dielectric": ("eta",) + _PBRT_ROUGH,
     "thindielectric": ("eta",),
+    "coateddiffuse": ("reflectance", "eta", "thickness", "albedo", "g", "maxdepth", "nsamples") + _PBRT_ROUGH,
+    "coatedconductor": ("interface.roughness", "interface.uroughness", "interface.vroughness", "interface.eta",
+                        "conductor.roughness", "conductor.uroughness", "conductor.vroughness", "conductor.eta",
+                        "conductor.k", "reflectance", "thickness", "albedo", "g", "maxdepth", "nsamples",
+                        "remaproughness"),
 }
 #: Parameters that shape the geometry, not the BxDF: recorded and left out.
 _PBRT_IGNORED = ("displacement", "normalmap")
@@ -838,7 +875,7 @@ def _spectrum_param(rec, pname, *, albedo):
             if albedo:
                 _pfail_param(rec, p, f"named spectrum {p.values[0]!r} is not a reflectance; give rgb, "
                              "float or wavelength/value pairs")
-            return _named_metal(rec, p, p.values[0], pname)
+            return _named_metal(rec, p, p.values[0], pname.rsplit(".", 1)[-1])
         v = _numbers(rec, p)
         if v.size % 2 or v.size == 0:
             _pfail_param(rec, p, f"a spectrum needs (wavelength, value) pairs, got {v.size} numbers")
@@ -851,9 +888,9 @@ def _spectrum_param(rec, pname, *, albedo):
     _pfail_param(rec, p, f"unsupported type {p.type!r}; expected rgb, spectrum or float")
 
 
-def _eta_param(rec, default=1.5):
+def _eta_param(rec, default=1.5, param="eta"):
     """Scalar IOR of a dielectric: float, spectrum (value at 550 nm) or grey rgb."""
-    p = rec.params.get("eta")
+    p = rec.params.get(param)
     if p is None:
         return default
     _check_texture(rec, p)
@@ -913,13 +950,32 @@ def _bool_param(rec, pname, default):
     return v is True or v == "true"
 
 
-def _alphas(rec):
-    r = _float_param(rec, "roughness", 0.0)
-    u = _float_param(rec, "uroughness", r)
-    v = _float_param(rec, "vroughness", r)
+def _int_param(rec, pname, default):
+    p = rec.params.get(pname)
+    if p is None:
+        return default
+    if p.type != "integer" or len(p.values) != 1 or not isinstance(p.values[0], float) or p.values[0] % 1:
+        _pfail_param(rec, p, f"expected one \"integer {pname}\", got {p.type!r} {list(p.values)!r}")
+    return int(p.values[0])
+
+
+def _layer_kwargs(rec):
+    """pbrt-v4 LayeredBxDF parameters of coateddiffuse / coatedconductor (materials.cpp)."""
+    albedo = _spectrum_param(rec, "albedo", albedo=True)
+    g = _float_param(rec, "g", 0.0)
+    return dict(thickness=_float_param(rec, "thickness", 0.01), albedo=0.0 if albedo is None else albedo,
+                g=min(max(g, -1.0), 1.0), max_depth=_int_param(rec, "maxdepth", 10),
+                n_samples=_int_param(rec, "nsamples", 1))
+
+
+def _alphas(rec, prefix=""):
+    r = _float_param(rec, prefix + "roughness", 0.0)
+    u = _float_param(rec, prefix + "uroughness", r)
+    v = _float_param(rec, prefix + "vroughness", r)
     for val, n in ((u, "uroughness"), (v, "vroughness")):
         if not (math.isfinite(val) and val >= 0):
-            _pfail(rec, f"{n if n in rec.params else 'roughness'} must be finite and >= 0, got {val}")
+            _pfail(rec, f"{prefix + n if prefix + n in rec.params else prefix + 'roughness'} must be finite "
+                   f"and >= 0, got {val}")
     if _bool_param(rec, "remaproughness", True):
         return roughness_to_alpha(u), roughness_to_alpha(v)
     return u, v
@@ -961,6 +1017,27 @@ def _pbrt_bxdf(rec):
         if mtype == "dielectric":
             ax, ay = _alphas(rec)
             return Dielectric(_eta_param(rec), alpha_x=ax, alpha_y=ay, masking="correlated")
+        if mtype == "coateddiffuse":
+            ax, ay = _alphas(rec)
+            r = _spectrum_param(rec, "reflectance", albedo=True)
+            return CoatedDiffuse(0.5 if r is None else r, eta=_eta_param(rec), alpha_x=ax, alpha_y=ay,
+                                 **_layer_kwargs(rec))
+        if mtype == "coatedconductor":
+            iax, iay = _alphas(rec, "interface.")
+            cax, cay = _alphas(rec, "conductor.")
+            ieta = _eta_param(rec, param="interface.eta")
+            refl = _spectrum_param(rec, "reflectance", albedo=True)
+            eta = _spectrum_param(rec, "conductor.eta", albedo=False)
+            k = _spectrum_param(rec, "conductor.k", albedo=False)
+            kw = dict(conductor_alpha_x=cax, conductor_alpha_y=cay, interface_eta=ieta, interface_alpha_x=iax,
+                      interface_alpha_y=iay, **_layer_kwargs(rec))
+            if refl is not None:
+                if eta is not None or k is not None:
+                    _pfail(rec, "give either \"reflectance\" or \"conductor.eta\"/\"conductor.k\", not both")
+                return CoatedConductor.from_reflectance(refl, **kw)
+            eta = np.array(METALS["Cu"][0]) if eta is None else eta
+            k = np.array(METALS["Cu"][1]) if k is None else k
+            return CoatedConductor(eta, k, **kw)
         return ThinDielectric(_eta_param(rec))
     except _PbrtError:
         raise
@@ -983,6 +1060,13 @@ def from_pbrt(text: str, *, skip_unsupported: bool = False) -> dict:
       remaproughness [true] -> ``Conductor``.
     * ``dielectric``: eta [1.5], roughness as conductor -> ``Dielectric``.
     * ``thindielectric``: eta [1.5] -> ``ThinDielectric``.
+    * ``coateddiffuse``: reflectance [0.5], eta [1.5], roughness/uroughness/vroughness [0],
+      thickness [0.01], albedo [0], g [0], maxdepth [10], nsamples [1] -> ``CoatedDiffuse``.
+    * ``coatedconductor``: interface.eta [1.5], interface.(u|v)roughness [0],
+      conductor.eta/conductor.k [metal-Cu-eta / metal-Cu-k] or reflectance,
+      conductor.(u|v)roughness [0], thickness, albedo, g, maxdepth, nsamples as coateddiffuse
+      -> ``CoatedConductor`` (which divides the conductor's eta and k by interface.eta, as
+      pbrt-v4 does).
 
     pbrt-v4's microfacet models use height-correlated Smith masking: ``masking="correlated"``.
     Roughness: with remaproughness true, alpha = sqrt(roughness) (``bk.roughness_to_alpha``),
@@ -1001,7 +1085,7 @@ def from_pbrt(text: str, *, skip_unsupported: bool = False) -> dict:
     (``PbrtMaterial.ignored``).
 
     ``ValueError`` naming the material, its line and the parameter for unsupported types
-    (coateddiffuse, coatedconductor, hair, measured, mix, subsurface, interface, ...),
+    (hair, measured, mix, subsurface, interface, ...),
     texture-valued or unknown parameters, bad values, and malformed text (with the line).
     ``skip_unsupported=True`` leaves out materials that cannot be converted (unsupported types,
     textures, unknown spectra) instead of raising; malformed text still raises.

@@ -323,3 +323,30 @@ def test_extremes_finite(model, dtype, rng):
     for uc in (0.0, 1 - 1e-7):
         s = model.sample(wo, np.full(n, uc, dtype), rng.random((n, 2)).astype(dtype))
         assert np.all(np.isfinite(s.f)) and np.all(np.isfinite(s.pdf)) and np.all(np.isfinite(s.wi))
+
+
+def test_from_pbrt_coated_materials():
+    text = '''
+    MakeNamedMaterial "paint" "string type" "coatedconductor" "float interface.roughness" 0.01
+        "spectrum conductor.eta" "metal-Au-eta" "spectrum conductor.k" "metal-Au-k" "float conductor.uroughness" 0.09
+        "float conductor.vroughness" 0.04 "float interface.eta" 1.4 "rgb albedo" [0.5 0.1 0.1] "float thickness" 0.1
+        "integer maxdepth" 20 "integer nsamples" 4 "float g" 0.3
+    MakeNamedMaterial "wood" "string type" "coateddiffuse" "rgb reflectance" [0.6 0.3 0.1] "float roughness" 0.04
+        "bool remaproughness" false "float eta" 1.33
+    MakeNamedMaterial "plain" "string type" "coateddiffuse"
+    MakeNamedMaterial "r" "string type" "coatedconductor" "rgb reflectance" [0.9 0.5 0.3]
+    '''
+    m = bk.from_pbrt(text)
+    au_eta, au_k = bk.METALS["Au"]
+    assert m["paint"] == bk.CoatedConductor(au_eta, au_k, conductor_alpha_x=0.3, conductor_alpha_y=0.2,
+                                            interface_eta=1.4, interface_alpha=0.1, albedo=[0.5, 0.1, 0.1],
+                                            thickness=0.1, max_depth=20, n_samples=4, g=0.3)
+    assert m["wood"] == bk.CoatedDiffuse([0.6, 0.3, 0.1], eta=1.33, alpha=0.04)
+    assert m["plain"] == bk.CoatedDiffuse()
+    assert m["r"] == bk.CoatedConductor.from_reflectance([0.9, 0.5, 0.3])
+    with pytest.raises(ValueError, match="maxdepth"):
+        bk.from_pbrt('Material "coateddiffuse" "float maxdepth" 3')
+    with pytest.raises(ValueError, match="not both"):
+        bk.from_pbrt('Material "coatedconductor" "rgb reflectance" [0.5 0.5 0.5] "spectrum conductor.eta" "metal-Cu-eta"')
+    with pytest.raises(ValueError, match="thickness"):
+        bk.from_pbrt('Material "coateddiffuse" "float thickness" -1')

@@ -290,3 +290,21 @@ def test_extremes_finite(model, dtype, rng):
         assert np.all(np.isfinite(s.f)) and np.all(np.isfinite(s.pdf)) and np.all(np.isfinite(s.wi))
     s = model.sample(wo, np.zeros(4000, dtype), np.zeros((4000, 2), dtype))
     assert np.all(np.isfinite(s.f))
+
+
+def test_mitsuba_interop_round_trip():
+    from bsdfkit.references.mitsuba import to_mitsuba
+    for m in SMOOTH[:3] + ROUGH:
+        m = bk.Plastic(**{**m._params, "masking": "separable"})
+        assert bk.from_mitsuba(to_mitsuba(m)) == m
+        assert bk.from_mitsuba(to_mitsuba(m)["bsdf"]) == m       # the bare one-sided plugin too
+    m = bk.from_mitsuba({"type": "roughplastic", "distribution": "ggx", "alpha": 0.2, "int_ior": "acrylic glass",
+                         "diffuse_reflectance": {"type": "rgb", "value": [0.5, 0.2, 0.1]}, "nonlinear": True})
+    assert m == bk.Plastic([0.5, 0.2, 0.1], 1.49 / 1.000277, alpha=0.2, nonlinear=True, masking="separable")
+    assert bk.from_mitsuba({"type": "plastic"}) == bk.Plastic(0.5, 1.49 / 1.000277, masking="separable")
+    for d, word in (({"type": "roughplastic", "alpha": 0.1}, "beckmann"),
+                    ({"type": "plastic", "nonlinear": "yes"}, "nonlinear"),
+                    ({"type": "plastic", "diffuse_reflectance": 1.5}, "reflectance"),
+                    ({"type": "roughplastic", "distribution": "ggx", "alpha_u": 0.1, "alpha_v": 0.2}, "alpha_u")):
+        with pytest.raises(ValueError, match=word):
+            bk.from_mitsuba(d)
