@@ -9,9 +9,9 @@ bsdfkit.simplify at tol = 1e-2, 1e-3, 1e-4) and python/bsdfkit/_knob_costs.json 
 bsdfkit.simplify ranks by; --costs-out to write it elsewhere, --quick writes none unless given).
 
 Method
-* One representative instance per cost family (bsdfkit.tradeoff.family: the class plus the
+* One representative instance per cost family (bsdfkit.tuning.family: the class plus the
   structural variant that selects a compiled kernel), chosen so that every knob is reachable.
-* Errors: bsdfkit.tradeoff (measure=False), i.e. the package's own definition (relative error of
+* Errors: bsdfkit.tuning.tradeoff (measure=False), i.e. the package's own definition (relative error of
   f |cos theta_i| with the albedo floor, p99 / max, directional-albedo error), seed 0.
 * Throughput: the timed operation is eval with a preallocated out= (sample with preallocated
   outputs for models made only of delta lobes), on N uniform pairs, single-threaded by default
@@ -45,8 +45,9 @@ sys.path.insert(0, str(HERE))
 from throughput import QUIET, machine_info, wait_quiet  # noqa: E402  (same directory: same timing rules)
 
 import bsdfkit as bk  # noqa: E402
-from bsdfkit.tradeoff import (_best_time, _op, _pareto_mask, _timed_call, _timing_inputs,  # noqa: E402
-                              configurations, family, simplify, tradeoff)
+from bsdfkit.tuning import best_time as _best_time, configurations, family, simplify, tradeoff  # noqa: E402
+from bsdfkit.tuning.costs import _op, _timed_call, _timing_inputs  # noqa: E402
+from bsdfkit.tuning.report import _pareto_mask  # noqa: E402
 
 SEED = 0
 TOLS = (1e-2, 1e-3, 1e-4)

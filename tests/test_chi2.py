@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import bsdfkit as bk
-from bsdfkit.references import mitsuba as ref
+from bsdfkit.testing import mitsuba as ref
 
 # incidence |cos theta_o|; negative = from below the surface; 0.01 is grazing
 ZS = [0.999, 0.7, 0.3, 0.01, -0.6]

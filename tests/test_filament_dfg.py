@@ -1,6 +1,6 @@
 """The DFG table bsdfkit computes for Filament's models (bk.filament.dfg_lut): layout, caching,
 determinism, the alpha -> 0 limits, and its values against an independent Gauss-Legendre
-quadrature (bsdfkit.references.drjit_filament.dfg_quadrature: NDF-CDF coordinates with the
+quadrature (bsdfkit.testing.drjit_filament.dfg_quadrature: NDF-CDF coordinates with the
 horizon cut resolved exactly; the library integrates by quasi-Monte Carlo visible-normal and
 mixture sampling).
 
@@ -12,10 +12,10 @@ import pytest
 
 import bsdfkit as bk
 from bsdfkit import _core
-from bsdfkit.references import mitsuba as ref
+from bsdfkit.testing import mitsuba as ref
 
 ref.variant()
-from bsdfkit.references import drjit_filament as dj  # noqa: E402
+from bsdfkit.testing import drjit_filament as dj  # noqa: E402
 
 SIZE = 128
 ROWS = [1, 2, 3, 6, 8, 12, 16, 32, 64, 96, 127]

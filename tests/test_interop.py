@@ -2,7 +2,7 @@
 
 Loaded models are checked three ways: by value (== a model built by hand from the documented
 mapping), by eval on direction pairs, and -- for Mitsuba dicts and spectra -- against Mitsuba
-itself (llvm_ad_rgb, float32, through bsdfkit.references.mitsuba).
+itself (llvm_ad_rgb, float32, through bsdfkit.testing.mitsuba).
 """
 import re
 
@@ -17,7 +17,7 @@ SMOOTH = 1e-3
 
 
 def _mi():
-    from bsdfkit.references import mitsuba as ref
+    from bsdfkit.testing import mitsuba as ref
     ref.variant()
     import mitsuba as mi
     return ref, mi
@@ -58,7 +58,7 @@ def _expressible(m) -> bool:
 def _to_mitsuba_checked(m):
     """to_mitsuba(m); for a model Mitsuba cannot express, asserts that to_mitsuba refuses it
     with a ValueError and returns None (so every MODEL_CASES entry asserts something)."""
-    from bsdfkit.references.mitsuba import to_mitsuba
+    from bsdfkit.testing.mitsuba import to_mitsuba
     if _expressible(m):
         return to_mitsuba(m)
     with pytest.raises((ValueError, NotImplementedError)):
@@ -79,7 +79,7 @@ def test_round_trip_model_cases(case):
 
 
 def test_round_trip_covers_every_mitsuba_family():
-    from bsdfkit.references.mitsuba import to_mitsuba
+    from bsdfkit.testing.mitsuba import to_mitsuba
     covered = set()
     for case, make in MODEL_CASES.items():
         m = make()

@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 import bsdfkit as bk  # noqa: E402
-from bsdfkit import _spec  # noqa: E402
+from bsdfkit.models import spec as _spec  # noqa: E402
 from bsdfkit import plot as bkplot  # noqa: E402
 
 LUM = np.array([0.2126, 0.7152, 0.0722])
@@ -371,7 +371,7 @@ def test_new_model_without_example_fails_loudly(monkeypatch):
         def _make_core(self):
             return None
 
-    monkeypatch.setattr(bk, "MODELS", bk.MODELS + (Velvet,))
+    monkeypatch.setattr(bk.models, "MODELS", bk.MODELS + (Velvet,))
     assert _spec.model_names()["velvet"] is Velvet          # new classes are parsed automatically...
     assert "velvet kd ks=0.5" in _spec.usage()
     with pytest.raises(LookupError, match="EXAMPLES"):       # ...but the gallery needs an example

@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 import bsdfkit as bk
-from bsdfkit.tradeoff import (ALBEDO_COS_THETA, COST_RESOLUTION, FLOOR_FRACTION, DirectionSet, Table, configurations,
-                              direction_set, family, knob_costs, pareto)
+from bsdfkit.plot import pareto
+from bsdfkit.tuning import (ALBEDO_COS_THETA, COST_RESOLUTION, FLOOR_FRACTION, DirectionSet, Table, configurations,
+                            direction_set, family, knob_costs)
 
 N = 2048          # direction pairs per set: small, the suite stays fast
 N_ALB = 2048      # albedo samples per wo

@@ -12,7 +12,7 @@ import numpy as np
 
 from . import plot as _plot
 from ._enums import TransportMode
-from ._models import Conductor, Dielectric, Diffuse, DiffuseTransmission, ThinDielectric
+from .models import Conductor, Dielectric, Diffuse, DiffuseTransmission, ThinDielectric
 
 #: Incident angles (degrees) of the lobe grid columns and of the albedo table.
 THETAS = (0, 30, 60, 80)

@@ -5,7 +5,8 @@ import numpy as np
 
 from .. import _core
 from .._arrays import check_int
-from .._models import _MASKING, METALS, BxDF, _alphas, _masking, _pick_alpha, _rgb, _scalar
+from .base import _MASKING, BxDF, _alphas, _masking, _pick_alpha, _rgb, _scalar
+from .conductor import METALS
 
 __all__ = ["CoatedDiffuse", "CoatedConductor"]
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _core
-from .._models import _MASKING, BxDF, _masking, _rgb, _scalar
+from .base import _MASKING, BxDF, _masking, _rgb, _scalar
 
 __all__ = ["Plastic"]
 

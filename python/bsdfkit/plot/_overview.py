@@ -1,0 +1,84 @@
+"""Several views of one or more models side by side."""
+from __future__ import annotations
+
+import math
+
+from ._common import _as_models, _check_choice, _new_figure, _quantity
+from ._albedo import albedo
+from ..models.describe import describe
+from ._halfdiff import halfdiff
+from ._hemisphere import hemisphere
+from ._lobe3d import lobe3d
+from ._polar import polar
+from ._samples import samples
+
+__all__ = ["VIEWS", "overview"]
+
+
+#: The views of :func:`overview` (and of :func:`explore`), in their default order.
+VIEWS = ("polar", "lobe3d", "hemisphere", "halfdiff", "albedo", "samples")
+
+
+_PROJECTIONS = {"polar": "polar", "lobe3d": "3d"}
+
+
+def overview(model_or_list, theta_o=30.0, phi_o=0.0, views=VIEWS, *, log=False, cosine=False, channel="luminance",
+             fig=None, ncols=3, n_samples=100_000, albedo_samples=32768, albedo_theta=31, res=96, seed=0,
+             title=None):
+    """Several views of the same model(s) at one ``wo`` in one figure (the CLI ``lobes`` command,
+    :func:`explore` and the notebooks use it).
+
+    views: names from :data:`VIEWS`. ``phi_o`` is wo's azimuth (degrees); the polar slice is the
+    plane of wo (its ``phi_plane = phi_o + 180``, so the mirror direction is at +θo). log,
+    cosine and channel apply to every view that has them. ``fig``: a Figure to draw into (a
+    new pyplot figure otherwise).
+
+    Returns the Figure; ``fig.bsdfkit_axes`` maps each view name to its Axes (each with its
+    ``bsdfkit_data``).
+    """
+    models = _as_models(model_or_list)
+    views = tuple(views)
+    for v in views:
+        _check_choice(v, "views", VIEWS)
+    if not views:
+        raise ValueError("views: name at least one view")
+    ncols = max(1, min(ncols, len(views)))
+    nrows = math.ceil(len(views) / ncols)
+    if fig is None:
+        fig = _new_figure((5.6 * ncols, 4.9 * nrows))
+    else:
+        fig.set_layout_engine("constrained")
+    fig.get_layout_engine().set(w_pad=0.08, wspace=0.06, h_pad=0.08)
+    axes = {}
+    for i, v in enumerate(views):
+        ax = fig.add_subplot(nrows, ncols, i + 1, projection=_PROJECTIONS.get(v))
+        axes[v] = ax
+        if v == "polar":
+            polar(models, theta_o=theta_o, phi_plane=phi_o + 180.0, log=log, cosine=cosine, channel=channel, ax=ax,
+                  title=f"in-plane slice, {_quantity(cosine)}{' (log)' if log else ''}\nvs θi [°] (plane of ωo)",
+                  legend=len(models) > 1)
+        elif v == "lobe3d":
+            lobe3d(models, theta_o=theta_o, phi_o=phi_o, log=log, cosine=cosine, channel=channel, ax=ax,
+                   n_theta=31, n_phi=61, legend=len(models) > 1)
+        elif v == "hemisphere":
+            hemisphere(models, theta_o=theta_o, phi_o=phi_o, log=log, cosine=cosine, channel=channel, ax=ax,
+                       res=res, legend=True,
+                       title=f"{_quantity(cosine)} over ωi{' (log)' if log else ''}, disks seen from above")
+        elif v == "halfdiff":
+            halfdiff(models, log=True, cosine=cosine, channel=channel, ax=ax, res=res,
+                     title=f"{_quantity(cosine)} (log), θh × θd at φd = 90°")
+        elif v == "albedo":
+            albedo(models, n_theta=albedo_theta, n_samples=albedo_samples, channel=channel, ax=ax, seed=seed,
+                   title=f"directional albedo ({albedo_samples} samples per θo)\ndashed: white furnace ρ = 1, "
+                         f"dotted: θo = {theta_o:g}°", legend=len(models) > 1)
+            ax.axvline(min(theta_o, 90.0), color="k", ls=":", lw=1.0)
+        elif v == "samples":
+            samples(models, theta_o=theta_o, phi_o=phi_o, n=n_samples, seed=seed, ax=ax,
+                    title=f"sampling: histogram vs pdf ({n_samples:,} samples)".replace(",", " "))
+    if title is None:
+        title = (", ".join(describe(m) for m in models) + f"  —  ωo at θo = {theta_o:g}°, φo = {phi_o:g}°"
+                 + f"  ({channel}{', log' if log else ''}{', ×cos' if cosine else ''})")
+    if title:
+        fig.suptitle(title, fontsize="large")
+    fig.bsdfkit_axes = axes
+    return fig
