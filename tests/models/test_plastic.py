@@ -293,7 +293,7 @@ def test_extremes_finite(model, dtype, rng):
 
 
 def test_mitsuba_interop_round_trip():
-    from bsdfkit.references.mitsuba import to_mitsuba
+    from bsdfkit.testing.mitsuba import to_mitsuba
     for m in SMOOTH[:3] + ROUGH:
         m = bk.Plastic(**{**m._params, "masking": "separable"})
         assert bk.from_mitsuba(to_mitsuba(m)) == m
