@@ -46,6 +46,13 @@ def describe(model: BxDF) -> str:
         return f"Dielectric η={p['eta']:.3g}{alpha}"
     if isinstance(model, ThinDielectric):
         return f"ThinDielectric η={p['eta']:.3g}"
+    if "conductor_eta" in p:   # CoatedConductor: name the metal, the two roughnesses and the medium
+        name = next((n for n, (eta, k) in METALS.items()
+                     if np.allclose(p["conductor_eta"], eta) and np.allclose(p["conductor_k"], k)), None)
+        name = name or f"η={_fmt(p['conductor_eta'])}, k={_fmt(p['conductor_k'])}"
+        med = f", albedo={_fmt(p['albedo'])}" if np.any(np.asarray(p["albedo"]) > 0) else ""
+        return (f"CoatedConductor {name}, α={p['conductor_alpha_x']:.2g}, coat η={p['interface_eta']:.3g} "
+                f"α={p['interface_alpha_x']:.2g}{med}")
     from .spec import to_spec
 
     rest = to_spec(model).split()[1:]
