@@ -122,6 +122,12 @@ struct LayerParams {  // the medium and the estimator, shared by both models
     int max_depth = 10;
     int n_samples = 1;
     uint64_t seed = 0;
+    // MIS weight of the exit interface's transmission after a base / phase sample: pbrt-v4 uses
+    // top.PDF(-w, wi) (the density of wi given the inner direction) against the sample's density
+    // of the inner direction; false keeps that (the book's estimator, biased high with a rough
+    // coat), true uses top.PDF(wi, -w) in the adjoint mode, the density of the same inner
+    // direction under the NEE strategy, so the two MIS weights sum to one (unbiased).
+    bool consistent_mis = false;
 
     template <class V> void fields(V &&v) {
         v("thickness", thickness);
@@ -130,6 +136,7 @@ struct LayerParams {  // the medium and the estimator, shared by both models
         v("max_depth", max_depth);
         v("n_samples", n_samples);
         v("seed", seed);
+        v("consistent_mis", consistent_mis);
     }
 };
 
@@ -181,6 +188,7 @@ template <typename F, typename Bottom> struct LayeredBxDF {
     F g = 0;
     int max_depth = 10, n_samples = 1;
     uint64_t seed = 0;
+    bool consistent_mis = false;
 
     void set_layer(const LayerParams &p) {
         thickness = max_(F(p.thickness), F(std::numeric_limits<float>::min()));
@@ -190,6 +198,14 @@ template <typename F, typename Bottom> struct LayeredBxDF {
         max_depth = p.max_depth;
         n_samples = p.n_samples;
         seed = p.seed;
+        consistent_mis = p.consistent_mis;
+    }
+
+    // Density used to MIS-weight a transmission through the exit (top) interface towards wi from
+    // the inner direction -w (see LayerParams::consistent_mis).
+    F exit_pdf(const Vec3<F> &w, const Vec3<F> &wi, TransportMode mode) const {
+        return consistent_mis ? top.pdf(wi, -w, flip_mode(mode), RT_Transmission)
+                              : top.pdf(-w, wi, mode, RT_Transmission);
     }
 
     bool top_specular() const { return top.is_smooth(); }
@@ -265,7 +281,7 @@ template <typename F, typename Bottom> struct LayeredBxDF {
                         if (((z < exit_z && w.z > F(0)) || (z > exit_z && w.z < F(0))) && !top_spec) {
                             Spectrum<F> fe = top.f(-w, wi, mode);
                             if (nonzero_mask(fe)) {
-                                F ep = top.pdf(-w, wi, mode, RT_Transmission);
+                                F ep = exit_pdf(w, wi, mode);
                                 fsum = fsum + beta * fe * (LayerTr(zp - exit_z, w) * PowerHeuristic(ps_pdf, ep));
                             }
                         }
@@ -298,7 +314,7 @@ template <typename F, typename Bottom> struct LayeredBxDF {
                         Spectrum<F> fe = top.f(-w, wi, mode);
                         if (nonzero_mask(fe)) {
                             F wt = F(1);
-                            if (!bot_spec) wt = PowerHeuristic(bs.pdf, top.pdf(-w, wi, mode, RT_Transmission));
+                            if (!bot_spec) wt = PowerHeuristic(bs.pdf, exit_pdf(w, wi, mode));
                             fsum = fsum + beta * fe * (LayerTr(thickness, bs.wi) * wt);
                         }
                     }
