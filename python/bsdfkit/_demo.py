@@ -12,7 +12,8 @@ import numpy as np
 
 from . import plot as _plot
 from ._enums import TransportMode
-from .models import Conductor, Dielectric, Diffuse, DiffuseTransmission, ThinDielectric
+from .models import (CoatedConductor, CoatedDiffuse, Conductor, Dielectric, Diffuse, DiffuseTransmission, Plastic,
+                     ThinDielectric)
 
 #: Incident angles (degrees) of the lobe grid columns and of the albedo table.
 THETAS = (0, 30, 60, 80)
@@ -36,6 +37,13 @@ def configurations():
         ("Dielectric(1.5, alpha=0.2)", Dielectric(1.5, alpha=0.2)),
         ("Dielectric(1.5)", Dielectric(1.5)),
         ("ThinDielectric(1.5)", ThinDielectric(1.5)),
+        ("Plastic([0.7, 0.2, 0.1], alpha=0.15) (rough plastic)", Plastic([0.7, 0.2, 0.1], alpha=0.15)),
+        ("CoatedDiffuse([0.6, 0.35, 0.15], alpha=0.05) (varnished wood)",
+         CoatedDiffuse([0.6, 0.35, 0.15], alpha=0.05)),
+        ('CoatedConductor.from_metal("Cu", conductor_alpha=0.3, interface_alpha=0.05, albedo=[0.6, 0.1, 0.1], '
+         'thickness=0.1) (car paint)',
+         CoatedConductor.from_metal("Cu", conductor_alpha=0.3, interface_alpha=0.05, albedo=[0.6, 0.1, 0.1],
+                                    thickness=0.1)),
     ]
 
 
