@@ -46,13 +46,16 @@ def describe(model: BxDF) -> str:
         return f"Dielectric η={p['eta']:.3g}{alpha}"
     if isinstance(model, ThinDielectric):
         return f"ThinDielectric η={p['eta']:.3g}"
-    if "conductor_eta" in p:   # CoatedConductor: name the metal, the two roughnesses and the medium
+    if "conductor_eta" in p:   # CoatedConductor: the metal, metal / coat alpha, whether a medium
         name = next((n for n, (eta, k) in METALS.items()
                      if np.allclose(p["conductor_eta"], eta) and np.allclose(p["conductor_k"], k)), None)
-        name = name or f"η={_fmt(p['conductor_eta'])}, k={_fmt(p['conductor_k'])}"
-        med = f", albedo={_fmt(p['albedo'])}" if np.any(np.asarray(p["albedo"]) > 0) else ""
-        return (f"CoatedConductor {name}, α={p['conductor_alpha_x']:.2g}, coat η={p['interface_eta']:.3g} "
-                f"α={p['interface_alpha_x']:.2g}{med}")
+        name = name or f"η={_fmt(p['conductor_eta'])}"
+        med = ", medium" if np.any(np.asarray(p["albedo"]) > 0) else ""
+        return f"CoatedConductor {name}, α={p['conductor_alpha_x']:.2g}/{p['interface_alpha_x']:.2g}{med}"
+    if type(model).__name__ in ("Plastic", "CoatedDiffuse"):
+        a = p.get("alpha", p.get("alpha_x", 0.0))
+        med = ", medium" if np.any(np.asarray(p.get("albedo", 0.0)) > 0) else ""
+        return f"{type(model).__name__} R={_fmt(p['reflectance'])}, " + (f"α={a:.2g}" if a >= 1e-3 else "smooth") + med
     from .spec import to_spec
 
     rest = to_spec(model).split()[1:]
