@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import bsdfkit as bk
+from bsdfkit.models.filament import dfg as _dfg
 from bsdfkit import _core
 from bsdfkit.testing import mitsuba as ref
 
@@ -90,9 +91,12 @@ def test_against_quadrature(row):
     assert err.max() < 1e-3
 
 
-def test_progress_and_validation(capsys):
+def test_progress_and_validation(capsys, monkeypatch, tmp_path):
+    monkeypatch.setenv("BSDFKIT_CACHE_DIR", str(tmp_path))  # an empty disk cache: computed here
+    _dfg._CACHE.pop((9, 64), None)
+    _dfg._CACHE.pop((10, 64), None)
     bk.filament.dfg_lut(9, 64, progress=True)
-    assert "computing the Filament DFG table (9x9, 64 samples)" in capsys.readouterr().err
+    assert "computing the Filament DFG table (9x9, 64 samples" in capsys.readouterr().err
     bk.filament.dfg_lut(10, 64, progress=False)
     assert capsys.readouterr().err == ""
     bk.filament.dfg_lut(9, 64, progress=True)  # cached: nothing to report

@@ -24,15 +24,14 @@ from ._enums import BxDFFlags, ReflTrans, TransportMode
 from ._version import __version__
 from .directions import direction, hemisphere_grid
 from .interop import from_mitsuba, from_pbrt, parse_pbrt_materials
-from .models import (METALS, MODELS, BxDF, Conductor, Dielectric, Diffuse, DiffuseTransmission, FilamentCloth,
-                     FilamentStandard, SampleResult, ThinDielectric, conductor_fresnel, roughness_to_alpha)
-from .models import CoatedConductor, CoatedDiffuse, Plastic
+from .models import *  # noqa: F401,F403  (every model class; a new family is re-exported by models/__init__.py)
+from .models.custom import Custom
+from .spectral import Spectrum, sample_wavelengths, spectrum_to_rgb
 from .threads import get_num_threads, set_num_threads
 from .tuning import Table, knobs, simplify, tradeoff
 
-__all__ = ["BxDF", "BxDFFlags", "Conductor", "Dielectric", "Diffuse", "DiffuseTransmission", "METALS",
-           "ReflTrans", "SampleResult", "ThinDielectric", "TransportMode", "direction", "get_num_threads",
-           "hemisphere_grid", "roughness_to_alpha", "conductor_fresnel", "set_num_threads", "MODELS",
-           "FilamentStandard", "FilamentCloth", "filament", "models", "plot", "tuning", "render", "io",
-           "tradeoff", "simplify", "knobs", "Table", "from_mitsuba", "from_pbrt", "parse_pbrt_materials", "interop",
-           "__version__", "Plastic", "CoatedDiffuse", "CoatedConductor"]
+__all__ = models.__all__ + [
+    "BxDFFlags", "ReflTrans", "TransportMode", "direction", "get_num_threads", "hemisphere_grid", "set_num_threads",
+    "Custom", "filament", "models", "plot", "tuning", "render", "io", "tradeoff", "simplify", "knobs", "Table", "from_mitsuba",
+    "from_pbrt", "parse_pbrt_materials", "interop", "spectral", "Spectrum", "sample_wavelengths", "spectrum_to_rgb",
+    "__version__"]

@@ -30,8 +30,12 @@ def _parser() -> argparse.ArgumentParser:
 
 # ---------------------------------------------------------------- python -m bsdfkit lobes
 
-_LOBES_EXAMPLES = ("conductor metal=Cu alpha=0.2", "dielectric eta=1.5 alpha=0.3", "diffuse 0.8,0.5,0.2",
-                   "difftrans 0.5 0.4", "conductor metal=Au alpha=0.1 + diffuse 0.5")
+def _lobes_examples() -> list:
+    """Spec examples for the help text: each registered class's first example, and an overlay."""
+    from .models import registry
+
+    first = [next(iter(c.examples.values())) for c in registry.classes()]
+    return first + ([f"{first[1]} + {first[0]}"] if len(first) > 1 else [])
 
 
 def _add_lobes_command(sub) -> None:
@@ -43,7 +47,7 @@ def _add_lobes_command(sub) -> None:
         description="Write the views of bsdfkit.plot.overview for MODEL-SPEC at one incident direction ωo.\n"
                     "MODEL-SPEC: a model name and its parameters (key=value or positional; RGB as r,g,b);\n"
                     "overlay several models by separating their specs with a '+' word. Examples:\n  "
-                    + "\n  ".join(_LOBES_EXAMPLES) + "\nRun with a bad spec to see every model and its parameters.")
+                    + "\n  ".join(_lobes_examples()) + "\nRun with a bad spec to see every model and its parameters.")
     lo.add_argument("spec", nargs="+", metavar="MODEL-SPEC", help="model name followed by its parameters")
     lo.add_argument("--theta", type=float, default=30.0, metavar="DEG",
                     help="θo, angle of ωo from the normal in degrees (default 30)")
@@ -140,19 +144,33 @@ def _run_simplify_command(args) -> int:
         return fail(f"--seed: expected an integer >= 0, got {args.seed}")
     if args.n < 16:
         return fail(f"-n: expected an integer >= 16, got {args.n}")
-    try:
-        with open(args.scene, encoding="utf-8") as fh:
-            text = fh.read()
-    except OSError as e:
-        return fail(f"{args.scene}: {e.strerror or e}")
+    import os
+    import warnings
+
+    if not os.path.isfile(args.scene):
+        return fail(f"{args.scene}: no such file")
     from .interop import from_pbrt
+    from .interop.pbrt import PbrtSkipWarning
     from .models.describe import describe
     from .tuning import simplify
 
     try:
-        materials = from_pbrt(text, skip_unsupported=args.skip_unsupported)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", PbrtSkipWarning)
+            materials = from_pbrt(os.path.abspath(args.scene), skip_unsupported=args.skip_unsupported)
+    except OSError as e:
+        return fail(str(e))
     except ValueError as e:
         return fail(f"{args.scene}: {e}")
+    skipped = [w.message for w in caught if isinstance(w.message, PbrtSkipWarning)]
+    for w in caught:
+        if not isinstance(w.message, PbrtSkipWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    if skipped:
+        print(f"{args.scene}: skipped {len(skipped)} unsupported material(s):")
+        for w in skipped:
+            where = f"{os.path.relpath(w.file)}: line {w.line}" if w.file else f"line {w.line}"
+            print(f"  - {w.material!r} ({where}): {w.reason}")
     if not materials:
         return fail(f"{args.scene}: no materials found")
     print(f"{args.scene}: {len(materials)} material(s), tol {args.tol:g}, metric {args.metric}, seed {args.seed}")
@@ -199,6 +217,9 @@ def _run_render_command(args) -> int:
     from .render import parse_spec, preview
     from .threads import set_num_threads
 
+    if args.quiet:  # also silences the Filament DFG table's first-use progress
+        from .models.filament import dfg
+        dfg.PROGRESS_DEFAULT = False
     try:
         model = parse_spec(" ".join(args.spec))
     except ValueError as e:

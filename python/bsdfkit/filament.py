@@ -4,8 +4,8 @@ The models themselves are :class:`bsdfkit.FilamentStandard` and :class:`bsdfkit.
 everything here lives in :mod:`bsdfkit.models.filament` (this module is its public short name).
 """
 from .models.filament.dfg import (DFG_LUT_SAMPLES, DFG_LUT_SIZE, MIN_N_DOT_V, MIN_PERCEPTUAL_ROUGHNESS, TERMS,
-                                  _table, dfg_lut, term)
+                                  _table, cache_dir, dfg_lut, term)
 from .models.filament.materials import examples
 
-__all__ = ["dfg_lut", "term", "examples", "TERMS", "MIN_PERCEPTUAL_ROUGHNESS", "MIN_N_DOT_V", "DFG_LUT_SIZE",
+__all__ = ["dfg_lut", "cache_dir", "term", "examples", "TERMS", "MIN_PERCEPTUAL_ROUGHNESS", "MIN_N_DOT_V", "DFG_LUT_SIZE",
            "DFG_LUT_SAMPLES"]

@@ -300,9 +300,12 @@ def _mi_plastic(d, where, rough):
                                             masking="separable", specular_reflectance=ks))
 
 
-def from_mitsuba(d: dict) -> BxDF:
+def from_mitsuba(d) -> BxDF:
     """The bsdfkit model of a Mitsuba 3 BSDF plugin dictionary (the inverse of
-    :func:`bsdfkit.testing.mitsuba.to_mitsuba`).
+    :func:`bsdfkit.testing.mitsuba.to_mitsuba`), or of a loaded ``mi.BSDF`` (``mi.load_dict``,
+    a scene's BSDF): its plugin class and ``mi.traverse`` parameters are read back into such a
+    dictionary. A loaded BSDF stores float32 values (and eta = int_ior / ext_ior), so its model
+    equals the dictionary's to float32 precision.
 
     Plugins and parameters (Mitsuba 3.9 names and defaults):
 
@@ -355,4 +358,63 @@ def from_mitsuba(d: dict) -> BxDF:
     Raises ``ValueError`` naming the plugin and parameter for anything else: unknown plugins,
     textures, Beckmann roughness, tints, unknown parameters, presets or IOR names.
     """
+    if not isinstance(d, dict) and type(d).__module__.startswith("mitsuba") and hasattr(d, "class_name"):
+        d = _loaded_to_dict(d)
     return _mi_bsdf(d, "")
+
+
+# Mitsuba class names of loaded BSDFs -> plugin names
+_MI_CLASSES = {"SmoothDiffuse": "diffuse", "SmoothConductor": "conductor", "RoughConductor": "roughconductor",
+               "SmoothDielectric": "dielectric", "RoughDielectric": "roughdielectric",
+               "ThinDielectric": "thindielectric", "Null": "null"}
+
+
+def _loaded_to_dict(bsdf) -> dict:
+    """A loaded ``mi.BSDF`` as a plugin dictionary (class name + ``mi.traverse`` parameters)."""
+    import re
+    import mitsuba as mi
+
+    params = mi.traverse(bsdf)
+    vals = {k: params[k] for k in params.keys()}
+    text = str(bsdf)
+    name = bsdf.class_name()
+    if name.startswith("TwoSided"):
+        kids = re.findall(r"brdf\[(\d)\] = (\w+)\[", text)
+        cls = dict(kids).get("0")
+        if cls is None:
+            raise ValueError(f"from_mitsuba: cannot read the nested BSDF of {name}")
+        sub = {k[len("brdf_0."):]: v for k, v in vals.items() if k.startswith("brdf_0.")}
+        return {"type": "twosided", "bsdf": _loaded_params_to_dict(cls, sub, text)}
+    return _loaded_params_to_dict(name, vals, text)
+
+
+def _loaded_params_to_dict(cls: str, vals: dict, text: str) -> dict:
+    import re
+
+    if cls not in _MI_CLASSES:
+        raise ValueError(f"from_mitsuba: unsupported loaded Mitsuba BSDF {cls!r}; supported: "
+                         f"{', '.join(sorted(_MI_CLASSES))} (and TwoSided around one of them)")
+    plugin = _MI_CLASSES[cls]
+    d = {"type": plugin}
+
+    def val(key):
+        v = np.asarray(vals[key], dtype=np.float64).ravel()
+        return float(v[0]) if v.size == 1 else [float(x) for x in v]
+    known = set()
+    for key, v in vals.items():
+        base = key[:-len(".value")] if key.endswith(".value") else key
+        known.add(key)
+        if base == "eta" and plugin in ("dielectric", "roughdielectric", "thindielectric"):
+            d["int_ior"], d["ext_ior"] = val(key), 1.0
+        else:
+            d[base] = val(key)
+    if plugin in ("conductor", "roughconductor") and np.all(np.asarray(d.get("eta", 1.0)) == 0) \
+            and np.all(np.asarray(d.get("k", 0.0)) == 1):
+        d.pop("eta")
+        d.pop("k")
+        d["material"] = "none"  # Mitsuba's default perfect mirror (eta = 0, k = 1)
+    if plugin.startswith("rough"):
+        m = re.search(r"distribution = (\w+)", text)
+        if m:
+            d["distribution"] = m.group(1)
+    return d

@@ -2,7 +2,9 @@
 from __future__ import annotations
 
 import math
+import os
 import re
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -11,7 +13,7 @@ from ..models import (BxDF, CoatedConductor, CoatedDiffuse, Conductor, Dielectri
                       METALS, ThinDielectric, roughness_to_alpha)
 from .spectra import spectrum_to_rgb
 
-__all__ = ["PBRT_GLASS_ETA", "PbrtParam", "PbrtMaterial", "parse_pbrt_materials", "from_pbrt"]
+__all__ = ["PBRT_GLASS_ETA", "PbrtParam", "PbrtMaterial", "PbrtSkipWarning", "parse_pbrt_materials", "from_pbrt"]
 
 
 #: Index of refraction at 550 nm of pbrt-v4's named glass spectra: linear interpolation of the
@@ -91,6 +93,7 @@ class PbrtMaterial:
     named: bool
     params: dict = field(repr=False, hash=False)
     shapes: int = 0
+    file: str | None = None  # the scene file the statement is in (Include/Import), None for text
 
     @property
     def ignored(self) -> tuple:
@@ -263,29 +266,60 @@ def _statement_name(ts, keyword, line):
     return t[1]
 
 
-def parse_pbrt_materials(text: str) -> list:
+# pbrt-v4's scene directives (src/pbrt/parser.cpp), plus pbrt-v3's that v4 files may still carry.
+_PBRT_DIRECTIVES = frozenset("""
+    Accelerator ActiveTransform AreaLightSource Attribute AttributeBegin AttributeEnd Camera ColorSpace
+    ConcatTransform CoordinateSystem CoordSysTransform Film Identity Import Include Integrator LightSource
+    LookAt MakeNamedMaterial MakeNamedMedium Material MediumInterface NamedMaterial ObjectBegin ObjectEnd
+    ObjectInstance Option PixelFilter ReverseOrientation Rotate Sampler Scale Shape Texture Transform
+    TransformBegin TransformEnd TransformTimes Translate WorldBegin WorldEnd
+    Renderer SurfaceIntegrator VolumeIntegrator
+""".split())
+
+#: Nesting limit of Include/Import (a cycle would otherwise recurse forever).
+PBRT_MAX_INCLUDE_DEPTH = 32
+
+
+def parse_pbrt_materials(text: str, *, path=None) -> list:
     """The material statements of pbrt-v4 scene text, in order, as ``PbrtMaterial`` records.
 
     Understands pbrt's tokens (quoted strings with escapes, numbers, ``true``/``false``,
     brackets, ``#`` comments to the end of the line; statements may span lines) and reads
     ``Material "type" params...`` and ``MakeNamedMaterial "name" "string type" "..."
     params...``. ``AttributeBegin``/``AttributeEnd``, ``NamedMaterial`` and ``Shape`` are
-    followed to count the shapes using each material; every other directive is skipped
-    (``Include``/``Import`` are not followed). Anonymous materials are named
-    ``"material#<n> (line <line>)"``. Does not convert parameters: see
+    followed to count the shapes using each material; ``Include "file"`` and ``Import "file"``
+    are read in place, relative to the including file (``path``; the working directory for text
+    without one), at most :data:`PBRT_MAX_INCLUDE_DEPTH` deep; every other pbrt directive is
+    skipped. Anonymous materials are named ``"material#<n> (line <line>)"`` (``"... (<file>
+    line <line>)"`` inside an included file). Does not convert parameters: see
     :meth:`PbrtMaterial.to_bxdf` and :func:`from_pbrt`.
 
-    ``ValueError`` with the line number for malformed text: unterminated strings or brackets,
-    stray ``]``, non-numbers in lists, malformed parameter declarations, a ``MakeNamedMaterial``
-    without ``"string type"``, a redefined named material.
+    ``ValueError`` with the line number (and file) for malformed text: unterminated strings or
+    brackets, stray ``]``, non-numbers in lists, malformed parameter declarations, a word that is
+    not a pbrt directive, a ``MakeNamedMaterial`` without ``"string type"``, a redefined named
+    material, Include nested too deep. ``OSError`` naming the file for a missing include.
     """
     if not isinstance(text, str):
         raise TypeError(f"text: expected str (pbrt scene text), got {type(text).__name__}")
+    st = {"recs": [], "by_name": {}, "current": None, "stack": [], "n_anon": 0}
+    _parse_into(st, text, None if path is None else os.fspath(path), 0)
+    return [PbrtMaterial(name=r[0], type=r[1], line=r[2], named=r[3], params=r[4], shapes=r[5], file=r[6])
+            for r in st["recs"]]
+
+
+def _parse_into(st, text, path, depth):
+    where = "" if path is None or depth == 0 else f"{os.path.basename(path)} "
+    try:
+        _parse_statements(st, text, path, depth, where)
+    except _PbrtError as e:
+        if path is None or depth == 0 or str(e).startswith(f"{path}:"):
+            raise
+        raise _PbrtError(f"{path}: {e}") from None
+
+
+def _parse_statements(st, text, path, depth, where):
     ts = _Stream(text)
-    recs = []            # mutable [name, type, line, named, params, shapes]
-    by_name = {}
-    current, stack = None, []
-    n_anon = 0
+    recs, by_name, stack = st["recs"], st["by_name"], st["stack"]
     while True:
         t = ts.next()
         if t is None:
@@ -298,13 +332,18 @@ def parse_pbrt_materials(text: str) -> list:
                 continue
             raise _PbrtError(f"line {t[2]}: unexpected {t[1]!r} (expected a directive)")
         kw, line = t[1], t[2]
+        if kw not in _PBRT_DIRECTIVES:
+            hint = (" (from_pbrt takes scene text or a path to an existing file: is this a file name?)"
+                    if ("." in kw or "/" in kw) and len(recs) == 0 else "")
+            raise _PbrtError(f"line {line}: unknown directive {kw!r}{hint}")
         if kw == "Material":
             mtype = _statement_name(ts, kw, line)
             params = _read_params(ts, f"Material {mtype!r}")
-            n_anon += 1
-            rec = [f"material#{n_anon} (line {line})", mtype, line, False, params, 0]
+            st["n_anon"] += 1
+            rec = [f"material#{st['n_anon']} ({where}line {line})", mtype, line, False, params, 0,
+                   path if depth else None]
             recs.append(rec)
-            current = rec
+            st["current"] = rec
         elif kw == "MakeNamedMaterial":
             name = _statement_name(ts, kw, line)
             params = _read_params(ts, f"MakeNamedMaterial {name!r}")
@@ -314,20 +353,33 @@ def parse_pbrt_materials(text: str) -> list:
             if name in by_name:
                 raise _PbrtError(f"line {line}: MakeNamedMaterial {name!r}: named material redefined "
                                  f"(first defined on line {by_name[name][2]})")
-            rec = [name, tp.values[0], line, True, params, 0]
+            rec = [name, tp.values[0], line, True, params, 0, path if depth else None]
             recs.append(rec)
             by_name[name] = rec
+        elif kw in ("Include", "Import"):
+            fname = _statement_name(ts, kw, line)
+            base = os.path.dirname(path) if path is not None else os.getcwd()
+            full = os.path.normpath(fname if os.path.isabs(fname) else os.path.join(base, fname))
+            if depth + 1 > PBRT_MAX_INCLUDE_DEPTH:
+                raise _PbrtError(f"line {line}: {kw} {fname!r}: nested deeper than {PBRT_MAX_INCLUDE_DEPTH} "
+                                 "files (an Include cycle?)")
+            try:
+                sub = _read_scene_file(full)
+            except OSError as e:
+                raise OSError(f"{path or '<text>'}: line {line}: {kw} {fname!r}: cannot read {full!r} "
+                              f"({e.strerror or e})") from None
+            _parse_into(st, sub, full, depth + 1)
         elif kw == "NamedMaterial":
             name = _statement_name(ts, kw, line)
-            current = ("named", name)
+            st["current"] = ("named", name)
         elif kw == "AttributeBegin":
-            stack.append(current)
+            stack.append(st["current"])
         elif kw == "AttributeEnd":
             if stack:
-                current = stack.pop()
+                st["current"] = stack.pop()
             _skip_args(ts)
         elif kw == "Shape":
-            cur = current
+            cur = st["current"]
             if isinstance(cur, tuple):
                 cur = by_name.get(cur[1])
             if cur is not None:
@@ -335,7 +387,17 @@ def parse_pbrt_materials(text: str) -> list:
             _skip_args(ts)
         else:
             _skip_args(ts)
-    return [PbrtMaterial(name=r[0], type=r[1], line=r[2], named=r[3], params=r[4], shapes=r[5]) for r in recs]
+
+
+def _read_scene_file(path) -> str:
+    """A pbrt scene file's text (``.gz`` files decompressed, as pbrt-v4 reads them)."""
+    p = os.fspath(path)
+    if p.endswith(".gz"):
+        import gzip
+        with gzip.open(p, "rt", encoding="utf-8") as fh:
+            return fh.read()
+    with open(p, encoding="utf-8") as fh:
+        return fh.read()
 
 
 def _pfail(rec, msg):
@@ -571,8 +633,13 @@ def _pbrt_bxdf(rec):
         _pfail(rec, str(e))
 
 
-def from_pbrt(text: str, *, skip_unsupported: bool = False) -> dict:
-    """bsdfkit models for the materials of pbrt-v4 scene text: ``{name: BxDF}`` in file order.
+def from_pbrt(source, *, skip_unsupported: bool = False) -> dict:
+    """bsdfkit models for the materials of a pbrt-v4 scene: ``{name: BxDF}`` in file order.
+
+    ``source``: scene text, or the path of a scene file (an ``os.PathLike``, or a ``str``
+    without a newline that names an existing file; ``.gz`` files are decompressed).
+    ``Include``/``Import`` are followed relative to the including file (text: the working
+    directory); a missing include raises ``OSError`` naming it.
 
     Named materials keep their names; anonymous ``Material`` statements are called
     ``"material#<n> (line <line>)"`` (see :func:`parse_pbrt_materials` for the syntax handled).
@@ -614,13 +681,42 @@ def from_pbrt(text: str, *, skip_unsupported: bool = False) -> dict:
     (hair, measured, mix, subsurface, interface, ...),
     texture-valued or unknown parameters, bad values, and malformed text (with the line).
     ``skip_unsupported=True`` leaves out materials that cannot be converted (unsupported types,
-    textures, unknown spectra) instead of raising; malformed text still raises.
+    textures, unknown spectra) instead of raising, with one :class:`PbrtSkipWarning` per
+    material naming it, its line and the reason (its ``material``, ``line`` and ``reason``
+    attributes carry them); malformed text still raises.
     """
+    text, path = _scene_source(source)
     out = {}
-    for rec in parse_pbrt_materials(text):
+    for rec in parse_pbrt_materials(text, path=path):
         try:
             out[rec.name] = rec.to_bxdf()
-        except _PbrtError:
+        except _PbrtError as e:
             if not skip_unsupported:
                 raise
+            w = PbrtSkipWarning(f"from_pbrt: skipped {e}" + (f" [in {rec.file}]" if rec.file else ""))
+            w.material, w.line, w.file, w.reason = rec.name, rec.line, rec.file, str(e)
+            warnings.warn(w, stacklevel=2)
     return out
+
+
+class PbrtSkipWarning(UserWarning):
+    """A material ``from_pbrt(..., skip_unsupported=True)`` left out (attributes: ``material``,
+    ``line``, ``file``, ``reason``)."""
+
+
+def _scene_source(source):
+    """(text, path or None) of from_pbrt's argument."""
+    if isinstance(source, os.PathLike):
+        p = os.fspath(source)
+        return _read_scene_file(p), p
+    if isinstance(source, bytes):
+        raise TypeError("source: expected scene text (str) or a path (str or os.PathLike), got bytes (decode the text first)")
+    if not isinstance(source, str):
+        raise TypeError(f"source: expected scene text (str) or a path (str or os.PathLike), "
+                        f"got {type(source).__name__}")
+    if "\n" not in source and source.strip() and os.path.isfile(source.strip()):
+        p = source.strip()
+        return _read_scene_file(p), p
+    if "\n" not in source and source.strip().endswith((".pbrt", ".pbrt.gz")):
+        raise FileNotFoundError(f"source: scene file {source.strip()!r} not found")
+    return source, None

@@ -4,7 +4,9 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _core
-from .base import BxDF, _MASKING, _alphas, _masking, _pick_alpha, _rgb
+from .base import (MIN_ALPHA, BxDF, _MASKING, _alphas, _masking, _pick_alpha, _rgb, alpha_text, fmt_value,
+                   is_smooth, masking_knob, rgb_dict)
+from .registry import KnobDecl
 
 __all__ = ["METALS", "Conductor", "conductor_fresnel"]
 
@@ -36,8 +38,9 @@ class Conductor(BxDF):
     conductor Fresnel term (pbrt-v4 ``ConductorBxDF``; the complex Fresnel term by default).
 
     eta, k: real and imaginary IOR per RGB channel (eta > 0, k >= 0).
-    alpha: GGX roughness (alpha, not pbrt's remapped "roughness"); alpha_x / alpha_y override it
-    per tangent axis (local x / y). max(alpha_x, alpha_y) < 1e-3 makes the lobe a delta mirror
+    alpha: GGX roughness (alpha, not pbrt's remapped "roughness"), isotropic; or alpha_x and
+    alpha_y together, per tangent axis (local x / y) -- one of them alone, or alpha with them, is
+    a ValueError. max(alpha_x, alpha_y) < 1e-3 makes the lobe a delta mirror
     (pbrt-v4 ``EffectivelySmooth``); otherwise each alpha is floored at 1e-4.
     masking: "correlated" (height-correlated Smith, pbrt-v4) or "separable" (G1 G1, Mitsuba 3).
     fresnel: the Fresnel term F(cos), cos = |wo . wm|, from most accurate to cheapest-ish:
@@ -64,7 +67,29 @@ class Conductor(BxDF):
 
     __slots__ = ()
 
-    def __init__(self, eta, k, alpha=0.0, alpha_x=None, alpha_y=None, masking="correlated", fresnel="exact"):
+    aliases = ("metal",)
+    description = "Metal: mirror or GGX microfacet reflection with a conductor Fresnel term (pbrt-v4 ConductorBxDF)"
+    examples = {
+        "copper, alpha 0.2": "conductor metal=Cu alpha=0.2",
+        "gold mirror": "conductor metal=Au",
+        "aluminium, anisotropic": "conductor metal=Al alpha_x=0.4 alpha_y=0.1",
+        "anisotropic, explicit eta and k": "conductor eta=0.2,0.9,1.1 k=3.9,2.4,2.1 alpha_x=0.4 alpha_y=0.08",
+        "aluminium, separable masking": "conductor metal=Al alpha=0.5 masking=separable",
+        "copper mirror, Schlick": "conductor metal=Cu fresnel=schlick",
+        "chromium, Schlick": "conductor metal=Cr alpha=0.3 fresnel=schlick",
+        "gold, F82, rough": "conductor metal=Au alpha=0.3 fresnel=f82",
+        "aluminium, F82, separable": "conductor metal=Al alpha=0.5 masking=separable fresnel=f82",
+    }
+    energy_conserving, exact_eval, two_sided, transmission, delta_only = True, True, True, False, False
+    reciprocal = True
+    mitsuba = "roughconductor"
+    knobs = (
+        KnobDecl("fresnel", ("exact", "f82", "schlick"), "approximation",
+                 "conductor Fresnel: complex (exact), F82-tint, Schlick"),
+        masking_knob(lambda q: "smooth conductor (max alpha < 1e-3): a mirror has no masking" if is_smooth(q) else None),
+    )
+
+    def __init__(self, eta, k, alpha=None, alpha_x=None, alpha_y=None, masking="correlated", fresnel="exact"):
         ax, ay = _alphas(alpha, alpha_x, alpha_y)
         super().__init__(eta=_rgb(eta, "eta", lo=0.0, lo_open=True), k=_rgb(k, "k", lo=0.0),
                          alpha_x=ax, alpha_y=ay, masking=_masking(masking), fresnel=_fresnel(fresnel))
@@ -102,7 +127,43 @@ class Conductor(BxDF):
     def _make_core(self):
         p = self._params
         core_cls = getattr(_core, _FRESNEL[p["fresnel"]][0])
-        return core_cls(p["eta"].tolist(), p["k"].tolist(), p["alpha_x"], p["alpha_y"], _MASKING[p["masking"]])
+        return core_cls(eta=p["eta"].tolist(), k=p["k"].tolist(), alpha_x=p["alpha_x"], alpha_y=p["alpha_y"],
+                        masking=_MASKING[p["masking"]])
+
+    def cost_family(self) -> str:
+        return "Conductor" + ("/smooth" if is_smooth(self._params) else "/rough")
+
+    def describe(self) -> str:
+        p = self._params
+        name = next((n for n, (eta, k) in METALS.items()
+                     if np.allclose(p["eta"], eta) and np.allclose(p["k"], k)), None)
+        if name is None:
+            name = f"η={fmt_value(p['eta'])}, k={fmt_value(p['k'])}"
+        return f"Conductor {name}{alpha_text(p)}"
+
+    def to_mitsuba(self) -> dict:
+        """``twosided{conductor}`` if smooth, else ``twosided{roughconductor}`` (ggx, alpha_u = alpha_x
+        on local x, visible-normal sampling). Mitsuba always uses separable masking, so a
+        ``masking="correlated"`` model's f differs (its pdf agrees); ``fresnel`` other than
+        ``"exact"`` raises ValueError (Mitsuba has no Schlick / F82 conductor)."""
+        if self.fresnel != "exact":
+            raise ValueError(
+                f"fresnel: Mitsuba 3's conductors only have the exact complex Fresnel term, got "
+                f"fresnel={self.fresnel!r}; use bsdfkit.testing.drjit_models.conductor_f(..., "
+                f"fresnel={self.fresnel!r}) as the reference")
+        p = self._params
+        if is_smooth(p):
+            inner = {"type": "conductor", "eta": rgb_dict(self.eta), "k": rgb_dict(self.k)}
+        else:
+            inner = {"type": "roughconductor", "distribution": "ggx", "alpha_u": max(p["alpha_x"], MIN_ALPHA),
+                     "alpha_v": max(p["alpha_y"], MIN_ALPHA), "sample_visible": True,
+                     "eta": rgb_dict(self.eta), "k": rgb_dict(self.k)}
+        return {"type": "twosided", "bsdf": inner}
+
+
+
+#: The values of ``Conductor.from_metal``'s first argument (listed by the spec parser's usage text).
+Conductor.from_metal.__func__.choices = tuple(METALS)
 
 
 def conductor_fresnel(cos_theta, eta, k, fresnel="exact") -> np.ndarray:

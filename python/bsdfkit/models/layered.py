@@ -5,8 +5,9 @@ import numpy as np
 
 from .. import _core
 from .._arrays import check_int
-from .base import _MASKING, BxDF, _alphas, _masking, _pick_alpha, _rgb, _scalar
+from .base import _MASKING, BxDF, _alphas, _masking, _pick_alpha, _rgb, _scalar, fmt_value, masking_knob
 from .conductor import METALS
+from .registry import KnobDecl
 
 __all__ = ["CoatedDiffuse", "CoatedConductor"]
 
@@ -52,8 +53,8 @@ def _layer(thickness, albedo, g, max_depth, n_samples, seed, mis):
     md = check_int(max_depth, "max_depth", 1)
     ns = check_int(n_samples, "n_samples", 1)
     sd = check_int(seed, "seed", 0)
-    if sd >= 2 ** 64:
-        raise ValueError(f"seed: must be < 2**64, got {sd}")
+    if sd >= 2 ** 31:
+        raise ValueError(f"seed: must be < 2**31, got {sd}")
     if md > 1_000_000 or ns > 1_000_000:
         raise ValueError("max_depth, n_samples: must be <= 1e6")
     if mis not in _MIS:
@@ -61,9 +62,23 @@ def _layer(thickness, albedo, g, max_depth, n_samples, seed, mis):
     return dict(thickness=t, albedo=a, g=gg, max_depth=md, n_samples=ns, seed=sd, mis=mis)
 
 
-def _layer_args(p):
-    return (p["thickness"], p["albedo"].tolist(), p["g"], p["max_depth"], p["n_samples"], p["seed"],
-            p["mis"] == "consistent")
+def _layer_kw(p):
+    return dict(thickness=p["thickness"], albedo=p["albedo"].tolist(), g=p["g"], max_depth=p["max_depth"],
+                n_samples=p["n_samples"], seed=p["seed"], consistent_mis=p["mis"] == "consistent")
+
+
+#: The layered models' knobs: the estimator's sample count and walk depth are approximations
+#: (the same material, noisier or truncated); the MIS rule and the masking are modelling choices
+#: ("pbrt" is biased high with a rough coat, so it is a different f()).
+_KNOBS = (KnobDecl("n_samples", (64, 16, 4, 1), "approximation", "random walks averaged per evaluation"),
+          KnobDecl("max_depth", (100, 20, 10, 5, 2), "approximation", "longest random walk (deeper ones are cut)"),
+          KnobDecl("mis", ("consistent", "pbrt"), "modelling",
+                   "exit MIS weight: consistent (unbiased) or pbrt-v4's (biased high with a rough coat)"),
+          masking_knob(None))
+
+
+def _medium(p) -> str:
+    return ", medium" if np.any(np.asarray(p["albedo"]) > 0) else ""
 
 
 class CoatedDiffuse(BxDF):
@@ -78,18 +93,15 @@ class CoatedDiffuse(BxDF):
 
     __slots__ = ()
 
-    aliases = ("coateddiffuse", "coated_diffuse")
+    aliases = ()
     examples = {"varnished wood": "coated_diffuse reflectance=0.6,0.35,0.15 alpha=0.05",
                 "lacquer with a scattering medium": "coated_diffuse reflectance=0.2 albedo=0.8 thickness=0.2 g=0.3"}
     description = "diffuse base under a dielectric coat with an optional HG medium (pbrt-v4, stochastic)"
-    energy_conserving = True
-    exact_eval = False
-    two_sided = True
-    transmission = False
+    # reciprocal = False: each eval is one random-walk realization seeded by (wo, wi), so
+    # f(wo, wi) != f(wi, wo) call by call (and pbrt's MIS rule is not reciprocal in expectation)
+    energy_conserving, exact_eval, reciprocal, two_sided, transmission, delta_only = True, False, False, True, False, False
     mitsuba = None
-    knobs = (("n_samples", (64, 32, 16, 8, 4, 2, 1), "approximation"),
-             ("max_depth", (100, 50, 20, 10, 5, 2, 1), "approximation"))
-    cost_family = "layered"
+    knobs = _KNOBS
 
     def __init__(self, reflectance=0.5, eta=1.5, alpha=0.0, alpha_x=None, alpha_y=None, thickness=0.01,
                  albedo=0.0, g=0.0, max_depth=10, n_samples=1, seed=0, masking="correlated", mis="pbrt"):
@@ -104,8 +116,16 @@ class CoatedDiffuse(BxDF):
 
     def _make_core(self):
         p = self._params
-        return _core.CoatedDiffuse(p["reflectance"].tolist(), p["eta"], p["alpha_x"], p["alpha_y"],
-                                   _MASKING[p["masking"]], *_layer_args(p))
+        return _core.CoatedDiffuse(reflectance=p["reflectance"].tolist(), eta=p["eta"], alpha_x=p["alpha_x"],
+                                   alpha_y=p["alpha_y"], masking=_MASKING[p["masking"]], **_layer_kw(p))
+
+    def cost_family(self) -> str:
+        return "CoatedDiffuse" + _medium(self._params).replace(", ", "/")
+
+    def describe(self) -> str:
+        p = self._params
+        a = p["alpha_x"]
+        return f"CoatedDiffuse R={fmt_value(p['reflectance'])}, " + (f"α={a:.2g}" if a >= 1e-3 else "smooth") + _medium(p)
 
 
 class CoatedConductor(BxDF):
@@ -129,17 +149,13 @@ class CoatedConductor(BxDF):
 
     __slots__ = ()
 
-    aliases = ("coatedconductor", "coated_conductor", "carpaint")
+    aliases = ("carpaint",)
     examples = {"car paint": "coated_conductor metal=Cu conductor_alpha=0.3 interface_alpha=0.02 albedo=0.5,0.1,0.1 "
                              "thickness=0.1"}
     description = "metal under a dielectric coat with an optional HG medium (pbrt-v4, stochastic)"
-    energy_conserving = True
-    exact_eval = False
-    two_sided = True
-    transmission = False
+    energy_conserving, exact_eval, reciprocal, two_sided, transmission, delta_only = True, False, False, True, False, False
     mitsuba = None
-    knobs = CoatedDiffuse.knobs
-    cost_family = "layered"
+    knobs = _KNOBS
 
     def __init__(self, conductor_eta, conductor_k, conductor_alpha=0.0, conductor_alpha_x=None,
                  conductor_alpha_y=None, interface_eta=1.5, interface_alpha=0.0, interface_alpha_x=None,
@@ -178,9 +194,21 @@ class CoatedConductor(BxDF):
 
     def _make_core(self):
         p = self._params
-        return _core.CoatedConductor(p["conductor_eta"].tolist(), p["conductor_k"].tolist(), p["conductor_alpha_x"],
-                                     p["conductor_alpha_y"], p["interface_eta"], p["interface_alpha_x"],
-                                     p["interface_alpha_y"], _MASKING[p["masking"]], *_layer_args(p))
+        return _core.CoatedConductor(conductor_eta=p["conductor_eta"].tolist(), conductor_k=p["conductor_k"].tolist(),
+                                     conductor_alpha_x=p["conductor_alpha_x"], conductor_alpha_y=p["conductor_alpha_y"],
+                                     interface_eta=p["interface_eta"], interface_alpha_x=p["interface_alpha_x"],
+                                     interface_alpha_y=p["interface_alpha_y"], masking=_MASKING[p["masking"]],
+                                     **_layer_kw(p))
+
+    def cost_family(self) -> str:
+        return "CoatedConductor" + _medium(self._params).replace(", ", "/")
+
+    def describe(self) -> str:
+        p = self._params
+        name = next((n for n, (eta, k) in METALS.items()
+                     if np.allclose(p["conductor_eta"], eta) and np.allclose(p["conductor_k"], k)), None)
+        name = name or f"η={fmt_value(p['conductor_eta'])}"
+        return f"CoatedConductor {name}, α={p['conductor_alpha_x']:.2g}/{p['interface_alpha_x']:.2g}{_medium(p)}"
 
 
 def _named_alphas(alpha, ax, ay, name):

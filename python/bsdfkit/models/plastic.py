@@ -4,7 +4,11 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _core
-from .base import _MASKING, BxDF, _masking, _rgb, _scalar
+from .base import _MASKING, MIN_ALPHA, BxDF, _masking, _rgb, _scalar, fmt_value, masking_knob, rgb_dict
+from .registry import KnobDecl
+
+#: below this alpha the coating is smooth (Mitsuba's plastic instead of roughplastic)
+SMOOTH_ALPHA = 1e-3
 
 __all__ = ["Plastic"]
 
@@ -65,18 +69,18 @@ class Plastic(BxDF):
 
     __slots__ = ()
 
-    # registry declarations (read by the model registry once it lands)
-    aliases = ("plastic", "roughplastic")
-    examples = {"smooth plastic": "plastic reflectance=0.5", "rough plastic": "plastic reflectance=0.5 alpha=0.2",
-                "red rough plastic, nonlinear": "plastic reflectance=[0.8,0.1,0.1] alpha=0.1 nonlinear=True"}
+    aliases = ("roughplastic",)
+    examples = {"red, rough coat": "plastic reflectance=0.8,0.1,0.1 alpha=0.2",
+                "smooth plastic": "plastic reflectance=0.5",
+                "rough, nonlinear, separable (Mitsuba)":
+                    "plastic reflectance=0.8,0.1,0.1 alpha=0.1 nonlinear=True masking=separable"}
     description = "diffuse base under a smooth or rough dielectric coat (Mitsuba plastic / roughplastic)"
-    energy_conserving = True
-    exact_eval = True
-    two_sided = True
-    transmission = False
-    mitsuba = "plastic"
-    knobs = (("masking", ("separable", "correlated"), "modelling"), ("nonlinear", (False, True), "modelling"))
-    cost_family = "plastic"
+    energy_conserving, exact_eval, reciprocal, two_sided, transmission, delta_only = True, True, True, True, False, False
+    mitsuba = "roughplastic"
+    knobs = (masking_knob(lambda q: "smooth coating (alpha < 1e-3): a mirror has no masking"
+                          if q["alpha"] < SMOOTH_ALPHA else None),
+             KnobDecl("nonlinear", (False, True), "modelling",
+                      "internal reflections: R / (1 - Fdr) (keeps the colour) or R / (1 - R Fdr) (saturates)"))
 
     def __init__(self, reflectance=0.5, eta=1.49, alpha=0.0, nonlinear=False, masking="correlated",
                  specular_reflectance=1.0):
@@ -95,8 +99,32 @@ class Plastic(BxDF):
 
     def _make_core(self):
         p = self._params
-        return _core.Plastic(p["reflectance"].tolist(), p["eta"], p["alpha"], p["nonlinear"], _MASKING[p["masking"]],
-                             p["specular_reflectance"].tolist())
+        return _core.Plastic(reflectance=p["reflectance"].tolist(), eta=p["eta"], alpha=p["alpha"],
+                             nonlinear=p["nonlinear"], masking=_MASKING[p["masking"]],
+                             specular_reflectance=p["specular_reflectance"].tolist())
+
+    def cost_family(self) -> str:
+        return "Plastic" + ("/smooth" if self._params["alpha"] < SMOOTH_ALPHA else "/rough")
+
+    def describe(self) -> str:
+        a = self._params["alpha"]
+        return f"Plastic R={fmt_value(self._params['reflectance'])}, " + (f"α={a:.2g}" if a >= SMOOTH_ALPHA else "smooth")
+
+    def to_mitsuba(self) -> dict:
+        """``twosided{plastic}`` (smooth coating) or ``twosided{roughplastic}`` (ggx, visible-normal
+        sampling). Mitsuba's plastics are one-sided and use separable masking: a
+        ``masking="correlated"`` rough model's f differs slightly (its pdf agrees)."""
+        p = self._params
+        inner = {"diffuse_reflectance": rgb_dict(p["reflectance"]), "int_ior": float(p["eta"]), "ext_ior": 1.0,
+                 "nonlinear": bool(p["nonlinear"])}
+        if np.any(np.asarray(p["specular_reflectance"]) != 1.0):
+            inner["specular_reflectance"] = rgb_dict(p["specular_reflectance"])
+        if p["alpha"] < SMOOTH_ALPHA:
+            inner["type"] = "plastic"
+        else:
+            inner.update(type="roughplastic", distribution="ggx", alpha=max(float(p["alpha"]), MIN_ALPHA),
+                         sample_visible=True)
+        return {"type": "twosided", "bsdf": inner}
 
     @property
     def transmittance_table(self) -> np.ndarray:

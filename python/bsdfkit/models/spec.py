@@ -10,33 +10,25 @@ A spec is a model name followed by its parameters, words separated by spaces::
     filament_standard metallic=1 roughness=0.3
 
 The model name is a class of ``bsdfkit.MODELS`` (case-insensitive, as ``FilamentStandard``,
-``filamentstandard`` or ``filament_standard``) or an alias (:data:`ALIASES`). Parameters are
+``filamentstandard`` or ``filament_standard``) or an alias (:func:`aliases`). Parameters are
 those of the class's constructor, positional or ``key=value``; a key ``X`` naming an alternative
 constructor ``from_X`` (``metal=`` for ``Conductor.from_metal``, ``reflectance=`` for
 ``Conductor.from_reflectance``) switches to it. Values: numbers, ``r,g,b`` triples,
 ``true``/``false``, ``none``, anything else is a string (``masking=separable``).
 
-Everything is derived from ``bsdfkit.MODELS`` and the constructors' signatures, so a new model
-class is accepted (and listed in error messages) without touching this file. Every class also
-needs an example for the gallery (:func:`example_model`): its default parameters, or an entry of
-:data:`EXAMPLES` when its constructor has required parameters; a class with neither raises.
+Everything is derived from the model registry (``bsdfkit.models.registry``: class names,
+``aliases``, ``examples``) and the constructors' signatures, so a new model class is accepted (and
+listed in error messages) without touching this file; its first example is its gallery row.
 """
 from __future__ import annotations
 
 import inspect
 import re
 
+from . import registry
+
 __all__ = ["parse_spec", "parse_specs", "example_model", "example_spec", "model_names", "usage", "to_spec",
-           "ALIASES", "EXAMPLES", "SpecError"]
-
-#: Short names accepted besides the class names (they are also the render command's).
-ALIASES = {"lambert": "Diffuse", "difftrans": "DiffuseTransmission", "metal": "Conductor",
-           "glass": "Dielectric", "thin": "ThinDielectric",
-           "roughplastic": "Plastic"}
-
-#: Example specs for classes whose constructor has required parameters (the gallery's row).
-EXAMPLES = {"Conductor": "conductor metal=Cu alpha=0.2",
-            "CoatedConductor": "coated_conductor metal=Cu conductor_alpha=0.3 interface_alpha=0.05"}
+           "aliases", "SpecError"]
 
 
 class SpecError(ValueError):
@@ -44,9 +36,12 @@ class SpecError(ValueError):
 
 
 def _models():
-    from . import MODELS
+    return registry.classes()
 
-    return MODELS
+
+def aliases() -> dict:
+    """Short names accepted besides the class names: ``{alias: class name}`` (from the registry)."""
+    return {a: c.__name__ for c in _models() for a in c.aliases}
 
 
 def _snake(name: str) -> str:
@@ -61,7 +56,7 @@ def model_names() -> dict:
     """Every accepted model name (snake_case class names and aliases) -> class."""
     classes = {c.__name__: c for c in _models()}
     names = {_snake(n): c for n, c in classes.items()}
-    names.update({a: classes[t] for a, t in ALIASES.items() if t in classes})
+    names.update({a: classes[t] for a, t in aliases().items() if t in classes})
     return names
 
 
@@ -99,11 +94,8 @@ def _signature_text(cls) -> str:
     for key, fn in _alternatives(cls).items():
         first = _params(fn)[0].name
         rest = " ".join(_fmt_param(p) for p in _params(fn, skip_first=True))
-        value = first.upper()
-        if key == "metal":
-            from .conductor import METALS
-
-            value = "|".join(METALS)
+        choices = getattr(fn, "choices", None)   # an alternative constructor may list its accepted values
+        value = "|".join(choices) if choices else first.upper()
         lines.append(f"  {name} {key}={value} {rest}".rstrip())
     return "\n".join(lines)
 
@@ -115,7 +107,7 @@ def usage(cls=None) -> str:
         "valid models (name, then positional values or key=value parameters; RGB as r,g,b):\n")
     text = head + "\n".join(_signature_text(c) for c in classes)
     if cls is None:
-        text += "\naliases: " + ", ".join(f"{a} = {_snake(t)}" for a, t in ALIASES.items())
+        text += "\naliases: " + ", ".join(f"{a} = {_snake(t)}" for a, t in aliases().items())
     return text
 
 
@@ -203,19 +195,16 @@ def parse_specs(words) -> list:
 
 
 def example_spec(cls) -> str:
-    """The gallery's spec of a model class: :data:`EXAMPLES`, or its name alone (defaults)."""
-    if cls.__name__ in EXAMPLES:
-        return EXAMPLES[cls.__name__]
-    required = [p.name for p in _params(cls.__init__) if p.default is inspect.Parameter.empty]
-    if required:
-        raise LookupError(f"{cls.__name__} has required parameters ({', '.join(required)}) and no example: "
-                          f"add one to bsdfkit._spec.EXAMPLES (or give the parameters defaults) so the "
-                          f"gallery can show it")
-    return _snake(cls.__name__)
+    """The gallery's spec of a model class: the first of its registered ``examples``."""
+    ex = getattr(cls, "examples", None)
+    if not ex:
+        raise LookupError(f"{cls.__name__} declares no examples: add examples = {{label: spec}} to the class "
+                          f"so the gallery, the demo and the contract tests can show it")
+    return next(iter(ex.values()))
 
 
 def example_model(cls):
-    """A model of class ``cls`` with default parameters (or its :data:`EXAMPLES` spec)."""
+    """The model of class ``cls`` described by its first registered example."""
     m = parse_spec(example_spec(cls))
     if type(m) is not cls:
         raise LookupError(f"the example spec of {cls.__name__} built a {type(m).__name__}")

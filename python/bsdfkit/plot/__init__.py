@@ -22,6 +22,7 @@ transmission below it. 0 deg (the normal) is at the top of the plot.
 from ..models.describe import describe
 from ._albedo import albedo
 from ._common import LUMINANCE_WEIGHTS, luminance
+from ._difference import difference, difference_model
 from ._explore import Explorer, explore
 from ._gallery import gallery
 from ._halfdiff import halfdiff
@@ -32,5 +33,5 @@ from ._pareto import pareto
 from ._polar import polar
 from ._samples import sample_stats, samples
 
-__all__ = ["pareto", "polar", "lobe3d", "hemisphere", "halfdiff", "albedo", "samples", "sample_stats", "overview",
+__all__ = ["pareto", "difference", "difference_model", "polar", "lobe3d", "hemisphere", "halfdiff", "albedo", "samples", "sample_stats", "overview",
            "gallery", "explore", "Explorer", "describe", "luminance", "LUMINANCE_WEIGHTS", "VIEWS"]

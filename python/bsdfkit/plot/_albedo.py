@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..models.base import _mode
 from .._enums import TransportMode
 from ._common import _RGB_COLORS, _RGB_STYLES, _as_labels, _as_models, _check_channel, _new_axes, _select
 from ..models.describe import describe
@@ -48,7 +49,7 @@ def albedo(model_or_list, n_theta=46, n_samples=8192, ax=None, channel="luminanc
         k = len(data["model"])
         color = colors[j] if colors is not None else f"C{k % 10}"
         lab = lab if lab is not None else describe(m)
-        rgb = m.albedo(wo, n_samples=n_samples, seed=seed, mode=mode)
+        rgb = m.albedo(wo, n_samples=n_samples, seed=seed, mode=_mode(mode))
         val = _select(rgb, channel)
         if channel == "rgb":
             style = _RGB_STYLES[k % len(_RGB_STYLES)]
@@ -58,7 +59,7 @@ def albedo(model_or_list, n_theta=46, n_samples=8192, ax=None, channel="luminanc
             ax.plot(theta_deg, val, color=color, ls=linestyle, lw=1.8, label=lab)
         ymax = max(ymax, float(np.max(val)))
         for key, v in (("theta_deg", theta_deg), ("value", val), ("rgb", rgb), ("label", lab), ("model", m),
-                       ("channel", channel), ("mode", TransportMode(mode))):
+                       ("channel", channel), ("mode", TransportMode(_mode(mode)))):
             data[key].append(v)
 
     if first:
@@ -70,8 +71,13 @@ def albedo(model_or_list, n_theta=46, n_samples=8192, ax=None, channel="luminanc
     ax.set_xlabel("θo, angle of ωo from the normal [°]")
     ax.set_ylabel("directional albedo ρ(θo) [unitless]")
     ax.grid(True, alpha=0.3)
+    mname = TransportMode(_mode(mode)).name.lower()
     if title is None:
-        title = f"Directional albedo ({channel}, {n_samples} samples per θo)"
+        title = f"Directional albedo ({channel}, {mname} mode, {n_samples} samples per θo)"
+        refr = any(int(m.flags) & 2 and getattr(m, "eta", 1.0) != 1.0 and type(m).__name__ == "Dielectric"
+                   for m in models)
+        if refr and mname == "radiance":
+            title += "\nrefraction scales radiance by 1/η²: glass < 1 (mode='importance': ρ = 1)"
     if title:
         ax.set_title(title, fontsize="medium")
     if legend:

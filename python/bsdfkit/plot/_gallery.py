@@ -16,10 +16,9 @@ def gallery(models=None, theta_o=40.0, *, fig=None, res=96, albedo_samples=16384
     """One row per model — in-plane polar slice, hemisphere image, directional albedo (RGB and
     luminance) — at ``theta_o`` (degrees).
 
-    models: a list of models, or None for one example of every class in ``bsdfkit.MODELS``
-    (``bsdfkit._spec.example_model``: default parameters, or the class's entry of
-    ``bsdfkit._spec.EXAMPLES``; a new class with required parameters and no example raises
-    LookupError, so the gallery never silently skips a model).
+    models: a list of models, or None for the first registered example of every class in
+    ``bsdfkit.MODELS`` (``bsdfkit.models.spec.example_model``; the registry refuses a class
+    without examples, so the gallery never silently skips a model).
 
     Returns the Figure (a pyplot figure unless ``fig`` is given); ``fig.bsdfkit_rows`` is a list
     of ``(model, {"polar": ax, "hemisphere": ax, "albedo": ax})``.

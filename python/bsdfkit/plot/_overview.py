@@ -49,35 +49,46 @@ def overview(model_or_list, theta_o=30.0, phi_o=0.0, views=VIEWS, *, log=False, 
     else:
         fig.set_layout_engine("constrained")
     fig.get_layout_engine().set(w_pad=0.08, wspace=0.06, h_pad=0.08)
+    # Legends and colorbars get short labels ("A: Conductor Au, α=0.2", cut at 40 characters);
+    # the full descriptions go to the title, wrapped: long model names then keep the layout.
+    import textwrap
+    full = [describe(m) for m in models]
+    if len(models) > 1:
+        labels = [f"{chr(65 + i % 26)}: {textwrap.shorten(d, 40, placeholder=' …')}" for i, d in enumerate(full)]
+    else:
+        labels = [textwrap.shorten(full[0], 40, placeholder=" …")]
     axes = {}
     for i, v in enumerate(views):
         ax = fig.add_subplot(nrows, ncols, i + 1, projection=_PROJECTIONS.get(v))
         axes[v] = ax
         if v == "polar":
-            polar(models, theta_o=theta_o, phi_plane=phi_o + 180.0, log=log, cosine=cosine, channel=channel, ax=ax,
+            polar(models, label=labels, theta_o=theta_o, phi_plane=phi_o + 180.0, log=log, cosine=cosine, channel=channel, ax=ax,
                   title=f"in-plane slice, {_quantity(cosine)}{' (log)' if log else ''}\nvs θi [°] (plane of ωo)",
                   legend=len(models) > 1)
         elif v == "lobe3d":
-            lobe3d(models, theta_o=theta_o, phi_o=phi_o, log=log, cosine=cosine, channel=channel, ax=ax,
+            lobe3d(models, label=labels, theta_o=theta_o, phi_o=phi_o, log=log, cosine=cosine, channel=channel, ax=ax,
                    n_theta=31, n_phi=61, legend=len(models) > 1)
         elif v == "hemisphere":
-            hemisphere(models, theta_o=theta_o, phi_o=phi_o, log=log, cosine=cosine, channel=channel, ax=ax,
+            hemisphere(models, label=labels, theta_o=theta_o, phi_o=phi_o, log=log, cosine=cosine, channel=channel, ax=ax,
                        res=res, legend=True,
                        title=f"{_quantity(cosine)} over ωi{' (log)' if log else ''}, disks seen from above")
         elif v == "halfdiff":
-            halfdiff(models, log=True, cosine=cosine, channel=channel, ax=ax, res=res,
+            halfdiff(models, label=labels, log=True, cosine=cosine, channel=channel, ax=ax, res=res,
                      title=f"{_quantity(cosine)} (log), θh × θd at φd = 90°")
         elif v == "albedo":
-            albedo(models, n_theta=albedo_theta, n_samples=albedo_samples, channel=channel, ax=ax, seed=seed,
-                   title=f"directional albedo ({albedo_samples} samples per θo)\ndashed: white furnace ρ = 1, "
+            albedo(models, label=labels, n_theta=albedo_theta, n_samples=albedo_samples, channel=channel, ax=ax, seed=seed,
+                   title=f"directional albedo (radiance mode, {albedo_samples} samples per θo)\ndashed: white furnace ρ = 1, "
                          f"dotted: θo = {theta_o:g}°", legend=len(models) > 1)
             ax.axvline(min(theta_o, 90.0), color="k", ls=":", lw=1.0)
         elif v == "samples":
-            samples(models, theta_o=theta_o, phi_o=phi_o, n=n_samples, seed=seed, ax=ax,
+            samples(models, label=labels, theta_o=theta_o, phi_o=phi_o, n=n_samples, seed=seed, ax=ax,
                     title=f"sampling: histogram vs pdf ({n_samples:,} samples)".replace(",", " "))
     if title is None:
-        title = (", ".join(describe(m) for m in models) + f"  —  ωo at θo = {theta_o:g}°, φo = {phi_o:g}°"
-                 + f"  ({channel}{', log' if log else ''}{', ×cos' if cosine else ''})")
+        names = ([f"{lab.split(':')[0]} = {d}" for lab, d in zip(labels, full)] if len(models) > 1 else full)
+        width = max(60, int(fig.get_figwidth() * 12))
+        title = ("\n".join(textwrap.fill(n, width, subsequent_indent="    ") for n in names)
+                 + f"\nωo at θo = {theta_o:g}°, φo = {phi_o:g}°  ({channel}{', log' if log else ''}"
+                 + f"{', ×cos' if cosine else ''})")
     if title:
         fig.suptitle(title, fontsize="large")
     fig.bsdfkit_axes = axes

@@ -8,15 +8,24 @@ from ..tuning.report import Table, _check_metric
 __all__ = ["pareto"]
 
 
-def pareto(table: Table, ax=None, metric: str = "p99"):
+def pareto(table: Table, ax=None, metric: str = "p99", front_list="auto"):
     """Throughput against error of every configuration in ``table`` (a :class:`Table`), the
     Pareto front highlighted and labelled. x: the error ``metric`` (log scale; error-0 rows, the
     most accurate configuration among them, are drawn at the left edge), y: live speedup over
     the most accurate configuration (expected speedup when the table was not measured).
-    Returns the Axes, with the numbers in ``ax.bsdfkit_data`` (error, speedup, front, labels)."""
+    front_list: where the numbered list of front configurations goes: ``"right"`` of the axes,
+    ``"none"`` (only the numbers at the points; the list is ``ax.bsdfkit_data["front_list"]``),
+    or ``"auto"``: right when this call makes the figure, none when drawing into a given ``ax``
+    (a grid of panels, where a list beside each would squash the plots).
+    Returns the Axes, with the numbers in ``ax.bsdfkit_data`` (error, speedup, front, labels,
+    front_list)."""
     if not isinstance(table, Table):
         raise TypeError(f"table: expected a bsdfkit.tradeoff.Table, got {type(table).__name__}")
     col = _check_metric(metric)
+    if front_list not in ("auto", "right", "none"):
+        raise ValueError(f"front_list: must be 'auto', 'right' or 'none', got {front_list!r}")
+    if front_list == "auto":
+        front_list = "right" if ax is None else "none"
     if ax is None:
         import matplotlib.pyplot as plt  # lazy
         ax = plt.figure(figsize=(11.5, 5.0), layout="constrained").add_subplot()
@@ -41,16 +50,18 @@ def pareto(table: Table, ax=None, metric: str = "p99"):
                     fontsize=8, color="tab:red", weight="bold")
         e = "0" if err[i] == 0 else f"{err[i]:.1e}"
         lines.append(f"{k}. {rows[i]['config']}  ({thr[i]:.2f}x, {metric} {e})")
-    ax.text(1.02, 1.0, "Pareto front\n" + "\n".join(lines), transform=ax.transAxes, va="top", ha="left",
-            fontsize=7.5, family="monospace", color="tab:red")
+    if front_list == "right":
+        ax.text(1.02, 1.0, "Pareto front\n" + "\n".join(lines), transform=ax.transAxes, va="top", ha="left",
+                fontsize=7.5, family="monospace", color="tab:red")
     ax.set_xscale("log")
-    ax.set_xlabel(f"{metric} relative error of f·|cos θi| vs the most accurate configuration"
-                  + (" (0 drawn at the left)" if (err == 0).any() else ""))
+    what = ("relative error of the directional albedo" if metric == "albedo"
+            else f"{metric} relative error of f·|cos θi|")
+    ax.set_xlabel(f"{what} vs the most accurate" + (" (0 at the left edge)" if (err == 0).any() else ""))
     ax.set_ylabel("speedup over the most accurate (" + ("measured" if live else "cost table") + ")")
     from ..models.describe import describe
     ax.set_title(describe(table.model), fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8, loc="lower right")
     ax.bsdfkit_data = {"error": err, "speedup": thr, "front": list(front), "labels": [r["config"] for r in rows],
-                       "metric": metric}
+                       "metric": metric, "front_list": lines}
     return ax

@@ -69,7 +69,8 @@ def polar(model_or_list, theta_o=30.0, phi_plane=0.0, log=False, cosine=False, c
     curve peaks below this fraction of the stronger half, it is also drawn magnified by a round
     factor (dotted, labelled "×factor") so that it does not vanish; 0 or None turns this off.
     log: radial axis logarithmic, covering ``log_decades`` decades below the largest value
-    (values below are drawn at the centre).
+    (values below are drawn at the centre; an overlaid curve lying entirely below the range of
+    the first call says so in its legend entry).
     ax: a polar Axes to draw into (created if None); calling again on the same Axes overlays
     and appends to its data (the radial mapping of the first call is kept).
 
@@ -140,6 +141,9 @@ def polar(model_or_list, theta_o=30.0, phi_plane=0.0, log=False, cosine=False, c
         color = colors[j] if colors is not None else f"C{k % 10}"
         rgb_style = _RGB_STYLES[k % len(_RGB_STYLES)]
         val, lab = e["value"], e["label"]
+        if log and np.any(val > 0) and float(np.max(val)) < floor:
+            # an overlay below the first call's decade range: drawn clipped at the centre, and said
+            lab = f"{lab} (max {float(np.max(val)):.1e} < log floor {floor:.0e}: clipped to the centre)"
         if np.any(val > 0) or not e["delta"]:   # never draw nothing; skip an all-zero curve of a delta model
             if channel == "rgb":
                 for c in range(3):

@@ -136,102 +136,20 @@ def _mi():
 # Model -> plugin dictionary
 # ---------------------------------------------------------------------------------------------
 
-def _rgb(v):
-    a = np.broadcast_to(np.asarray(v, dtype=np.float64), (3,))
-    return {"type": "rgb", "value": [float(x) for x in a]}
-
-
-def _kind(model) -> str:
-    name = type(model).__name__
-    for suffix in ("BxDF", "BSDF"):
-        if name.endswith(suffix) and len(name) > len(suffix):
-            name = name[: -len(suffix)]
-    return name
-
-
-def _alphas(model):
-    ax, ay = float(model.alpha_x), float(model.alpha_y)
-    smooth = max(ax, ay) < SMOOTH_ALPHA
-    return smooth, max(ax, MIN_ALPHA), max(ay, MIN_ALPHA)
-
-
 def to_mitsuba(model) -> dict:
-    """Mitsuba plugin dictionary that should agree with a bsdfkit model.
-
-    Models are duck-typed on ``type(model).__name__`` (a trailing ``BxDF`` is ignored):
-
-    * ``Diffuse(reflectance)`` -> ``twosided{diffuse}``.
-    * ``Conductor(eta, k, alpha_x, alpha_y, masking)`` -> ``twosided{conductor}`` if
-      ``max(alpha) < 1e-3`` else ``twosided{roughconductor}`` (ggx, ``alpha_u`` = alpha_x on
-      local x, ``alpha_v`` = alpha_y, visible-normal sampling). ``fresnel`` other than
-      ``"exact"`` -> ``ValueError`` (Mitsuba has no Schlick / F82 conductor).
-    * ``Dielectric(eta, alpha_x, alpha_y, masking)`` -> ``dielectric`` / ``roughdielectric``
-      (ggx) with ``int_ior = eta``, ``ext_ior = 1.0``; eta < 1 is passed through unchanged
-      (Mitsuba accepts int_ior < ext_ior). eta == 1 -> ``null`` (pbrt's pass-through).
-    * ``ThinDielectric(eta)`` -> ``thindielectric`` with ``int_ior = eta``, ``ext_ior = 1.0``.
-    * ``DiffuseTransmission`` -> ``NotImplementedError`` (no Mitsuba plugin).
-    * a ``dict`` is returned unchanged (raw Mitsuba dictionaries).
+    """Mitsuba plugin dictionary that should agree with a bsdfkit model: ``model.to_mitsuba()``
+    (each model class writes its own; see e.g. ``Conductor.to_mitsuba``). A ``dict`` is returned
+    unchanged (raw Mitsuba dictionaries). Models without a Mitsuba counterpart raise
+    NotImplementedError, approximations Mitsuba lacks (Schlick conductors) ValueError.
 
     ``masking`` is not representable: Mitsuba always uses the separable Smith G, so for
     ``masking="correlated"`` models f differs (by up to tens of percent at grazing angles / high
     roughness) while the pdf still agrees. The returned dict is the same for both."""
     if isinstance(model, dict):
         return model
-    kind = _kind(model)
-    if kind == "Diffuse":
-        return {"type": "twosided",
-                "bsdf": {"type": "diffuse", "reflectance": _rgb(model.reflectance)}}
-    if kind == "Conductor":
-        fresnel = getattr(model, "fresnel", "exact")
-        if fresnel != "exact":
-            raise ValueError(
-                f"fresnel: Mitsuba 3's conductors only have the exact complex Fresnel term, got "
-                f"fresnel={fresnel!r}; use bsdfkit.testing.drjit_models.conductor_f(..., "
-                f"fresnel={fresnel!r}) as the reference")
-        smooth, ax, ay = _alphas(model)
-        if smooth:
-            inner = {"type": "conductor", "eta": _rgb(model.eta), "k": _rgb(model.k)}
-        else:
-            inner = {"type": "roughconductor", "distribution": "ggx",
-                     "alpha_u": ax, "alpha_v": ay, "sample_visible": True,
-                     "eta": _rgb(model.eta), "k": _rgb(model.k)}
-        return {"type": "twosided", "bsdf": inner}
-    if kind == "Dielectric":
-        eta = float(model.eta)
-        if eta == 1.0:
-            # pbrt: eta == 1 is always the smooth branch, a straight pass-through with R = 0,
-            # f = 1/|cos|, pdf = 1. Mitsuba's dielectrics reject int_ior == ext_ior; 'null'
-            # samples wo = -wi with weight 1 and pdf 1 (sampled_type = Null).
-            return {"type": "null"}
-        smooth, ax, ay = _alphas(model)
-        # Mitsuba 3.9.1 accepts int_ior < ext_ior, so eta < 1 is given as is (no need to
-        # rescale to int_ior = 1, ext_ior = 1/eta).
-        if smooth:
-            return {"type": "dielectric", "int_ior": eta, "ext_ior": 1.0}
-        return {"type": "roughdielectric", "distribution": "ggx", "alpha_u": ax, "alpha_v": ay,
-                "sample_visible": True, "int_ior": eta, "ext_ior": 1.0}
-    if kind == "ThinDielectric":
-        eta = float(model.eta)
-        if eta == 1.0:
-            return {"type": "null"}
-        return {"type": "thindielectric", "int_ior": eta, "ext_ior": 1.0}
-    if kind == "Plastic":
-        # Mitsuba's plastics are one-sided; bsdfkit's is two-sided like pbrt's BxDFs
-        inner = {"diffuse_reflectance": _rgb(model.reflectance), "int_ior": float(model.eta), "ext_ior": 1.0,
-                 "nonlinear": bool(model.nonlinear)}
-        if np.any(np.asarray(model.specular_reflectance) != 1.0):
-            inner["specular_reflectance"] = _rgb(model.specular_reflectance)
-        if float(model.alpha) < SMOOTH_ALPHA:
-            inner["type"] = "plastic"
-        else:
-            inner.update(type="roughplastic", distribution="ggx", alpha=max(float(model.alpha), MIN_ALPHA),
-                         sample_visible=True)
-        return {"type": "twosided", "bsdf": inner}
-    if kind == "DiffuseTransmission":
-        raise NotImplementedError(
-            "Mitsuba 3 has no diffuse-transmission BSDF plugin; use "
-            "bsdfkit.testing.drjit_models.diffuse_transmission_f_pdf as the reference")
-    raise TypeError(f"to_mitsuba: unsupported model type {type(model).__name__!r}")
+    if not hasattr(model, "to_mitsuba"):
+        raise TypeError(f"to_mitsuba: unsupported model type {type(model).__name__!r}")
+    return model.to_mitsuba()
 
 
 def load(model_or_dict):

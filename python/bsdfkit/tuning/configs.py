@@ -6,8 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..models import FilamentCloth, FilamentStandard
-from ..models import BxDF, Conductor, Dielectric
+from ..models import BxDF
 
 __all__ = ["Knob", "family", "Config", "configurations", "knobs"]
 
@@ -20,10 +19,13 @@ class Knob:
     """One accuracy knob of a model instance.
 
     name: the knob (a constructor keyword of the model, ``"precision"``, or a lobe name).
-    kind: ``"precision"`` | ``"approximation"`` | ``"lobe"``. settings: values, most accurate
-    first; labels: the same as short strings. value: the model's current setting (``None`` for
-    precision, which belongs to the call). reachable: False when the knob cannot change the
-    result of this instance in any configuration (then ``note`` says why).
+    kind: ``"approximation"`` (a cheaper way to compute the same material: precision, Fresnel
+    approximations, table sizes, dropping a negligible lobe) or ``"modelling"`` (which material it
+    is: masking, Lambert vs Burley, ...), as the model class declares it. settings: values, most
+    accurate first; labels: the same as short strings. value: the model's current setting (``None``
+    for precision, which belongs to the call). reachable: False when the knob cannot change the
+    result of this instance in any configuration (then ``note`` says why). lobe: True for a
+    keep/drop knob of an optional lobe.
     """
 
     name: str
@@ -33,6 +35,7 @@ class Knob:
     value: object
     reachable: bool
     note: str
+    lobe: bool = False
 
 
 @dataclass(frozen=True)
@@ -45,6 +48,7 @@ class _Spec:
     moot: object             # callable(params) -> str | None (reason)
     note: str
     param: str | None = None  # the constructor keyword it sets (None: precision)
+    lobe: bool = False
 
 
 def _never(_p):
@@ -57,129 +61,57 @@ def _label(v) -> str:
     return str(v)
 
 
-def _choice_spec(p, name, order, moot, note):
-    return _Spec(name, "approximation", tuple(order), tuple(_label(v) for v in order), p[name], moot, note, name)
-
-
 def _precision_spec():
-    return _Spec("precision", "precision", ("float64", "float32"), ("float64", "float32"), None, _never,
+    return _Spec("precision", "approximation", ("float64", "float32"), ("float64", "float32"), None, _never,
                  "kernel precision: float32 directions run float32 kernels (a property of the call)")
 
 
-def _smooth(p) -> bool:
-    return max(p["alpha_x"], p["alpha_y"]) < 1e-3
+def _spec_of(decl, p, fixed: bool) -> _Spec:
+    """The instance form of a class's KnobDecl; ``fixed``: only the input's own setting."""
+    settings = tuple(decl.settings(p)) if callable(decl.settings) else tuple(decl.settings)
+    labels = tuple(decl.labels(p)) if decl.labels else tuple(_label(v) for v in settings)
+    moot = decl.moot or _never
+    if decl.lobe:   # a lobe knob is moot when the input has no such lobe (one setting: keep)
+        moot = _never if len(settings) > 1 else (lambda q, n=decl.name: f"no {n.replace('_', ' ')}")
+    value = p[decl.keyword]
+    if fixed:
+        i = _index_of(settings, value)
+        settings, labels = (settings[i],), (labels[i],)
+    return _Spec(decl.name, decl.kind, settings, labels, value, moot, decl.note, decl.keyword, decl.lobe)
 
 
-def _conductor_specs(m):
-    p = m._params
-    return [
-        _choice_spec(p, "fresnel", ("exact", "f82", "schlick"), _never,
-                     "conductor Fresnel: complex (exact), F82-tint, Schlick"),
-        _choice_spec(p, "masking", ("correlated", "separable"),
-                     lambda q: "smooth conductor (max alpha < 1e-3): a mirror has no masking" if _smooth(q) else None,
-                     "Smith masking-shadowing: height-correlated or separable G1 G1"),
-        _precision_spec()]
+def _index_of(settings, value) -> int:
+    for i, v in enumerate(settings):
+        if np.array_equal(np.asarray(v), np.asarray(value)):
+            return i
+    return 0
 
 
-def _dielectric_specs(m):
-    p = m._params
-
-    def moot(q):
-        if _smooth(q):
-            return "smooth dielectric (max alpha < 1e-3): delta lobes have no masking"
-        if q["eta"] == 1.0:
-            return "eta = 1: light passes straight through, no microfacets involved"
-        return None
-    return [_choice_spec(p, "masking", ("correlated", "separable"), moot,
-                         "Smith masking-shadowing: height-correlated or separable G1 G1"), _precision_spec()]
-
-
-def _filament_f0(q) -> np.ndarray:
-    """Per-channel f0 of a FilamentStandard parameter set (computeF0 + CLEAR_COAT_IOR_CHANGE)."""
-    from ..models.filament import dfg as _fil
-    f0 = q["base_color"] * q["metallic"] + 0.16 * q["reflectance"] ** 2 * (1 - q["metallic"])
-    if q["clear_coat_ior_change"] and q["clear_coat"] > 0:
-        cc = q["clear_coat"]
-        f0 = f0 + cc * (_fil.term("f0ClearCoatToSurface", f0) - f0)
-    return f0
+def _check_allow(model, allow) -> frozenset:
+    """The modelling knobs named in ``allow`` (validated against the class's declarations)."""
+    if allow is None:
+        return frozenset()
+    if isinstance(allow, str):
+        allow = (allow,)
+    names = {k.name for k in type(model).knobs if k.kind == "modelling"}
+    for a in allow:
+        if a not in names:
+            raise ValueError(f"allow: {a!r} is not a modelling knob of {type(model).__name__} "
+                             f"(its modelling knobs: {', '.join(sorted(names)) or 'none'})")
+    return frozenset(allow)
 
 
-def _lut_settings(v: int) -> tuple:
-    """DFG table sizes, largest (most accurate) first: 128, 64, 32, 16 and the input's own size."""
-    return tuple(sorted({128, 64, 32, 16, int(v)}, reverse=True))
-
-
-def _filament_standard_specs(m):
-    p = m._params
-    cc, sheen = p["clear_coat"], p["sheen_color"]
-
-    def diffuse_moot(q):
-        return ("no diffuse colour (base_color (1 - metallic) = 0)"
-                if float(np.max(q["base_color"] * (1 - q["metallic"]))) == 0 else None)
-
-    def vis_moot(q):
-        return "anisotropic lobe: always V_SmithGGXCorrelated_Anisotropic" if q["anisotropy"] != 0 else None
-
-    def f90_moot(q):
-        return ("the f90 rule saturates (16.5 sum(f0) >= 1): f90 = 1 either way"
-                if 16.5 * float(np.sum(_filament_f0(q))) >= 1.0 else None)
-
-    def ec_moot(q):
-        return "f0 = 0: the compensation 1 + f0 (1/DFG.y - 1) is 1" if float(np.max(_filament_f0(q))) == 0 else None
-
-    def lut_moot(q):
-        ec_on = q["energy_compensation"] and ec_moot(q) is None
-        has_sheen = float(np.max(q["sheen_color"])) > 0
-        if not ec_on and not has_sheen:
-            return "without energy compensation and sheen, the DFG table only feeds sampling probabilities"
-        return None
-
-    specs = []
-    specs.append(_Spec("clear_coat", "lobe", (cc, 0.0) if cc > 0 else (cc,), ("keep", "drop") if cc > 0 else ("keep",),
-                       cc, lambda q: None if cc > 0 else "no clear coat",
-                       "clear-coat lobe: keep, or drop (clear_coat = 0, compiled variant without the coat)",
-                       "clear_coat"))
-    has_sheen = float(np.max(sheen)) > 0
-    specs.append(_Spec("sheen", "lobe", (sheen, np.zeros(3)) if has_sheen else (sheen,),
-                       ("keep", "drop") if has_sheen else ("keep",), sheen,
-                       lambda q: None if has_sheen else "no sheen",
-                       "sheen lobe: keep, or drop (sheen_color = 0, compiled variant without sheen)", "sheen_color"))
-    specs.append(_choice_spec(p, "diffuse", ("burley", "lambert"), diffuse_moot,
-                              "diffuse term: Fd_Burley (retro-reflection, grazing falloff) or Fd_Lambert"))
-    specs.append(_choice_spec(p, "visibility", ("correlated", "fast"), vis_moot,
-                              "V_SmithGGXCorrelated or its _Fast approximation (Hammon 2017)"))
-    specs.append(_choice_spec(p, "f90", ("filament", "one"), f90_moot,
-                              "Schlick f90: the specular-occlusion rule saturate(16.5 sum f0), or 1"))
-    specs.append(_choice_spec(p, "energy_compensation", (True, False), ec_moot,
-                              "multiple-scattering energy compensation 1 + f0 (1/DFG.y - 1)"))
-    specs.append(_choice_spec(p, "dfg_lut_size", _lut_settings(p["dfg_lut_size"]), lut_moot,
-                              "side of the DFG table (energy compensation, sheen scaling)"))
-    specs.append(_precision_spec())
-    return specs
-
-
-def _filament_cloth_specs(m):
-    p = m._params
-    return [
-        _choice_spec(p, "diffuse", ("burley", "lambert"),
-                     lambda q: "black base colour" if float(np.max(q["base_color"])) == 0 else None,
-                     "diffuse term: Fd_Burley or Fd_Lambert"),
-        _choice_spec(p, "dfg_lut_size", (p["dfg_lut_size"],),
-                     lambda q: "the cloth's DFG table only feeds the lobe-selection probabilities of sample/pdf",
-                     "side of the DFG table (sampling probabilities only)"),
-        _precision_spec()]
-
-
-def _specs(model) -> list:
-    if isinstance(model, Conductor):
-        return _conductor_specs(model)
-    if isinstance(model, Dielectric):
-        return _dielectric_specs(model)
-    if isinstance(model, FilamentStandard):
-        return _filament_standard_specs(model)
-    if isinstance(model, FilamentCloth):
-        return _filament_cloth_specs(model)
-    return [_precision_spec()]   # Diffuse, DiffuseTransmission, ThinDielectric, any later model
+def _specs(model, allow="all") -> list:
+    """The knobs of ``model`` as _Spec, precision last. ``allow``: ``"all"`` enumerates every knob
+    (tradeoff); a set of names enumerates the approximations and only those modelling knobs, the
+    other modelling knobs keeping the input's setting (simplify)."""
+    p = model._params
+    out = []
+    for d in type(model).knobs:
+        fixed = allow != "all" and d.kind == "modelling" and d.name not in allow
+        out.append(_spec_of(d, p, fixed))
+    out.append(_precision_spec())
+    return out
 
 
 def _check_model(model, name="model"):
@@ -191,18 +123,9 @@ def _check_model(model, name="model"):
 
 def family(model) -> str:
     """Cost-table family of a model: the class plus the structural variant that selects a
-    different compiled kernel (smooth/rough, Filament's coat/sheen lobes)."""
+    different compiled kernel (``model.cost_family()``: smooth/rough, Filament's coat/sheen lobes)."""
     _check_model(model)
-    p = model._params
-    name = type(model).__name__
-    if isinstance(model, Conductor):
-        return name + ("/smooth" if _smooth(p) else "/rough")
-    if isinstance(model, Dielectric):
-        return name + ("/smooth" if _smooth(p) or p["eta"] == 1.0 else "/rough")
-    if isinstance(model, FilamentStandard):
-        lobes = [x for x, on in (("coat", p["clear_coat"] > 0), ("sheen", float(np.max(p["sheen_color"])) > 0)) if on]
-        return name + ("/" + "+".join(lobes) if lobes else "")
-    return name
+    return model.cost_family()
 
 
 @dataclass(frozen=True, eq=False)
@@ -255,11 +178,13 @@ def _apply(model, specs, combo):
     return params, moot
 
 
-def configurations(model) -> list:
+def configurations(model, allow="all") -> list:
     """Every reachable configuration of ``model`` (a list of :class:`Config`), the most accurate
-    first, then in registry order of enumeration (later knobs vary fastest)."""
+    first, then in registry order of enumeration (later knobs vary fastest). ``allow``: ``"all"``
+    (default) varies every knob; a tuple of modelling-knob names varies the approximation knobs
+    and only those modelling knobs (the others keep the input's setting), as :func:`simplify`."""
     _check_model(model)
-    specs = _specs(model)
+    specs = _specs(model, allow)
     seen, out = set(), []
     for combo in itertools.product(*[range(len(s.settings)) for s in specs]):
         params, moot = _apply(model, specs, combo)
@@ -276,8 +201,8 @@ def configurations(model) -> list:
     return out
 
 
-def _reference_config(model) -> Config:
-    specs = _specs(model)
+def _reference_config(model, allow="all") -> Config:
+    specs = _specs(model, allow)
     params, moot = _apply(model, specs, (0,) * len(specs))
     labels = {s.name: (None if moot[s.name] else s.labels[0]) for s in specs}
     key = ";".join(f"{s.name}={s.labels[0]}" for s in specs)
@@ -285,8 +210,8 @@ def _reference_config(model) -> Config:
 
 
 def knobs(model) -> tuple:
-    """The accuracy knobs of a model instance (tuple of :class:`Knob`), registry order: lobes,
-    approximations, precision last. ``reachable`` is False for knobs that cannot change this
+    """The accuracy knobs of a model instance (tuple of :class:`Knob`), in the order the class
+    declares them, precision last. ``reachable`` is False for knobs that cannot change this
     instance's result in any configuration."""
     _check_model(model)
     return _knobs_from(model, configurations(model))
@@ -302,5 +227,5 @@ def _knobs_from(model, cfgs) -> tuple:
         else:
             _, moot = _apply(model, specs, (0,) * len(specs))
             note = moot[s.name] or ("only one setting" if len(s.settings) == 1 else s.note)
-        out.append(Knob(s.name, s.kind, s.settings, s.labels, s.value, reach, note))
+        out.append(Knob(s.name, s.kind, s.settings, s.labels, s.value, reach, note, s.lobe))
     return tuple(out)

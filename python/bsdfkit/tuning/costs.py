@@ -11,7 +11,7 @@ import numpy as np
 from .errors import _all_delta, _is_transmissive
 from .configs import Config, family
 
-__all__ = ["knob_costs", "COST_RESOLUTION", "best_time"]
+__all__ = ["knob_costs", "COST_RESOLUTION", "best_time", "time_repeats", "spread", "SPREAD_WARN", "cost_deviations"]
 
 
 _COSTS_CACHE: dict = {}
@@ -60,7 +60,10 @@ COST_RESOLUTION = 0.05
 def _pick(cands, costs, configs, err):
     """Index of the chosen candidate and how it was ranked (see :func:`simplify`)."""
     if all(c is None for c in costs):
-        return min(cands, key=lambda i: configs[i].registry_rank), "registry order (no cost table for this family)"
+        def rank(i):   # most knobs at cheaper settings; ties: the most lobes dropped, then the closest
+            r = configs[i].registry_rank
+            return (r[0], -sum(v == "drop" for v in configs[i].labels.values()), err[i], r[1])
+        return min(cands, key=rank), "registry order (no cost table for this family)"
     c = {i: 1.0 if costs[i] is None else float(costs[i]) for i in cands}
     cmin = min(c.values())
     near = [i for i in cands if c[i] <= cmin * (1 + COST_RESOLUTION)]
@@ -70,23 +73,61 @@ def _pick(cands, costs, configs, err):
                                  if costs[best] is None else "")
 
 
-def best_time(fn, repeats=5, min_time=0.005, warmup=1):
-    """Min over ``repeats`` of the mean time of ``inner`` back-to-back calls of ``fn`` after
-    ``warmup`` calls; ``inner`` is chosen so that one repeat takes >= ``min_time`` seconds.
-    Also the timer of ``bench/throughput.py`` and ``bench/filament.py``."""
+def time_repeats(fn, repeats=5, min_time=0.005, warmup=1) -> list:
+    """Per-call times of ``repeats`` repeats, each the mean of ``inner`` back-to-back calls of
+    ``fn`` after ``warmup`` calls; ``inner`` is chosen so that one repeat takes >= ``min_time``
+    seconds."""
     for _ in range(warmup):
         fn()
     t0 = time.perf_counter()
     fn()
     dt = time.perf_counter() - t0
     inner = max(1, int(math.ceil(min_time / max(dt, 1e-9)))) if dt < min_time else 1
-    best = math.inf
+    out = []
     for _ in range(repeats):
         t0 = time.perf_counter()
         for _ in range(inner):
             fn()
-        best = min(best, (time.perf_counter() - t0) / inner)
-    return best
+        out.append((time.perf_counter() - t0) / inner)
+    return out
+
+
+def best_time(fn, repeats=5, min_time=0.005, warmup=1):
+    """Min over ``repeats`` of the mean time of ``inner`` back-to-back calls of ``fn`` after
+    ``warmup`` calls (:func:`time_repeats`).
+    Also the timer of ``bench/throughput.py`` and ``bench/filament.py``."""
+    return min(time_repeats(fn, repeats, min_time, warmup))
+
+
+def spread(times) -> float:
+    """Timing spread of repeats: median / min (1 on a quiet machine; a load spike or a stalled
+    thread makes it large)."""
+    t = sorted(times)
+    return float(np.median(t) / t[0]) if t and t[0] > 0 else math.inf
+
+
+#: Above this spread (median / min of the repeats) a live timing is reported as unreliable.
+SPREAD_WARN = 1.5
+
+
+def cost_deviations(shipped: dict, measured: dict, tol: float = 0.5) -> list:
+    """Entries of a cost table that a fresh measurement contradicts: ``[(family, config key,
+    table cost, measured cost)]`` for every entry present in both whose measured relative cost
+    differs from the table's by more than ``tol`` (0.5: a factor outside [1/1.5, 1.5]).
+    ``shipped``: a :func:`knob_costs` table; ``measured``: ``{family: {config key: cost}}``
+    (``bench/tradeoff.py --check`` measures it)."""
+    out = []
+    fams = shipped.get("families", {})
+    for fam, costs in measured.items():
+        table = fams.get(fam, {}).get("costs", {})
+        for key, got in costs.items():
+            want = table.get(key)
+            if want is None or not want > 0 or not got > 0:
+                continue
+            r = got / want
+            if r > 1 + tol or r < 1 / (1 + tol):
+                out.append((fam, key, float(want), float(got)))
+    return out
 
 
 def _timing_inputs(model, n, seed):
@@ -119,20 +160,26 @@ def _op(model) -> str:
 
 
 def _measure(configs, op, n_timing, repeats, rounds, seed):
-    """Live throughput: every configuration timed right after the most accurate one (best of
-    ``repeats``), in ``rounds`` interleaved rounds; returns (evals/s, speedup) lists, speedup =
-    smallest reference time of the run / smallest time of the configuration (a load spike during
-    one reference timing then cannot inflate a ratio)."""
+    """Live throughput: every configuration timed right after the most accurate one (``repeats``
+    repeats each), in ``rounds`` interleaved rounds; returns (evals/s, speedup, spread) lists,
+    speedup = smallest reference time of the run / smallest time of the configuration (a load
+    spike during one reference timing then cannot inflate a ratio), spread = the larger of the
+    configuration's and the reference's :func:`spread` over all its repeats."""
     inputs = _timing_inputs(configs[0].model, n_timing, seed)
     calls = [_timed_call(c, op, inputs) for c in configs]
-    t_ref, t = math.inf, [math.inf] * len(configs)
+    ref_times = []
+    times = [[] for _ in configs]
     for _ in range(rounds):
         for i, call in enumerate(calls):
-            tr = best_time(calls[0], repeats)
-            t_ref = min(t_ref, tr)
-            t[i] = min(t[i], tr if i == 0 else best_time(call, repeats))
-    t[0] = t_ref
-    return [n_timing / x for x in t], [t_ref / x for x in t]
+            ref_times += time_repeats(calls[0], repeats)
+            if i:
+                times[i] += time_repeats(call, repeats)
+    times[0] = ref_times
+    t = [min(x) for x in times]
+    t_ref = t[0]
+    s_ref = spread(ref_times)
+    spreads = [max(s_ref, spread(x)) for x in times]
+    return [n_timing / x for x in t], [t_ref / x for x in t], spreads
 
 
 def _threads():

@@ -215,13 +215,18 @@ def _values(cfg: Config, prep: _Prepared):
 
 
 class _Evaluation:
-    """Errors of every configuration of a model against its most accurate one."""
+    """Errors of every configuration of a model against a reference: its most accurate
+    configuration (``reference="accurate"``, :func:`tradeoff`) or the input model itself, called
+    in float64 (``reference="input"``, :func:`simplify`). ``allow`` as in :func:`configurations`."""
 
-    def __init__(self, model, directions, n, seed, n_albedo):
+    def __init__(self, model, directions, n, seed, n_albedo, *, allow="all", reference="accurate"):
         self.model = model
-        self.configs = configurations(model)
-        self.reference = self.configs[0]
-        assert self.reference.is_reference
+        self.configs = configurations(model, allow)
+        if reference == "input":
+            self.reference = next(c for c in self.configs if c.dtype is np.float64 and c.model == model)
+        else:
+            self.reference = self.configs[0]
+            assert self.reference.is_reference
         if directions is None:
             self.directions = direction_set(model, n, seed, n_albedo=n_albedo)
         else:

@@ -121,7 +121,7 @@ struct LayerParams {  // the medium and the estimator, shared by both models
     double g = 0;
     int max_depth = 10;
     int n_samples = 1;
-    uint64_t seed = 0;
+    int seed = 0;  // >= 0; an int field (core/bxdf.h), widened to 64 bits for hashing
     // MIS weight of the exit interface's transmission after a base / phase sample: pbrt-v4 uses
     // top.PDF(-w, wi) (the density of wi given the inner direction) against the sample's density
     // of the inner direction; false keeps that (the book's estimator, biased high with a rough
@@ -197,7 +197,7 @@ template <typename F, typename Bottom> struct LayeredBxDF {
         g = F(clamp(p.g, -0.99, 0.99));
         max_depth = p.max_depth;
         n_samples = p.n_samples;
-        seed = p.seed;
+        seed = uint64_t(p.seed);
         consistent_mis = p.consistent_mis;
     }
 

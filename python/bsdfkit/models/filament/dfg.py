@@ -3,7 +3,9 @@
 The models themselves are :class:`bsdfkit.FilamentStandard` and :class:`bsdfkit.FilamentCloth`.
 
 The DFG table is computed by bsdfkit (in C++, double precision) rather than ported from
-Filament's texture, and cached per ``(size, samples)`` for the life of the process::
+Filament's texture, cached per ``(size, samples)`` for the life of the process and on disk
+under :func:`cache_dir` (keyed by size, samples and the digest of the compiled builder), so
+only the first process on a machine pays the few seconds it takes::
 
     >>> import bsdfkit as bk
     >>> lut = bk.filament.dfg_lut(128)        # (128, 128, 3) float64, read-only
@@ -26,8 +28,11 @@ roughness 1 (size 128).
 """
 from __future__ import annotations
 
+import hashlib
 import math
+import os
 import sys
+import tempfile
 import threading
 import time
 
@@ -35,7 +40,7 @@ import numpy as np
 
 from ... import _core
 
-__all__ = ["dfg_lut", "term", "TERMS", "MIN_PERCEPTUAL_ROUGHNESS", "MIN_N_DOT_V", "DFG_LUT_SIZE",
+__all__ = ["dfg_lut", "cache_dir", "term", "TERMS", "MIN_PERCEPTUAL_ROUGHNESS", "MIN_N_DOT_V", "DFG_LUT_SIZE",
            "DFG_LUT_SAMPLES"]
 
 #: Filament's roughness clamps (``MIN_PERCEPTUAL_ROUGHNESS``; alpha floor = its square).
@@ -80,20 +85,102 @@ def _check_size(size, samples):
 
 
 def _table(size=DFG_LUT_SIZE, samples=None, progress=None):
-    """The cached compiled table (``_core.FilamentDFG``) shared by every model of this size."""
+    """The cached compiled table (``_core.FilamentDFG``) shared by every model of this size:
+    from this process's cache, else from the on-disk cache (:func:`cache_dir`), else computed
+    (and then written to the disk cache)."""
     size, samples = _check_size(size, samples)
     key = (size, samples)
     with _LOCK:
         t = _CACHE.get(key)
         if t is None:
-            t = _core.FilamentDFG(_build(size, samples, progress), samples)
+            a = _load_cached(size, samples)
+            if a is None:
+                a = _build(size, samples, progress)
+                _store_cached(size, samples, a)
+            t = _core.FilamentDFG(a, samples)
             _CACHE[key] = t
     return t
 
 
+#: Whether ``_build`` reports progress when ``progress=None``: None = only on an interactive
+#: stderr for builds over 1 s; the CLI's ``-q`` sets False.
+PROGRESS_DEFAULT = None
+
+
+def cache_dir() -> str:
+    """Directory of bsdfkit's on-disk cache: ``$BSDFKIT_CACHE_DIR`` if set, else the user cache
+    directory (``$XDG_CACHE_HOME/bsdfkit`` or ``~/.cache/bsdfkit``; ``%LOCALAPPDATA%\\bsdfkit`` on
+    Windows, ``~/Library/Caches/bsdfkit`` on macOS)."""
+    d = os.environ.get("BSDFKIT_CACHE_DIR")
+    if d:
+        return d
+    if sys.platform == "win32":
+        base = os.environ.get("LOCALAPPDATA") or os.path.expanduser("~\\AppData\\Local")
+    elif sys.platform == "darwin":
+        base = os.path.expanduser("~/Library/Caches")
+    else:
+        base = os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache")
+    return os.path.join(base, "bsdfkit")
+
+
+_BUILDER_DIGEST = None
+
+
+def _builder_digest() -> str:
+    """Content key of the code that computes the table: the SHA-256 of the compiled extension
+    (a rebuilt or upgraded bsdfkit never reads a table an older builder wrote)."""
+    global _BUILDER_DIGEST
+    if _BUILDER_DIGEST is None:
+        h = hashlib.sha256()
+        with open(_core.__file__, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                h.update(block)
+        _BUILDER_DIGEST = h.hexdigest()[:16]
+    return _BUILDER_DIGEST
+
+
+def _cache_path(size, samples) -> str:
+    return os.path.join(cache_dir(), f"filament-dfg-{size}x{size}-{samples}-{_builder_digest()}.npy")
+
+
+def _load_cached(size, samples):
+    """The table from the disk cache, or None (missing, unreadable or not a valid table)."""
+    try:
+        a = np.load(_cache_path(size, samples), allow_pickle=False)
+    except (OSError, ValueError, EOFError):
+        return None
+    if a.shape != (size, size, 3) or a.dtype != np.float64 or not np.all(np.isfinite(a)):
+        return None
+    return a
+
+
+def _store_cached(size, samples, a) -> None:
+    """Writes the table atomically (temporary file + rename); a read-only or missing cache
+    directory only means the next process computes it again."""
+    path = _cache_path(size, samples)
+    try:
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=os.path.dirname(path), suffix=".tmp")
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                np.save(fh, a, allow_pickle=False)
+            os.replace(tmp, path)
+        except BaseException:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+            raise
+    except OSError:
+        pass
+
+
 def _build(size, samples, progress):
     """Row chunks of the C++ builder; reports progress on stderr once it runs longer than 1 s
-    (``progress=None``), always (``True``) or never (``False``)."""
+    (``progress=None``: only when stderr is a terminal, and never after the CLI's ``-q``),
+    always (``True``) or never (``False``)."""
+    if progress is None:
+        progress = PROGRESS_DEFAULT
+        if progress is None:
+            progress = None if _stderr_is_tty() else False
     out = np.empty((size, size, 3))
     t0 = time.perf_counter()
     step = max(1, math.ceil(size / 32))
@@ -106,12 +193,20 @@ def _build(size, samples, progress):
         due = r1 == size or elapsed - last >= 0.25
         if due and (progress or (progress is None and elapsed > 1.0)):
             last = elapsed
-            print(f"\rbsdfkit: computing the Filament DFG table ({size}x{size}, {samples} samples): "
-                  f"{100 * r1 // size:3d}% ({elapsed:.1f} s)", end="", file=sys.stderr, flush=True)
+            print(f"\rbsdfkit: computing the Filament DFG table ({size}x{size}, {samples} samples, "
+                  f"cached in {cache_dir()}): {100 * r1 // size:3d}% ({elapsed:.1f} s)", end="", file=sys.stderr,
+                  flush=True)
             shown = True
     if shown:
         print(file=sys.stderr, flush=True)
     return out
+
+
+def _stderr_is_tty() -> bool:
+    try:
+        return sys.stderr is not None and sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        return False
 
 
 def dfg_lut(size: int = DFG_LUT_SIZE, samples: int | None = None, *, progress=None) -> np.ndarray:
@@ -119,9 +214,10 @@ def dfg_lut(size: int = DFG_LUT_SIZE, samples: int | None = None, *, progress=No
 
     ``lut[j, i] = (x, y, z)`` at perceptual roughness ``j / (size - 1)`` and NoV
     ``i / (size - 1)`` (NoV = 1e-4 for i = 0; see the module docstring for the channels). ``samples`` quasi-Monte
-    Carlo samples per texel (default :data:`DFG_LUT_SAMPLES`). Cached per ``(size, samples)``;
-    the first call for a size takes one to three seconds at 128 (progress is printed on stderr when
-    it takes longer than that; ``progress=True/False`` forces it on/off).
+    Carlo samples per texel (default :data:`DFG_LUT_SAMPLES`). Cached per ``(size, samples)`` in
+    the process and on disk (:func:`cache_dir`); computing a table takes one to five seconds at
+    128 (progress is printed on an interactive stderr when it takes longer than 1 s;
+    ``progress=True/False`` forces it on/off).
     """
     a = _table(size, samples, progress).array()
     a.setflags(write=False)

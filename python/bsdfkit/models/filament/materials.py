@@ -8,6 +8,7 @@ import numpy as np
 from ... import _core
 from . import dfg as _fil
 from ..base import BxDF, _rgb, _scalar
+from ..registry import KnobDecl
 
 __all__ = ["FilamentStandard", "FilamentCloth", "examples"]
 
@@ -48,6 +49,64 @@ def _lut_size(value):
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 2 <= value <= 4096:
         raise ValueError(f"dfg_lut_size: must be an integer in [2, 4096], got {value!r}")
     return int(value)
+
+
+# ---------------------------------------------------------------- knob declarations (read by bsdfkit.tuning)
+
+def _f0(q) -> np.ndarray:
+    """Per-channel f0 of a FilamentStandard parameter set (computeF0 + CLEAR_COAT_IOR_CHANGE)."""
+    f0 = q["base_color"] * q["metallic"] + 0.16 * q["reflectance"] ** 2 * (1 - q["metallic"])
+    if q["clear_coat_ior_change"] and q["clear_coat"] > 0:
+        cc = q["clear_coat"]
+        f0 = f0 + cc * (_fil.term("f0ClearCoatToSurface", f0) - f0)
+    return f0
+
+
+def _strength(v) -> float:
+    return float(np.max(v))
+
+
+def _lobe_settings(param):
+    """keep (the input's strength) then drop (0), or only keep when the lobe is absent."""
+    def settings(q):
+        v = q[param]
+        zero = np.zeros(3) if isinstance(v, np.ndarray) else 0.0
+        return (v, zero) if _strength(v) > 0 else (v,)
+    return settings
+
+
+def _lobe_labels(param):
+    return lambda q: ("keep", "drop") if _strength(q[param]) > 0 else ("keep",)
+
+
+def _diffuse_moot(q):
+    return ("no diffuse colour (base_color (1 - metallic) = 0)"
+            if float(np.max(q["base_color"] * (1 - q["metallic"]))) == 0 else None)
+
+
+def _visibility_moot(q):
+    return "anisotropic lobe: always V_SmithGGXCorrelated_Anisotropic" if q["anisotropy"] != 0 else None
+
+
+def _f90_moot(q):
+    return ("the f90 rule saturates (16.5 sum(f0) >= 1): f90 = 1 either way"
+            if 16.5 * float(np.sum(_f0(q))) >= 1.0 else None)
+
+
+def _ec_moot(q):
+    return "f0 = 0: the compensation 1 + f0 (1/DFG.y - 1) is 1" if float(np.max(_f0(q))) == 0 else None
+
+
+def _lut_moot(q):
+    ec_on = q["energy_compensation"] and _ec_moot(q) is None
+    if not ec_on and float(np.max(q["sheen_color"])) == 0:
+        return "without energy compensation and sheen, the DFG table only feeds sampling probabilities"
+    return None
+
+
+def _lut_settings(q) -> tuple:
+    """DFG table sizes, largest (most accurate) first: 128, 64, 32, 16 and the input's own size."""
+    return tuple(sorted({128, 64, 32, 16, int(q["dfg_lut_size"])}, reverse=True))
 
 
 class FilamentStandard(BxDF):
@@ -100,6 +159,49 @@ class FilamentStandard(BxDF):
 
     __slots__ = ()
 
+    description = "Filament's standard material: diffuse + GGX specular, clear coat, sheen, anisotropy"
+    examples = {
+        "plastic (defaults)": "filament_standard 0.8,0.5,0.3",
+        "plastic, Burley diffuse": "filament_standard 0.8,0.5,0.3 diffuse=burley",
+        "plastic, low quality (fast V, f90 1, no EC, mobile)":
+            "filament_standard 0.8,0.5,0.3 visibility=fast f90=one energy_compensation=false min_roughness=mobile",
+        "gold, rough": "filament_standard 1,0.85,0.57 metallic=1 roughness=0.6",
+        "gold, rough, no energy compensation":
+            "filament_standard 1,0.85,0.57 metallic=1 roughness=0.6 energy_compensation=false",
+        "brushed aluminium (anisotropy 0.8)": "filament_standard 0.91,0.92,0.92 metallic=1 roughness=0.5 anisotropy=0.8",
+        "car paint (clear coat over blue metal)":
+            "filament_standard 0.05,0.2,0.7 metallic=0.7 roughness=0.5 clear_coat=1 clear_coat_roughness=0.05",
+        "car paint, doc layering": "filament_standard 0.05,0.2,0.7 metallic=0.7 roughness=0.5 clear_coat=1 "
+                                   "clear_coat_roughness=0.05 clear_coat_layering=doc",
+        "satin (sheen)": "filament_standard 0.3,0.05,0.1 roughness=0.6 sheen_color=0.9,0.6,0.7 sheen_roughness=0.4",
+        "faint clear coat (README)": "filament_standard clear_coat=0.001",
+        "coated satin, reflectance 0.1 (every knob reachable)":
+            "filament_standard 0.8,0.5,0.3 reflectance=0.1 clear_coat=0.5 clear_coat_roughness=0.1 "
+            "sheen_color=0.6,0.5,0.4 sheen_roughness=0.5",
+        "plastic, reflectance 0.1": "filament_standard 0.8,0.5,0.3 reflectance=0.1",
+    }
+    energy_conserving, exact_eval, two_sided, transmission, delta_only = False, True, False, False, False
+    reciprocal = False  # energy compensation and sheen scaling depend on wo only
+    mitsuba = None
+    knobs = (
+        KnobDecl("clear_coat", _lobe_settings("clear_coat"), "approximation",
+                 "clear-coat lobe: keep, or drop (clear_coat = 0, compiled variant without the coat)",
+                 labels=_lobe_labels("clear_coat"), lobe=True),
+        KnobDecl("sheen", _lobe_settings("sheen_color"), "approximation",
+                 "sheen lobe: keep, or drop (sheen_color = 0, compiled variant without sheen)",
+                 param="sheen_color", labels=_lobe_labels("sheen_color"), lobe=True),
+        KnobDecl("diffuse", ("burley", "lambert"), "modelling",
+                 "diffuse term: Fd_Burley (retro-reflection, grazing falloff) or Fd_Lambert", moot=_diffuse_moot),
+        KnobDecl("visibility", ("correlated", "fast"), "approximation",
+                 "V_SmithGGXCorrelated or its _Fast approximation (Hammon 2017)", moot=_visibility_moot),
+        KnobDecl("f90", ("filament", "one"), "modelling",
+                 "Schlick f90: the specular-occlusion rule saturate(16.5 sum f0), or 1", moot=_f90_moot),
+        KnobDecl("energy_compensation", (True, False), "modelling",
+                 "multiple-scattering energy compensation 1 + f0 (1/DFG.y - 1)", moot=_ec_moot),
+        KnobDecl("dfg_lut_size", _lut_settings, "approximation",
+                 "side of the DFG table (energy compensation, sheen scaling)", moot=_lut_moot),
+    )
+
     def __init__(self, base_color=0.8, metallic=0.0, roughness=0.5, reflectance=0.5, anisotropy=0.0,
                  clear_coat=0.0, clear_coat_roughness=0.0, sheen_color=0.0, sheen_roughness=0.0, *,
                  diffuse="lambert", visibility="correlated", f90="filament", energy_compensation=True,
@@ -128,6 +230,11 @@ class FilamentStandard(BxDF):
     def _from_params(cls, p):
         return cls(**p)
 
+    def cost_family(self) -> str:
+        p = self._params
+        lobes = [x for x, on in (("coat", p["clear_coat"] > 0), ("sheen", float(np.max(p["sheen_color"])) > 0)) if on]
+        return "FilamentStandard" + ("/" + "+".join(lobes) if lobes else "")
+
     @property
     def min_perceptual_roughness(self) -> float:
         """The MIN_PERCEPTUAL_ROUGHNESS value in effect."""
@@ -141,11 +248,14 @@ class FilamentStandard(BxDF):
         coat, sheen = p["clear_coat"] > 0, float(np.max(p["sheen_color"])) > 0
         cls = {(False, False): _core.FilamentStandard, (True, False): _core.FilamentStandardCoat,
                (False, True): _core.FilamentStandardSheen, (True, True): _core.FilamentStandardCoatSheen}[coat, sheen]
-        return cls(p["base_color"].tolist(), p["metallic"], p["roughness"], p["reflectance"], p["anisotropy"],
-                   p["clear_coat"], p["clear_coat_roughness"], p["sheen_color"].tolist(), p["sheen_roughness"],
-                   _DIFFUSE[p["diffuse"]], _VISIBILITY[p["visibility"]], _F90[p["f90"]], p["energy_compensation"],
-                   _min_pr(p["min_roughness"]), _LAYERING[p["clear_coat_layering"]], p["clear_coat_ior_change"],
-                   _fil._table(p["dfg_lut_size"]))
+        return cls(base_color=p["base_color"].tolist(), metallic=p["metallic"], roughness=p["roughness"],
+                   reflectance=p["reflectance"], anisotropy=p["anisotropy"], clear_coat=p["clear_coat"],
+                   clear_coat_roughness=p["clear_coat_roughness"], sheen_color=p["sheen_color"].tolist(),
+                   sheen_roughness=p["sheen_roughness"], diffuse=_DIFFUSE[p["diffuse"]],
+                   visibility=_VISIBILITY[p["visibility"]], f90_filament=_F90[p["f90"]],
+                   energy_compensation=p["energy_compensation"], min_perceptual_roughness=_min_pr(p["min_roughness"]),
+                   layering=_LAYERING[p["clear_coat_layering"]], clear_coat_ior_change=p["clear_coat_ior_change"],
+                   dfg=_fil._table(p["dfg_lut_size"]))
 
 
 class FilamentCloth(BxDF):
@@ -169,6 +279,24 @@ class FilamentCloth(BxDF):
     """
 
     __slots__ = ()
+
+    description = "Filament's cloth material: diffuse (optionally wrapped, subsurface) + Charlie sheen"
+    examples = {
+        "cloth (denim)": "filament_cloth 0.1,0.15,0.35 roughness=0.8",
+        "cloth (velvet, subsurface)": "filament_cloth 0.35,0.02,0.08 sheen_color=0.9,0.4,0.5 "
+                                      "subsurface_color=0.3,0.05,0.05 roughness=0.35",
+        "cloth (defaults)": "filament_cloth",
+    }
+    energy_conserving, exact_eval, two_sided, transmission, delta_only = False, True, False, False, False
+    reciprocal = False  # energy compensation and sheen scaling depend on wo only
+    mitsuba = None
+    knobs = (
+        KnobDecl("diffuse", ("burley", "lambert"), "modelling", "diffuse term: Fd_Burley or Fd_Lambert",
+                 moot=lambda q: "black base colour" if float(np.max(q["base_color"])) == 0 else None),
+        KnobDecl("dfg_lut_size", lambda q: (q["dfg_lut_size"],), "approximation",
+                 "side of the DFG table (sampling probabilities only)",
+                 moot=lambda q: "the cloth's DFG table only feeds the lobe-selection probabilities of sample/pdf"),
+    )
 
     def __init__(self, base_color=0.5, sheen_color=None, subsurface_color=None, roughness=0.5, *,
                  diffuse="lambert", min_roughness="desktop", dfg_lut_size=128):
@@ -201,32 +329,15 @@ class FilamentCloth(BxDF):
         p = self._params
         ss = p["subsurface_color"]
         return _core.FilamentCloth(
-            p["base_color"].tolist(), self.effective_sheen_color.tolist(),
-            [0.0, 0.0, 0.0] if ss is None else ss.tolist(), ss is not None, p["roughness"],
-            _DIFFUSE[p["diffuse"]], _min_pr(p["min_roughness"]), _fil._table(p["dfg_lut_size"]))
+            base_color=p["base_color"].tolist(), sheen_color=self.effective_sheen_color.tolist(),
+            subsurface_color=[0.0, 0.0, 0.0] if ss is None else ss.tolist(), has_subsurface=ss is not None,
+            roughness=p["roughness"], diffuse=_DIFFUSE[p["diffuse"]],
+            min_perceptual_roughness=_min_pr(p["min_roughness"]), dfg=_fil._table(p["dfg_lut_size"]))
 
 
 def examples() -> dict:
     """Representative Filament materials by name, one per lobe and knob family (for galleries,
-    demos and benchmarks): plastic, metal, brushed metal, car paint, velvet-sheen, cloth, ...
-    Every value is a ``bsdfkit.FilamentStandard`` or ``bsdfkit.FilamentCloth``."""
-    return {
-        "plastic (defaults)": FilamentStandard([0.8, 0.5, 0.3]),
-        "plastic, Burley diffuse": FilamentStandard([0.8, 0.5, 0.3], diffuse="burley"),
-        "plastic, low quality (fast V, f90 1, no EC, mobile)": FilamentStandard(
-            [0.8, 0.5, 0.3], visibility="fast", f90="one", energy_compensation=False, min_roughness="mobile"),
-        "gold, rough": FilamentStandard([1.0, 0.85, 0.57], metallic=1.0, roughness=0.6),
-        "gold, rough, no energy compensation": FilamentStandard([1.0, 0.85, 0.57], metallic=1.0, roughness=0.6,
-                                                                energy_compensation=False),
-        "brushed aluminium (anisotropy 0.8)": FilamentStandard([0.91, 0.92, 0.92], metallic=1.0, roughness=0.5,
-                                                               anisotropy=0.8),
-        "car paint (clear coat over blue metal)": FilamentStandard([0.05, 0.2, 0.7], metallic=0.7, roughness=0.5,
-                                                                   clear_coat=1.0, clear_coat_roughness=0.05),
-        "car paint, doc layering": FilamentStandard([0.05, 0.2, 0.7], metallic=0.7, roughness=0.5, clear_coat=1.0,
-                                                    clear_coat_roughness=0.05, clear_coat_layering="doc"),
-        "satin (sheen)": FilamentStandard([0.3, 0.05, 0.1], roughness=0.6, sheen_color=[0.9, 0.6, 0.7],
-                                          sheen_roughness=0.4),
-        "cloth (denim)": FilamentCloth([0.1, 0.15, 0.35], roughness=0.8),
-        "cloth (velvet, subsurface)": FilamentCloth([0.35, 0.02, 0.08], sheen_color=[0.9, 0.4, 0.5],
-                                                    subsurface_color=[0.3, 0.05, 0.05], roughness=0.35),
-    }
+    demos and benchmarks): the registered examples of :class:`FilamentStandard` and
+    :class:`FilamentCloth`, built."""
+    from ..spec import parse_spec
+    return {label: parse_spec(spec) for cls in (FilamentStandard, FilamentCloth) for label, spec in cls.examples.items()}
