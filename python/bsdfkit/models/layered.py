@@ -103,7 +103,7 @@ class CoatedDiffuse(BxDF):
     mitsuba = None
     knobs = _KNOBS
 
-    def __init__(self, reflectance=0.5, eta=1.5, alpha=0.0, alpha_x=None, alpha_y=None, thickness=0.01,
+    def __init__(self, reflectance=0.5, eta=1.5, alpha=None, alpha_x=None, alpha_y=None, thickness=0.01,
                  albedo=0.0, g=0.0, max_depth=10, n_samples=1, seed=0, masking="correlated", mis="pbrt"):
         ax, ay = _alphas(alpha, alpha_x, alpha_y)
         super().__init__(reflectance=_rgb(reflectance, "reflectance", lo=0.0, hi=1.0),
