@@ -47,9 +47,9 @@ def test_lobes_variants(tmp_path, capsys, args, size):
 
 def test_lobes_bad_spec_lists_models_and_parameters(tmp_path):
     out = tmp_path / "never.png"
-    r = _run("lobes", "plastic", "roughness=0.2", "-o", str(out))
+    r = _run("lobes", "velvet", "roughness=0.2", "-o", str(out))
     assert r.returncode != 0
-    assert "unknown model 'plastic'" in r.stderr
+    assert "unknown model 'velvet'" in r.stderr
     for name in ("conductor", "dielectric", "diffuse", "thin_dielectric", "filament_standard"):
         assert f"\n  {name} " in r.stderr
     assert "metal=Cu|Au|Ag|Al|Cr" in r.stderr and "alpha=" in r.stderr

@@ -342,7 +342,7 @@ def test_parse_spec(spec, expect):
 
 @pytest.mark.parametrize("spec, message", [
     ("", "empty"),
-    ("plastic 0.5", "unknown model 'plastic'"),
+    ("velvet 0.5", "unknown model 'velvet'"),
     ("conductor beta=1", "conductor has no parameter 'beta'"),
     ("conductor alpha=0.2", "missing a required argument: 'eta'"),
     ("conductor metal=Xx", "unknown metal 'Xx'"),
@@ -365,14 +365,14 @@ def test_new_model_without_example_fails_loudly(monkeypatch):
     from bsdfkit.models import registry
     monkeypatch.setattr(registry, "_CLASSES", dict(registry._CLASSES))   # undone after the test
     with pytest.raises(TypeError, match="examples"):          # the registry refuses a class without examples
-        class Plastic(bk.BxDF):                               # noqa: F841
+        class Velvet(bk.BxDF):                               # noqa: F841
             def __init__(self, kd, ks=0.5):
                 super().__init__(kd=kd, ks=ks)
 
-    class Plastic(bk.BxDF):
+    class Velvet(bk.BxDF):
         __slots__ = ()
         description = "test double"
-        examples = {"red": "plastic 0.3"}
+        examples = {"red": "velvet 0.3"}
         energy_conserving = exact_eval = reciprocal = two_sided = True
         transmission = delta_only = False
         mitsuba = None
@@ -383,10 +383,10 @@ def test_new_model_without_example_fails_loudly(monkeypatch):
         def _make_core(self):
             return None
 
-    assert _spec.model_names()["plastic"] is Plastic          # new classes are parsed automatically...
-    assert Plastic in bk.MODELS                                # ...listed...
-    assert "plastic kd ks=0.5" in _spec.usage()
-    assert _spec.example_spec(Plastic) == "plastic 0.3"       # ...and the gallery row is the first example
+    assert _spec.model_names()["velvet"] is Velvet          # new classes are parsed automatically...
+    assert Velvet in bk.MODELS                                # ...listed...
+    assert "velvet kd ks=0.5" in _spec.usage()
+    assert _spec.example_spec(Velvet) == "velvet 0.3"       # ...and the gallery row is the first example
 
 
 def test_to_spec_round_trips():

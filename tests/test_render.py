@@ -78,6 +78,9 @@ FURNACE = {
     "conductor_rough_F1_separable": (lambda: bk.Conductor(alpha=0.5, masking="separable", **F_ONE), "albedo"),
     "conductor_cu_rough": (lambda: bk.Conductor.from_metal("Cu", alpha=0.3), "albedo"),
     "diffuse_absorbing": (lambda: bk.Diffuse(0.5), "albedo"),
+    # stochastic layered model: sample() has pdf_is_proportional, MIS asks pdf() (an approximate
+    # density); a white base under a smooth coat with a non-absorbing medium loses nothing
+    "coated_diffuse_lossless": (lambda: bk.CoatedDiffuse(1.0, albedo=1.0, thickness=0.1, max_depth=100), "lossless"),
 }
 FURNACE_RES, FURNACE_SPP, FURNACE_SEEDS = 32, 64, (0, 1, 2, 3)
 
@@ -541,7 +544,7 @@ def test_parse_spec(spec, cls):
     assert R.parse_spec("conductor metal=Cu alpha=0.2") == bk.Conductor.from_metal("Cu", alpha=0.2)
 
 
-@pytest.mark.parametrize("spec", ["", "plastic 0.5", "diffuse color=red", "conductor metal=Xx", "diffuse 2.0",
+@pytest.mark.parametrize("spec", ["", "velvet 0.5", "diffuse color=red", "conductor metal=Xx", "diffuse 2.0",
                                   "dielectric eta=1.5 0.3"])
 def test_parse_spec_errors(spec):
     with pytest.raises(ValueError):
@@ -559,7 +562,7 @@ def test_cli_render(tmp_path, capsys):
     assert main(["render", "dielectric eta=1.5", "-o", str(exr), "--width", "16", "--height", "16", "--spp", "2",
                  "--env", "studio", "-q"]) == 0
     assert read_image(exr).shape == (16, 16, 3)
-    assert main(["render", "plastic", "-o", str(out), "-q"]) == 2
+    assert main(["render", "velvet", "-o", str(out), "-q"]) == 2
     assert "unknown model" in capsys.readouterr().err
     assert main(["render", "diffuse", "-o", str(out), "--env", str(tmp_path / "missing.exr"), "-q"]) == 1
     assert "missing.exr" in capsys.readouterr().err

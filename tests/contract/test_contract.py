@@ -91,12 +91,17 @@ def test_sample_agrees_with_eval_and_pdf(cls, spec, dtype):
                 ep = np.abs(s.pdf[keep] - p) / np.maximum(p, 1e-30)
                 assert np.quantile(ef, 0.999) < rtol, (wo, mode, np.max(ef))
                 assert np.quantile(ep, 0.999) < rtol, (wo, mode, np.max(ep))
-            else:  # stochastic evaluation: agree in the mean
-                np.testing.assert_allclose(np.mean(s.f[keep]), np.mean(f), rtol=0.05)
+            else:  # stochastic (pdf_is_proportional samples): s.f / s.pdf are not the eval / pdf of
+                # wi; only finiteness here. The models' own tests check sample() against an
+                # independent reference (tests/models/test_layered.py: slab simulation histograms).
+                assert np.all(np.isfinite(f)) and np.all(np.isfinite(s.f[keep]))
             assert np.all(p > 0)
 
 
-@pytest.mark.parametrize("cls, spec", cases(lambda c, m: bool(m.flags & bk.BxDFFlags.Specular)))
+# delta-only models: a model with a delta and a smooth lobe (a smooth coat over a diffuse base)
+# has the smooth lobe's nonzero eval in the delta's direction
+@pytest.mark.parametrize("cls, spec", cases(lambda c, m: bool(m.flags & bk.BxDFFlags.Specular) and
+                                            not has_smooth_lobe(m)))
 def test_delta_samples_have_zero_eval_and_pdf(cls, spec):
     m, rng = model_of(spec), np.random.default_rng(1)
     wo = random_dirs(rng, 400, upper=not cls.two_sided)
@@ -180,6 +185,11 @@ def test_float32_close_to_float64(cls, spec):
     wo, wi = wo[ok], wi[ok]
     f64 = m.eval(wo, wi) * np.abs(wi[:, 2:3])
     f32 = m.eval(wo.astype(np.float32), wi.astype(np.float32)).astype(np.float64) * np.abs(wi[:, 2:3])
+    if not cls.exact_eval:   # stochastic: float32 and float64 walk different realizations; agree in the mean
+        np.testing.assert_allclose(np.mean(f32, 0), np.mean(f64, 0), rtol=0.03)
+        p64, p32 = m.pdf(wo, wi), m.pdf(wo.astype(np.float32), wi.astype(np.float32))
+        np.testing.assert_allclose(np.mean(p32), np.mean(p64), rtol=0.03)
+        return
     floor = 1e-3 * max(float(np.mean(f64)), 1e-30)
     err = np.abs(f32 - f64) / np.maximum(np.abs(f64), floor)
     assert np.quantile(err, 0.99) < 1e-3, np.quantile(err, 0.99)

@@ -6,7 +6,7 @@ import numbers
 
 import numpy as np
 
-from ..models import BxDF, Conductor, Dielectric, Diffuse, METALS, ThinDielectric
+from ..models import BxDF, Conductor, Dielectric, Diffuse, METALS, Plastic, ThinDielectric
 from .spectra import spectrum_to_rgb
 
 __all__ = ["MITSUBA_IOR", "MIRROR_ETA", "from_mitsuba"]
@@ -31,7 +31,7 @@ MIRROR_ETA = 1e-6
 
 
 _MI_SUPPORTED = ("diffuse", "conductor", "roughconductor", "dielectric", "roughdielectric",
-                 "thindielectric", "measured", "twosided", "null")
+                 "thindielectric", "measured", "plastic", "roughplastic", "twosided", "null")
 
 
 _MI_CONSTANT_TEXTURES = ("rgb", "spectrum", "uniform", "srgb")
@@ -46,6 +46,9 @@ _MI_PARAMS = {
     "roughdielectric": ("int_ior", "ext_ior", "specular_reflectance", "specular_transmittance",
                         "distribution", "alpha", "alpha_u", "alpha_v", "sample_visible"),
     "thindielectric": ("int_ior", "ext_ior", "specular_reflectance", "specular_transmittance"),
+    "plastic": ("diffuse_reflectance", "specular_reflectance", "nonlinear", "int_ior", "ext_ior"),
+    "roughplastic": ("diffuse_reflectance", "specular_reflectance", "nonlinear", "int_ior", "ext_ior",
+                     "distribution", "alpha", "sample_visible"),
     "null": (),
     "measured": ("filename",),
 }
@@ -248,9 +251,9 @@ def _mi_bsdf(d, where):
         models = []
         for key, sub in _mi_nested(d, label):
             subkind = sub.get("type")
-            if subkind not in ("diffuse", "conductor", "roughconductor"):
+            if subkind not in ("diffuse", "conductor", "roughconductor", "plastic", "roughplastic"):
                 _mi_fail(label, f"nested plugin {subkind!r} is not supported inside twosided (only the "
-                         "reflection-only diffuse, conductor and roughconductor are)")
+                         "reflection-only diffuse, conductor, roughconductor, plastic and roughplastic are)")
             models.append(_mi_bsdf(sub, f"{label}.{key}"))
         if len(models) == 2 and models[0] != models[1]:
             _mi_fail(label, "different front and back BSDFs are not supported (bsdfkit models are "
@@ -273,6 +276,8 @@ def _mi_bsdf(d, where):
         if not isinstance(fn, str):
             _mi_fail(label, f"filename: expected the path of an RGL tensor file (str), got {type(fn).__name__}")
         return Measured(fn)
+    if kind in ("plastic", "roughplastic"):
+        return _mi_plastic(d, label, kind == "roughplastic")
     eta = _mi_eta(d, label)
     if kind == "dielectric":
         return _mi_build(label, lambda: Dielectric(eta))
@@ -280,6 +285,26 @@ def _mi_bsdf(d, where):
         ax, ay = _mi_alphas(d, label)
         return _mi_build(label, lambda: Dielectric(eta, alpha_x=ax, alpha_y=ay, masking="separable"))
     return _mi_build(label, lambda: ThinDielectric(eta))
+
+
+def _mi_plastic(d, where, rough):
+    r = _mi_color(d.get("diffuse_reflectance", 0.5), where, "diffuse_reflectance", bounded=True)
+    ks = _mi_color(d.get("specular_reflectance", 1.0), where, "specular_reflectance", bounded=False)
+    nl = d.get("nonlinear", False)
+    if not isinstance(nl, (bool, np.bool_)):
+        _mi_fail(where, f"parameter 'nonlinear': expected True or False, got {nl!r}")
+    eta_int = _mi_ior(d, where, "int_ior", "polypropylene")
+    eta_ext = _mi_ior(d, where, "ext_ior", "air")
+    if eta_ext == 0:
+        _mi_fail(where, "parameter 'ext_ior': must be > 0")
+    alpha = 0.0
+    if rough:
+        ax, ay = _mi_alphas(d, where)
+        if ax != ay:
+            _mi_fail(where, "roughplastic is isotropic (Mitsuba refuses alpha_u != alpha_v)")
+        alpha = ax
+    return _mi_build(where, lambda: Plastic(r, eta_int / eta_ext, alpha=alpha, nonlinear=bool(nl),
+                                            masking="separable", specular_reflectance=ks))
 
 
 def from_mitsuba(d) -> BxDF:
@@ -305,6 +330,11 @@ def from_mitsuba(d) -> BxDF:
     ``roughdielectric``  as dielectric, plus distribution/alpha as roughconductor
                          -> ``Dielectric(..., masking="separable")``
     ``thindielectric``   ``int_ior``/``ext_ior`` -> ``ThinDielectric(int_ior / ext_ior)``
+    ``plastic``          ``diffuse_reflectance`` (0.5), ``specular_reflectance`` (1),
+                         ``nonlinear`` (false), ``int_ior`` ("polypropylene"), ``ext_ior``
+                         ("air") -> ``Plastic(..., masking="separable")``
+    ``roughplastic``     as plastic, plus ``distribution`` ("ggx" only), ``alpha`` (0.1)
+                         -> ``Plastic(..., alpha=alpha, masking="separable")``
     ``twosided``         one nested diffuse/conductor/roughconductor (or two identical ones):
                          unwrapped, bsdfkit's Diffuse and Conductor are two-sided
     ``measured``         ``filename`` (an RGL tensor file) -> ``Measured(filename)``

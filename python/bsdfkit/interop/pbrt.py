@@ -9,8 +9,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..models import (BxDF, Conductor, Dielectric, Diffuse, DiffuseTransmission, METALS, ThinDielectric,
-                       roughness_to_alpha)
+from ..models import (BxDF, CoatedConductor, CoatedDiffuse, Conductor, Dielectric, Diffuse, DiffuseTransmission,
+                      METALS, ThinDielectric, roughness_to_alpha)
 from .spectra import spectrum_to_rgb
 
 __all__ = ["PBRT_GLASS_ETA", "PbrtParam", "PbrtMaterial", "PbrtSkipWarning", "parse_pbrt_materials", "from_pbrt"]
@@ -38,11 +38,11 @@ _PBRT_OTHER_METALS = ("CuZn", "MgO", "TiO2")
 _ETA_WAVELENGTH = 550.0
 
 
-_PBRT_SUPPORTED = ("diffuse", "diffusetransmission", "conductor", "dielectric", "thindielectric")
+_PBRT_SUPPORTED = ("diffuse", "diffusetransmission", "conductor", "dielectric", "thindielectric",
+                   "coateddiffuse", "coatedconductor")
 
 
-_PBRT_UNSUPPORTED = ("coateddiffuse", "coatedconductor", "hair", "measured", "mix", "subsurface",
-                     "interface", "none", "")
+_PBRT_UNSUPPORTED = ("hair", "measured", "mix", "subsurface", "interface", "none", "")
 
 
 _PBRT_ROUGH = ("roughness", "uroughness", "vroughness", "remaproughness")
@@ -54,6 +54,11 @@ _PBRT_PARAMS = {
     "conductor": ("eta", "k", "reflectance") + _PBRT_ROUGH,
     "dielectric": ("eta",) + _PBRT_ROUGH,
     "thindielectric": ("eta",),
+    "coateddiffuse": ("reflectance", "eta", "thickness", "albedo", "g", "maxdepth", "nsamples") + _PBRT_ROUGH,
+    "coatedconductor": ("interface.roughness", "interface.uroughness", "interface.vroughness", "interface.eta",
+                        "conductor.roughness", "conductor.uroughness", "conductor.vroughness", "conductor.eta",
+                        "conductor.k", "reflectance", "thickness", "albedo", "g", "maxdepth", "nsamples",
+                        "remaproughness"),
 }
 
 
@@ -458,7 +463,7 @@ def _spectrum_param(rec, pname, *, albedo):
             if albedo:
                 _pfail_param(rec, p, f"named spectrum {p.values[0]!r} is not a reflectance; give rgb, "
                              "float or wavelength/value pairs")
-            return _named_metal(rec, p, p.values[0], pname)
+            return _named_metal(rec, p, p.values[0], pname.rsplit(".", 1)[-1])
         v = _numbers(rec, p)
         if v.size % 2 or v.size == 0:
             _pfail_param(rec, p, f"a spectrum needs (wavelength, value) pairs, got {v.size} numbers")
@@ -471,9 +476,9 @@ def _spectrum_param(rec, pname, *, albedo):
     _pfail_param(rec, p, f"unsupported type {p.type!r}; expected rgb, spectrum or float")
 
 
-def _eta_param(rec, default=1.5):
+def _eta_param(rec, default=1.5, param="eta"):
     """Scalar IOR of a dielectric: float, spectrum (value at 550 nm) or grey rgb."""
-    p = rec.params.get("eta")
+    p = rec.params.get(param)
     if p is None:
         return default
     _check_texture(rec, p)
@@ -533,13 +538,32 @@ def _bool_param(rec, pname, default):
     return v is True or v == "true"
 
 
-def _alphas(rec):
-    r = _float_param(rec, "roughness", 0.0)
-    u = _float_param(rec, "uroughness", r)
-    v = _float_param(rec, "vroughness", r)
+def _int_param(rec, pname, default):
+    p = rec.params.get(pname)
+    if p is None:
+        return default
+    if p.type != "integer" or len(p.values) != 1 or not isinstance(p.values[0], float) or p.values[0] % 1:
+        _pfail_param(rec, p, f"expected one \"integer {pname}\", got {p.type!r} {list(p.values)!r}")
+    return int(p.values[0])
+
+
+def _layer_kwargs(rec):
+    """pbrt-v4 LayeredBxDF parameters of coateddiffuse / coatedconductor (materials.cpp)."""
+    albedo = _spectrum_param(rec, "albedo", albedo=True)
+    g = _float_param(rec, "g", 0.0)
+    return dict(thickness=_float_param(rec, "thickness", 0.01), albedo=0.0 if albedo is None else albedo,
+                g=min(max(g, -1.0), 1.0), max_depth=_int_param(rec, "maxdepth", 10),
+                n_samples=_int_param(rec, "nsamples", 1))
+
+
+def _alphas(rec, prefix=""):
+    r = _float_param(rec, prefix + "roughness", 0.0)
+    u = _float_param(rec, prefix + "uroughness", r)
+    v = _float_param(rec, prefix + "vroughness", r)
     for val, n in ((u, "uroughness"), (v, "vroughness")):
         if not (math.isfinite(val) and val >= 0):
-            _pfail(rec, f"{n if n in rec.params else 'roughness'} must be finite and >= 0, got {val}")
+            _pfail(rec, f"{prefix + n if prefix + n in rec.params else prefix + 'roughness'} must be finite "
+                   f"and >= 0, got {val}")
     if _bool_param(rec, "remaproughness", True):
         return roughness_to_alpha(u), roughness_to_alpha(v)
     return u, v
@@ -581,6 +605,27 @@ def _pbrt_bxdf(rec):
         if mtype == "dielectric":
             ax, ay = _alphas(rec)
             return Dielectric(_eta_param(rec), alpha_x=ax, alpha_y=ay, masking="correlated")
+        if mtype == "coateddiffuse":
+            ax, ay = _alphas(rec)
+            r = _spectrum_param(rec, "reflectance", albedo=True)
+            return CoatedDiffuse(0.5 if r is None else r, eta=_eta_param(rec), alpha_x=ax, alpha_y=ay,
+                                 **_layer_kwargs(rec))
+        if mtype == "coatedconductor":
+            iax, iay = _alphas(rec, "interface.")
+            cax, cay = _alphas(rec, "conductor.")
+            ieta = _eta_param(rec, param="interface.eta")
+            refl = _spectrum_param(rec, "reflectance", albedo=True)
+            eta = _spectrum_param(rec, "conductor.eta", albedo=False)
+            k = _spectrum_param(rec, "conductor.k", albedo=False)
+            kw = dict(conductor_alpha_x=cax, conductor_alpha_y=cay, interface_eta=ieta, interface_alpha_x=iax,
+                      interface_alpha_y=iay, **_layer_kwargs(rec))
+            if refl is not None:
+                if eta is not None or k is not None:
+                    _pfail(rec, "give either \"reflectance\" or \"conductor.eta\"/\"conductor.k\", not both")
+                return CoatedConductor.from_reflectance(refl, **kw)
+            eta = np.array(METALS["Cu"][0]) if eta is None else eta
+            k = np.array(METALS["Cu"][1]) if k is None else k
+            return CoatedConductor(eta, k, **kw)
         return ThinDielectric(_eta_param(rec))
     except _PbrtError:
         raise
@@ -608,6 +653,13 @@ def from_pbrt(source, *, skip_unsupported: bool = False) -> dict:
       remaproughness [true] -> ``Conductor``.
     * ``dielectric``: eta [1.5], roughness as conductor -> ``Dielectric``.
     * ``thindielectric``: eta [1.5] -> ``ThinDielectric``.
+    * ``coateddiffuse``: reflectance [0.5], eta [1.5], roughness/uroughness/vroughness [0],
+      thickness [0.01], albedo [0], g [0], maxdepth [10], nsamples [1] -> ``CoatedDiffuse``.
+    * ``coatedconductor``: interface.eta [1.5], interface.(u|v)roughness [0],
+      conductor.eta/conductor.k [metal-Cu-eta / metal-Cu-k] or reflectance,
+      conductor.(u|v)roughness [0], thickness, albedo, g, maxdepth, nsamples as coateddiffuse
+      -> ``CoatedConductor`` (which divides the conductor's eta and k by interface.eta, as
+      pbrt-v4 does).
 
     pbrt-v4's microfacet models use height-correlated Smith masking: ``masking="correlated"``.
     Roughness: with remaproughness true, alpha = sqrt(roughness) (``bk.roughness_to_alpha``),
@@ -626,7 +678,7 @@ def from_pbrt(source, *, skip_unsupported: bool = False) -> dict:
     (``PbrtMaterial.ignored``).
 
     ``ValueError`` naming the material, its line and the parameter for unsupported types
-    (coateddiffuse, coatedconductor, hair, measured, mix, subsurface, interface, ...),
+    (hair, measured, mix, subsurface, interface, ...),
     texture-valued or unknown parameters, bad values, and malformed text (with the line).
     ``skip_unsupported=True`` leaves out materials that cannot be converted (unsupported types,
     textures, unknown spectra) instead of raising, with one :class:`PbrtSkipWarning` per

@@ -12,7 +12,10 @@ from .conductor import METALS, Conductor, conductor_fresnel
 from .dielectric import Dielectric, ThinDielectric
 from .filament import FilamentCloth, FilamentStandard
 from .measured import MERL, Measured
+from .plastic import Plastic
+from .layered import CoatedConductor, CoatedDiffuse
 from .registry import MODELS, KnobDecl
 
 __all__ = ["BxDF", "SampleResult", "roughness_to_alpha", "METALS", "Conductor", "conductor_fresnel", "Dielectric",
-           "ThinDielectric", "Diffuse", "DiffuseTransmission", "FilamentStandard", "FilamentCloth", "MERL", "Measured", "MODELS", "KnobDecl"]
+           "ThinDielectric", "Diffuse", "DiffuseTransmission", "FilamentStandard", "FilamentCloth", "MERL", "Measured",
+           "Plastic", "CoatedDiffuse", "CoatedConductor", "MODELS", "KnobDecl"]

@@ -12,6 +12,8 @@
 #include "filament.h"
 #include "measured.h"
 #include "merl.h"
+#include "layered.h"
+#include "plastic.h"
 #include "thin_dielectric.h"
 
 namespace bsdfkit {
@@ -30,7 +32,10 @@ using AllModels = ModelList<DiffuseBxDF,
                             FilamentClothBxDF,
                             MERLNearestBxDF,           // measured: MERL table, nearest / trilinear lookup
                             MERLLinearBxDF,
-                            MeasuredBxDF>;             // measured: RGL tensor file
+                            MeasuredBxDF,             // measured: RGL tensor file
+                            PlasticBxDF,
+                            CoatedDiffuseBxDF,         // stochastic (pbrt-v4 LayeredBxDF)
+                            CoatedConductorBxDF>;
 
 static_assert(AllModels::check(), "a model of AllModels does not follow core/bxdf.h");
 static_assert(AllModels::names_unique(), "two models of AllModels have the same Name");
