@@ -18,6 +18,7 @@ int num_threads() { return g_threads.load(); }
 
 void bind_pbrt_models(py::module_ &m);
 void bind_filament_models(py::module_ &m);
+void bind_hair_models(py::module_ &m);
 void bind_render(py::module_ &m);
 
 } // namespace bsdfkit::py_bind
@@ -35,6 +36,7 @@ PYBIND11_MODULE(_core, m) {
 
     py_bind::bind_pbrt_models(m);
     py_bind::bind_filament_models(m);
+    py_bind::bind_hair_models(m);
     py_bind::bind_render(m);
 
     m.def("read_image", [](const std::string &path) {

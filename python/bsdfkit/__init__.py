@@ -18,6 +18,8 @@ from ._models import (METALS, BxDF, Conductor, Dielectric, Diffuse, DiffuseTrans
 from . import render  # noqa: E402  (preview renderer: bk.render.preview)
 from . import filament
 from ._filament_models import FilamentCloth, FilamentStandard
+from .models.hair import Hair
+from .models.normalized_fresnel import NormalizedFresnel
 from .tradeoff import Table, knobs, simplify, tradeoff  # speed vs accuracy (bk.tradeoff is the function)
 from .interop import from_mitsuba, from_pbrt, parse_pbrt_materials  # scene materials in
 
@@ -27,11 +29,13 @@ __all__ = ["BxDF", "BxDFFlags", "Conductor", "Dielectric", "Diffuse", "DiffuseTr
            "ReflTrans", "SampleResult", "ThinDielectric", "TransportMode", "direction", "get_num_threads",
            "hemisphere_grid", "roughness_to_alpha", "conductor_fresnel", "set_num_threads", "MODELS"]
 __all__ += ["FilamentStandard", "FilamentCloth", "filament"]
+__all__ += ["Hair", "NormalizedFresnel"]
 __all__ += ["tradeoff", "simplify", "knobs", "Table"]
 __all__ += ["from_mitsuba", "from_pbrt", "parse_pbrt_materials", "interop"]
 
 #: Every model class, in gallery order.
-MODELS = (Diffuse, DiffuseTransmission, Conductor, Dielectric, ThinDielectric, FilamentStandard, FilamentCloth)
+MODELS = (Diffuse, DiffuseTransmission, Conductor, Dielectric, ThinDielectric, FilamentStandard, FilamentCloth,
+          NormalizedFresnel, Hair)
 
 
 def set_num_threads(n: int) -> None:
