@@ -215,6 +215,13 @@ def to_mitsuba(model) -> dict:
         if eta == 1.0:
             return {"type": "null"}
         return {"type": "thindielectric", "int_ior": eta, "ext_ior": 1.0}
+    if kind == "Hair":
+        # frame and h mapping: bsdfkit.testing.hair_ref (Mitsuba's fibre axis is local y)
+        from ..testing.hair_ref import mitsuba_dict
+        return mitsuba_dict(model)
+    if kind == "NormalizedFresnel":
+        raise NotImplementedError("Mitsuba 3 has no normalized-Fresnel (BSSRDF exit) plugin; use "
+                                  "bsdfkit.testing.hair_ref.normalized_fresnel_f as the reference")
     if kind == "DiffuseTransmission":
         raise NotImplementedError(
             "Mitsuba 3 has no diffuse-transmission BSDF plugin; use "

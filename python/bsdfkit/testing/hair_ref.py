@@ -75,7 +75,7 @@ def _consts(p):
 
 def I0(x, terms=10):
     """Series of the modified Bessel function I0: sum_{i<terms} x^{2i} / (4^i (i!)^2); pbrt-v4 sums
-    10 terms, Mitsuba 3 (``warp.h::detail::i0``) 11."""
+    10 terms, Mitsuba 3 (``warp.h::detail::i0``) 11. (``terms=None`` elsewhere: scipy's exact I0.)"""
     val, term = np.zeros_like(x), np.ones_like(x)
     for i in range(terms):
         val = val + term
@@ -84,6 +84,9 @@ def I0(x, terms=10):
 
 
 def log_I0(x, terms=10):
+    if terms is None:  # exact (scipy's Bessel function), for showing what the series costs
+        from scipy.special import i0e
+        return np.log(i0e(x)) + x
     with np.errstate(over="ignore", divide="ignore"):
         big = x + 0.5 * (-np.log(2 * np.pi) + np.log(1 / np.maximum(x, 1e-300)) + 1 / (8 * np.maximum(x, 1e-300)))
         small = np.log(I0(np.minimum(x, 12.0), terms))
@@ -94,6 +97,8 @@ def Mp(cos_i, cos_o, sin_i, sin_o, v, terms=10):
     """d'Eon et al. 2011 eq. 7 as pbrt-v4 evaluates it (log space for v <= 0.1)."""
     a = cos_i * cos_o / v
     b = sin_i * sin_o / v
+    if terms is None:  # exact I0: exp(log I0(a) - b) / (2 v sinh(1/v)) in log space
+        return np.exp(log_I0(a, None) - b - 1 / v - np.log(v) - np.log1p(-np.exp(-2 / v)))
     if v <= 0.1:
         return np.exp(log_I0(a, terms) - b - 1 / v + 0.6931 + np.log(1 / (2 * v)))
     return np.exp(-b) * I0(a, terms) / (np.sinh(1 / v) * 2 * v)
