@@ -221,7 +221,7 @@ def lobe_terms(model, theta_o, theta_i, phi):
     v, s, sin2k, cos2k = _consts(p)
     sin_o = np.array(np.sin(theta_o))
     cos_o, gamma_t, T = _geometry(p, sin_o)
-    ap = Ap(cos_o, p["eta"], p["h"], T[None])[0]
+    ap = Ap(cos_o, p["eta"], p["h"], T.reshape(3)).reshape(P_MAX + 1, 3)
     gamma_o = np.arcsin(p["h"])
     ti = np.asarray(theta_i, float)
     mp = []
