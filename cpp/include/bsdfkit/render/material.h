@@ -9,6 +9,8 @@
 #include "../bxdfs/diffuse.h"
 #include "../bxdfs/diffuse_transmission.h"
 #include "../bxdfs/filament.h"
+#include "../bxdfs/hair.h"
+#include "../bxdfs/normalized_fresnel.h"
 #include "../bxdfs/thin_dielectric.h"
 #include "../core/bsdf.h"
 
@@ -34,7 +36,9 @@ using RenderModels = ModelList<DiffuseBxDF,
                                ThinDielectricBxDF,
                                FilamentStandardBxDF,
                                FilamentStandardSheenBxDF,
-                               FilamentClothBxDF>;
+                               FilamentClothBxDF,
+                               NormalizedFresnelBxDF,
+                               HairBxDF>;
 using Material = RenderModels::Variant<Float>;
 
 // The renderer only solves the light transport equation for radiance (camera paths).
