@@ -170,7 +170,7 @@ MITSUBA_IOR = {
 MIRROR_ETA = 1e-6
 
 _MI_SUPPORTED = ("diffuse", "conductor", "roughconductor", "dielectric", "roughdielectric",
-                 "thindielectric", "twosided", "null")
+                 "thindielectric", "twosided", "null", "hair")
 _MI_CONSTANT_TEXTURES = ("rgb", "spectrum", "uniform", "srgb")
 _MI_PARAMS = {
     "diffuse": ("reflectance",),
@@ -182,6 +182,8 @@ _MI_PARAMS = {
                         "distribution", "alpha", "alpha_u", "alpha_v", "sample_visible"),
     "thindielectric": ("int_ior", "ext_ior", "specular_reflectance", "specular_transmittance"),
     "null": (),
+    "hair": ("eumelanin", "pheomelanin", "sigma_a", "scale", "int_ior", "ext_ior", "longitudinal_roughness",
+             "azimuthal_roughness", "scale_tilt"),
 }
 
 
@@ -401,6 +403,8 @@ def _mi_bsdf(d, where):
         return _mi_conductor(d, label, kind == "roughconductor")
     if kind == "null":
         return Dielectric(1.0)
+    if kind == "hair":
+        return _mi_hair(d, label)
     eta = _mi_eta(d, label)
     if kind == "dielectric":
         return _mi_build(label, lambda: Dielectric(eta))
@@ -408,6 +412,30 @@ def _mi_bsdf(d, where):
         ax, ay = _mi_alphas(d, label)
         return _mi_build(label, lambda: Dielectric(eta, alpha_x=ax, alpha_y=ay, masking="separable"))
     return _mi_build(label, lambda: ThinDielectric(eta))
+
+
+def _mi_hair(d, where):
+    """Mitsuba 3 ``hair`` -> ``Hair`` (h = 0: Mitsuba derives h from the direction, see
+    ``bsdfkit.testing.hair_ref.wo_for_h``)."""
+    from .models.hair import Hair, sigma_a_from_concentration
+
+    has_pig = "eumelanin" in d or "pheomelanin" in d
+    if "sigma_a" in d and has_pig:
+        _mi_fail(where, "give either 'sigma_a' or 'eumelanin'/'pheomelanin', not both (Mitsuba refuses it)")
+    scale = _mi_float(d.get("scale", 1.0), where, "scale")
+    if "sigma_a" in d:
+        sigma_a = scale * _mi_color(d["sigma_a"], where, "sigma_a", bounded=False)
+    else:
+        if "scale" in d and scale != 1.0:
+            _mi_fail(where, "'scale' only applies to 'sigma_a' (Mitsuba ignores it for pigments)")
+        ce = _mi_float(d.get("eumelanin", 1.3), where, "eumelanin")
+        cp = _mi_float(d.get("pheomelanin", 0.2), where, "pheomelanin")
+        sigma_a = _mi_build(where, lambda: sigma_a_from_concentration(ce, cp))
+    eta = _mi_ior(d, where, "int_ior", "amber") / _mi_ior(d, where, "ext_ior", "air")
+    bm = _mi_float(d.get("longitudinal_roughness", 0.3), where, "longitudinal_roughness")
+    bn = _mi_float(d.get("azimuthal_roughness", 0.3), where, "azimuthal_roughness")
+    alpha = _mi_float(d.get("scale_tilt", 2.0), where, "scale_tilt")
+    return _mi_build(where, lambda: Hair(sigma_a=sigma_a, eta=eta, beta_m=bm, beta_n=bn, alpha=alpha, h=0.0))
 
 
 def from_mitsuba(d: dict) -> BxDF:
@@ -434,6 +462,12 @@ def from_mitsuba(d: dict) -> BxDF:
                          unwrapped, bsdfkit's Diffuse and Conductor are two-sided
     ``null``             -> ``Dielectric(1.0)`` (pbrt's straight pass-through; ``to_mitsuba``
                          writes eta = 1 dielectrics and thin dielectrics as ``null``)
+    ``hair``             ``sigma_a`` (x ``scale``) or ``eumelanin`` (1.3) / ``pheomelanin``
+                         (**0.2**, pbrt's default is 0), ``int_ior`` ("amber" 1.55) / ``ext_ior``
+                         ("air"), ``longitudinal_roughness`` / ``azimuthal_roughness`` (0.3),
+                         ``scale_tilt`` (2 degrees) -> ``Hair(..., h=0)``: Mitsuba has no h, it
+                         derives it from the direction (``bsdfkit.testing.hair_ref``); its fibre
+                         axis is local y where bsdfkit's (pbrt's) is x
     ==================  ======================================================================
 
     Colours (reflectance, eta, k) may be a float, 3 numbers (a list, numpy array or
@@ -484,8 +518,8 @@ _PBRT_OTHER_METALS = ("CuZn", "MgO", "TiO2")
 #: Wavelength at which dielectric eta spectra are evaluated.
 _ETA_WAVELENGTH = 550.0
 
-_PBRT_SUPPORTED = ("diffuse", "diffusetransmission", "conductor", "dielectric", "thindielectric")
-_PBRT_UNSUPPORTED = ("coateddiffuse", "coatedconductor", "hair", "measured", "mix", "subsurface",
+_PBRT_SUPPORTED = ("diffuse", "diffusetransmission", "conductor", "dielectric", "thindielectric", "hair")
+_PBRT_UNSUPPORTED = ("coateddiffuse", "coatedconductor", "measured", "mix", "subsurface",
                      "interface", "none", "")
 _PBRT_ROUGH = ("roughness", "uroughness", "vroughness", "remaproughness")
 _PBRT_PARAMS = {
@@ -494,6 +528,7 @@ _PBRT_PARAMS = {
     "conductor": ("eta", "k", "reflectance") + _PBRT_ROUGH,
     "dielectric": ("eta",) + _PBRT_ROUGH,
     "thindielectric": ("eta",),
+    "hair": ("sigma_a", "reflectance", "eumelanin", "pheomelanin", "eta", "beta_m", "beta_n", "alpha"),
 }
 #: Parameters that shape the geometry, not the BxDF: recorded and left out.
 _PBRT_IGNORED = ("displacement", "normalmap")
@@ -961,11 +996,38 @@ def _pbrt_bxdf(rec):
         if mtype == "dielectric":
             ax, ay = _alphas(rec)
             return Dielectric(_eta_param(rec), alpha_x=ax, alpha_y=ay, masking="correlated")
+        if mtype == "hair":
+            return _pbrt_hair(rec)
         return ThinDielectric(_eta_param(rec))
     except _PbrtError:
         raise
     except (ValueError, TypeError) as e:
         _pfail(rec, str(e))
+
+
+def _pbrt_hair(rec):
+    """pbrt-v4 ``HairMaterial``: sigma_a, else reflectance, else eumelanin/pheomelanin (each
+    ignored when an earlier one is given, as pbrt-v4 warns and does); neither -> eumelanin 1.3.
+    beta_m / beta_n clamped to [0.01, 1] and reflectance to [0, 1] as pbrt-v4's material does."""
+    from .models.hair import Hair, sigma_a_from_concentration, sigma_a_from_reflectance
+
+    bm = min(max(_float_param(rec, "beta_m", 0.3), 0.01), 1.0)
+    bn = min(max(_float_param(rec, "beta_n", 0.3), 0.01), 1.0)
+    kw = dict(eta=_float_param(rec, "eta", 1.55), beta_m=bm, beta_n=bn, alpha=_float_param(rec, "alpha", 2.0), h=0.0)
+    sigma_a = _spectrum_param(rec, "sigma_a", albedo=False)
+    if sigma_a is None:
+        p = rec.params.get("reflectance")
+        if p is not None:
+            _check_texture(rec, p)
+            c = _spectrum_param(rec, "reflectance", albedo=False)
+            sigma_a = sigma_a_from_reflectance(np.clip(c, 0.0, 1.0), bn)
+        else:
+            ce = _float_param(rec, "eumelanin", None)
+            cp = _float_param(rec, "pheomelanin", None)
+            if ce is None and cp is None:
+                ce = 1.3
+            sigma_a = sigma_a_from_concentration(ce or 0.0, cp or 0.0)
+    return Hair(sigma_a=sigma_a, **kw)
 
 
 def from_pbrt(text: str, *, skip_unsupported: bool = False) -> dict:
@@ -983,6 +1045,10 @@ def from_pbrt(text: str, *, skip_unsupported: bool = False) -> dict:
       remaproughness [true] -> ``Conductor``.
     * ``dielectric``: eta [1.5], roughness as conductor -> ``Dielectric``.
     * ``thindielectric``: eta [1.5] -> ``ThinDielectric``.
+    * ``hair``: sigma_a, else reflectance (``Hair.from_reflectance``, clamped to [0, 1]), else
+      eumelanin / pheomelanin [1.3 / 0] (``Hair.from_concentration``); eta [1.55], beta_m, beta_n
+      [0.3] (clamped to [0.01, 1]), alpha [2 degrees] -> ``Hair(..., h=0)`` (pbrt-v4 takes h from
+      the curve's v coordinate per hit).
 
     pbrt-v4's microfacet models use height-correlated Smith masking: ``masking="correlated"``.
     Roughness: with remaproughness true, alpha = sqrt(roughness) (``bk.roughness_to_alpha``),
@@ -1001,7 +1067,7 @@ def from_pbrt(text: str, *, skip_unsupported: bool = False) -> dict:
     (``PbrtMaterial.ignored``).
 
     ``ValueError`` naming the material, its line and the parameter for unsupported types
-    (coateddiffuse, coatedconductor, hair, measured, mix, subsurface, interface, ...),
+    (coateddiffuse, coatedconductor, measured, mix, subsurface, interface, ...),
     texture-valued or unknown parameters, bad values, and malformed text (with the line).
     ``skip_unsupported=True`` leaves out materials that cannot be converted (unsupported types,
     textures, unknown spectra) instead of raising; malformed text still raises.
