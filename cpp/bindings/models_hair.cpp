@@ -29,6 +29,17 @@ void bind_hair_models(py::module_ &m) {
             pf.h = h;
             return PyModel<HairBxDF>{HairBxDF<float>::make(pf), HairBxDF<double>::make(p)};
         }));
+    bind_model<HairFarFieldBxDF>(m, "HairFarField").def(
+        py::init([](const RGB &sigma_a, double eta, double beta_m, double beta_n, double alpha) {
+            HairFarFieldBxDF<double>::Params p;
+            HairFarFieldBxDF<float>::Params pf;
+            p.sigma_a = pf.sigma_a = sigma_a;
+            p.eta = pf.eta = eta;
+            p.beta_m = pf.beta_m = beta_m;
+            p.beta_n = pf.beta_n = beta_n;
+            p.alpha = pf.alpha = alpha;
+            return PyModel<HairFarFieldBxDF>{HairFarFieldBxDF<float>::make(pf), HairFarFieldBxDF<double>::make(p)};
+        }));
     bind_model<NormalizedFresnelBxDF>(m, "NormalizedFresnel").def(py::init([](double eta) {
         NormalizedFresnelBxDF<double>::Params p;
         p.eta = eta;

@@ -294,7 +294,7 @@ def test_value_semantics():
     (dict(sigma_a=-0.1), "sigma_a"), (dict(sigma_a=[0.1, np.nan, 0.2]), "sigma_a"), (dict(sigma_a=[1, 2]), "sigma_a"),
     (dict(eta=0.9), "eta"), (dict(eta=np.inf), "eta"), (dict(beta_m=0.0), "beta_m"), (dict(beta_m=1.5), "beta_m"),
     (dict(beta_n=-1), "beta_n"), (dict(beta_n=np.nan), "beta_n"), (dict(alpha=120.0), "alpha"),
-    (dict(h=1.5), "h"), (dict(h=np.nan), "h"), (dict(h="a"), "h"),
+    (dict(h=1.5), "h"), (dict(h=np.nan), "h"), (dict(h="a"), "h"), (dict(h=-1.01), "h"),
 ])
 def test_bad_input(kw, name):
     with pytest.raises((ValueError, TypeError), match=name):
@@ -336,3 +336,54 @@ def test_extremes_finite(kw, dtype):
     assert np.allclose(np.linalg.norm(s.wi[s.valid], axis=-1), 1, atol=1e-3)
     s = m.sample(wo, n=len(wo), seed=2)
     assert np.all(np.isfinite(s.f)) and np.all(np.isfinite(s.pdf))
+
+
+# ----------------------------------------------------------------------------- far field (h=None)
+
+def test_far_field_matches_quadrature_of_h():
+    """Hair(h=None) is (1/2) int f(h) dh: against the oracle with a 64-point rule in gamma = asin h
+    (the kernel uses 16 points); smooth lobes (beta_n = 0.5) agree to 1e-3 of the peak."""
+    m = bk.Hair(sigma_a=[0.2, 0.5, 1.0], beta_m=0.3, beta_n=0.5, alpha=2.0, h=None)
+    assert m.h is None and eval(repr(m), {"Hair": bk.Hair}) == m
+    rng = np.random.default_rng(21)
+    wo, wi = uniform_sphere(3000, rng), uniform_sphere(3000, rng)
+    f = m.eval(wo, wi) * np.abs(wi[:, 2:3])
+    f_ref = ref.far_field_f(m, wo, wi) * np.abs(wi[:, 2:3])
+    err = np.max(np.abs(f - f_ref)) / np.max(f_ref)
+    print(f"far field vs 64-point oracle: {err:.2e} of the peak of f|cos|")
+    assert err < 1e-3
+    # and it is the weighted mean of 16 single-h models (Gauss-Legendre in gamma)
+    x, w = np.polynomial.legendre.leggauss(16)
+    g = x * np.pi / 2
+    wk = w * np.cos(g) / np.sum(w * np.cos(g))
+    mix = sum(wgt * bk.Hair(sigma_a=[0.2, 0.5, 1.0], beta_m=0.3, beta_n=0.5, alpha=2.0, h=float(np.sin(gk)))
+              .eval(wo[:200], wi[:200]) for gk, wgt in zip(g, wk))
+    assert np.allclose(m.eval(wo[:200], wi[:200]), mix, rtol=1e-12, atol=0)
+
+
+def test_far_field_furnace_and_sampling():
+    m = bk.Hair(sigma_a=0.0, beta_m=0.4, beta_n=0.6, h=None)
+    wi, w = _sphere_grid(400, 400)
+    wo = np.array([0.3, 0.4, np.sqrt(0.75)])
+    e = np.sum(m.eval(wo, wi)[:, 0] * np.abs(wi[:, 2]) * w)
+    assert abs(e - 1) < 5e-3, e
+    s = m.sample(wo, n=5000, seed=3)
+    v = s.valid
+    assert v.mean() > 0.999
+    assert np.all(np.abs(s.weight[v, 0] - 1) < 1e-6)  # sigma_a = 0: exact sampling
+    m = bk.Hair(sigma_a=[0.3, 0.6, 1.2], beta_m=0.3, beta_n=0.4, h=None)
+    s = m.sample(wo, n=2000, seed=4)
+    v = s.valid
+    assert np.allclose(s.f[v], m.eval(wo, s.wi[v]), rtol=1e-9)
+    assert np.allclose(s.pdf[v], m.pdf(wo, s.wi[v]), rtol=1e-9)
+    R = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+    passed, p, msg = mref.chi2_test(lambda uc, u: ((r := m.sample(wo, uc, u)).wi @ R.T, r.valid),
+                                    lambda d: m.pdf(wo, d @ R), res=101, ires=12, sample_count=500_000, seed=5,
+                                    significance=0.01)
+    print(f"chi2 far field: p = {p:.4g}")
+    assert passed, msg
+    for dt in (np.float32, np.float64):
+        for mm in (bk.Hair(h=None, beta_m=0.01, beta_n=0.01), bk.Hair(h=None, sigma_a=1e4, eta=1.0)):
+            r = np.random.default_rng(1)
+            a = mm.eval(uniform_sphere(200, r).astype(dt), uniform_sphere(200, r).astype(dt))
+            assert np.all(np.isfinite(a))

@@ -298,4 +298,76 @@ template <typename F> struct HairBxDF {
     void regularize() {}
 };
 
+// The far-field fibre: HairBxDF averaged over the offset h in [-1, 1] (a fibre seen whole, thinner
+// than a pixel). (1/2) int f(h) dh is integrated in gamma = asin h, where the integrand is smooth:
+// h = sin gamma, dh = cos gamma dgamma, by Gauss-Legendre with `Nodes` points on (-pi/2, pi/2)
+// (weights normalised to sum 1). Sampling picks node k with its weight, then samples HairBxDF(h_k);
+// pdf is the same mixture, so sample_f, f and pdf agree exactly. Cost: Nodes times HairBxDF.
+template <typename F> struct HairFarFieldBxDF {
+    static constexpr int Nodes = 16;
+    static constexpr const char *Name = "HairFarField";
+    using Params = typename HairBxDF<F>::Params;  // h is ignored
+    HairBxDF<F> lobe[Nodes];
+    F weight[Nodes], cdf[Nodes];
+
+    static HairFarFieldBxDF make(const Params &p) {
+        // 16-point Gauss-Legendre nodes / weights on [-1, 1] (Abramowitz & Stegun table 25.4)
+        static const double x8[8] = {0.0950125098376374, 0.2816035507792589, 0.4580167776572274,
+                                     0.6178762444026438, 0.7554044083550030, 0.8656312023878318,
+                                     0.9445750230732326, 0.9894009349916499};
+        static const double w8[8] = {0.1894506104550685, 0.1826034150449236, 0.1691565193950025,
+                                     0.1495959888165767, 0.1246289712555339, 0.0951585116824928,
+                                     0.0622535239386479, 0.0271524594117541};
+        HairFarFieldBxDF m;
+        double wsum = 0, wk[Nodes];
+        for (int k = 0; k < Nodes; ++k) {
+            int i = k < 8 ? 7 - k : k - 8;
+            double x = k < 8 ? -x8[i] : x8[i];
+            double gamma = x * 1.5707963267948966;
+            Params q = p;
+            q.h = std::sin(gamma);
+            m.lobe[k] = HairBxDF<F>::make(q);
+            wk[k] = w8[i] * std::cos(gamma);
+            wsum += wk[k];
+        }
+        double c = 0;
+        for (int k = 0; k < Nodes; ++k) {
+            m.weight[k] = F(wk[k] / wsum);
+            c += wk[k] / wsum;
+            m.cdf[k] = F(c);
+        }
+        m.cdf[Nodes - 1] = F(1);
+        return m;
+    }
+
+    uint8_t flags() const { return GlossyReflection; }
+
+    Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode) const {
+        Spectrum<F> sum(F(0));
+        for (int k = 0; k < Nodes; ++k) sum = sum + lobe[k].f(wo, wi, mode) * weight[k];
+        return sum;
+    }
+
+    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode, uint8_t sample_flags) const {
+        F sum = F(0);
+        for (int k = 0; k < Nodes; ++k) sum += lobe[k].pdf(wo, wi, mode, sample_flags) * weight[k];
+        return sum;
+    }
+
+    BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode, uint8_t sample_flags) const {
+        // node k with probability weight[k]; uc remapped for the lobe choice inside node k
+        int k = 0;
+        for (int j = 0; j < Nodes - 1; ++j) k += int(uc >= cdf[j]);
+        F start = k == 0 ? F(0) : cdf[k - 1];
+        F ur = clamp((uc - start) / weight[k], F(0), F(1) - std::numeric_limits<F>::epsilon() / 2);
+        BSDFSample<F> s = lobe[k].sample_f(wo, ur, u, mode, sample_flags);
+        s.f = f(wo, s.wi, mode);
+        s.pdf = pdf(wo, s.wi, mode, sample_flags);
+        s.valid = s.valid & (s.pdf > F(0));
+        return s;
+    }
+
+    void regularize() {}
+};
+
 } // namespace bsdfkit
