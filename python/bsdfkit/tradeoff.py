@@ -307,6 +307,8 @@ def family(model) -> str:
     if isinstance(model, FilamentStandard):
         lobes = [x for x, on in (("coat", p["clear_coat"] > 0), ("sheen", float(np.max(p["sheen_color"])) > 0)) if on]
         return name + ("/" + "+".join(lobes) if lobes else "")
+    if name == "Hair" and p.get("h", 0.0) is None:
+        return name + "/far-field"   # 16 single-h kernels per call
     return name
 
 
