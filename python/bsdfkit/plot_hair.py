@@ -52,6 +52,9 @@ def hair_lobes(model, theta_o=30.0, *, fig=None, weighted=True, n=721):
     import matplotlib.pyplot as plt
 
     m = _check_hair(model)
+    if m.h is None:
+        raise ValueError("model: hair_lobes needs a fibre offset h (the azimuthal lobes depend on it); "
+                         "the far-field fibre (h=None) has no single N_p -- use hair_lobe3d")
     theta_o = _finite(theta_o, "theta_o")
     if not -90.0 <= theta_o <= 90.0:
         raise ValueError(f"theta_o: must be in [-90, 90] degrees, got {theta_o}")

@@ -91,3 +91,7 @@ def test_hair_plots(tmp_path):
         plot_hair.hair_lobes(bk.Diffuse())
     with pytest.raises(ValueError, match="theta_o"):
         plot_hair.hair_lobes(m, theta_o=120)
+    with pytest.raises(ValueError, match="h=None"):
+        plot_hair.hair_lobes(bk.Hair(h=None))
+    ax = plot_hair.hair_lobe3d(bk.Hair(h=None), n_theta=13, n_phi=17)
+    assert np.isfinite(np.asarray(ax.bsdfkit_data["radius"][0])).all()
