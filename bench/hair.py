@@ -16,9 +16,9 @@ import time
 import numpy as np
 
 import bsdfkit as bk
-from bsdfkit.references import mitsuba as mref
+from bsdfkit.testing import mitsuba as mref
 from bsdfkit.testing import hair_ref
-from bsdfkit.tradeoff import best_time
+from bsdfkit.tuning.costs import best_time
 
 NOTE = "\n**Reading.** bsdfkit's hair kernel is about 0.2-0.4x Mitsuba here. It is scalar code: per pair it calls libm exp/log (Mp per lobe, the logistic, T), atan2 and asin, which GCC 12 does not vectorize without -ffast-math / libmvec, whereas Mitsuba's LLVM JIT evaluates 8 float lanes per AVX2 instruction. Vectorizable exp/log (like the sincos_ in core/math.h) are the obvious next step; f64 costs little extra because the scalar libm calls dominate.\n"
 

@@ -29,7 +29,7 @@ from matplotlib.figure import Figure  # noqa: E402
 
 import bsdfkit as bk  # noqa: E402
 from bsdfkit import plot as bkplot  # noqa: E402
-from bsdfkit._spec import example_model  # noqa: E402
+from bsdfkit.models.spec import example_model  # noqa: E402
 
 GALLERY_BUDGET_S = 30.0
 

@@ -7,7 +7,7 @@
 Scene: the demo gallery (``python -m bsdfkit demo``: one sphere per demo configuration on the
 checkerboard ground under the procedural sky), rendered by both at the same resolution, spp and
 depth (ours max_depth 8 = Mitsuba max_depth 9). The Mitsuba scene comes from
-``bsdfkit.references.mitsuba_scene`` (same camera, sphere placement, envmap resampled at
+``bsdfkit.testing.mitsuba_scene`` (same camera, sphere placement, envmap resampled at
 Mitsuba's texel positions, checkerboard ground). DiffuseTransmission has no Mitsuba plugin:
 Mitsuba renders that sphere as a two-sided diffuse of the same reflectance + transmittance
 (noted in the report); everything else is the same model.
@@ -49,7 +49,7 @@ def build_scene():
 
 
 def mitsuba_bsdf(model):
-    from bsdfkit.references import mitsuba as ref
+    from bsdfkit.testing import mitsuba as ref
     if type(model).__name__ == "DiffuseTransmission":
         r = np.clip(np.asarray(model.reflectance) + np.asarray(model.transmittance), 0, 1)
         return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": r.tolist()}}}
@@ -58,8 +58,8 @@ def mitsuba_bsdf(model):
 
 def mitsuba_worker(args):
     """Subprocess: render the Mitsuba scene `rounds` times, print JSON timings, save the image."""
-    from bsdfkit.references import mitsuba as ref
-    from bsdfkit.references.mitsuba_scene import to_mitsuba_scene
+    from bsdfkit.testing import mitsuba as ref
+    from bsdfkit.testing.mitsuba_scene import to_mitsuba_scene
     ref.variant()
     import drjit as dr
     import mitsuba as mi

@@ -50,11 +50,6 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 SEED = 20240611
 
-# libLLVM for Dr.Jit. Dr.Jit 1.5's Mitsuba kernels abort the process with LLVM 15/16
-# ("Cannot select: fmaximum"), so prefer LLVM >= 17 when it is installed.
-LLVM_CANDIDATES = ["/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1", "/usr/lib/x86_64-linux-gnu/libLLVM-19.so.1",
-                   "/usr/lib/x86_64-linux-gnu/libLLVM-17.so.1", "/usr/lib/x86_64-linux-gnu/libLLVM-15.so.1"]
-
 CU_ETA = [0.201006, 0.923749, 1.102215]
 CU_K = [3.913262, 2.453045, 2.142090]
 
@@ -121,8 +116,8 @@ def checksum(inputs):
 
 def best_time(fn, repeats=5, min_time=0.02, warmup=1):
     """Min over `repeats` of the mean time of `inner` back-to-back calls; `inner` is chosen so
-    that one repeat takes >= min_time (1 for the N = 1e6 calls). bsdfkit.tradeoff's timer."""
-    from bsdfkit.tradeoff import best_time as timer   # lazily: the Mitsuba subprocesses never load bsdfkit
+    that one repeat takes >= min_time (1 for the N = 1e6 calls). bsdfkit.tuning's timer."""
+    from bsdfkit.tuning import best_time as timer   # lazily: the Mitsuba subprocesses never load bsdfkit
 
     return timer(fn, repeats=repeats, min_time=min_time, warmup=warmup)
 
@@ -319,24 +314,33 @@ def bsdfkit_agreement_sample(inputs, n=2000):
 
 # ------------------------------------------------------------------------------------ mitsuba workers
 
+def _llvm_finder():
+    """bsdfkit.testing.llvm (the one libLLVM finder of tests, bench and scripts), loaded by path:
+    the Mitsuba worker processes never import bsdfkit itself."""
+    import importlib.util
+    pkg = Path(importlib.util.find_spec("bsdfkit").origin).parent
+    spec = importlib.util.spec_from_file_location("_bsdfkit_llvm", pkg / "testing" / "llvm.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
 def _setup_drjit_env(llvm):
     """DRJIT_LIBLLVM_PATH for the worker: --llvm if given; else the environment's choice unless it
     is LLVM 15/16 (which abort on Mitsuba 3.9's kernels) and a newer one is installed; else the
-    newest candidate."""
+    newest working libLLVM (bsdfkit.testing.llvm)."""
     if llvm:
         os.environ["DRJIT_LIBLLVM_PATH"] = llvm
         return
-    newer = next((c for c in LLVM_CANDIDATES if os.path.exists(c) and "-15" not in c and "-16" not in c), None)
+    finder = _llvm_finder()
+    newer = next((p for v, p in finder.find_libllvm() if v >= finder.MIN_WORKING_LLVM), None)
     cur = os.environ.get("DRJIT_LIBLLVM_PATH")
     if cur and ("LLVM-15" in cur or "LLVM-16" in cur) and newer:
         sys.stderr.write(f"[bench] DRJIT_LIBLLVM_PATH={cur}: Dr.Jit 1.5 aborts on Mitsuba's BSDF kernels with "
                          f"LLVM 15/16 ('Cannot select: fmaximum'); using {newer} instead (override with --llvm)\n")
         os.environ["DRJIT_LIBLLVM_PATH"] = newer
     elif not cur:
-        for c in LLVM_CANDIDATES:
-            if os.path.exists(c):
-                os.environ["DRJIT_LIBLLVM_PATH"] = c
-                break
+        finder.configure_llvm_env()
 
 
 class _MiLLVM:
@@ -796,7 +800,7 @@ def main():
     ap.add_argument("--no-mitsuba", action="store_true", help="bsdfkit and copy bound only")
     ap.add_argument("--models", default=None,
                     help="comma-separated subset of: " + ", ".join(c[0] for c in CONFIGS) + " (default: all)")
-    ap.add_argument("--llvm", default=None, help="libLLVM for Dr.Jit (default: newest of LLVM 19/17/15)")
+    ap.add_argument("--llvm", default=None, help="libLLVM for Dr.Jit (default: the newest working one, bsdfkit.testing.llvm)")
     ap.add_argument("--_worker", default=None, help=argparse.SUPPRESS)
     ap.add_argument("--spec", default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()

@@ -9,9 +9,9 @@ bsdfkit.simplify at tol = 1e-2, 1e-3, 1e-4) and python/bsdfkit/_knob_costs.json 
 bsdfkit.simplify ranks by; --costs-out to write it elsewhere, --quick writes none unless given).
 
 Method
-* One representative instance per cost family (bsdfkit.tradeoff.family: the class plus the
+* One representative instance per cost family (bsdfkit.tuning.family: the class plus the
   structural variant that selects a compiled kernel), chosen so that every knob is reachable.
-* Errors: bsdfkit.tradeoff (measure=False), i.e. the package's own definition (relative error of
+* Errors: bsdfkit.tuning.tradeoff (measure=False), i.e. the package's own definition (relative error of
   f |cos theta_i| with the albedo floor, p99 / max, directional-albedo error), seed 0.
 * Throughput: the timed operation is eval with a preallocated out= (sample with preallocated
   outputs for models made only of delta lobes), on N uniform pairs, single-threaded by default
@@ -45,34 +45,28 @@ sys.path.insert(0, str(HERE))
 from throughput import QUIET, machine_info, wait_quiet  # noqa: E402  (same directory: same timing rules)
 
 import bsdfkit as bk  # noqa: E402
-from bsdfkit.tradeoff import (_best_time, _op, _pareto_mask, _timed_call, _timing_inputs,  # noqa: E402
-                              configurations, family, simplify, tradeoff)
+from bsdfkit.tuning import best_time as _best_time, configurations, family, simplify, tradeoff  # noqa: E402
+from bsdfkit.tuning.costs import _op, _timed_call, _timing_inputs, cost_deviations, knob_costs  # noqa: E402
+from bsdfkit.tuning.report import _pareto_mask  # noqa: E402
 
 SEED = 0
 TOLS = (1e-2, 1e-3, 1e-4)
 
 
 def representatives():
-    """(label, model) per cost family; every knob reachable."""
-    S = bk.FilamentStandard
-    base = dict(base_color=[0.8, 0.5, 0.3], reflectance=0.1)        # f0 = 0.0016: the f90 rule is not 1
-    coat = dict(clear_coat=0.5, clear_coat_roughness=0.1)
-    sheen = dict(sheen_color=[0.6, 0.5, 0.4], sheen_roughness=0.5)
-    return [
-        ("Diffuse R=(0.8, 0.5, 0.2)", bk.Diffuse([0.8, 0.5, 0.2])),
-        ("DiffuseTransmission R=(0.3, 0.5, 0.1) T=(0.6, 0.2, 0.4)",
-         bk.DiffuseTransmission([0.3, 0.5, 0.1], [0.6, 0.2, 0.4])),
-        ("Conductor Au, smooth", bk.Conductor.from_metal("Au")),
-        ("Conductor Cu, α = 0.3", bk.Conductor.from_metal("Cu", alpha=0.3)),
-        ("Dielectric η = 1.5, smooth", bk.Dielectric(1.5)),
-        ("Dielectric η = 1.5, α = 0.3", bk.Dielectric(1.5, alpha=0.3)),
-        ("ThinDielectric η = 1.5", bk.ThinDielectric(1.5)),
-        ("FilamentStandard plastic, reflectance 0.1, roughness 0.5", S(**base)),
-        ("FilamentStandard + clear coat 0.5 (r_c 0.1)", S(**base, **coat)),
-        ("FilamentStandard + sheen (0.6, 0.5, 0.4), r_s 0.5", S(**base, **sheen)),
-        ("FilamentStandard + clear coat + sheen", S(**base, **coat, **sheen)),
-        ("FilamentCloth denim (0.1, 0.15, 0.35), roughness 0.8", bk.FilamentCloth([0.1, 0.15, 0.35], roughness=0.8)),
-    ]
+    """(label, model) per cost family, from the model registry: of the registered examples of a
+    family (``model.cost_family()``), the one with the most reachable knobs (ties: the first)."""
+    from bsdfkit.models import registry
+    from bsdfkit.models.spec import parse_spec
+
+    best = {}
+    for cls, label, spec in registry.examples():
+        m = parse_spec(spec)
+        reach = sum(k.reachable for k in bk.knobs(m))
+        fam = m.cost_family()
+        if fam not in best or reach > best[fam][0]:
+            best[fam] = (reach, f"{cls.__name__} {label}", m)
+    return [(label, m) for _, label, m in best.values()]
 
 
 def extra_models():
@@ -108,6 +102,27 @@ def measure_family(model, n, repeats, rounds):
     return op, cfgs, best
 
 
+def check(args) -> int:
+    """--check: the shipped cost table against a fresh single-threaded timing of every family."""
+    bk.set_num_threads(args.threads)
+    n = args.n or 2**15
+    shipped = knob_costs()
+    measured = {}
+    for label, model in representatives():
+        fam = family(model)
+        if args.families and fam not in args.families.split(","):
+            continue
+        _, cfgs, best = measure_family(model, n, args.repeats, args.rounds or 2)
+        ref = best[cfgs[0].key]
+        measured[fam] = {k: t / ref for k, t in best.items()}
+    bad = cost_deviations(shipped, measured, tol=0.5)
+    for fam, key, want, got in bad:
+        print(f"STALE {fam} {key}: table {want:.3f}, measured {got:.3f} ({got / want:.2f}x)")
+    print(f"{len(bad)} stale cost entr{'y' if len(bad) == 1 else 'ies'} of "
+          f"{sum(len(v) for v in measured.values())} checked (tolerance 50 %)")
+    return 1 if bad else 0
+
+
 def fmt_e(x):
     return "0" if x == 0 else f"{x:.1e}"
 
@@ -125,7 +140,12 @@ def main():
     ap.add_argument("--costs-out", default=None,
                     help="cost table path (default python/bsdfkit/_knob_costs.json; none with --quick)")
     ap.add_argument("--families", default=None, help="comma-separated subset of family names")
+    ap.add_argument("--check", action="store_true",
+                    help="only re-time every family and compare with the shipped cost table: exit status 1 if an "
+                         "entry is off by more than 50 %% (a kernel change made it stale); writes nothing")
     args = ap.parse_args()
+    if args.check:
+        return check(args)
     n = args.n or (2**15 if args.quick else 2**18)
     rounds = args.rounds or (1 if args.quick else 3)
     n_err = 4096 if args.quick else 8192
@@ -243,7 +263,7 @@ def write_md(path, info, results, headline, n, rounds, repeats, n_err, elapsed, 
 
     for r in results:
         rows, op = r["rows"], r["op"]
-        knob_cols = [k.name for k in r["table"].knobs if k.reachable and k.kind != "precision"]
+        knob_cols = [k.name for k in r["table"].knobs if k.reachable and k.name != "precision"]
         w(f"## {r['label']} — `{r['family']}`\n")
         w(f"`{r['model']!r}`; timed op: `{op}`; {len(rows)} configurations; reference "
           f"{rows[0]['evals_per_s'] / 1e6:.1f} M/s.\n")
@@ -270,4 +290,4 @@ def write_md(path, info, results, headline, n, rounds, repeats, n_err, elapsed, 
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

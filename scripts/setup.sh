@@ -26,7 +26,8 @@ if ! $PY - <<'PYEOF' 2>/dev/null
 import importlib.metadata as md, sys
 need = {"scikit-build-core": None, "pybind11": None, "numpy": None, "matplotlib": None, "pytest": None,
         "pytest-xdist": None, "hypothesis": None, "mitsuba": "3.9.1", "drjit": None, "scipy": None,
-        "nbclient": None, "nbmake": None, "ipykernel": None, "nbformat": None, "ipywidgets": None}
+        "nbclient": None, "nbmake": None, "ipykernel": None, "nbformat": None, "ipywidgets": None,
+        "colour-science": "0.4.4", "pybind11-stubgen": None}
 for name, least in need.items():
     v = md.version(name)
     if least and tuple(int(x) for x in v.split(".")[:3]) < tuple(int(x) for x in least.split(".")):
@@ -35,7 +36,8 @@ PYEOF
 then
   echo "[setup] pip install build and test dependencies"
   $PY -m pip install -q --disable-pip-version-check "scikit-build-core>=0.10" "pybind11>=2.12" numpy matplotlib \
-      pytest pytest-xdist hypothesis "mitsuba>=3.9.1" drjit scipy nbclient nbmake ipykernel nbformat ipywidgets
+      pytest pytest-xdist hypothesis "mitsuba>=3.9.1" drjit scipy nbclient nbmake ipykernel nbformat ipywidgets \
+      "colour-science>=0.4.4" pybind11-stubgen
 fi
 
 # Rebuild only when a source file changed since the last install.
@@ -44,5 +46,7 @@ hash=$(cat CMakeLists.txt pyproject.toml $(find cpp python -type f \( -name '*.h
 if [ "$(cat "$stamp_dir/.installed" 2>/dev/null)" != "$hash" ] || ! $PY -c "import bsdfkit._core" 2>/dev/null; then
   echo "[setup] building and installing bsdfkit"
   $PY -m pip install -q --disable-pip-version-check --no-build-isolation --no-deps .
+  # the typing stub of the compiled module is generated from it, never written by hand
+  bash scripts/gen_stubs "$PY"
   echo "$hash" > "$stamp_dir/.installed"
 fi

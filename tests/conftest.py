@@ -21,25 +21,14 @@ def grazing_dirs(rng, n, zs, sign=1.0):
     return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
 
 
-# One representative of every model family and its main variants; used by generic tests.
-MODEL_CASES = {
-    "diffuse": lambda: bk.Diffuse([0.8, 0.5, 0.2]),
-    "difftrans": lambda: bk.DiffuseTransmission([0.3, 0.5, 0.1], [0.6, 0.2, 0.4]),
-    "conductor_smooth": lambda: bk.Conductor.from_metal("Au"),
-    "conductor_rough": lambda: bk.Conductor.from_metal("Cu", alpha=0.3),
-    "conductor_aniso": lambda: bk.Conductor([0.2, 0.9, 1.1], [3.9, 2.4, 2.1], alpha_x=0.4, alpha_y=0.08),
-    "conductor_sep": lambda: bk.Conductor.from_metal("Al", alpha=0.5, masking="separable"),
-    "conductor_schlick": lambda: bk.Conductor.from_metal("Cu", fresnel="schlick"),
-    "conductor_schlick_rough": lambda: bk.Conductor.from_metal("Cr", alpha=0.3, fresnel="schlick"),
-    "conductor_f82": lambda: bk.Conductor.from_metal("Au", fresnel="f82"),
-    "conductor_f82_rough": lambda: bk.Conductor.from_metal("Al", alpha=0.5, masking="separable", fresnel="f82"),
-    "conductor_f82_aniso": lambda: bk.Conductor([0.2, 0.9, 1.1], [3.9, 2.4, 2.1], alpha_x=0.4, alpha_y=0.08,
-                                                fresnel="f82"),
-    "dielectric_smooth": lambda: bk.Dielectric(1.5),
-    "dielectric_rough": lambda: bk.Dielectric(1.5, alpha=0.3),
-    "dielectric_aniso_inv": lambda: bk.Dielectric(1 / 1.33, alpha_x=0.5, alpha_y=0.1),
-    "thin": lambda: bk.ThinDielectric(1.5),
-}
+def _registry_cases():
+    from bsdfkit.models import registry
+    from bsdfkit.models.spec import parse_spec
+    return {f"{cls.__name__}-{label}": (lambda s=spec: parse_spec(s)) for cls, label, spec in registry.examples()}
+
+
+# Every registered example (bsdfkit.models.registry); used by generic tests.
+MODEL_CASES = _registry_cases()
 
 
 @pytest.fixture(params=sorted(MODEL_CASES))
@@ -50,3 +39,11 @@ def any_model(request):
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _bsdfkit_disk_cache(tmp_path_factory):
+    """The suite's on-disk cache (Filament DFG tables): a fresh directory per session, shared by
+    its subprocesses (notebooks, CLI), unless BSDFKIT_CACHE_DIR already names one (CI may keep it)."""
+    import os
+    os.environ.setdefault("BSDFKIT_CACHE_DIR", str(tmp_path_factory.mktemp("bsdfkit-cache")))

@@ -80,7 +80,7 @@ def test_lobes_help_mentions_specs():
 
 
 def test_every_model_class_is_reachable_by_spec():
-    from bsdfkit._spec import example_model, example_spec, parse_spec
+    from bsdfkit.models.spec import example_model, example_spec, parse_spec
 
     for cls in bk.MODELS:
         assert parse_spec(example_spec(cls)) == example_model(cls)

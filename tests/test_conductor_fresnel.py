@@ -1,7 +1,7 @@
 """Conductor Fresnel knob: Conductor(..., fresnel="exact" | "schlick" | "f82").
 
 * The Schlick and F82-tint terms and the models built on them against the independent float64
-  Dr.Jit reference (bsdfkit.references.drjit_models, written from the papers' formulas).
+  Dr.Jit reference (bsdfkit.testing.drjit_models, written from the papers' formulas).
 * Sampling is the same VNDF sampler for every variant; sample().f must equal eval, and the delta
   mirror's weight must be the approximation at cos_o.
 * Accuracy of the approximations against the exact complex Fresnel term: the properties the
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import bsdfkit as bk
-from bsdfkit.references import drjit_models as dj
+from bsdfkit.testing import drjit_models as dj
 from conftest import grazing_dirs, random_dirs
 
 APPROX = ["schlick", "f82"]
@@ -328,7 +328,7 @@ def test_approximations_differ_from_exact():
 
 
 def test_to_mitsuba_rejects_approximations():
-    from bsdfkit.references import mitsuba as ref
+    from bsdfkit.testing import mitsuba as ref
     assert ref.to_mitsuba(bk.Conductor.from_metal("Cu", alpha=0.2))["bsdf"]["type"] == "roughconductor"
     for fr in APPROX:
         with pytest.raises(ValueError, match=f"fresnel.*{fr}"):

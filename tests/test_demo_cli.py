@@ -65,8 +65,8 @@ def test_demo_markdown_one_row_per_configuration(demo_dir):
     header = next(ln for ln in text.splitlines() if ln.startswith("| Configuration"))
     for t in (0, 30, 60, 80):
         assert f"θo = {t}°" in header
-    # the Diffuse(0.8) row reads 0.8 in every cell
-    diffuse = next(r for r in rows if r.startswith("| `Diffuse(0.8)`"))
+    # the Diffuse 0.8 row (the class's first registered example) reads 0.8 in every cell
+    diffuse = next(r for r in rows if r.startswith("| `diffuse 0.8`"))
     assert diffuse.count("0.8000") == 4 * 4
 
 

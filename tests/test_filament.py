@@ -359,7 +359,7 @@ def test_extremes_sweep_finite(dtype):
     mirror = d * np.array([-1, -1, 1])
     wo = np.concatenate([wo, d, d]).astype(dtype)
     wi = np.concatenate([wi, mirror, d]).astype(dtype)
-    us = np.array([0.0, 1e-7, 0.5, 0.999, np.nextafter(dtype(1), dtype(0))], dtype)
+    us = np.array([0.0, 1e-7, 0.5, 0.999, np.nextafter(dtype(1), dtype(0)), 1.0], dtype)  # both ends
     uc = np.resize(us, len(wo))
     u = np.stack([np.resize(us, len(wo)), np.resize(us[::-1], len(wo))[::-1]], 1)
     for m in _extreme_models():
@@ -370,6 +370,7 @@ def test_extremes_sweep_finite(dtype):
         for arr in (s.f, s.pdf, s.wi, s.weight):
             assert np.all(np.isfinite(arr)), m
         assert np.all(s.pdf[s.valid] > 0)
+        assert np.all(np.isfinite(m.eval(wo, s.wi)))  # every sampled wi is a valid input
         a = m.albedo(d.astype(dtype), n_samples=64, seed=1)
         assert np.all(np.isfinite(a)) and np.all(a >= 0), m
 

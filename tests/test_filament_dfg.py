@@ -1,6 +1,6 @@
 """The DFG table bsdfkit computes for Filament's models (bk.filament.dfg_lut): layout, caching,
 determinism, the alpha -> 0 limits, and its values against an independent Gauss-Legendre
-quadrature (bsdfkit.references.drjit_filament.dfg_quadrature: NDF-CDF coordinates with the
+quadrature (bsdfkit.testing.drjit_filament.dfg_quadrature: NDF-CDF coordinates with the
 horizon cut resolved exactly; the library integrates by quasi-Monte Carlo visible-normal and
 mixture sampling).
 
@@ -11,11 +11,12 @@ import numpy as np
 import pytest
 
 import bsdfkit as bk
+from bsdfkit.models.filament import dfg as _dfg
 from bsdfkit import _core
-from bsdfkit.references import mitsuba as ref
+from bsdfkit.testing import mitsuba as ref
 
 ref.variant()
-from bsdfkit.references import drjit_filament as dj  # noqa: E402
+from bsdfkit.testing import drjit_filament as dj  # noqa: E402
 
 SIZE = 128
 ROWS = [1, 2, 3, 6, 8, 12, 16, 32, 64, 96, 127]
@@ -90,9 +91,12 @@ def test_against_quadrature(row):
     assert err.max() < 1e-3
 
 
-def test_progress_and_validation(capsys):
+def test_progress_and_validation(capsys, monkeypatch, tmp_path):
+    monkeypatch.setenv("BSDFKIT_CACHE_DIR", str(tmp_path))  # an empty disk cache: computed here
+    _dfg._CACHE.pop((9, 64), None)
+    _dfg._CACHE.pop((10, 64), None)
     bk.filament.dfg_lut(9, 64, progress=True)
-    assert "computing the Filament DFG table (9x9, 64 samples)" in capsys.readouterr().err
+    assert "computing the Filament DFG table (9x9, 64 samples" in capsys.readouterr().err
     bk.filament.dfg_lut(10, 64, progress=False)
     assert capsys.readouterr().err == ""
     bk.filament.dfg_lut(9, 64, progress=True)  # cached: nothing to report

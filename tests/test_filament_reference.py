@@ -1,5 +1,5 @@
 """Filament models against the independent float64 Dr.Jit reference
-(bsdfkit.references.drjit_filament) term by term and as whole models, and the GGX pieces against
+(bsdfkit.testing.drjit_filament) term by term and as whole models, and the GGX pieces against
 Mitsuba 3's MicrofacetDistribution (ggx).
 
 Errors are relative, reported as p99.9 over >= 1e4 direction pairs per parameter set (half of
@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 import bsdfkit as bk
-from bsdfkit.references import mitsuba as ref
+from bsdfkit.testing import mitsuba as ref
 from conftest import grazing_dirs, random_dirs
 
 ref.variant()  # selects libLLVM before Dr.Jit is imported
-from bsdfkit.references import drjit_filament as dj  # noqa: E402
+from bsdfkit.testing import drjit_filament as dj  # noqa: E402
 
 N = 12_000
 ZS = [1.0, 0.8, 0.5, 0.3, 0.1, 0.03, 0.01, 0.003, 0.001]

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import bsdfkit as bk
-from bsdfkit.references import drjit_models as dj
-from bsdfkit.references import mitsuba as ref
+from bsdfkit.testing import drjit_models as dj
+from bsdfkit.testing import mitsuba as ref
 from conftest import grazing_dirs, random_dirs
 
 N = 12_000  # direction pairs per parameter set (half random, half importance-sampled)

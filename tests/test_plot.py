@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 import bsdfkit as bk  # noqa: E402
-from bsdfkit import _spec  # noqa: E402
+from bsdfkit.models import spec as _spec  # noqa: E402
 from bsdfkit import plot as bkplot  # noqa: E402
 
 LUM = np.array([0.2126, 0.7152, 0.0722])
@@ -362,8 +362,20 @@ def test_parse_spec_errors_name_the_problem(spec, message):
 
 
 def test_new_model_without_example_fails_loudly(monkeypatch):
+    from bsdfkit.models import registry
+    monkeypatch.setattr(registry, "_CLASSES", dict(registry._CLASSES))   # undone after the test
+    with pytest.raises(TypeError, match="examples"):          # the registry refuses a class without examples
+        class Plastic(bk.BxDF):                               # noqa: F841
+            def __init__(self, kd, ks=0.5):
+                super().__init__(kd=kd, ks=ks)
+
     class Plastic(bk.BxDF):
         __slots__ = ()
+        description = "test double"
+        examples = {"red": "plastic 0.3"}
+        energy_conserving = exact_eval = reciprocal = two_sided = True
+        transmission = delta_only = False
+        mitsuba = None
 
         def __init__(self, kd, ks=0.5):
             super().__init__(kd=kd, ks=ks)
@@ -371,13 +383,10 @@ def test_new_model_without_example_fails_loudly(monkeypatch):
         def _make_core(self):
             return None
 
-    monkeypatch.setattr(bk, "MODELS", bk.MODELS + (Plastic,))
     assert _spec.model_names()["plastic"] is Plastic          # new classes are parsed automatically...
+    assert Plastic in bk.MODELS                                # ...listed...
     assert "plastic kd ks=0.5" in _spec.usage()
-    with pytest.raises(LookupError, match="EXAMPLES"):       # ...but the gallery needs an example
-        _spec.example_model(Plastic)
-    monkeypatch.setitem(_spec.EXAMPLES, "Plastic", "plastic 0.3")
-    assert _spec.example_spec(Plastic) == "plastic 0.3"
+    assert _spec.example_spec(Plastic) == "plastic 0.3"       # ...and the gallery row is the first example
 
 
 def test_to_spec_round_trips():

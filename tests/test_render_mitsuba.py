@@ -1,7 +1,7 @@
 """The preview renderer against Mitsuba 3's `path` integrator (llvm_ad_rgb): the same sphere,
 environment map, camera and material, both unbiased, so the images differ by noise only.
 
-Conventions matched (see bsdfkit.references.mitsuba_scene): perspective sensor with fov on x and
+Conventions matched (see bsdfkit.testing.mitsuba_scene): perspective sensor with fov on x and
 look_at, box reconstruction filter, Mitsuba max_depth = ours + 1, the envmap's lat-long
 orientation (checked first, on an environment-only view of a map with distinctive features),
 and Mitsuba's envmap texel positions (rows at y / (H - 1), ours at (y + 0.5) / H): the test
@@ -21,7 +21,7 @@ import pytest
 import bsdfkit as bk
 from bsdfkit import render as R
 
-import bsdfkit.references.mitsuba as mitsuba_ref
+import bsdfkit.testing.mitsuba as mitsuba_ref
 import mitsuba  # noqa: F401,E402
 
 RES = 48
@@ -64,7 +64,7 @@ ENV_MI = env_function(latlong((np.arange(ENV_W) + 0.5) / ENV_W, np.arange(ENV_H)
 def render_mitsuba(scene, seeds, spp, max_depth):
     mitsuba_ref.variant()
     import mitsuba as mi
-    from bsdfkit.references.mitsuba_scene import to_mitsuba_scene
+    from bsdfkit.testing.mitsuba_scene import to_mitsuba_scene
     d = to_mitsuba_scene(scene, width=RES, height=RES, spp=spp, max_depth=max_depth)
     d["environment"] = {"type": "envmap", "bitmap": mi.Bitmap(ENV_MI)}
     msc = mi.load_dict(d)
@@ -111,7 +111,7 @@ def test_environment_orientation():
     sc = R.Scene(environment=ENV_OURS).look_at((0, 0, 0), (0.6, 0.3, 0.74), fov=50)
     mitsuba_ref.variant()
     import mitsuba as mi
-    from bsdfkit.references.mitsuba_scene import to_mitsuba_scene
+    from bsdfkit.testing.mitsuba_scene import to_mitsuba_scene
     d = to_mitsuba_scene(sc, width=RES, height=RES, spp=64, max_depth=0)
     d["environment"] = {"type": "envmap", "bitmap": mi.Bitmap(np.fliplr(ENV_MI).copy())}
     mirrored = np.array(mi.render(mi.load_dict(d), seed=0, spp=64))

@@ -18,6 +18,11 @@ int num_threads();
 
 template <typename F> inline bool is_dtype(const py::array &a) { return a.dtype().is(py::dtype::of<F>()); }
 
+// A batch stopped by the interrupt hook (module.cpp: Ctrl-C) left the Python error set.
+inline void raise_if_interrupted() {
+    if (PyErr_Occurred()) throw py::error_already_set();
+}
+
 [[noreturn]] inline void value_error(const std::string &msg) { throw py::value_error(msg); }
 
 // Checks dtype, C-contiguity and the trailing shape; returns the data pointer.
@@ -57,9 +62,11 @@ inline uint8_t to_sflags(int s) {
     return uint8_t(s);
 }
 
+// One bound model (core/bxdf.h): both precisions, built from one Params (kept for `params`).
 template <template <typename> class Model> struct PyModel {
     Model<float> m32;
     Model<double> m64;
+    typename Model<double>::Params params;
 
     template <typename F> const Model<F> &get() const {
         if constexpr (std::is_same_v<F, float>) return m32; else return m64;
@@ -83,6 +90,7 @@ template <template <typename> class Model> struct PyModel {
             else if (ni == n) eval_batch<0, 3>(m, po, pi, n, md, pout, nt, bad);
             else eval_batch<0, 0>(m, po, pi, n, md, pout, nt, bad);
         }
+        raise_if_interrupted();
         return py::make_tuple(bad.wo.load(), bad.wi.load());
     }
 
@@ -105,6 +113,7 @@ template <template <typename> class Model> struct PyModel {
             else if (ni == n) pdf_batch<0, 3>(m, po, pi, n, md, s, pout, nt, bad);
             else pdf_batch<0, 0>(m, po, pi, n, md, s, pout, nt, bad);
         }
+        raise_if_interrupted();
         return py::make_tuple(bad.wo.load(), bad.wi.load());
     }
 
@@ -144,6 +153,7 @@ template <template <typename> class Model> struct PyModel {
             if (no == n) sample_batch<3>(m, po, puc, pu, n, md, s, o, num_threads(), bad);
             else sample_batch<0>(m, po, puc, pu, n, md, s, o, num_threads(), bad);
         }
+        raise_if_interrupted();
         return bad.wo.load();
     }
 
@@ -160,6 +170,7 @@ template <template <typename> class Model> struct PyModel {
             py::gil_scoped_release release;
             albedo_batch(get<F>(), po, no, n_samples, seed, md, pout, num_threads(), bad);
         }
+        raise_if_interrupted();
         return bad.wo.load();
     }
 };
@@ -189,17 +200,6 @@ py::class_<PyModel<Model>> bind_model(py::module_ &m, const char *name) {
         })
         .def_property_readonly("flags", [](const P &self) { return int(self.m64.flags()); });
     return c;
-}
-
-inline Masking to_masking(int m) {
-    if (m != 0 && m != 1) value_error("masking: must be 'correlated' or 'separable'");
-    return Masking(m);
-}
-
-template <typename F> inline Spectrum<F> to_spectrum(const std::array<double, 3> &a) {
-    Spectrum<F> s;
-    for (int i = 0; i < 3; ++i) s[i] = F(a[i]);
-    return s;
 }
 
 } // namespace bsdfkit::py_bind

@@ -1,6 +1,6 @@
-// Bindings of Filament's models, of the DFG table builder and of the individual Filament terms
-// (for term-by-term reference tests). Parameters arrive validated from Python
-// (bsdfkit/_filament_models.py); the DFG table is built and cached by bsdfkit.filament.
+// Bindings of Filament's DFG table and its builder, and of the individual Filament terms (for
+// term-by-term reference tests). The models are bound by bind_all (models.cpp) from bxdfs/all.h;
+// they take the table as their Params field `dfg`. The table is built and cached by bsdfkit.filament.
 #include <pybind11/stl.h>
 
 #include <string>
@@ -13,14 +13,9 @@ namespace bsdfkit::py_bind {
 
 namespace {
 
-using RGB = std::array<double, 3>;
-
-// Immutable, shared DFG table; every model built from it holds a reference, so the table lives
-// as long as the last model (or Python handle) that uses it.
-struct PyDFG {
-    std::shared_ptr<const FilamentDFG> table;
-};
-
+// Immutable, shared DFG table (core/table.h); every model built from it holds a reference, so
+// the table lives as long as the last model (or Python handle) that uses it.
+using PyDFG = SharedTable<FilamentDFG>;
 
 template <typename F>
 py::array term_t(const std::string &name, const std::vector<py::array> &args) {
@@ -92,41 +87,6 @@ py::array term_t(const std::string &name, const std::vector<py::array> &args) {
     return out;
 }
 
-filament::DiffuseTerm to_diffuse(int d) {
-    if (d != 0 && d != 1) value_error("diffuse: must be 'lambert' or 'burley'");
-    return filament::DiffuseTerm(d);
-}
-
-template <template <typename> class Model> void bind_standard(py::module_ &m, const char *name) {
-    bind_model<Model>(m, name).def(py::init([](const RGB &base, double metallic, double roughness, double reflectance,
-                                               double anisotropy, double clear_coat, double clear_coat_roughness,
-                                               const RGB &sheen, double sheen_roughness, int diffuse, int visibility,
-                                               bool f90_filament, bool energy_compensation,
-                                               double min_perceptual_roughness, int layering,
-                                               bool clear_coat_ior_change, const PyDFG &dfg) {
-        if (visibility != 0 && visibility != 1) value_error("visibility: must be 'correlated' or 'fast'");
-        if (layering != 0 && layering != 1) value_error("clear_coat_layering: must be 'code' or 'doc'");
-        FilamentStandardParams p;
-        p.base_color = base;
-        p.metallic = metallic;
-        p.roughness = roughness;
-        p.reflectance = reflectance;
-        p.anisotropy = anisotropy;
-        p.clear_coat = clear_coat;
-        p.clear_coat_roughness = clear_coat_roughness;
-        p.sheen_color = sheen;
-        p.sheen_roughness = sheen_roughness;
-        p.diffuse = to_diffuse(diffuse);
-        p.visibility = filament::VisibilityTerm(visibility);
-        p.f90_filament = f90_filament;
-        p.energy_compensation = energy_compensation;
-        p.min_perceptual_roughness = min_perceptual_roughness;
-        p.layering = filament::Layering(layering);
-        p.clear_coat_ior_change = clear_coat_ior_change;
-        return PyModel<Model>{Model<float>::make(p, dfg.table), Model<double>::make(p, dfg.table)};
-    }));
-}
-
 } // namespace
 
 void bind_filament_models(py::module_ &m) {
@@ -134,14 +94,21 @@ void bind_filament_models(py::module_ &m) {
         .def(py::init([](py::array_t<double, py::array::c_style | py::array::forcecast> a, int samples) {
             if (a.ndim() != 3 || a.shape(0) != a.shape(1) || a.shape(2) != 3 || a.shape(0) < 2)
                 value_error("table: expected a (size, size, 3) array with size >= 2");
-            return PyDFG{make_filament_dfg(int(a.shape(0)), samples, a.data())};
+            return make_filament_dfg(int(a.shape(0)), samples, a.data());
         }))
-        .def_property_readonly("size", [](const PyDFG &d) { return d.table->size; })
-        .def_property_readonly("samples", [](const PyDFG &d) { return d.table->samples; })
+        .def_property_readonly("size", [](const PyDFG &d) { return d->size; })
+        .def_property_readonly("samples", [](const PyDFG &d) { return d->samples; })
+        .def_property_readonly("digest", [](const PyDFG &d) { return d.digest(); },
+                               "64-bit content digest of the table's values (core/table.h)")
+        // equal values compare equal (by digest), so Params read back from two models compare
+        .def("__eq__", [](const PyDFG &a, const py::object &b) {
+            return py::isinstance<PyDFG>(b) && a == b.cast<const PyDFG &>();
+        })
+        .def("__hash__", [](const PyDFG &d) { return py::hash(py::int_(d.digest())); })
         .def("array", [](const PyDFG &d) {
-            int s = d.table->size;
+            int s = d->size;
             py::array_t<double> out({s, s, 3});
-            std::copy(d.table->d64.begin(), d.table->d64.end(), out.mutable_data());
+            std::copy(d->d64.begin(), d->d64.end(), out.mutable_data());
             return out;
         });
 
@@ -163,27 +130,6 @@ void bind_filament_models(py::module_ &m) {
         return f32 ? term_t<float>(name, args) : term_t<double>(name, args);
     });
 
-    // Four classes for the standard model: with or without the clear-coat and the sheen lobes, so
-    // that the common case carries neither (and vectorizes); Python picks one (_filament_models.py).
-    bind_standard<FilamentStandardBxDF>(m, "FilamentStandard");
-    bind_standard<FilamentStandardCoatBxDF>(m, "FilamentStandardCoat");
-    bind_standard<FilamentStandardSheenBxDF>(m, "FilamentStandardSheen");
-    bind_standard<FilamentStandardCoatSheenBxDF>(m, "FilamentStandardCoatSheen");
-
-    bind_model<FilamentClothBxDF>(m, "FilamentCloth")
-        .def(py::init([](const RGB &base, const RGB &sheen, const RGB &subsurface, bool has_subsurface,
-                         double roughness, int diffuse, double min_perceptual_roughness, const PyDFG &dfg) {
-            FilamentClothParams p;
-            p.base_color = base;
-            p.sheen_color = sheen;
-            p.subsurface_color = subsurface;
-            p.has_subsurface = has_subsurface;
-            p.roughness = roughness;
-            p.diffuse = to_diffuse(diffuse);
-            p.min_perceptual_roughness = min_perceptual_roughness;
-            return PyModel<FilamentClothBxDF>{FilamentClothBxDF<float>::make(p, dfg.table),
-                                               FilamentClothBxDF<double>::make(p, dfg.table)};
-        }));
 }
 
 } // namespace bsdfkit::py_bind

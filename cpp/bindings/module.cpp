@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "bsdfkit/io.h"
+#include "bsdfkit/pool.h"
 
 namespace py = pybind11;
 
@@ -16,6 +17,7 @@ namespace bsdfkit::py_bind {
 static std::atomic<int> g_threads{int(std::max(1u, std::thread::hardware_concurrency()))};
 int num_threads() { return g_threads.load(); }
 
+void bind_all(py::module_ &m);
 void bind_pbrt_models(py::module_ &m);
 void bind_filament_models(py::module_ &m);
 void bind_hair_models(py::module_ &m);
@@ -27,6 +29,12 @@ using namespace bsdfkit;
 
 PYBIND11_MODULE(_core, m) {
     m.doc() = "bsdfkit compiled core (use the bsdfkit package, not this module directly)";
+    // Batch kernels poll this between chunks (pool.h): Ctrl-C stops a long eval / albedo call
+    // and the binding re-raises the KeyboardInterrupt.
+    interrupt_hook() = +[]() -> bool {
+        py::gil_scoped_acquire gil;
+        return PyErr_CheckSignals() != 0;
+    };
     m.def("set_num_threads", [](int n) {
         if (n < 1) throw py::value_error("n: number of threads must be >= 1");
         py_bind::g_threads = n;
@@ -34,8 +42,9 @@ PYBIND11_MODULE(_core, m) {
     m.def("get_num_threads", [] { return py_bind::g_threads.load(); });
     m.def("hardware_concurrency", [] { return int(std::max(1u, std::thread::hardware_concurrency())); });
 
+    py_bind::bind_filament_models(m);  // first: the models' Params refer to its FilamentDFG
+    py_bind::bind_all(m);
     py_bind::bind_pbrt_models(m);
-    py_bind::bind_filament_models(m);
     py_bind::bind_hair_models(m);
     py_bind::bind_render(m);
 

@@ -25,7 +25,7 @@ template <typename T> struct type_tag {
     using type = T;
 };
 
-// The bound model of `h` (a PyModel<M> for one M of RenderModels), float precision.
+// The bound model of `h` (a PyModel<M> for one M of AllModels, bxdfs/all.h), float precision.
 template <template <typename> class... Ms>
 bool to_material_impl(const py::handle &h, Material *out, ModelList<Ms...> *) {
     auto one = [&](auto tag) {
@@ -39,7 +39,7 @@ bool to_material_impl(const py::handle &h, Material *out, ModelList<Ms...> *) {
 Material to_material(const py::object &model) {
     py::object core = py::hasattr(model, "_core") ? model.attr("_core") : model;
     Material m;
-    if (!to_material_impl(core, &m, static_cast<RenderModels *>(nullptr)))
+    if (!to_material_impl(core, &m, static_cast<AllModels *>(nullptr)))
         throw py::type_error("material: expected a bsdfkit model, got " + std::string(py::str(py::type::of(model))));
     return m;
 }

@@ -103,17 +103,17 @@ void filament_dfg_rows(int size, int samples, int row_begin, int row_end, double
     }
 }
 
-std::shared_ptr<const FilamentDFG> make_filament_dfg(int size, int samples, const double *values) {
+SharedTable<FilamentDFG> make_filament_dfg(int size, int samples, const double *values) {
     auto t = std::make_shared<FilamentDFG>();
     t->size = size;
     t->samples = samples;
     t->d64.assign(values, values + size_t(size) * size * 3);
     t->d32.resize(t->d64.size());
     for (size_t k = 0; k < t->d64.size(); ++k) t->d32[k] = float(t->d64[k]);
-    return t;
+    return SharedTable<FilamentDFG>(std::move(t));
 }
 
-std::shared_ptr<const FilamentDFG> make_filament_dfg(int size, int samples, int nthreads) {
+SharedTable<FilamentDFG> make_filament_dfg(int size, int samples, int nthreads) {
     std::vector<double> v(size_t(size) * size * 3);
     filament_dfg_rows(size, samples, 0, size, v.data(), nthreads);
     return make_filament_dfg(size, samples, v.data());

@@ -4,11 +4,12 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 
 def _parser() -> argparse.ArgumentParser:
-    from . import __version__
+    from ._version import __version__
 
     p = argparse.ArgumentParser(prog="bsdfkit" if __name__ != "__main__" else "python -m bsdfkit",
                                 description="bsdfkit: pbrt-v4 BSDFs over numpy arrays.")
@@ -22,7 +23,6 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("-o", "--outdir", default="bsdfkit-demo", metavar="DIR",
                    help="output directory, created if missing (default: ./bsdfkit-demo)")
     _add_lobes_command(sub)
-    from .render import _add_render_command
     _add_render_command(sub)
     _add_simplify_command(sub)
     return p
@@ -30,8 +30,12 @@ def _parser() -> argparse.ArgumentParser:
 
 # ---------------------------------------------------------------- python -m bsdfkit lobes
 
-_LOBES_EXAMPLES = ("conductor metal=Cu alpha=0.2", "dielectric eta=1.5 alpha=0.3", "diffuse 0.8,0.5,0.2",
-                   "difftrans 0.5 0.4", "conductor metal=Au alpha=0.1 + diffuse 0.5")
+def _lobes_examples() -> list:
+    """Spec examples for the help text: each registered class's first example, and an overlay."""
+    from .models import registry
+
+    first = [next(iter(c.examples.values())) for c in registry.classes()]
+    return first + ([f"{first[1]} + {first[0]}"] if len(first) > 1 else [])
 
 
 def _add_lobes_command(sub) -> None:
@@ -43,7 +47,7 @@ def _add_lobes_command(sub) -> None:
         description="Write the views of bsdfkit.plot.overview for MODEL-SPEC at one incident direction ωo.\n"
                     "MODEL-SPEC: a model name and its parameters (key=value or positional; RGB as r,g,b);\n"
                     "overlay several models by separating their specs with a '+' word. Examples:\n  "
-                    + "\n  ".join(_LOBES_EXAMPLES) + "\nRun with a bad spec to see every model and its parameters.")
+                    + "\n  ".join(_lobes_examples()) + "\nRun with a bad spec to see every model and its parameters.")
     lo.add_argument("spec", nargs="+", metavar="MODEL-SPEC", help="model name followed by its parameters")
     lo.add_argument("--theta", type=float, default=30.0, metavar="DEG",
                     help="θo, angle of ωo from the normal in degrees (default 30)")
@@ -64,7 +68,7 @@ def _run_lobes_command(args) -> int:
     import math
     import os
 
-    from ._spec import parse_specs
+    from .models.spec import parse_specs
 
     def fail(msg):
         sys.stderr.write(f"bsdfkit lobes: {msg}\n")
@@ -140,19 +144,33 @@ def _run_simplify_command(args) -> int:
         return fail(f"--seed: expected an integer >= 0, got {args.seed}")
     if args.n < 16:
         return fail(f"-n: expected an integer >= 16, got {args.n}")
-    try:
-        with open(args.scene, encoding="utf-8") as fh:
-            text = fh.read()
-    except OSError as e:
-        return fail(f"{args.scene}: {e.strerror or e}")
-    from . import from_pbrt
-    from .plot import describe
-    from .tradeoff import simplify
+    import os
+    import warnings
+
+    if not os.path.isfile(args.scene):
+        return fail(f"{args.scene}: no such file")
+    from .interop import from_pbrt
+    from .interop.pbrt import PbrtSkipWarning
+    from .models.describe import describe
+    from .tuning import simplify
 
     try:
-        materials = from_pbrt(text, skip_unsupported=args.skip_unsupported)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", PbrtSkipWarning)
+            materials = from_pbrt(os.path.abspath(args.scene), skip_unsupported=args.skip_unsupported)
+    except OSError as e:
+        return fail(str(e))
     except ValueError as e:
         return fail(f"{args.scene}: {e}")
+    skipped = [w.message for w in caught if isinstance(w.message, PbrtSkipWarning)]
+    for w in caught:
+        if not isinstance(w.message, PbrtSkipWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    if skipped:
+        print(f"{args.scene}: skipped {len(skipped)} unsupported material(s):")
+        for w in skipped:
+            where = f"{os.path.relpath(w.file)}: line {w.line}" if w.file else f"line {w.line}"
+            print(f"  - {w.material!r} ({where}): {w.reason}")
     if not materials:
         return fail(f"{args.scene}: no materials found")
     print(f"{args.scene}: {len(materials)} material(s), tol {args.tol:g}, metric {args.metric}, seed {args.seed}")
@@ -168,6 +186,67 @@ def _run_simplify_command(args) -> int:
               f"over the most accurate configuration")
         if args.verbose:
             print("\n".join(f"{'':<{width}}  " + line for line in str(rep).splitlines()))
+    return 0
+
+
+# ---------------------------------------------------------------- command line (python -m bsdfkit render)
+
+def _add_render_command(sub) -> None:
+    r = sub.add_parser("render", help="path-trace one material on a sphere (or a mesh) under an environment",
+                       description="Render MODEL-SPEC, e.g. 'conductor metal=Cu alpha=0.2', 'diffuse 0.8,0.5,0.2', "
+                                   "'dielectric eta=1.5 alpha=0.1', 'thindielectric', 'difftrans 0.5 0.4', on a unit "
+                                   "sphere standing on a checkerboard ground. Writes PNG (sRGB) or EXR (linear) by "
+                                   "the extension of --output. Ctrl-C stops early and writes what was rendered.")
+    r.add_argument("spec", nargs="+", metavar="MODEL-SPEC", help="model name followed by its parameters")
+    r.add_argument("-o", "--output", default="render.png", metavar="PATH", help="output image (default: render.png)")
+    r.add_argument("--env", default="sky", metavar="ENV",
+                   help="sky (default), studio, white, or a lat-long EXR/HDR/PNG file")
+    r.add_argument("--shape", default=None, metavar="MESH", help="OBJ/PLY/... mesh instead of the sphere")
+    r.add_argument("--width", type=int, default=256)
+    r.add_argument("--height", type=int, default=256)
+    r.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
+    r.add_argument("--max-depth", type=int, default=8, help="scattering events per path (default 8)")
+    r.add_argument("--seed", type=int, default=0)
+    r.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops (default 0)")
+    r.add_argument("--threads", type=int, default=None, help="worker threads (default: all cores)")
+    r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+
+
+def _run_render_command(args) -> int:
+    from .io import write_image
+    from .render import parse_spec, preview
+    from .threads import set_num_threads
+
+    if args.quiet:  # also silences the Filament DFG table's first-use progress
+        from .models.filament import dfg
+        dfg.PROGRESS_DEFAULT = False
+    try:
+        model = parse_spec(" ".join(args.spec))
+    except ValueError as e:
+        sys.stderr.write(f"bsdfkit render: {e}\n")
+        return 2
+    try:
+        if args.threads is not None:
+            set_num_threads(args.threads)
+        img = preview(model, envmap=args.env, width=args.width, height=args.height, spp=args.spp,
+                      max_depth=args.max_depth, seed=args.seed, progress=not args.quiet, shape=args.shape)
+    except KeyboardInterrupt as e:
+        partial = getattr(e, "image", None)
+        if partial is not None:
+            write_image(args.output, partial, exposure=args.exposure)
+            sys.stderr.write(f"bsdfkit render: interrupted; wrote {args.output} after {e.spp_done} spp\n")
+        else:
+            sys.stderr.write("bsdfkit render: interrupted\n")
+        return 130
+    except (ValueError, TypeError, OSError) as e:
+        sys.stderr.write(f"bsdfkit render: {e}\n")
+        return 1
+    try:
+        write_image(args.output, img, exposure=args.exposure)
+    except (ValueError, OSError) as e:
+        sys.stderr.write(f"bsdfkit render: {e}\n")
+        return 1
+    print(os.path.abspath(args.output))
     return 0
 
 
@@ -189,7 +268,6 @@ def main(argv=None) -> int:
     if args.command == "lobes":
         return _run_lobes_command(args)
     if args.command == "render":
-        from .render import _run_render_command
         return _run_render_command(args)
     if args.command == "simplify":
         return _run_simplify_command(args)

@@ -12,7 +12,6 @@ import numpy as np
 
 from . import plot as _plot
 from ._enums import TransportMode
-from ._models import Conductor, Dielectric, Diffuse, DiffuseTransmission, ThinDielectric
 
 #: Incident angles (degrees) of the lobe grid columns and of the albedo table.
 THETAS = (0, 30, 60, 80)
@@ -25,18 +24,12 @@ VIEWS_SAMPLES = 50_000
 
 
 def configurations():
-    """The demo's model configurations: a list of (name, model)."""
-    return [
-        ("Diffuse(0.8)", Diffuse(0.8)),
-        ("DiffuseTransmission(0.5, 0.4)", DiffuseTransmission(0.5, 0.4)),
-        ('Conductor.from_metal("Au", alpha=0.2)', Conductor.from_metal("Au", alpha=0.2)),
-        ('Conductor.from_metal("Cu", alpha=0)', Conductor.from_metal("Cu", alpha=0)),
-        ('Conductor.from_metal("Al", alpha_x=0.4, alpha_y=0.1)',
-         Conductor.from_metal("Al", alpha_x=0.4, alpha_y=0.1)),
-        ("Dielectric(1.5, alpha=0.2)", Dielectric(1.5, alpha=0.2)),
-        ("Dielectric(1.5)", Dielectric(1.5)),
-        ("ThinDielectric(1.5)", ThinDielectric(1.5)),
-    ]
+    """The demo's model configurations: a list of (spec, model), the first registered example of
+    every model class (the gallery's rows), in registry order."""
+    from .models import registry
+    from .models.spec import example_model, example_spec
+
+    return [(example_spec(cls), example_model(cls)) for cls in registry.classes()]
 
 
 def _anisotropic(model) -> bool:
@@ -51,7 +44,8 @@ def _is_gray(model) -> bool:
 
 def _refracts(model) -> bool:
     """True when Radiance-mode transmission is scaled by 1/η² (a real index change)."""
-    return isinstance(model, Dielectric) and model.eta != 1.0
+    cls = type(model)
+    return cls.transmission and not cls.delta_only and float(model._params.get("eta", 1.0)) != 1.0
 
 
 def _lobes_figure(configs, path):

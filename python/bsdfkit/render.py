@@ -337,7 +337,7 @@ class Scene:
         """A horizontal square (normal +y) of side ``size`` at y = ``height``. With ``checker`` (a
         second model) the two materials alternate on squares of side ``checker_size``.
         Defaults: a grey checkerboard of Diffuse(0.45) and Diffuse(0.15)."""
-        from ._models import Diffuse
+        from .models import Diffuse
         if material is None:
             material = Diffuse(0.45)
             if checker is None:
@@ -615,62 +615,5 @@ def parse_spec(spec):
     (or alias), then positional values and ``key=value`` constructor parameters (RGB as
     ``r,g,b``); ``metal=`` / ``reflectance=`` select ``Conductor.from_metal`` /
     ``from_reflectance``. Raises ValueError listing the valid models or parameters."""
-    from ._spec import parse_spec as shared
+    from .models.spec import parse_spec as shared
     return shared(spec)
-
-
-# ---------------------------------------------------------------- command line (python -m bsdfkit render)
-
-def _add_render_command(sub) -> None:
-    r = sub.add_parser("render", help="path-trace one material on a sphere (or a mesh) under an environment",
-                       description="Render MODEL-SPEC, e.g. 'conductor metal=Cu alpha=0.2', 'diffuse 0.8,0.5,0.2', "
-                                   "'dielectric eta=1.5 alpha=0.1', 'thindielectric', 'difftrans 0.5 0.4', on a unit "
-                                   "sphere standing on a checkerboard ground. Writes PNG (sRGB) or EXR (linear) by "
-                                   "the extension of --output. Ctrl-C stops early and writes what was rendered.")
-    r.add_argument("spec", nargs="+", metavar="MODEL-SPEC", help="model name followed by its parameters")
-    r.add_argument("-o", "--output", default="render.png", metavar="PATH", help="output image (default: render.png)")
-    r.add_argument("--env", default="sky", metavar="ENV",
-                   help="sky (default), studio, white, or a lat-long EXR/HDR/PNG file")
-    r.add_argument("--shape", default=None, metavar="MESH", help="OBJ/PLY/... mesh instead of the sphere")
-    r.add_argument("--width", type=int, default=256)
-    r.add_argument("--height", type=int, default=256)
-    r.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
-    r.add_argument("--max-depth", type=int, default=8, help="scattering events per path (default 8)")
-    r.add_argument("--seed", type=int, default=0)
-    r.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops (default 0)")
-    r.add_argument("--threads", type=int, default=None, help="worker threads (default: all cores)")
-    r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
-
-
-def _run_render_command(args) -> int:
-    from . import set_num_threads
-    from .io import write_image
-
-    try:
-        model = parse_spec(" ".join(args.spec))
-    except ValueError as e:
-        sys.stderr.write(f"bsdfkit render: {e}\n")
-        return 2
-    try:
-        if args.threads is not None:
-            set_num_threads(args.threads)
-        img = preview(model, envmap=args.env, width=args.width, height=args.height, spp=args.spp,
-                      max_depth=args.max_depth, seed=args.seed, progress=not args.quiet, shape=args.shape)
-    except KeyboardInterrupt as e:
-        partial = getattr(e, "image", None)
-        if partial is not None:
-            write_image(args.output, partial, exposure=args.exposure)
-            sys.stderr.write(f"bsdfkit render: interrupted; wrote {args.output} after {e.spp_done} spp\n")
-        else:
-            sys.stderr.write("bsdfkit render: interrupted\n")
-        return 130
-    except (ValueError, TypeError, OSError) as e:
-        sys.stderr.write(f"bsdfkit render: {e}\n")
-        return 1
-    try:
-        write_image(args.output, img, exposure=args.exposure)
-    except (ValueError, OSError) as e:
-        sys.stderr.write(f"bsdfkit render: {e}\n")
-        return 1
-    print(os.path.abspath(args.output))
-    return 0

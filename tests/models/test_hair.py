@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import bsdfkit as bk
-from bsdfkit.references import mitsuba as mref
+from bsdfkit.testing import mitsuba as mref
 from bsdfkit.testing import hair_ref as ref
 
 EUM = np.array([0.419, 0.697, 1.37])

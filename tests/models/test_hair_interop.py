@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 import bsdfkit as bk
-from bsdfkit._spec import parse_spec
-from bsdfkit.references import mitsuba as mref
+from bsdfkit.models.spec import parse_spec
+from bsdfkit.testing import mitsuba as mref
 from bsdfkit.testing import hair_ref
 
 
@@ -73,7 +73,7 @@ def test_render_preview_hair():
 def test_hair_plots(tmp_path):
     import matplotlib
     matplotlib.use("Agg")
-    from bsdfkit import plot_hair
+    from bsdfkit.plot import hair as plot_hair
 
     m = bk.Hair.from_concentration(0.8, 0.3, h=0.4, beta_m=0.25)
     fig = plot_hair.hair_lobes(m, theta_o=30, n=181)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import bsdfkit as bk
-from bsdfkit.references import mitsuba as mref
+from bsdfkit.testing import mitsuba as mref
 from bsdfkit.models.normalized_fresnel import fresnel_moment1
 from bsdfkit.testing import hair_ref as ref
 

@@ -1,5 +1,5 @@
 // Array kernels: eval / pdf / sample / albedo of one model over N directions, chunked over a
-// thread pool (OpenMP). Every element is computed by pure per-element code, so outputs are
+// thread pool (pool.h). Every element is computed by pure per-element code, so outputs are
 // bit-identical for any thread count. Inner loops are written to auto-vectorize.
 #pragma once
 #include <algorithm>
@@ -10,22 +10,23 @@
 #include <vector>
 
 #include "core/bsdf.h"
+#include "core/bxdf.h"
 #include "core/rng.h"
+#include "pool.h"
 
 namespace bsdfkit {
 
 inline constexpr int64_t kChunk = 8192;
 
-// Runs fn(begin, end) over fixed chunks of [0, n). Chunk boundaries never depend on the
-// thread count, which keeps chunk-level reductions deterministic too.
-template <typename Fn> inline void parallel_chunks(int64_t n, int nthreads, int64_t chunk, const Fn &fn) {
+// Runs fn(begin, end) over fixed chunks of [0, n) on the calling thread and the pool's helpers
+// (pool.h). Chunk boundaries never depend on the thread count, which keeps chunk-level
+// reductions deterministic too. Returns false if an interrupt (Ctrl-C) stopped it early; the
+// outputs are then incomplete.
+template <typename Fn> inline bool parallel_chunks(int64_t n, int nthreads, int64_t chunk, const Fn &fn) {
     int64_t nchunks = (n + chunk - 1) / chunk;
-    if (nthreads <= 1 || nchunks <= 1) {
-        for (int64_t c = 0; c < nchunks; ++c) fn(c * chunk, std::min(n, (c + 1) * chunk));
-        return;
-    }
-#pragma omp parallel for num_threads(nthreads) schedule(dynamic, 1)
-    for (int64_t c = 0; c < nchunks; ++c) fn(c * chunk, std::min(n, (c + 1) * chunk));
+    InterruptPoll poll;
+    auto body = [&](int64_t c) { fn(c * chunk, std::min(n, (c + 1) * chunk)); };
+    return ChunkPool::instance().run(nchunks, nthreads, body, poll);
 }
 
 // A direction is accepted if it is finite and unit length to this tolerance on |w|^2.
@@ -43,15 +44,10 @@ struct BadCounts {
 };
 
 // f(wo, wi) for N pairs; SO / SI are 3 for a full array, 0 for one broadcast direction.
-// A per-chunk local copy of a (trivially copyable) model: its parameters then cannot alias the
-// outputs, so they stay in registers instead of being reloaded, and alias-checked, every
-// iteration. A model holding a resource (Filament's table pointer) names a trivially copyable
-// base `Kernel` with all its methods; the copy is of that base. Others are used by reference.
-template <typename M, typename = void> struct KernelOf { using type = M; };
-template <typename M> struct KernelOf<M, std::void_t<typename M::Kernel>> { using type = typename M::Kernel; };
-template <typename Model>
-using LocalModel = std::conditional_t<std::is_trivially_copyable_v<typename KernelOf<Model>::type>,
-                                      const typename KernelOf<Model>::type, const Model &>;
+// A per-chunk local copy of the model's trivially copyable kernel (core/bxdf.h: the model, or
+// its `Kernel` base when it holds a shared table): its parameters then cannot alias the outputs,
+// so they stay in registers instead of being reloaded, and alias-checked, every iteration.
+template <typename Model> using LocalModel = const KernelOf_t<Model>;
 
 template <int SO, int SI, typename Model, typename F>
 void eval_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMode mode, F *out, int nthreads,
@@ -97,11 +93,8 @@ template <typename F> struct SampleOut {
 };
 
 // Models whose sample_f branches on a loop-invariant smoothness test (Conductor, Dielectric)
-// expose is_smooth(), sample_smooth(wo, uc, mode, sf) and sample_rough(wo, uc, u, mode, sf);
-// sample_batch then runs one branch-free loop per case.
-template <typename M, typename = void> struct has_split_sample : std::false_type {};
-template <typename M>
-struct has_split_sample<M, std::void_t<decltype(&M::is_smooth), decltype(&M::sample_rough)>> : std::true_type {};
+// expose is_smooth(), sample_smooth and sample_rough (core/bxdf.h); sample_batch then runs one
+// branch-free loop per case.
 
 // The same results as bsdf_sample per element, over one chunk [b, e). The main loop stores only
 // float outputs (an invalid sample has pdf = 0; validity is folded into float selects) and
@@ -118,12 +111,13 @@ inline void sample_chunk(const Model &m, const Sampler &smp, bool model_ok, int6
     for (int64_t i = b; i < e; ++i) {
         Vec3<F> o = load3<F, SO>(wo, i);
         bo += not_unit(o);
-        BSDFSample<F> s = smp(m, o, uc[i], Point2<F>{u[2 * i], u[2 * i + 1]});
+        // Uniforms on [0, 1) (OneMinusEpsilon), as in bsdf_sample.
+        BSDFSample<F> s = smp(m, o, clamp_uniform(uc[i]), clamp_uniform(Point2<F>{u[2 * i], u[2 * i + 1]}));
         bool ok = sample_accepted(s, o) & model_ok;   // bsdf_sample's rule (core/bsdf.h)
         for (int c = 0; c < 3; ++c) of[3 * i + c] = ok ? s.f[c] : F(0);
-        owi[3 * i] = ok ? s.wi.x : F(0);
-        owi[3 * i + 1] = ok ? s.wi.y : F(0);
-        owi[3 * i + 2] = ok ? s.wi.z : F(0);
+        owi[3 * i] = ok ? s.wi.x : F(0);      // an invalid sample carries the normal (0, 0, 1)
+        owi[3 * i + 1] = ok ? s.wi.y : F(0);  // (kInvalidSampleWi, core/bsdf.h)
+        owi[3 * i + 2] = ok ? s.wi.z : F(1);
         opdf[i] = ok ? s.pdf : F(0);
         oeta[i] = ok ? s.eta : F(1);
         F tag = F(s.flags) + (s.pdf_is_proportional ? F(256) : F(0)); // flags + 256 * proportional

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from .. import _core
-from .._models import BxDF, _scalar
+from .base import BxDF, _scalar
 
 __all__ = ["NormalizedFresnel", "fresnel_moment1"]
 
@@ -27,15 +27,21 @@ class NormalizedFresnel(BxDF):
     """
 
     __slots__ = ()
-    aliases = ("normalizedfresnel", "normalized_fresnel", "bssrdf_exit")
-    examples = {"skin": "normalizedfresnel eta=1.4", "water": "normalizedfresnel eta=1.33"}
+    aliases = ("bssrdf_exit",)
+    examples = {"skin": "normalized_fresnel eta=1.4", "water": "normalized_fresnel eta=1.33"}
     description = "BSSRDF exit lobe (1 - Fr) / (c pi) of pbrt-v4"
-    energy_conserving = False  # albedo eta^2 in Radiance mode
+    energy_conserving = True   # albedo 1 in Importance mode (eta^2 in Radiance mode: the adjoint factor)
     exact_eval = True
+    reciprocal = False         # f depends on wi only, through Fr(cos wi)
     two_sided = True
     transmission = False
+    delta_only = False
     mitsuba = None
-    cost_family = "diffuse"
+    knobs = ()                 # no accuracy setting (FresnelMoment1 is pbrt-v4's fixed polynomial)
+
+    def to_mitsuba(self) -> dict:
+        raise NotImplementedError("Mitsuba 3 has no normalized-Fresnel (BSSRDF exit) plugin; use "
+                                  "bsdfkit.testing.hair_ref.normalized_fresnel_f as the reference")
 
     def __init__(self, eta=1.33):
         super().__init__(eta=_scalar(eta, "eta", lo=0.0, lo_open=True))
@@ -48,4 +54,4 @@ class NormalizedFresnel(BxDF):
         return f"NormalizedFresnel(eta={self._params['eta']!r})"
 
     def _make_core(self):
-        return _core.NormalizedFresnel(self._params["eta"])
+        return _core.NormalizedFresnel(eta=self._params["eta"])

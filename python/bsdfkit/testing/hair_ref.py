@@ -275,9 +275,9 @@ def mitsuba_h(wo):
 
 def mitsuba_eval_pdf(model, wo, wi):
     """Mitsuba 3 ``hair``'s f (cosine removed) and pdf at pbrt-frame directions: maps both to
-    Mitsuba's frame (:func:`to_mitsuba_frame`) and calls ``bsdfkit.references.mitsuba.eval_pdf``.
+    Mitsuba's frame (:func:`to_mitsuba_frame`) and calls ``bsdfkit.testing.mitsuba.eval_pdf``.
     The caller picks wo with ``wo_for_h(model.h, theta_o)`` so Mitsuba's h equals the model's."""
-    from ..references import mitsuba as ref
+    from . import mitsuba as ref
     return ref.eval_pdf(mitsuba_dict(model), to_mitsuba_frame(wo), to_mitsuba_frame(wi))
 
 

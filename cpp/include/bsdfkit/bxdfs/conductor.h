@@ -1,8 +1,9 @@
 // Conductor: perfect mirror or Trowbridge-Reitz microfacet reflection with a conductor Fresnel
 // term (pbrt-v4 ConductorBxDF; Torrance & Sparrow 1967, Walter et al. 2007).
-//   eta, k     real and imaginary index of refraction per channel (eta > 0, k >= 0)
-//   mfd        anisotropic GGX; max(alpha) < 1e-3 makes the lobe a delta
-//   FR         the Fresnel term, a compile-time knob (one loop per variant, each vectorizes):
+// Parameters (ConductorParams; Python: bsdfkit.Conductor)
+//   eta, k     real and imaginary index of refraction per channel (eta > 0, k >= 0); default Cu
+//   alpha_x, alpha_y, masking   anisotropic GGX; max(alpha) < 1e-3 makes the lobe a delta
+//   FR         the Fresnel term, a compile-time knob (one loop per variant):
 //              Exact    complex Fresnel of eta + i k (FrComplex)
 //              Schlick  Schlick 1994 with the exact normal-incidence reflectance F0
 //              F82      F82-tint (Hoffman 2019; Kutz et al. 2021): Schlick minus a
@@ -12,6 +13,7 @@
 #include <cstdint>
 
 #include "../core/bsdf_sample.h"
+#include "../core/bxdf.h"
 #include "../core/fresnel.h"
 #include "../core/microfacet.h"
 
@@ -19,7 +21,24 @@ namespace bsdfkit {
 
 enum class ConductorFresnel : uint8_t { Exact = 0, Schlick = 1, F82 = 2 };
 
+struct ConductorParams {
+    std::array<double, 3> eta{0.201006, 0.923749, 1.102215}, k{3.913262, 2.453045, 2.142090};  // Cu (bk.METALS)
+    double alpha_x = 0, alpha_y = 0;
+    Masking masking = Masking::Correlated;
+    template <class V> void fields(V &&v) {
+        v("eta", eta);
+        v("k", k);
+        v("alpha_x", alpha_x);
+        v("alpha_y", alpha_y);
+        v("masking", masking);
+    }
+};
+
 template <typename F, ConductorFresnel FR = ConductorFresnel::Exact> struct ConductorBxDF {
+    using Params = ConductorParams;
+    static constexpr const char *Name = FR == ConductorFresnel::Schlick ? "ConductorSchlick"
+                                        : FR == ConductorFresnel::F82   ? "ConductorF82"
+                                                                        : "Conductor";
     TrowbridgeReitz<F> mfd;
     Spectrum<F> eta, k;
     // Per-channel Schlick F0 and F82-tint a, computed in double at construction (unused by Exact).
@@ -34,6 +53,11 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact> struct Cond
         }
     }
 
+    static ConductorBxDF make(const Params &p) {
+        return ConductorBxDF(TrowbridgeReitz<F>(F(p.alpha_x), F(p.alpha_y), p.masking), to_spectrum<F>(p.eta),
+                             to_spectrum<F>(p.k));
+    }
+
     uint8_t flags() const { return mfd.effectively_smooth() ? SpecularReflection : GlossyReflection; }
 
     // The Fresnel reflectance at |wo.wm| = cos_i, per channel (the FR knob).
@@ -46,11 +70,9 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact> struct Cond
     // Torrance-Sparrow: f = D(wm) F(wo.wm) G(wo, wi) / (4 cos_o cos_i), wm = normalize(wo + wi).
     Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode) const {
         F cos_o = AbsCosTheta(wo), cos_i = AbsCosTheta(wi);
-        Vec3<F> wm = wi + wo;
-        F len2 = length_squared(wm);
         F denom = F(4) * cos_o * cos_i;
-        bool active = SameHemisphere(wo, wi) && !mfd.effectively_smooth() && len2 > F(0) && denom > F(0);
-        wm = wm / std::sqrt(active ? len2 : F(1));
+        bool active = SameHemisphere(wo, wi) & !mfd.effectively_smooth() & (denom > F(0));
+        Vec3<F> wm = reflection_half_vector(wi, wo, active);
         F scale = mfd.D(wm) * mfd.G(wo, wi) / denom;
         Spectrum<F> fr = fresnel(absdot(wo, wm));
         return select(active, fr * scale, Spectrum<F>(F(0)));
@@ -101,7 +123,6 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact> struct Cond
         bool active = SameHemisphere(wo, wi) & (len2 > F(0));
         wm = face_forward(wm / std::sqrt(active ? len2 : F(1)), Vec3<F>(0, 0, 1));
         F p = mfd.PDF(wo, wm) / (F(4) * absdot(wo, wm));
-        // The loop-invariant tests as a bit mask: a select on them does not vectorize in float64.
         p = keep_or_zero(active ? p : F(0), (sample_flags & RT_Reflection) != 0);
         return keep_or_zero(p, !mfd.effectively_smooth());
     }

@@ -1,21 +1,38 @@
 // Dielectric interface: smooth (delta) or Trowbridge-Reitz rough reflection and transmission
 // (pbrt-v4 DielectricBxDF; Walter et al. 2007 "Microfacet models for refraction").
-//   eta   relative IOR inside / outside (> 0; < 1 means the outside is denser)
-//   mfd   anisotropic GGX; max(alpha) < 1e-3 (or eta == 1) makes both lobes deltas
+// Parameters (DielectricParams; Python: bsdfkit.Dielectric)
+//   eta                  relative IOR inside / outside (> 0; < 1 means the outside is denser)
+//   alpha_x, alpha_y, masking   anisotropic GGX; max(alpha) < 1e-3 (or eta == 1) makes both lobes deltas
 // wo may lie on either side. In Radiance mode transmitted radiance is scaled by 1/etap^2,
 // in Importance mode it is not (Veach 1997 ch. 5), so f is not symmetric for transmission.
 #pragma once
 #include "../core/bsdf_sample.h"
+#include "../core/bxdf.h"
 #include "../core/fresnel.h"
 #include "../core/microfacet.h"
 
 namespace bsdfkit {
 
-static_assert(SpecularTransmission == SpecularReflection + 1 && GlossyTransmission == GlossyReflection + 1);
+struct DielectricParams {
+    double eta = 1.5, alpha_x = 0, alpha_y = 0;
+    Masking masking = Masking::Correlated;
+    template <class V> void fields(V &&v) {
+        v("eta", eta);
+        v("alpha_x", alpha_x);
+        v("alpha_y", alpha_y);
+        v("masking", masking);
+    }
+};
 
 template <typename F> struct DielectricBxDF {
+    using Params = DielectricParams;
+    static constexpr const char *Name = "Dielectric";
     F eta;
     TrowbridgeReitz<F> mfd;
+
+    static DielectricBxDF make(const Params &p) {
+        return {F(p.eta), TrowbridgeReitz<F>(F(p.alpha_x), F(p.alpha_y), p.masking)};
+    }
 
     // Bitwise | (not ||): a short-circuit here becomes control flow in every batch loop.
     bool is_smooth() const { return (eta == F(1)) | mfd.effectively_smooth(); }
@@ -26,23 +43,21 @@ template <typename F> struct DielectricBxDF {
     }
 
     // Lobe probabilities restricted by sample_flags.
-    static void lobe_probs(F R, uint8_t sample_flags, F *pr, F *pt) {
-        // Bit masks, not selects on the invariant flag test (GCC 12 does not vectorize those in float64).
-        *pr = keep_or_zero(R, (sample_flags & RT_Reflection) != 0);
-        *pt = keep_or_zero(F(1) - R, (sample_flags & RT_Transmission) != 0);
-    }
+    static void lobe_probs(F R, F T, uint8_t sample_flags, F *pr, F *pt) { restrict_lobes(R, T, sample_flags, pr, pt); }
 
     // Generalized half vector of a pair, facing +z, and the relative IOR etap along wi.
     // Returns false where pbrt-v4 returns 0: a horizon direction, a degenerate half vector,
     // or a back-facing microfacet.
-    bool half_vector(const Vec3<F> &wo, const Vec3<F> &wi, Vec3<F> *wm, F *etap) const {
+    // *len2 = |wi etap + wo|^2, from which the transmission Jacobian's denominator follows
+    // without cancellation: (wi.wm + wo.wm / etap)^2 = (h.wm / etap)^2 = |h|^2 / etap^2.
+    bool half_vector(const Vec3<F> &wo, const Vec3<F> &wi, Vec3<F> *wm, F *etap, F *len2_out) const {
         F cos_o = CosTheta(wo), cos_i = CosTheta(wi);
         bool reflect = cos_i * cos_o > F(0);
         F eta_side = cos_o > F(0) ? eta : F(1) / eta;
         *etap = reflect ? F(1) : eta_side;
         Vec3<F> h = wi * *etap + wo;
         F len2 = length_squared(h);
-        // Bitwise & keeps the mask free of short-circuit branches (vectorizes).
+        *len2_out = len2;
         bool ok = (cos_i != F(0)) & (cos_o != F(0)) & (len2 > F(0));
         F inv_len = F(1) / std::sqrt(ok ? len2 : F(1));
         F sgn = h.z < F(0) ? -inv_len : inv_len; // normalize and face +z in one scale
@@ -54,22 +69,24 @@ template <typename F> struct DielectricBxDF {
     }
 
     Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode) const {
-        // Delta lobes evaluate to 0; folded into the mask (no early return) so the loop vectorizes.
+        // Delta lobes evaluate to 0: folded into the mask (no early return).
         Vec3<F> wm;
-        F etap;
-        bool ok = half_vector(wo, wi, &wm, &etap) & !is_smooth();
+        F etap, len2;
+        bool ok = half_vector(wo, wi, &wm, &etap, &len2) & !is_smooth();
         bool reflect = CosTheta(wi) * CosTheta(wo) > F(0);
         F cos_o = CosTheta(wo), cos_i = CosTheta(wi);
-        F Fr = FrDielectric(dot(wo, wm), eta);
+        F Fr, Ft;
+        FrDielectricRT(dot(wo, wm), eta, &Fr, &Ft); // Ft = 1 - Fr without cancellation
         F dg = mfd.D(wm) * mfd.G(wo, wi);
+        F cc = std::abs(cos_i * cos_o);
         // Reflection: D G F / |4 cos_i cos_o|
-        F fr = dg * Fr / std::abs(F(4) * cos_i * cos_o);
-        // Transmission: D G (1 - F) |wi.wm wo.wm / (cos_i cos_o (wi.wm + wo.wm / etap)^2)|
-        F denom = sqr(dot(wi, wm) + dot(wo, wm) / etap) * cos_i * cos_o;
-        F ft = dg * (F(1) - Fr) * std::abs(dot(wi, wm) * dot(wo, wm) / denom);
-        ft = mode == TransportMode::Radiance ? ft / sqr(etap) : ft;
+        F fr = dg * Fr / (F(4) * cc);
+        // Transmission (Walter 2007 eq. 21): D G (1 - F) |wi.wm wo.wm| / (|cos_i cos_o| (wi.wm + wo.wm/etap)^2),
+        // the squared sum being |h|^2 / etap^2 (half_vector); Radiance mode divides by etap^2,
+        // which cancels the etap^2 of that denominator.
+        F ft = dg * Ft * std::abs(dot(wi, wm) * dot(wo, wm)) / (len2 * cc);
+        ft = mode == TransportMode::Radiance ? ft : ft * sqr(etap);
         F v = reflect ? fr : ft;
-        ok = ok & (reflect | (denom != F(0)));
         return Spectrum<F>(ok ? v : F(0));
     }
 
@@ -83,8 +100,8 @@ template <typename F> struct DielectricBxDF {
         BSDFSample<F> s;
         // eta == 1 is a pure pass-through; force R = 0 rather than trusting rounding.
         F R = keep_or_zero(FrDielectric(CosTheta(wo), eta), eta != F(1)), pr, pt;
-        lobe_probs(R, sample_flags, &pr, &pt);
-        bool reflect = uc < pr / (pr + pt);
+        lobe_probs(R, F(1) - R, sample_flags, &pr, &pt);
+        bool reflect = ChooseFirstLobe(uc, pr, pt);
         // Specular reflection about +z, or refraction through the flat interface.
         Vec3<F> wr(-wo.x, -wo.y, wo.z), wt;
         F etap;
@@ -95,10 +112,9 @@ template <typename F> struct DielectricBxDF {
         ft = mode == TransportMode::Radiance ? ft / sqr(etap) : ft;
         s.f = Spectrum<F>(reflect ? R / cos_i : ft);
         s.pdf = (reflect ? pr : pt) / (pr + pt);
-        // Flags by arithmetic, not a byte select (vectorizes): Transmission = Reflection + 1.
-        s.flags = uint8_t(SpecularReflection + int(!reflect));
+        s.flags = lobe_flag(SpecularReflection, !reflect);
         s.eta = reflect ? F(1) : etap;
-        // Masks with & / | (no short-circuit; vectorizes). cos_i > 0 always holds (DeltaAbsCos).
+        // cos_i > 0 always holds (DeltaAbsCos).
         s.valid = ((pr + pt) > F(0)) & (reflect | refr_ok);
         return s;
     }
@@ -107,9 +123,10 @@ template <typename F> struct DielectricBxDF {
                                uint8_t sample_flags) const {
         BSDFSample<F> s;
         Vec3<F> wm = mfd.Sample_wm(wo, u);
-        F R = FrDielectric(dot(wo, wm), eta), pr, pt;
-        lobe_probs(R, sample_flags, &pr, &pt);
-        bool reflect = uc < pr / (pr + pt);
+        F R, T, pr, pt;
+        FrDielectricRT(dot(wo, wm), eta, &R, &T);
+        lobe_probs(R, T, sample_flags, &pr, &pt);
+        bool reflect = ChooseFirstLobe(uc, pr, pt);
         F cos_o = CosTheta(wo);
         F pdf_wm = mfd.PDF(wo, wm);
 
@@ -123,24 +140,22 @@ template <typename F> struct DielectricBxDF {
         Vec3<F> wt;
         F etap;
         bool ok_t = Refract(wo, wm, eta, &etap, &wt);
-        // wt.z == 0 is left to the BSDF-level check on wi.z (bsdf_sample): testing it here too
-        // lets GCC's PRE turn the batch loop's wi.z test into a bool select it cannot vectorize.
+        // wt.z == 0 is left to the BSDF-level check on wi.z (bsdf_sample; rule V5, core/math.h).
         ok_t = ok_t & !SameHemisphere(wo, wt);
         F denom = sqr(dot(wt, wm) + dot(wo, wm) / etap);
         F dwm_dwi = absdot(wt, wm) / denom;
         F pdf_t = pdf_wm * dwm_dwi * pt / (pr + pt);
-        F f_t = (F(1) - R) * mfd.D(wm) * mfd.G(wo, wt) *
+        F f_t = T * mfd.D(wm) * mfd.G(wo, wt) *
                 std::abs(dot(wt, wm) * dot(wo, wm) / (CosTheta(wt) * cos_o * denom));
         f_t = mode == TransportMode::Radiance ? f_t / sqr(etap) : f_t;
 
         s.wi = reflect ? wr : wt;
         s.f = Spectrum<F>(reflect ? f_r : f_t);
-        // The chosen lobe's validity is folded into its pdf (0 = invalid) with float selects:
-        // a bool select (reflect ? ok_r : ok_t) does not vectorize under GCC 12.
+        // The chosen lobe's validity is folded into its pdf (0 = invalid; rule V2, core/math.h).
         pdf_r = ok_r ? pdf_r : F(0);
         pdf_t = ok_t ? pdf_t : F(0);
         s.pdf = reflect ? pdf_r : pdf_t;
-        s.flags = uint8_t(GlossyReflection + int(!reflect));
+        s.flags = lobe_flag(GlossyReflection, !reflect);
         s.eta = reflect ? F(1) : etap;
         s.valid = ((pr + pt) > F(0)) & (cos_o != F(0)) & (s.pdf > F(0));
         return s;
@@ -148,17 +163,18 @@ template <typename F> struct DielectricBxDF {
 
     F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
         Vec3<F> wm;
-        F etap;
-        bool ok = half_vector(wo, wi, &wm, &etap) & !is_smooth();
+        F etap, len2;
+        bool ok = half_vector(wo, wi, &wm, &etap, &len2) & !is_smooth();
         bool reflect = CosTheta(wi) * CosTheta(wo) > F(0);
-        F R = FrDielectric(dot(wo, wm), eta), pr, pt;
-        lobe_probs(R, sample_flags, &pr, &pt);
+        F R, T, pr, pt;
+        FrDielectricRT(dot(wo, wm), eta, &R, &T);
+        lobe_probs(R, T, sample_flags, &pr, &pt);
         F pdf_wm = mfd.PDF(wo, wm);
         F p_r = pdf_wm / (F(4) * absdot(wo, wm)) * pr;
-        F denom = sqr(dot(wi, wm) + dot(wo, wm) / etap);
-        F p_t = pdf_wm * absdot(wi, wm) / denom * pt;
+        // dwm/dwi = |wi.wm| / (wi.wm + wo.wm/etap)^2 = |wi.wm| etap^2 / |h|^2 (half_vector)
+        F p_t = pdf_wm * absdot(wi, wm) * sqr(etap) / len2 * pt;
         F p = (reflect ? p_r : p_t) / (pr + pt);
-        ok = ok & ((pr + pt) > F(0)) & (reflect | (denom > F(0))); // & / |: vectorizes (float64 too)
+        ok &= ((pr + pt) > F(0)); // len2 > 0 is in half_vector's ok
         return ok ? p : F(0);
     }
 

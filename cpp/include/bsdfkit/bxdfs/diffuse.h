@@ -1,14 +1,24 @@
 // Lambertian reflection, two-sided (pbrt-v4 DiffuseBxDF).
-//   R  reflectance per channel, in [0, 1]
+//   reflectance  R per channel, in [0, 1]
 #pragma once
 #include "../core/bsdf_sample.h"
+#include "../core/bxdf.h"
 #include "../core/frame.h"
 #include "../core/sampling.h"
 
 namespace bsdfkit {
 
+struct DiffuseParams {
+    std::array<double, 3> reflectance{0.5, 0.5, 0.5};
+    template <class V> void fields(V &&v) { v("reflectance", reflectance); }
+};
+
 template <typename F> struct DiffuseBxDF {
+    using Params = DiffuseParams;
+    static constexpr const char *Name = "Diffuse";
     Spectrum<F> R;
+
+    static DiffuseBxDF make(const Params &p) { return {to_spectrum<F>(p.reflectance)}; }
 
     uint8_t flags() const { return R.is_black() ? Unset : DiffuseReflection; }
 
@@ -23,9 +33,8 @@ template <typename F> struct DiffuseBxDF {
         Vec3<F> wi = SampleCosineHemisphere(u);
         wi.z = wo.z < F(0) ? -wi.z : wi.z; // two-sided: sample wo's side
         s.wi = wi;
-        // wi is on wo's side unless one of them lies on the horizon: that case is folded into the
-        // pdf (0 = invalid) with a float select, which vectorizes (f(wo, wi)'s select does not
-        // once GCC pushes the later f != 0 tests into it).
+        // wi is on wo's side unless one of them lies on the horizon: folded into the pdf
+        // (0 = invalid; rules V2, V5 of core/math.h).
         s.pdf = SameHemisphere(wo, wi) ? CosineHemispherePDF(AbsCosTheta(wi)) : F(0);
         s.f = R * InvPi<F>;
         s.flags = DiffuseReflection;
@@ -35,7 +44,7 @@ template <typename F> struct DiffuseBxDF {
 
     F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
         F p = SameHemisphere(wo, wi) ? CosineHemispherePDF(AbsCosTheta(wi)) : F(0);
-        return keep_or_zero(p, (sample_flags & RT_Reflection) != 0); // bit mask: vectorizes in float64
+        return keep_or_zero(p, (sample_flags & RT_Reflection) != 0);
     }
 
     void regularize() {}

@@ -1,17 +1,30 @@
 // Lambertian reflection plus Lambertian transmission (pbrt-v4 DiffuseTransmissionBxDF).
-//   R  reflectance per channel, T  transmittance per channel, each in [0, 1]
+//   reflectance  R per channel, transmittance  T per channel, each in [0, 1]
 // Symmetric: the transport mode does not change the value.
 #pragma once
 #include "../core/bsdf_sample.h"
+#include "../core/bxdf.h"
 #include "../core/frame.h"
 #include "../core/sampling.h"
 
 namespace bsdfkit {
 
-static_assert(DiffuseTransmission == DiffuseReflection + 1);
+struct DiffuseTransmissionParams {
+    std::array<double, 3> reflectance{0.25, 0.25, 0.25}, transmittance{0.25, 0.25, 0.25};
+    template <class V> void fields(V &&v) {
+        v("reflectance", reflectance);
+        v("transmittance", transmittance);
+    }
+};
 
 template <typename F> struct DiffuseTransmissionBxDF {
+    using Params = DiffuseTransmissionParams;
+    static constexpr const char *Name = "DiffuseTransmission";
     Spectrum<F> R, T;
+
+    static DiffuseTransmissionBxDF make(const Params &p) {
+        return {to_spectrum<F>(p.reflectance), to_spectrum<F>(p.transmittance)};
+    }
 
     uint8_t flags() const {
         return uint8_t((R.is_black() ? Unset : DiffuseReflection) | (T.is_black() ? Unset : DiffuseTransmission));
@@ -23,9 +36,7 @@ template <typename F> struct DiffuseTransmissionBxDF {
 
     // Lobe probabilities from the largest channel, restricted by sample_flags.
     void lobe_probs(uint8_t sample_flags, F *pr, F *pt) const {
-        // Bit masks, not selects on the invariant flag tests (GCC 12 does not vectorize those in float64).
-        *pr = keep_or_zero(R.max_component(), (sample_flags & RT_Reflection) != 0);
-        *pt = keep_or_zero(T.max_component(), (sample_flags & RT_Transmission) != 0);
+        restrict_lobes(R.max_component(), T.max_component(), sample_flags, pr, pt);
     }
 
     BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode,
@@ -34,17 +45,15 @@ template <typename F> struct DiffuseTransmissionBxDF {
         lobe_probs(sample_flags, &pr, &pt);
         BSDFSample<F> s;
         F sum = pr + pt;
-        bool reflect = uc < pr / sum;
+        bool reflect = ChooseFirstLobe(uc, pr, pt);
         Vec3<F> wi = SampleCosineHemisphere(u);
-        // reflection stays on wo's side, transmission goes to the other side
-        // (float selects, not a bool compare of the two tests: vectorizes)
+        // reflection stays on wo's side, transmission goes to the other side (float selects, V2)
         F zo = wo.z < F(0) ? -wi.z : wi.z; // on wo's side
         wi.z = reflect ? zo : -zo;
         s.wi = wi;
         s.pdf = CosineHemispherePDF(AbsCosTheta(wi)) * (reflect ? pr : pt) / sum;
         s.f = f(wo, wi, mode);
-        // Flags by arithmetic, not a byte select (vectorizes): Transmission = Reflection + 1.
-        s.flags = uint8_t(DiffuseReflection + int(!reflect));
+        s.flags = lobe_flag(DiffuseReflection, !reflect);
         s.valid = sum > F(0);
         return s;
     }

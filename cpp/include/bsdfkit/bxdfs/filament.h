@@ -47,6 +47,7 @@
 #include <memory>
 
 #include "../core/bsdf_sample.h"
+#include "../core/bxdf.h"
 #include "../core/microfacet.h"
 #include "../core/sampling.h"
 #include "filament_dfg.h"
@@ -66,6 +67,9 @@ inline constexpr double kClothWrap = 0.5;                 // Fd_Wrap(NoL, 0.5) (
 enum class DiffuseTerm : uint8_t { Lambert = 0, Burley = 1 };
 enum class VisibilityTerm : uint8_t { Correlated = 0, Fast = 1 };
 enum class Layering : uint8_t { Code = 0, Doc = 1 };
+inline constexpr std::array<const char *, 2> enum_names(DiffuseTerm) { return {"lambert", "burley"}; }
+inline constexpr std::array<const char *, 2> enum_names(VisibilityTerm) { return {"correlated", "fast"}; }
+inline constexpr std::array<const char *, 2> enum_names(Layering) { return {"code", "doc"}; }
 
 template <typename F> inline F pow5(F x) {
     F x2 = x * x;
@@ -166,7 +170,7 @@ template <typename F> inline Vec3<F> SampleCharlie(F alpha, Point2<F> u) {
     F sin_t = std::pow(u.x, alpha / (F(2) * alpha + F(1)));
     F cos_t = safe_sqrt(F(1) - sin_t * sin_t);
     F phi = F(2) * Pi<F> * u.y, sp, cp;
-    sincos_(phi, &sp, &cp);  // vectorizes (core/math.h)
+    sincos_(phi, &sp, &cp);
     return {sin_t * cp, sin_t * sp, cos_t};
 }
 template <typename F> inline F CharliePDF(F alpha, const Vec3<F> &h) {
@@ -180,7 +184,7 @@ template <typename F> inline Vec3<F> SampleWrapHemisphere(Point2<F> u, F w) {
     F c = u.x * (F(1) + F(2) * w);
     F mu = c / (w + std::sqrt(w * w + c));
     F r = safe_sqrt(F(1) - mu * mu), phi = F(2) * Pi<F> * u.y, sp, cp;
-    sincos_(phi, &sp, &cp);  // vectorizes (core/math.h)
+    sincos_(phi, &sp, &cp);
     return {r * cp, r * sp, mu};
 }
 template <typename F> inline F WrapHemispherePDF(F mu, F w) {
@@ -204,6 +208,27 @@ struct FilamentStandardParams {
     double min_perceptual_roughness = filament::kMinPerceptualRoughnessDesktop;
     filament::Layering layering = filament::Layering::Code;
     bool clear_coat_ior_change = true;
+    SharedTable<FilamentDFG> dfg;  // required (bsdfkit.filament's cached table)
+
+    template <class V> void fields(V &&v) {
+        v("base_color", base_color);
+        v("metallic", metallic);
+        v("roughness", roughness);
+        v("reflectance", reflectance);
+        v("anisotropy", anisotropy);
+        v("clear_coat", clear_coat);
+        v("clear_coat_roughness", clear_coat_roughness);
+        v("sheen_color", sheen_color);
+        v("sheen_roughness", sheen_roughness);
+        v("diffuse", diffuse);
+        v("visibility", visibility);
+        v("f90_filament", f90_filament);
+        v("energy_compensation", energy_compensation);
+        v("min_perceptual_roughness", min_perceptual_roughness);
+        v("layering", layering);
+        v("clear_coat_ior_change", clear_coat_ior_change);
+        v("dfg", dfg);
+    }
 };
 
 // Written for the batch kernels' vectorizer: uniform switches are stored as F (0 or 1) and
@@ -240,28 +265,35 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardKernel {
         if constexpr (Sheen) return max_(F(1) - sheen_max * dfg_sheen(NoV, 2), F(0)); else return F(1);
     }
 
+    // The dispatch functions of brdf.fs, on the knobs (stored as 0/1 factors, rule V3 of core/math.h).
+    // visibility(): anisotropic lobes always use V_SmithGGXCorrelated_Anisotropic, as Filament.
+    F visibility(const Vec3<F> &wo, const Vec3<F> &wi, F NoV, F NoL) const {
+        using namespace filament;
+        F Va = V_SmithGGXCorrelated_Anisotropic(spec.alpha_x, spec.alpha_y, wo.x, wo.y, wi.x, wi.y, NoV, NoL);
+        F Vi = fast_v > F(0) ? V_SmithGGXCorrelated_Fast(spec.alpha_x, NoV, NoL)
+                             : V_SmithGGXCorrelated(spec.alpha_x, NoV, NoL);
+        return anisotropic > F(0) ? Va : Vi;
+    }
+    F diffuse(F NoV, F NoL, F LoH) const {
+        return burley > F(0) ? filament::Fd_Burley(alpha, NoV, NoL, LoH) : filament::Fd_Lambert<F>();
+    }
+
     // f = ((Fd + Fr Ec [(1 - Fc)]) sheenScaling + Fsheen) (1 - Fc) + Frc   (surfaceShading, cosine excluded)
     Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode) const {
         using namespace filament;
-        Vec3<F> h = wo + wi;
-        F len2 = length_squared(h);
-        bool active = (wo.z > F(0)) & (wi.z > F(0)) & (len2 > F(0));  // & (no short-circuit): vectorizes
-        h = h / std::sqrt(active ? len2 : F(1));
+        bool active = (wo.z > F(0)) & (wi.z > F(0));
+        Vec3<F> h = reflection_half_vector(wo, wi, active);
         F NoV = max_(wo.z, F(kMinNoV));  // clampNoV
         F NoL = saturate(wi.z);
         F LoH = saturate(dot(wi, h));
         // Base specular lobe: D V F (isotropicLobe / anisotropicLobe)
         F D = D_GGX(spec, h);
-        F Va = V_SmithGGXCorrelated_Anisotropic(spec.alpha_x, spec.alpha_y, wo.x, wo.y, wi.x, wi.y, NoV, NoL);
-        F Vi = fast_v > F(0) ? V_SmithGGXCorrelated_Fast(spec.alpha_x, NoV, NoL)
-                             : V_SmithGGXCorrelated(spec.alpha_x, NoV, NoL);
-        F V = anisotropic > F(0) ? Va : Vi;
+        F V = visibility(wo, wi, NoV, NoL);
         // Clear coat Fresnel (clearCoatLobe): Fc = F_Schlick(0.04, 1, LoH) clearCoat
         F Fc = Coat ? F_Schlick(F(kClearCoatF0), F(1), LoH) * clear_coat : F(0);
         Spectrum<F> Fr = F_Schlick(f0, f90, LoH) * (D * V * (F(1) - doc_layering * Fc)) * Ec(NoV);
         // Diffuse lobe (diffuseLobe)
-        F fd = burley > F(0) ? Fd_Burley(alpha, NoV, NoL, LoH) : Fd_Lambert<F>();
-        Spectrum<F> color = diffuse_color * fd + Fr;
+        Spectrum<F> color = diffuse_color * diffuse(NoV, NoL, LoH) + Fr;
         // Sheen lobe (sheenLobe) after scaling the base
         if constexpr (Sheen) {
             F Ds = D_Charlie_sin2(sheen_alpha, h.x * h.x + h.y * h.y);
@@ -311,7 +343,6 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardKernel {
         Lobes l = lobes(NoV);
         F c_diff = l.diffuse, c_cos = c_diff + l.sheen_cos, c_ggx = c_cos + l.ggx, c_coat = c_ggx + l.coat;
         bool pick_cos = uc < c_cos;
-        // & / | (no short-circuit): vectorizes
         bool pick_ggx = !pick_cos & (uc < c_ggx);
         bool pick_coat = Coat & !pick_cos & !pick_ggx & (uc < c_coat) & (l.coat > F(0));
         // One visible-normal sample for whichever GGX lobe was picked
@@ -328,7 +359,7 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardKernel {
         s.wi = wi;
         s.f = f(wo, wi, mode);
         s.pdf = pdf(wo, wi, mode, sample_flags);
-        // Flags by arithmetic, not a byte select (vectorizes); masks with & (no short-circuit).
+        // Flags by arithmetic (rule V2, core/math.h).
         s.flags = uint8_t(GlossyReflection - (Glossy - Diffuse) * int(pick_cos & (uc < c_diff)));
         s.valid = ((sample_flags & RT_Reflection) != 0) & (wo.z > F(0)) & (wi.z > F(0));
         return s;
@@ -337,16 +368,13 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardKernel {
     // Full mixture density: sum of selection probability x lobe sampler density.
     F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
         using namespace filament;
-        Vec3<F> h = wo + wi;
-        F len2 = length_squared(h);
-        bool active = (wo.z > F(0)) & (wi.z > F(0)) & (len2 > F(0));
-        h = h / std::sqrt(active ? len2 : F(1));
+        bool active = (wo.z > F(0)) & (wi.z > F(0));
+        Vec3<F> h = reflection_half_vector(wo, wi, active);
         Lobes l = lobes(max_(wo.z, F(kMinNoV)));
         F jac = F(1) / (F(4) * absdot(wo, h));  // reflection Jacobian dwm/dwi
         F p = (l.diffuse + l.sheen_cos) * CosineHemispherePDF(wi.z) + l.ggx * spec.PDF(wo, h) * jac;
         if constexpr (Coat) p += l.coat * coat.PDF(wo, h) * jac;
         if constexpr (Sheen) p += l.charlie * CharliePDF(sheen_alpha, h) * jac;
-        // The loop-invariant flag test as a bit mask: a select on it does not vectorize in float64.
         return keep_or_zero(active ? p : F(0), (sample_flags & RT_Reflection) != 0);
     }
 
@@ -357,13 +385,17 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardKernel {
 };
 
 // The model: the kernel (trivially copyable, so the batch kernels work on a per-chunk local copy
-// whose parameters stay in registers) plus the shared DFG table it points into.
+// whose parameters stay in registers) plus the shared DFG table it points into (core/table.h).
 template <typename F, bool Coat, bool Sheen> struct FilamentStandardT : FilamentStandardKernel<F, Coat, Sheen> {
     using Kernel = FilamentStandardKernel<F, Coat, Sheen>;
-    std::shared_ptr<const FilamentDFG> dfg;  // keeps the table alive
+    using Params = FilamentStandardParams;
+    static constexpr const char *Name = Coat ? (Sheen ? "FilamentStandardCoatSheen" : "FilamentStandardCoat")
+                                             : (Sheen ? "FilamentStandardSheen" : "FilamentStandard");
+    SharedTable<FilamentDFG> dfg;  // keeps the table alive
 
-    static FilamentStandardT make(const FilamentStandardParams &p, std::shared_ptr<const FilamentDFG> table) {
+    static FilamentStandardT make(const Params &p) {
         using namespace filament;
+        const FilamentDFG *table = p.dfg.get();
         FilamentStandardT m;
         double min_pr = p.min_perceptual_roughness, min_alpha = min_pr * min_pr;
         double cc = p.clear_coat;
@@ -403,7 +435,7 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardT : Filament
         m.dfg_base = DFGRow<F>(d, table->size, pr);
         m.dfg_coat = DFGRow<F>(d, table->size, cc_pr);
         m.dfg_sheen = DFGRow<F>(d, table->size, s_pr);
-        m.dfg = std::move(table);
+        m.dfg = p.dfg;
         return m;
     }
 };
@@ -425,6 +457,18 @@ struct FilamentClothParams {
     double roughness = 0.5;
     filament::DiffuseTerm diffuse = filament::DiffuseTerm::Lambert;
     double min_perceptual_roughness = filament::kMinPerceptualRoughnessDesktop;
+    SharedTable<FilamentDFG> dfg;  // required (bsdfkit.filament's cached table)
+
+    template <class V> void fields(V &&v) {
+        v("base_color", base_color);
+        v("sheen_color", sheen_color);
+        v("subsurface_color", subsurface_color);
+        v("has_subsurface", has_subsurface);
+        v("roughness", roughness);
+        v("diffuse", diffuse);
+        v("min_perceptual_roughness", min_perceptual_roughness);
+        v("dfg", dfg);
+    }
 };
 
 // Cloth (surface_shading_model_cloth.fs): Fr = D_Charlie V_Neubelt sheenColor (no Fresnel, no
@@ -440,18 +484,21 @@ template <typename F> struct FilamentClothKernel {
 
     uint8_t flags() const { return base_max > F(0) ? uint8_t(GlossyReflection | Diffuse) : uint8_t(GlossyReflection); }
 
+    // brdf.fs diffuse() dispatch (the knob as a 0/1 factor)
+    F diffuse(F NoV, F NoL, F LoH) const {
+        return burley > F(0) ? filament::Fd_Burley(alpha, NoV, NoL, LoH) : filament::Fd_Lambert<F>();
+    }
+
     Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode) const {
         using namespace filament;
-        Vec3<F> h = wo + wi;
-        F len2 = length_squared(h);
-        bool active = (wo.z > F(0)) & (wi.z > F(0)) & (len2 > F(0));  // & (no short-circuit): vectorizes
-        h = h / std::sqrt(active ? len2 : F(1));
+        bool active = (wo.z > F(0)) & (wi.z > F(0));
+        Vec3<F> h = reflection_half_vector(wo, wi, active);
         F NoV = max_(wo.z, F(kMinNoV));
         F NoL = saturate(wi.z);
         F LoH = saturate(dot(wi, h));
         // specular: D_Charlie V_Neubelt sheenColor
         Spectrum<F> Fr = sheen_color * (D_Charlie_sin2(alpha, h.x * h.x + h.y * h.y) * V_Neubelt(NoV, NoL));
-        F fd = burley > F(0) ? Fd_Burley(alpha, NoV, NoL, LoH) : Fd_Lambert<F>();
+        F fd = diffuse(NoV, NoL, LoH);
         // with a subsurface color: wrapped diffuse and cheap subsurface, which Filament does not
         // multiply by NoL: divide here
         F wrap = Fd_Wrap(NoL, F(kClothWrap)) / max_(NoL, std::numeric_limits<F>::min());
@@ -494,7 +541,7 @@ template <typename F> struct FilamentClothKernel {
         s.wi = wi;
         s.f = f(wo, wi, mode);
         s.pdf = pdf(wo, wi, mode, sample_flags);
-        // Flags by arithmetic, not a byte select (vectorizes); masks with & (no short-circuit).
+        // Flags by arithmetic (rule V2, core/math.h).
         s.flags = uint8_t(GlossyReflection - (Glossy - Diffuse) * int(pick_base & (uc < l.diffuse)));
         s.valid = ((sample_flags & RT_Reflection) != 0) & (wo.z > F(0)) & (wi.z > F(0));
         return s;
@@ -502,13 +549,10 @@ template <typename F> struct FilamentClothKernel {
 
     F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
         using namespace filament;
-        Vec3<F> h = wo + wi;
-        F len2 = length_squared(h);
-        bool active = (wo.z > F(0)) & (wi.z > F(0)) & (len2 > F(0));
-        h = h / std::sqrt(active ? len2 : F(1));
+        bool active = (wo.z > F(0)) & (wi.z > F(0));
+        Vec3<F> h = reflection_half_vector(wo, wi, active);
         Lobes l = lobes(max_(wo.z, F(kMinNoV)));
         F p = (l.diffuse + l.sheen_base) * base_pdf(wi.z) + l.charlie * CharliePDF(alpha, h) / (F(4) * absdot(wo, h));
-        // The loop-invariant flag test as a bit mask: a select on it does not vectorize in float64.
         return keep_or_zero(active ? p : F(0), (sample_flags & RT_Reflection) != 0);
     }
 
@@ -519,9 +563,12 @@ template <typename F> struct FilamentClothKernel {
 // whose parameters stay in registers) plus the shared DFG table it points into.
 template <typename F> struct FilamentClothBxDF : FilamentClothKernel<F> {
     using Kernel = FilamentClothKernel<F>;
-    std::shared_ptr<const FilamentDFG> dfg;  // keeps the table alive
+    using Params = FilamentClothParams;
+    static constexpr const char *Name = "FilamentCloth";
+    SharedTable<FilamentDFG> dfg;  // keeps the table alive
 
-    static FilamentClothBxDF make(const FilamentClothParams &p, std::shared_ptr<const FilamentDFG> table) {
+    static FilamentClothBxDF make(const Params &p) {
+        const FilamentDFG *table = p.dfg.get();
         FilamentClothBxDF m;
         for (int c = 0; c < 3; ++c) {
             m.base_color[c] = F(p.base_color[c]);
@@ -535,7 +582,7 @@ template <typename F> struct FilamentClothBxDF : FilamentClothKernel<F> {
         m.sheen_max = m.sheen_color.max_component();
         m.burley = p.diffuse == filament::DiffuseTerm::Burley ? F(1) : F(0);
         m.dfg_row = DFGRow<F>(table->template data<F>(), table->size, pr);
-        m.dfg = std::move(table);
+        m.dfg = p.dfg;
         return m;
     }
 };

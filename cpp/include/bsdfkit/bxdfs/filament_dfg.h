@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "../core/math.h"
+#include "../core/table.h"
 
 namespace bsdfkit {
 
@@ -35,14 +36,20 @@ struct FilamentDFG {
     }
 };
 
+// The table's content digest (core/table.h): its size, sample count and float64 values.
+inline uint64_t content_digest(const FilamentDFG &t) {
+    int head[2] = {t.size, t.samples};
+    return digest_bytes(t.d64.data(), t.d64.size() * sizeof(double), digest_bytes(head, sizeof head));
+}
+
 // Computes rows [row_begin, row_end) of the table into out ((row_end - row_begin) * size * 3
 // doubles) on nthreads OpenMP threads; deterministic for any thread count (cpp/src/filament_dfg.cpp).
 void filament_dfg_rows(int size, int samples, int row_begin, int row_end, double *out, int nthreads);
 
 // The whole table (no caching here; callers cache, see bsdfkit.filament.dfg_lut).
-std::shared_ptr<const FilamentDFG> make_filament_dfg(int size, int samples, int nthreads);
+SharedTable<FilamentDFG> make_filament_dfg(int size, int samples, int nthreads);
 // Wraps precomputed values (size * size * 3 doubles in the layout above).
-std::shared_ptr<const FilamentDFG> make_filament_dfg(int size, int samples, const double *values);
+SharedTable<FilamentDFG> make_filament_dfg(int size, int samples, const double *values);
 
 // One roughness row of the table, fixed per model: the row indices and weight are computed once
 // at construction, so a per-element lookup only interpolates along NoV.

@@ -96,15 +96,27 @@ template <typename F> inline F SampleTrimmedLogistic(F u, F s, F cdf_lo, F cdf_h
 
 } // namespace hair
 
+struct HairParams {
+    double h = 0.0, eta = 1.55, beta_m = 0.3, beta_n = 0.3, alpha = 2.0;
+    std::array<double, 3> sigma_a{0.0, 0.0, 0.0};
+    template <class V> void fields(V &&v) {
+        v("sigma_a", sigma_a); v("eta", eta); v("beta_m", beta_m); v("beta_n", beta_n);
+        v("alpha", alpha); v("h", h);
+    }
+};
+
+// The far-field fibre has no offset h (it integrates over it).
+struct HairFarFieldParams {
+    double eta = 1.55, beta_m = 0.3, beta_n = 0.3, alpha = 2.0;
+    std::array<double, 3> sigma_a{0.0, 0.0, 0.0};
+    template <class V> void fields(V &&v) {
+        v("sigma_a", sigma_a); v("eta", eta); v("beta_m", beta_m); v("beta_n", beta_n);
+        v("alpha", alpha);
+    }
+};
+
 template <typename F> struct HairBxDF {
-    struct Params {
-        double h = 0.0, eta = 1.55, beta_m = 0.3, beta_n = 0.3, alpha = 2.0;
-        std::array<double, 3> sigma_a{0.0, 0.0, 0.0};
-        template <class V> void fields(V &&v) {
-            v("sigma_a", sigma_a); v("eta", eta); v("beta_m", beta_m); v("beta_n", beta_n);
-            v("alpha", alpha); v("h", h);
-        }
-    };
+    using Params = HairParams;
     static constexpr const char *Name = "Hair";
     static constexpr int P = hair::PMax;
 
@@ -306,7 +318,7 @@ template <typename F> struct HairBxDF {
 template <typename F> struct HairFarFieldBxDF {
     static constexpr int Nodes = 16;
     static constexpr const char *Name = "HairFarField";
-    using Params = typename HairBxDF<F>::Params;  // h is ignored
+    using Params = HairFarFieldParams;
     HairBxDF<F> lobe[Nodes];
     F weight[Nodes], cdf[Nodes];
 
@@ -324,7 +336,12 @@ template <typename F> struct HairFarFieldBxDF {
             int i = k < 8 ? 7 - k : k - 8;
             double x = k < 8 ? -x8[i] : x8[i];
             double gamma = x * 1.5707963267948966;
-            Params q = p;
+            HairParams q;
+            q.sigma_a = p.sigma_a;
+            q.eta = p.eta;
+            q.beta_m = p.beta_m;
+            q.beta_n = p.beta_n;
+            q.alpha = p.alpha;
             q.h = std::sin(gamma);
             m.lobe[k] = HairBxDF<F>::make(q);
             wk[k] = w8[i] * std::cos(gamma);

@@ -24,11 +24,13 @@ inline double FresnelMoment1(double eta) {
     return -4.61686 + 11.1136 * eta - 10.4646 * e2 + 5.11455 * e3 - 1.27198 * e4 + 0.12746 * e5;
 }
 
+struct NormalizedFresnelParams {
+    double eta = 1.33;
+    template <class V> void fields(V &&v) { v("eta", eta); }
+};
+
 template <typename F> struct NormalizedFresnelBxDF {
-    struct Params {
-        double eta = 1.33;
-        template <class V> void fields(V &&v) { v("eta", eta); }
-    };
+    using Params = NormalizedFresnelParams;
     static constexpr const char *Name = "NormalizedFresnel";
 
     F eta;

@@ -4,14 +4,23 @@
 // The ray leaves into the medium it came from, so the sample's eta is 1 and no 1/eta^2 applies.
 #pragma once
 #include "../core/bsdf_sample.h"
+#include "../core/bxdf.h"
 #include "../core/fresnel.h"
+#include "../core/sampling.h"
 
 namespace bsdfkit {
 
-static_assert(SpecularTransmission == SpecularReflection + 1);
+struct ThinDielectricParams {
+    double eta = 1.5;
+    template <class V> void fields(V &&v) { v("eta", eta); }
+};
 
 template <typename F> struct ThinDielectricBxDF {
+    using Params = ThinDielectricParams;
+    static constexpr const char *Name = "ThinDielectric";
     F eta;
+
+    static ThinDielectricBxDF make(const Params &p) { return {F(p.eta)}; }
 
     uint8_t flags() const { return Reflection | Transmission | Specular; }
 
@@ -23,18 +32,16 @@ template <typename F> struct ThinDielectricBxDF {
         // Geometric series of inter-reflections: R' = R + T^2 R / (1 - R^2)
         F T = F(1) - R;
         F Rs = R < F(1) ? R + sqr(T) * R / (F(1) - sqr(R)) : R;
-        // Bit masks, not selects on the invariant flag tests (GCC 12 does not vectorize those).
-        F pr = keep_or_zero(Rs, (sample_flags & RT_Reflection) != 0);
-        F pt = keep_or_zero(F(1) - Rs, (sample_flags & RT_Transmission) != 0);
-        bool reflect = uc < pr / (pr + pt);
+        F pr, pt;
+        restrict_lobes(Rs, F(1) - Rs, sample_flags, &pr, &pt);
+        bool reflect = ChooseFirstLobe(uc, pr, pt);
         s.wi = Vec3<F>(-wo.x, -wo.y, reflect ? wo.z : -wo.z);
         F cos_i = DeltaAbsCos(s.wi);
         s.f = Spectrum<F>((reflect ? Rs : F(1) - Rs) / cos_i);
         s.pdf = (reflect ? pr : pt) / (pr + pt);
-        // Flags by arithmetic, not a byte select (vectorizes): Transmission = Reflection + 1.
-        s.flags = uint8_t(SpecularReflection + int(!reflect));
+        s.flags = lobe_flag(SpecularReflection, !reflect);
         s.eta = F(1);
-        // & (no short-circuit; vectorizes). cos_i > 0 always holds (DeltaAbsCos).
+        // cos_i > 0 always holds (DeltaAbsCos).
         s.valid = (pr + pt) > F(0);
         return s;
     }

@@ -4,6 +4,7 @@
 #pragma once
 #include "bsdf_sample.h"
 #include "frame.h"
+#include "sampling.h"
 
 namespace bsdfkit {
 
@@ -40,6 +41,9 @@ template <typename F> inline bool sample_accepted(const BSDFSample<F> &s, const 
            finite_nonneg_mask(s.f) & (s.pdf <= std::numeric_limits<F>::max());
 }
 
+// The direction an invalid sample carries (with f = pdf = 0): the shading normal +z.
+template <typename F> inline Vec3<F> kInvalidSampleWi() { return Vec3<F>(0, 0, 1); }
+
 template <typename Model, typename F>
 inline Spectrum<F> bsdf_f(const Model &m, const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode) {
     Spectrum<F> v = finite_or_zero(m.f(wo, wi, mode));
@@ -55,12 +59,14 @@ inline F bsdf_pdf(const Model &m, const Vec3<F> &wo, const Vec3<F> &wi, Transpor
 template <typename Model, typename F>
 inline BSDFSample<F> bsdf_sample(const Model &m, const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode,
                                  uint8_t sf) {
-    BSDFSample<F> s = m.sample_f(wo, uc, u, mode, sf);
+    // Uniforms are documented on [0, 1] and used on [0, 1) (pbrt-v4's OneMinusEpsilon).
+    BSDFSample<F> s = m.sample_f(wo, clamp_uniform(uc), clamp_uniform(u), mode, sf);
     bool ok = sample_accepted(s, wo) & ((m.flags() & sf) != 0);
-    // Every output of a rejected sample is a defined value, never a NaN from a dead branch.
+    // Every output of a rejected sample is a defined value, never a NaN from a dead branch; its
+    // direction is the normal (0, 0, 1), so that eval / pdf accept every sampled wi.
     BSDFSample<F> r;
     r.f = select(ok, s.f, Spectrum<F>(F(0)));
-    r.wi = select(ok, s.wi, Vec3<F>(0, 0, 0));
+    r.wi = select(ok, s.wi, kInvalidSampleWi<F>());
     r.pdf = ok ? s.pdf : F(0);
     r.flags = ok ? s.flags : uint8_t(Unset);
     r.eta = ok ? s.eta : F(1);

@@ -22,4 +22,17 @@ template <typename F> struct BSDFSample {
 
 template <typename F> inline BSDFSample<F> invalid_sample() { return BSDFSample<F>{}; }
 
+// The flag of a two-lobe model's sample: `reflection` (e.g. SpecularReflection) or its
+// transmission twin (= reflection + 1), by arithmetic (rule V2, core/math.h).
+static_assert(DiffuseTransmission == DiffuseReflection + 1 && GlossyTransmission == GlossyReflection + 1 &&
+              SpecularTransmission == SpecularReflection + 1);
+inline uint8_t lobe_flag(BxDFFlags reflection, bool transmit) { return uint8_t(reflection + int(transmit)); }
+
+// Lobe weights restricted to the lobes sample_flags allows (pbrt-v4's `if (!(sampleFlags &
+// Reflection)) pr = 0;`), as bit masks (rule V3, core/math.h).
+template <typename F> inline void restrict_lobes(F r, F t, uint8_t sample_flags, F *pr, F *pt) {
+    *pr = keep_or_zero(r, (sample_flags & RT_Reflection) != 0);
+    *pt = keep_or_zero(t, (sample_flags & RT_Transmission) != 0);
+}
+
 } // namespace bsdfkit

@@ -27,6 +27,15 @@ template <typename F> inline F DeltaAbsCos(const Vec3<F> &w) {
 // Strict: a direction on the horizon is in neither hemisphere.
 template <typename F> inline bool SameHemisphere(const Vec3<F> &a, const Vec3<F> &b) { return a.z * b.z > F(0); }
 
+// The reflection half vector normalize(wo + wi) (Walter 2007 eq. 13). `active &= (wo + wi != 0)`;
+// where it ends up false the result is wo + wi unnormalized, for the caller's mask to discard.
+template <typename F> inline Vec3<F> reflection_half_vector(const Vec3<F> &wo, const Vec3<F> &wi, bool &active) {
+    Vec3<F> h = wo + wi;
+    F len2 = length_squared(h);
+    active &= len2 > F(0);
+    return h / std::sqrt(active ? len2 : F(1));
+}
+
 // Mirror wo about n (pbrt-v4 Reflect).
 template <typename F> inline Vec3<F> Reflect(const Vec3<F> &wo, const Vec3<F> &n) {
     return -wo + F(2) * dot(wo, n) * n;

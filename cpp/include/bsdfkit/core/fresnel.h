@@ -20,6 +20,30 @@ template <typename F> inline F FrDielectric(F cos_i, F eta) {
     return tir ? F(1) : fr;
 }
 
+// FrDielectric's reflectance R and transmittance T = 1 - R, each from its own closed form
+// (Born & Wolf: 1 - r^2 = 4 eta cos_i cos_t / (eta cos_i + cos_t)^2 per polarization), so
+// that T keeps full relative precision where R -> 1 (near the critical angle) instead of
+// losing it to the cancellation in 1 - R. One reciprocal serves both.
+template <typename F> inline void FrDielectricRT(F cos_i, F eta, F *R, F *T) {
+    cos_i = clamp(cos_i, F(-1), F(1));
+    bool inside = cos_i < F(0);
+    eta = inside ? F(1) / eta : eta;
+    cos_i = std::abs(cos_i);
+    F sin2_t = (F(1) - sqr(cos_i)) / sqr(eta);
+    bool tir = sin2_t >= F(1);
+    F cos_t = safe_sqrt(F(1) - sin2_t);
+    F a = eta * cos_i + cos_t, b = cos_i + eta * cos_t;     // parallel / perpendicular denominators
+    F a2 = sqr(a), b2 = sqr(b);
+    F inv = F(1) / (F(2) * a2 * b2);
+    F pa = eta * cos_i - cos_t, pb = cos_i - eta * cos_t;
+    F r = (sqr(pa) * b2 + sqr(pb) * a2) * inv;
+    F t = F(4) * eta * cos_i * cos_t * (a2 + b2) * inv;
+    // a = b = 0 only at cos_i = 0 with cos_t = 0 (grazing TIR): then R = 1, T = 0.
+    bool ok = (a2 * b2 > F(0)) & !tir;
+    *R = ok ? r : F(1);
+    *T = ok ? t : F(0);
+}
+
 // Minimal complex arithmetic in real form, so the conductor term vectorizes.
 template <typename F> struct Cplx {
     F re, im;

@@ -1,6 +1,21 @@
-// Scalar math vocabulary shared by every model. Written so that GCC can
-// if-convert and vectorize it: selects instead of branches, no fmin/fmax
-// (their NaN rules block vectorization), no errno-setting calls.
+// Scalar math vocabulary shared by every model.
+//
+// The rules that keep the batch loops (batch.h) vectorized, stated once; model code follows them
+// without repeating why (GCC 12/13 auto-vectorizer, -O3 -fno-math-errno -fno-trapping-math):
+//  V1 Masks are bools combined with bitwise & and |, accumulated Mitsuba-style (`active &= ...`)
+//     and applied once at the end: && / || become branches, and early returns end vectorization.
+//  V2 Select floats, not bools: fold a lobe's validity into its float (pdf = 0) or write a flag
+//     by arithmetic (lobe_flag, core/bsdf_sample.h); a bool-valued select (reflect ? ok_r : ok_t)
+//     and a byte select do not vectorize, nor do the bool COND_EXPRs if-conversion makes of &&.
+//  V3 A loop-invariant test (sample_flags, a model switch) masks a value by its bits
+//     (keep_or_zero; restrict_lobes): a select on an invariant bool does not vectorize in float64.
+//     Model switches are stored as F (0 or 1), not bool, so they can mask a float vector.
+//  V4 max_/min_/clamp are selects (no fmin/fmax: their NaN rules block it); no errno-setting
+//     calls; sin and cos through sincos_ (libm's have no vector form without -ffast-math).
+//  V5 Avoid selects whose operands are themselves selected divisions (two safe_divs in a row) and
+//     tests repeated between a model and the BSDF-level rules: GCC's PRE merges them into bool
+//     selects. -ffp-contract=off keeps vector body and scalar remainder bit-identical.
+// Check with the CMake option BSDFKIT_VEC_REPORT=ON (-fopt-info-vec-optimized).
 #pragma once
 #include <cmath>
 #include <cstdint>

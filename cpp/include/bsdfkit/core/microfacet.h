@@ -2,6 +2,8 @@
 // Heitz 2014 "Understanding the masking-shadowing function"; Heitz 2018 "Sampling the GGX
 // distribution of visible normals"; safeguards as in pbrt-v4's TrowbridgeReitzDistribution.
 #pragma once
+#include <array>
+
 #include "frame.h"
 #include "sampling.h"
 
@@ -10,6 +12,7 @@ namespace bsdfkit {
 // Masking-shadowing knob: height-correlated Smith (pbrt-v4, default) or the separable
 // product G1(wo) G1(wi) (Mitsuba 3, Walter 2007).
 enum class Masking : uint8_t { Correlated = 0, Separable = 1 };
+inline constexpr std::array<const char *, 2> enum_names(Masking) { return {"correlated", "separable"}; }
 
 // Below this max(alpha) a microfacet lobe is treated as a delta (pbrt-v4 EffectivelySmooth).
 inline constexpr double kSmoothAlpha = 1e-3;

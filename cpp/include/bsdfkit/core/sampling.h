@@ -1,8 +1,23 @@
 // Warps from [0,1)^2 to disks, hemispheres and spheres, with their densities.
 #pragma once
+#include <limits>
+
 #include "math.h"
 
 namespace bsdfkit {
+
+// The largest value below 1 (pbrt-v4 OneMinusEpsilon): uniforms documented on [0, 1] are
+// used on [0, 1), so a warp or a lobe CDF never sees u = 1.
+template <typename F> inline constexpr F OneMinusEpsilon = F(1) - std::numeric_limits<F>::epsilon() / F(2);
+template <typename F> inline F clamp_uniform(F u) { return u < OneMinusEpsilon<F> ? u : OneMinusEpsilon<F>; }
+template <typename F> inline Point2<F> clamp_uniform(Point2<F> u) { return {clamp_uniform(u.x), clamp_uniform(u.y)}; }
+
+// Lobe choice between two lobes of (unnormalized) probabilities pr, pt with uc in [0, 1]: the
+// first is taken with probability pr / (pr + pt); a lobe of probability 0 is never taken and
+// the only nonzero lobe always is, at both ends of uc (uc = 1 with pt = 0 picks the first).
+template <typename F> inline bool ChooseFirstLobe(F uc, F pr, F pt) {
+    return (pr > F(0)) & ((pt <= F(0)) | (uc < pr / (pr + pt)));
+}
 
 // Shirley & Chiu 1997 concentric map, (0,0) -> centre.
 template <typename F> inline Point2<F> SampleUniformDiskConcentric(Point2<F> u) {

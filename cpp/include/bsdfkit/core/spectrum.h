@@ -1,5 +1,7 @@
 // Fixed-size spectrum: 3 RGB channels. Parameters are uniform per model.
 #pragma once
+#include <array>
+
 #include "math.h"
 
 namespace bsdfkit {
@@ -31,6 +33,13 @@ inline Spectrum<Float, N> operator-(Float s, const Spectrum<Float, N> &a) { retu
 template <typename Float, int N>
 inline Spectrum<Float, N> select(bool c, const Spectrum<Float, N> &a, const Spectrum<Float, N> &b) {
     Spectrum<Float, N> r; for (int i = 0; i < N; ++i) r.v[i] = c ? a.v[i] : b.v[i]; return r;
+}
+
+// An RGB parameter (Params field, double) at the model's precision.
+template <typename Float> inline Spectrum<Float> to_spectrum(const std::array<double, 3> &a) {
+    Spectrum<Float> s;
+    for (int i = 0; i < 3; ++i) s[i] = Float(a[size_t(i)]);
+    return s;
 }
 
 } // namespace bsdfkit

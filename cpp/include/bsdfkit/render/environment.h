@@ -23,8 +23,8 @@ inline Float luminance(const RGB &c) { return Float(0.2126) * c[0] + Float(0.715
 
 inline Vec3f latlong_direction(Float u, Float v, Float *sin_theta) {
     Float st, ct, sp, cp;
-    fast_sincos(Pi<Float> * v, &st, &ct);
-    fast_sincos(Float(2) * Pi<Float> * u, &sp, &cp);
+    sincos_(Pi<Float> * v, &st, &ct);
+    sincos_(Float(2) * Pi<Float> * u, &sp, &cp);
     st = max_(st, Float(0));
     *sin_theta = st;
     return Vec3f(sp * st, ct, -cp * st);

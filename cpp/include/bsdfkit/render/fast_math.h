@@ -1,26 +1,12 @@
-// Float sin/cos and atan2 for the lat-long mapping of environment maps, branch-light and about
-// 2 ulp: Cody-Waite range reduction and the minimax polynomials of Cephes' sinf/cosf/atanf
-// (S. L. Moshier, "Methods and Programs for Mathematical Functions", 1989). glibc's versions
-// were ~10 % of the renderer's time (every environment lookup and sample needs them).
+// Float atan2 for the lat-long mapping of environment maps, branch-light and about 2 ulp: the
+// minimax polynomial of Cephes' atanf (S. L. Moshier, "Methods and Programs for Mathematical
+// Functions", 1989). glibc's atan2/sin/cos were ~10 % of the renderer's time (every environment
+// lookup and sample needs them); sin and cos come from core/math.h's sincos_, as in the models.
 #pragma once
 #include <cmath>
 #include <cstdint>
 
 namespace bsdfkit::render {
-
-// sin(x), cos(x) for |x| up to ~1e4 (the renderer passes [0, 2 pi]).
-inline void fast_sincos(float x, float *s, float *c) {
-    float j = std::nearbyint(x * 0.63661977236758134f);  // x / (pi / 2)
-    // x - j pi/2 in three parts (pi/2 = DP1 + DP2 + DP3), exact products for |j| < 2^11
-    float r = ((x - j * 1.5703125f) - j * 4.837512969970703125e-4f) - j * 7.54978995489188216e-8f;
-    float z = r * r;
-    float sr = r + r * z * ((-1.9515295891e-4f * z + 8.3321608736e-3f) * z - 1.6666654611e-1f);
-    float cr = 1.f - 0.5f * z + z * z * ((2.443315711809948e-5f * z - 1.388731625493765e-3f) * z + 4.166664568298827e-2f);
-    int q = int(int64_t(j) & 3);
-    float ss = (q & 1) ? cr : sr, cc = (q & 1) ? sr : cr;
-    *s = (q & 2) ? -ss : ss;
-    *c = ((q + 1) & 2) ? -cc : cc;
-}
 
 // atan(t) for t in [0, 1]: Cephes atanf's reduction around tan(pi/8) and its polynomial.
 inline float fast_atan01(float t) {

@@ -1,17 +1,10 @@
 // Type-erased material of the preview renderer: one of the per-element models, used only
 // through the BSDF-level wrappers of core/bsdf.h (no second implementation of any model).
-// Adding a model to the renderer is one line: its type in MaterialOf (and its #include).
+// The materials are exactly the compiled models of bxdfs/all.h: nothing to add here for a new model.
 #pragma once
 #include <variant>
 
-#include "../bxdfs/conductor.h"
-#include "../bxdfs/dielectric.h"
-#include "../bxdfs/diffuse.h"
-#include "../bxdfs/diffuse_transmission.h"
-#include "../bxdfs/filament.h"
-#include "../bxdfs/hair.h"
-#include "../bxdfs/normalized_fresnel.h"
-#include "../bxdfs/thin_dielectric.h"
+#include "../bxdfs/all.h"
 #include "../core/bsdf.h"
 
 namespace bsdfkit::render {
@@ -21,25 +14,7 @@ using Float = float;
 using Vec3f = Vec3<Float>;
 using RGB = Spectrum<Float>;
 
-template <template <typename> class... Models> struct ModelList {
-    template <typename F> using Variant = std::variant<Models<F>...>;
-};
-
-// The models a scene object may carry, named by the template the bindings register
-// (bind_model<X>). Adding a model to the renderer is one entry here (and its #include).
-using RenderModels = ModelList<DiffuseBxDF,
-                               DiffuseTransmissionBxDF,
-                               ConductorBxDF,
-                               ConductorSchlickBxDF,
-                               ConductorF82BxDF,
-                               DielectricBxDF,
-                               ThinDielectricBxDF,
-                               FilamentStandardBxDF,
-                               FilamentStandardSheenBxDF,
-                               FilamentClothBxDF,
-                               NormalizedFresnelBxDF,
-                               HairBxDF>;
-using Material = RenderModels::Variant<Float>;
+using Material = AllModels::Variant<Float>;
 
 // The renderer only solves the light transport equation for radiance (camera paths).
 inline constexpr TransportMode kMode = TransportMode::Radiance;

@@ -11,8 +11,8 @@ import math
 
 import numpy as np
 
-from .models.hair import Hair
-from .testing import hair_ref
+from ..models.hair import Hair
+from ..testing import hair_ref
 
 __all__ = ["hair_lobes", "hair_lobe3d"]
 
@@ -102,7 +102,7 @@ def hair_lobe3d(model, theta_o=30.0, phi_o=90.0, *, ax=None, log=False, **kw):
     the whole sphere, with wo at longitudinal angle ``theta_o`` and azimuth ``phi_o`` (degrees) of
     the hair frame (x = fibre axis; phi from y towards z). Draws with ``bsdfkit.plot.lobe3d``
     (``sphere=True, cosine=True``); extra keywords go to it. Returns its Axes."""
-    from . import plot
+    from ._lobe3d import lobe3d
 
     m = _check_hair(model)
     th, ph = math.radians(_finite(theta_o, "theta_o")), math.radians(_finite(phi_o, "phi_o"))
@@ -111,4 +111,4 @@ def hair_lobe3d(model, theta_o=30.0, phi_o=90.0, *, ax=None, log=False, **kw):
     phi_s = round(math.degrees(math.atan2(wo[1], wo[0])), 6) + 0.0
     kw.setdefault("n_theta", 61)
     kw.setdefault("n_phi", 121)
-    return plot.lobe3d(m, theta_o=theta_s, phi_o=phi_s, ax=ax, log=log, cosine=True, sphere=True, **kw)
+    return lobe3d(m, theta_o=theta_s, phi_o=phi_s, ax=ax, log=log, cosine=True, sphere=True, **kw)

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import bsdfkit as bk
-from bsdfkit.references import mitsuba as ref
+from bsdfkit.testing import mitsuba as ref
 
 ZS = [0.999, 0.7, 0.3, 0.1, 0.01]  # incidence cos(theta_o); one-sided models: wo above only
 # (x, y, z) -> (x, -z, y) as in test_chi2.py: the local horizon lies on the domain's phi = 0 / pi

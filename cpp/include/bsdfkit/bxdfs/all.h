@@ -1,0 +1,38 @@
+// THE list of compiled models (pbrt-v4's BxDF TaggedPointer type list is the pattern). The
+// bindings create bsdfkit._core.<Name> for each entry (cpp/bindings/models.cpp, keyword
+// arguments named as the Params fields) and the renderer's Material is the variant over it
+// (render/material.h), so a bound model can always be rendered. Adding a model: its header
+// (core/bxdf.h states what it must have; the static_assert below checks it) and one entry here.
+#pragma once
+#include "../core/bxdf.h"
+#include "conductor.h"
+#include "dielectric.h"
+#include "diffuse.h"
+#include "diffuse_transmission.h"
+#include "filament.h"
+#include "hair.h"
+#include "normalized_fresnel.h"
+#include "thin_dielectric.h"
+
+namespace bsdfkit {
+
+using AllModels = ModelList<DiffuseBxDF,
+                            DiffuseTransmissionBxDF,
+                            ConductorBxDF,             // Fresnel knob: one compiled class per variant
+                            ConductorSchlickBxDF,
+                            ConductorF82BxDF,
+                            DielectricBxDF,
+                            ThinDielectricBxDF,
+                            FilamentStandardBxDF,      // with / without the clear-coat and sheen lobes
+                            FilamentStandardCoatBxDF,
+                            FilamentStandardSheenBxDF,
+                            FilamentStandardCoatSheenBxDF,
+                            FilamentClothBxDF,
+                            NormalizedFresnelBxDF,
+                            HairBxDF,
+                            HairFarFieldBxDF>;      // Hair with h=None: 16 HairBxDF nodes
+
+static_assert(AllModels::check(), "a model of AllModels does not follow core/bxdf.h");
+static_assert(AllModels::names_unique(), "two models of AllModels have the same Name");
+
+} // namespace bsdfkit

@@ -1,0 +1,28 @@
+"""Directions in the local shading frame: one from angles, and cell-centred grids."""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["direction", "hemisphere_grid"]
+
+
+def direction(theta, phi=0.0) -> np.ndarray:
+    """Unit direction(s) from polar angle ``theta`` (from +z, radians) and azimuth ``phi``
+    (from +x towards +y, radians); broadcasts, returns float64 (..., 3)."""
+    theta = np.asarray(theta, dtype=np.float64)
+    phi = np.asarray(phi, dtype=np.float64)
+    st = np.sin(theta)
+    return np.stack(np.broadcast_arrays(st * np.cos(phi), st * np.sin(phi), np.cos(theta)), axis=-1)
+
+
+def hemisphere_grid(n_theta: int, n_phi: int, *, sphere: bool = False) -> np.ndarray:
+    """Cell-centred directions on the upper hemisphere (or the whole sphere), float64
+    (n_theta * n_phi, 3), theta-major: theta in (0, pi/2) (or (0, pi)), phi in (0, 2 pi)."""
+    for v, name in ((n_theta, "n_theta"), (n_phi, "n_phi")):
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+            raise ValueError(f"{name}: must be a positive integer, got {v!r}")
+    top = np.pi if sphere else np.pi / 2
+    theta = (np.arange(n_theta) + 0.5) * top / n_theta
+    phi = (np.arange(n_phi) + 0.5) * 2 * np.pi / n_phi
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    return direction(t, p).reshape(-1, 3)

@@ -1,0 +1,21 @@
+"""Scene materials in (one module per source: ``mitsuba``, ``pbrt``; ``spectra`` for spectral data): Mitsuba 3 plugin dictionaries and pbrt-v4 scene text as bsdfkit models.
+
+* :func:`from_mitsuba` turns a Mitsuba 3 BSDF dictionary (what ``mi.load_dict`` takes) into a
+  model; it inverts :func:`bsdfkit.testing.mitsuba.to_mitsuba`.
+* :func:`from_pbrt` reads the ``Material`` / ``MakeNamedMaterial`` statements of pbrt-v4 scene
+  text; :func:`parse_pbrt_materials` gives the parsed statements (type, parameters, line, how
+  many shapes use them) without converting them.
+* :func:`spectrum_to_rgb` projects a wavelength/value spectrum to linear sRGB the way Mitsuba's
+  RGB variants do, so spectra in either format give the RGB values Mitsuba would use.
+
+Only what bsdfkit can represent exactly is accepted; everything else (textures, layered and
+measured materials, Beckmann roughness, ``specular_reflectance`` tints ...) is refused with a
+``ValueError`` that names the plugin or material, the parameter and what is supported.
+"""
+
+from .mitsuba import MIRROR_ETA, MITSUBA_IOR, from_mitsuba
+from .pbrt import PBRT_GLASS_ETA, PbrtMaterial, PbrtParam, from_pbrt, parse_pbrt_materials
+from .spectra import spectrum_to_rgb
+
+__all__ = ["from_mitsuba", "from_pbrt", "parse_pbrt_materials", "PbrtMaterial", "PbrtParam",
+           "spectrum_to_rgb", "MITSUBA_IOR", "PBRT_GLASS_ETA", "MIRROR_ETA"]

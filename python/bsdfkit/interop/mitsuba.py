@@ -1,0 +1,424 @@
+"""Mitsuba 3 BSDF dictionaries -> bsdfkit models (:func:`from_mitsuba`)."""
+from __future__ import annotations
+
+import math
+import numbers
+
+import numpy as np
+
+from ..models import BxDF, Conductor, Dielectric, Diffuse, METALS, ThinDielectric
+from .spectra import spectrum_to_rgb
+
+__all__ = ["MITSUBA_IOR", "MIRROR_ETA", "from_mitsuba"]
+
+
+#: Mitsuba 3's named indices of refraction (``include/mitsuba/render/ior.h``; values from Hecht,
+#: "Optics", 4th ed., measured at ~589 nm and 0-20 °C). Names are case-insensitive.
+MITSUBA_IOR = {
+    "vacuum": 1.0, "helium": 1.000036, "hydrogen": 1.000132, "air": 1.000277,
+    "carbon dioxide": 1.00045, "water": 1.3330, "acetone": 1.36, "ethanol": 1.361,
+    "carbon tetrachloride": 1.461, "glycerol": 1.4729, "benzene": 1.501, "silicone oil": 1.52045,
+    "bromine": 1.661, "water ice": 1.31, "fused quartz": 1.458, "pyrex": 1.470,
+    "acrylic glass": 1.49, "polypropylene": 1.49, "bk7": 1.5046, "sodium chloride": 1.544,
+    "amber": 1.55, "pet": 1.5750, "diamond": 2.419,
+}
+
+
+#: Stand-in for eta = 0 (Mitsuba's ``material="none"`` conductor is eta = 0, k = 1: a perfect
+#: mirror; bsdfkit's Conductor needs eta > 0). With k = 1 the Fresnel reflectance is then
+#: 1 - 4 eta cos / (1 + cos^2 + ...) >= 1 - 2e-6.
+MIRROR_ETA = 1e-6
+
+
+_MI_SUPPORTED = ("diffuse", "conductor", "roughconductor", "dielectric", "roughdielectric",
+                 "thindielectric", "twosided", "null", "hair")
+
+
+_MI_CONSTANT_TEXTURES = ("rgb", "spectrum", "uniform", "srgb")
+
+
+_MI_PARAMS = {
+    "diffuse": ("reflectance",),
+    "conductor": ("material", "eta", "k", "specular_reflectance"),
+    "roughconductor": ("material", "eta", "k", "specular_reflectance", "distribution", "alpha",
+                       "alpha_u", "alpha_v", "sample_visible"),
+    "dielectric": ("int_ior", "ext_ior", "specular_reflectance", "specular_transmittance"),
+    "roughdielectric": ("int_ior", "ext_ior", "specular_reflectance", "specular_transmittance",
+                        "distribution", "alpha", "alpha_u", "alpha_v", "sample_visible"),
+    "thindielectric": ("int_ior", "ext_ior", "specular_reflectance", "specular_transmittance"),
+    "null": (),
+    "hair": ("eumelanin", "pheomelanin", "sigma_a", "scale", "int_ior", "ext_ior", "longitudinal_roughness",
+             "azimuthal_roughness", "scale_tilt"),
+}
+
+
+class _MiError(ValueError):
+    pass
+
+
+def _mi_fail(where, msg):
+    raise _MiError(f"from_mitsuba: {where}: {msg}")
+
+
+def _is_real(x) -> bool:
+    return isinstance(x, (numbers.Real, np.floating, np.integer)) and not isinstance(x, (bool, np.bool_))
+
+
+def _mi_color(v, where, param, *, bounded):
+    """A constant Mitsuba spectrum/colour value -> RGB (3,) float64."""
+    if _is_real(v):
+        return np.full(3, float(v))
+    if isinstance(v, dict):
+        kind = v.get("type")
+        if kind not in _MI_CONSTANT_TEXTURES:
+            _mi_fail(where, f"parameter {param!r} is a texture ({kind!r}); only constant values "
+                     "are supported (a float, {'type': 'rgb', ...}, {'type': 'spectrum', ...} or 3 numbers)")
+        if kind == "spectrum":
+            if "filename" in v:
+                _mi_fail(where, f"parameter {param!r}: spectrum files are not read; give "
+                         "'value' as a float or a list of (wavelength, value) pairs")
+            val = v.get("value")
+            if _is_real(val):
+                return np.full(3, float(val))
+            try:
+                pairs = np.asarray(val, dtype=np.float64)
+            except (TypeError, ValueError):
+                pairs = None
+            if pairs is None or pairs.ndim != 2 or pairs.shape[1] != 2 or len(pairs) == 0:
+                _mi_fail(where, f"parameter {param!r}: spectrum 'value' must be a float or a list "
+                         f"of (wavelength, value) pairs, got {val!r}")
+            try:
+                return spectrum_to_rgb(pairs[:, 0], pairs[:, 1], d65=True, bounded=bounded)
+            except ValueError as e:
+                _mi_fail(where, f"parameter {param!r}: {e}")
+        key = "color" if kind == "srgb" else "value"
+        extra = set(v) - {"type", key, "id"}
+        if extra:
+            _mi_fail(where, f"parameter {param!r}: unsupported keys {sorted(extra)} in a {kind!r} value")
+        return _mi_color(v.get(key), where, param, bounded=bounded)
+    if isinstance(v, (str, bytes)) or v is None:
+        _mi_fail(where, f"parameter {param!r}: expected a number, an RGB triple or a "
+                 f"{{'type': 'rgb'|'spectrum', ...}} dict, got {v!r}")
+    try:
+        a = np.array(v, dtype=np.float64)
+    except (TypeError, ValueError):
+        _mi_fail(where, f"parameter {param!r}: {type(v).__name__} values are not supported "
+                 "(textures and plugin objects cannot be converted); give a constant value")
+    if a.shape == ():
+        return np.full(3, float(a))
+    if a.shape == (1,):
+        return np.full(3, float(a[0]))
+    if a.shape != (3,):
+        _mi_fail(where, f"parameter {param!r}: expected 1 or 3 numbers, got shape {a.shape}")
+    return a
+
+
+def _mi_float(v, where, param):
+    if _is_real(v):
+        return float(v)
+    if isinstance(v, dict) and v.get("type") not in _MI_CONSTANT_TEXTURES:
+        _mi_fail(where, f"parameter {param!r} is a texture ({v.get('type')!r}); only a constant float is supported")
+    if isinstance(v, dict):
+        rgb = _mi_color(v, where, param, bounded=False)
+        if np.all(rgb == rgb[0]):
+            return float(rgb[0])
+    _mi_fail(where, f"parameter {param!r}: expected a float, got {v!r}")
+
+
+def _mi_ior(d, where, param, default):
+    v = d.get(param, default)
+    if isinstance(v, str):
+        key = v.lower()
+        if key not in MITSUBA_IOR:
+            _mi_fail(where, f"parameter {param!r}: unknown IOR name {v!r}; Mitsuba's names are: "
+                     + ", ".join(MITSUBA_IOR))
+        return MITSUBA_IOR[key]
+    x = _mi_float(v, where, param)
+    if x < 0:
+        _mi_fail(where, f"parameter {param!r}: must be >= 0, got {x}")
+    return x
+
+
+def _mi_unit(d, where, param):
+    if param in d:
+        rgb = _mi_color(d[param], where, param, bounded=False)
+        if not np.all(rgb == 1.0):
+            _mi_fail(where, f"parameter {param!r} = {rgb.tolist()} is not supported (bsdfkit models "
+                     "have no tint factor; only 1, Mitsuba's default, is accepted)")
+
+
+def _mi_alphas(d, where):
+    dist = d.get("distribution")
+    if dist is None:
+        _mi_fail(where, "no 'distribution' given: Mitsuba's default is 'beckmann', which bsdfkit "
+                 "does not have; only distribution='ggx' (Trowbridge-Reitz) is supported")
+    if not isinstance(dist, str) or dist.lower() != "ggx":
+        _mi_fail(where, f"distribution {dist!r} is not supported; only 'ggx' (Trowbridge-Reitz) is "
+                 "('beckmann' has no bsdfkit counterpart)")
+    sv = d.get("sample_visible", True)
+    if not isinstance(sv, (bool, np.bool_)):
+        _mi_fail(where, f"parameter 'sample_visible': expected True or False, got {sv!r}")
+    has_uv = ("alpha_u" in d, "alpha_v" in d)
+    if any(has_uv):
+        if not all(has_uv):
+            _mi_fail(where, "both 'alpha_u' and 'alpha_v' must be given (as Mitsuba requires)")
+        if "alpha" in d:
+            _mi_fail(where, "give either 'alpha' or 'alpha_u'/'alpha_v', not both")
+        ax, ay = _mi_float(d["alpha_u"], where, "alpha_u"), _mi_float(d["alpha_v"], where, "alpha_v")
+    else:
+        ax = ay = _mi_float(d.get("alpha", 0.1), where, "alpha")
+    for a, n in ((ax, "alpha_u"), (ay, "alpha_v")):
+        if not (math.isfinite(a) and a >= 0):
+            _mi_fail(where, f"parameter {n!r}: must be finite and >= 0, got {a}")
+    return ax, ay
+
+
+def _mi_build(where, fn):
+    """Run a model constructor, prefixing its validation errors with the plugin path."""
+    try:
+        return fn()
+    except (ValueError, TypeError) as e:
+        if isinstance(e, _MiError):
+            raise
+        raise _MiError(f"from_mitsuba: {where}: {e}") from None
+
+
+def _mi_conductor(d, where, rough):
+    material = d.get("material", "none")
+    if not isinstance(material, str):
+        _mi_fail(where, f"parameter 'material': expected a preset name, got {material!r}")
+    if "eta" in d or material == "none":
+        if material != "none":
+            _mi_fail(where, "give either (eta, k) or 'material', not both (as Mitsuba requires)")
+        eta = _mi_color(d.get("eta", 0.0), where, "eta", bounded=False)
+        k = _mi_color(d.get("k", 1.0), where, "k", bounded=False)
+        # Mitsuba's default (material="none", eta = 0, k = 1) is a perfect mirror.
+        eta = np.where(eta == 0.0, MIRROR_ETA, eta)
+    else:
+        if "k" in d:
+            _mi_fail(where, f"'k' given together with material={material!r}; give either (eta, k) or 'material'")
+        if material not in METALS:
+            _mi_fail(where, f"material preset {material!r} is not available; bsdfkit has the RGB "
+                     f"projections of: {', '.join(METALS)} (and 'none', the perfect mirror)")
+        eta, k = METALS[material]
+    _mi_unit(d, where, "specular_reflectance")
+    if rough:
+        ax, ay = _mi_alphas(d, where)
+        return _mi_build(where, lambda: Conductor(eta, k, alpha_x=ax, alpha_y=ay, masking="separable"))
+    return _mi_build(where, lambda: Conductor(eta, k))
+
+
+def _mi_eta(d, where):
+    eta_int = _mi_ior(d, where, "int_ior", "bk7")
+    eta_ext = _mi_ior(d, where, "ext_ior", "air")
+    if eta_ext == 0:
+        _mi_fail(where, "parameter 'ext_ior': must be > 0")
+    _mi_unit(d, where, "specular_reflectance")
+    _mi_unit(d, where, "specular_transmittance")
+    return eta_int / eta_ext
+
+
+def _mi_nested(d, where):
+    """The BSDF dictionaries nested in a twosided plugin."""
+    nested, bad = [], []
+    for key, v in d.items():
+        if key in ("type", "id"):
+            continue
+        if isinstance(v, dict) and "type" in v:
+            nested.append((key, v))
+        else:
+            bad.append(key)
+    if bad:
+        _mi_fail(where, f"unsupported parameters {bad}; twosided takes one nested BSDF dict "
+                 "(or two identical ones)")
+    if not nested:
+        _mi_fail(where, "no nested BSDF dict found")
+    if len(nested) > 2:
+        _mi_fail(where, f"at most two nested BSDFs, got {len(nested)}")
+    return nested
+
+
+def _mi_bsdf(d, where):
+    if not isinstance(d, dict):
+        raise TypeError(f"from_mitsuba: {where or 'd'}: expected a Mitsuba plugin dict, got {type(d).__name__}")
+    kind = d.get("type")
+    label = f"{where} ({kind!r})" if where else f"plugin {kind!r}"
+    if kind not in _MI_SUPPORTED:
+        _mi_fail(label, "unsupported plugin; supported: " + ", ".join(_MI_SUPPORTED))
+    if kind == "twosided":
+        models = []
+        for key, sub in _mi_nested(d, label):
+            subkind = sub.get("type")
+            if subkind not in ("diffuse", "conductor", "roughconductor"):
+                _mi_fail(label, f"nested plugin {subkind!r} is not supported inside twosided (only the "
+                         "reflection-only diffuse, conductor and roughconductor are)")
+            models.append(_mi_bsdf(sub, f"{label}.{key}"))
+        if len(models) == 2 and models[0] != models[1]:
+            _mi_fail(label, "different front and back BSDFs are not supported (bsdfkit models are "
+                     f"two-sided): {models[0]!r} vs {models[1]!r}")
+        return models[0]
+    unknown = [k for k in d if k not in ("type", "id") + _MI_PARAMS[kind]]
+    if unknown:
+        _mi_fail(label, f"unsupported parameters {unknown}; {kind} takes: "
+                 + (", ".join(_MI_PARAMS[kind]) or "nothing"))
+    if kind == "diffuse":
+        r = _mi_color(d.get("reflectance", 0.5), label, "reflectance", bounded=True)
+        return _mi_build(label, lambda: Diffuse(r))
+    if kind in ("conductor", "roughconductor"):
+        return _mi_conductor(d, label, kind == "roughconductor")
+    if kind == "null":
+        return Dielectric(1.0)
+    if kind == "hair":
+        return _mi_hair(d, label)
+    eta = _mi_eta(d, label)
+    if kind == "dielectric":
+        return _mi_build(label, lambda: Dielectric(eta))
+    if kind == "roughdielectric":
+        ax, ay = _mi_alphas(d, label)
+        return _mi_build(label, lambda: Dielectric(eta, alpha_x=ax, alpha_y=ay, masking="separable"))
+    return _mi_build(label, lambda: ThinDielectric(eta))
+
+
+def _mi_hair(d, where):
+    """Mitsuba 3 ``hair`` -> ``Hair`` (h = 0: Mitsuba derives h from the direction, see
+    ``bsdfkit.testing.hair_ref.wo_for_h``)."""
+    from ..models.hair import Hair, sigma_a_from_concentration
+
+    has_pig = "eumelanin" in d or "pheomelanin" in d
+    if "sigma_a" in d and has_pig:
+        _mi_fail(where, "give either 'sigma_a' or 'eumelanin'/'pheomelanin', not both (Mitsuba refuses it)")
+    scale = _mi_float(d.get("scale", 1.0), where, "scale")
+    if "sigma_a" in d:
+        sigma_a = scale * _mi_color(d["sigma_a"], where, "sigma_a", bounded=False)
+    else:
+        if "scale" in d and scale != 1.0:
+            _mi_fail(where, "'scale' only applies to 'sigma_a' (Mitsuba ignores it for pigments)")
+        ce = _mi_float(d.get("eumelanin", 1.3), where, "eumelanin")
+        cp = _mi_float(d.get("pheomelanin", 0.2), where, "pheomelanin")
+        sigma_a = _mi_build(where, lambda: sigma_a_from_concentration(ce, cp))
+    eta = _mi_ior(d, where, "int_ior", "amber") / _mi_ior(d, where, "ext_ior", "air")
+    bm = _mi_float(d.get("longitudinal_roughness", 0.3), where, "longitudinal_roughness")
+    bn = _mi_float(d.get("azimuthal_roughness", 0.3), where, "azimuthal_roughness")
+    alpha = _mi_float(d.get("scale_tilt", 2.0), where, "scale_tilt")
+    return _mi_build(where, lambda: Hair(sigma_a=sigma_a, eta=eta, beta_m=bm, beta_n=bn, alpha=alpha, h=0.0))
+
+
+def from_mitsuba(d) -> BxDF:
+    """The bsdfkit model of a Mitsuba 3 BSDF plugin dictionary (the inverse of
+    :func:`bsdfkit.testing.mitsuba.to_mitsuba`), or of a loaded ``mi.BSDF`` (``mi.load_dict``,
+    a scene's BSDF): its plugin class and ``mi.traverse`` parameters are read back into such a
+    dictionary. A loaded BSDF stores float32 values (and eta = int_ior / ext_ior), so its model
+    equals the dictionary's to float32 precision.
+
+    Plugins and parameters (Mitsuba 3.9 names and defaults):
+
+    ==================  ======================================================================
+    ``diffuse``          ``reflectance`` (0.5) -> ``Diffuse``
+    ``conductor``        ``eta``/``k`` or ``material`` (a preset in ``bsdfkit.METALS``: Cu, Au,
+                         Ag, Al, Cr; default ``"none"``: eta = 0, k = 1, the perfect mirror,
+                         given as eta = ``MIRROR_ETA``) -> smooth ``Conductor``
+    ``roughconductor``   as conductor, plus ``distribution`` (must be ``"ggx"``; Mitsuba's
+                         default is ``"beckmann"``, refused), ``alpha`` (0.1) or ``alpha_u``
+                         (local x) / ``alpha_v`` (local y), ``sample_visible``
+                         -> ``Conductor(..., masking="separable")``
+    ``dielectric``       ``int_ior`` ("bk7"), ``ext_ior`` ("air"): floats or Mitsuba's IOR
+                         names (``MITSUBA_IOR``); eta = int_ior / ext_ior -> smooth ``Dielectric``
+    ``roughdielectric``  as dielectric, plus distribution/alpha as roughconductor
+                         -> ``Dielectric(..., masking="separable")``
+    ``thindielectric``   ``int_ior``/``ext_ior`` -> ``ThinDielectric(int_ior / ext_ior)``
+    ``twosided``         one nested diffuse/conductor/roughconductor (or two identical ones):
+                         unwrapped, bsdfkit's Diffuse and Conductor are two-sided
+    ``null``             -> ``Dielectric(1.0)`` (pbrt's straight pass-through; ``to_mitsuba``
+                         writes eta = 1 dielectrics and thin dielectrics as ``null``)
+    ``hair``             ``sigma_a`` (x ``scale``) or ``eumelanin`` (1.3) / ``pheomelanin``
+                         (**0.2**, pbrt's default is 0), ``int_ior`` ("amber" 1.55) / ``ext_ior``
+                         ("air"), ``longitudinal_roughness`` / ``azimuthal_roughness`` (0.3),
+                         ``scale_tilt`` (2 degrees) -> ``Hair(..., h=0)``: Mitsuba has no h, it
+                         derives it from the direction (``bsdfkit.testing.hair_ref``); its fibre
+                         axis is local y where bsdfkit's (pbrt's) is x
+    ==================  ======================================================================
+
+    Colours (reflectance, eta, k) may be a float, 3 numbers (a list, numpy array or
+    ``mi.ScalarColor3f``), ``{"type": "rgb", "value": ...}``, ``{"type": "spectrum", "value":
+    float | [(wavelength, value), ...]}`` (projected as Mitsuba's RGB variants do, see
+    :func:`spectrum_to_rgb`), ``{"type": "uniform", "value": v}`` or ``{"type": "srgb",
+    "color": ...}``. ``specular_reflectance`` / ``specular_transmittance`` are accepted only
+    when they equal 1. ``id`` keys are ignored.
+
+    Conventions: Mitsuba's microfacet models use the separable Smith masking ``G1 G1``, so rough
+    plugins give ``masking="separable"``; smooth plugins keep the default masking (it has no
+    effect on delta lobes). bsdfkit always samples visible normals, so ``sample_visible=False``
+    changes Mitsuba's sampling and pdf but not the BSDF value returned here. A bare (one-sided)
+    ``diffuse``/``conductor``/``roughconductor`` is accepted too; bsdfkit's model equals it on
+    the front side (wo.z > 0) and mirrors it to the back. bsdfkit turns rough lobes with
+    max(alpha) < 1e-3 into deltas (pbrt's rule); Mitsuba keeps them as very sharp lobes.
+
+    Round trip: ``from_mitsuba(to_mitsuba(m)) == m`` for every model ``to_mitsuba`` accepts with
+    ``masking="separable"`` (or no microfacet lobe) and alphas either both < 1e-3 or both >=
+    1e-4 (``to_mitsuba`` floors rough alphas at 1e-4). A ``masking="correlated"`` rough model
+    comes back with ``masking="separable"``: Mitsuba cannot express the height-correlated form.
+    Eta = 1 dielectrics come back as ``Dielectric(1.0)``.
+
+    Raises ``ValueError`` naming the plugin and parameter for anything else: unknown plugins,
+    textures, Beckmann roughness, tints, unknown parameters, presets or IOR names.
+    """
+    if not isinstance(d, dict) and type(d).__module__.startswith("mitsuba") and hasattr(d, "class_name"):
+        d = _loaded_to_dict(d)
+    return _mi_bsdf(d, "")
+
+
+# Mitsuba class names of loaded BSDFs -> plugin names
+_MI_CLASSES = {"SmoothDiffuse": "diffuse", "SmoothConductor": "conductor", "RoughConductor": "roughconductor",
+               "SmoothDielectric": "dielectric", "RoughDielectric": "roughdielectric",
+               "ThinDielectric": "thindielectric", "Null": "null"}
+
+
+def _loaded_to_dict(bsdf) -> dict:
+    """A loaded ``mi.BSDF`` as a plugin dictionary (class name + ``mi.traverse`` parameters)."""
+    import re
+    import mitsuba as mi
+
+    params = mi.traverse(bsdf)
+    vals = {k: params[k] for k in params.keys()}
+    text = str(bsdf)
+    name = bsdf.class_name()
+    if name.startswith("TwoSided"):
+        kids = re.findall(r"brdf\[(\d)\] = (\w+)\[", text)
+        cls = dict(kids).get("0")
+        if cls is None:
+            raise ValueError(f"from_mitsuba: cannot read the nested BSDF of {name}")
+        sub = {k[len("brdf_0."):]: v for k, v in vals.items() if k.startswith("brdf_0.")}
+        return {"type": "twosided", "bsdf": _loaded_params_to_dict(cls, sub, text)}
+    return _loaded_params_to_dict(name, vals, text)
+
+
+def _loaded_params_to_dict(cls: str, vals: dict, text: str) -> dict:
+    import re
+
+    if cls not in _MI_CLASSES:
+        raise ValueError(f"from_mitsuba: unsupported loaded Mitsuba BSDF {cls!r}; supported: "
+                         f"{', '.join(sorted(_MI_CLASSES))} (and TwoSided around one of them)")
+    plugin = _MI_CLASSES[cls]
+    d = {"type": plugin}
+
+    def val(key):
+        v = np.asarray(vals[key], dtype=np.float64).ravel()
+        return float(v[0]) if v.size == 1 else [float(x) for x in v]
+    known = set()
+    for key, v in vals.items():
+        base = key[:-len(".value")] if key.endswith(".value") else key
+        known.add(key)
+        if base == "eta" and plugin in ("dielectric", "roughdielectric", "thindielectric"):
+            d["int_ior"], d["ext_ior"] = val(key), 1.0
+        else:
+            d[base] = val(key)
+    if plugin in ("conductor", "roughconductor") and np.all(np.asarray(d.get("eta", 1.0)) == 0) \
+            and np.all(np.asarray(d.get("k", 0.0)) == 1):
+        d.pop("eta")
+        d.pop("k")
+        d["material"] = "none"  # Mitsuba's default perfect mirror (eta = 0, k = 1)
+    if plugin.startswith("rough"):
+        m = re.search(r"distribution = (\w+)", text)
+        if m:
+            d["distribution"] = m.group(1)
+    return d

@@ -1,0 +1,702 @@
+"""pbrt-v4 scene text -> bsdfkit models: the ``Material`` / ``MakeNamedMaterial`` statements."""
+from __future__ import annotations
+
+import math
+import os
+import re
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..models import (BxDF, Conductor, Dielectric, Diffuse, DiffuseTransmission, METALS, ThinDielectric,
+                       roughness_to_alpha)
+from .spectra import spectrum_to_rgb
+
+__all__ = ["PBRT_GLASS_ETA", "PbrtParam", "PbrtMaterial", "PbrtSkipWarning", "parse_pbrt_materials", "from_pbrt"]
+
+
+#: Index of refraction at 550 nm of pbrt-v4's named glass spectra: linear interpolation of the
+#: tables in pbrt-v4 ``src/pbrt/util/spectrum.cpp`` (from refractiveindex.info, CC0). pbrt
+#: renders these dispersively (one wavelength per path); bsdfkit's Dielectric has one eta.
+PBRT_GLASS_ETA = {
+    "glass-BK7": 1.5185368127022,    # between 542 nm (1.51893348) and 564 nm (1.51784265)
+    "glass-BAF10": 1.6730513078597,
+    "glass-FK51A": 1.4877955395979,
+    "glass-LASF9": 1.8558085679207,
+    "glass-F5": 1.6770885733455,     # pbrt's table GlassSF5_eta
+    "glass-F10": 1.7335739960381,    # GlassSF10_eta
+    "glass-F11": 1.7911193889629,    # GlassSF11_eta
+}
+
+
+#: pbrt-v4 named metal spectra bsdfkit has no data for.
+_PBRT_OTHER_METALS = ("CuZn", "MgO", "TiO2")
+
+
+#: Wavelength at which dielectric eta spectra are evaluated.
+_ETA_WAVELENGTH = 550.0
+
+
+_PBRT_SUPPORTED = ("diffuse", "diffusetransmission", "conductor", "dielectric", "thindielectric", "hair")
+
+
+_PBRT_UNSUPPORTED = ("coateddiffuse", "coatedconductor", "measured", "mix", "subsurface",
+                     "interface", "none", "")
+
+
+_PBRT_ROUGH = ("roughness", "uroughness", "vroughness", "remaproughness")
+
+
+_PBRT_PARAMS = {
+    "diffuse": ("reflectance",),
+    "diffusetransmission": ("reflectance", "transmittance", "scale"),
+    "conductor": ("eta", "k", "reflectance") + _PBRT_ROUGH,
+    "dielectric": ("eta",) + _PBRT_ROUGH,
+    "thindielectric": ("eta",),
+    "hair": ("sigma_a", "reflectance", "eumelanin", "pheomelanin", "eta", "beta_m", "beta_n", "alpha"),
+}
+
+
+#: Parameters that shape the geometry, not the BxDF: recorded and left out.
+_PBRT_IGNORED = ("displacement", "normalmap")
+
+
+@dataclass(frozen=True)
+class PbrtParam:
+    """One parameter of a pbrt statement: ``"type name" values``."""
+
+    type: str
+    name: str
+    values: tuple
+    line: int
+
+
+@dataclass(frozen=True)
+class PbrtMaterial:
+    """A parsed ``Material`` or ``MakeNamedMaterial`` statement.
+
+    name: the given name, or ``"material#<n> (line <line>)"`` for the n-th anonymous ``Material``.
+    type: pbrt material type ("conductor", ...). line: line of the statement (1-based).
+    named: True for ``MakeNamedMaterial``. params: parameter name -> ``PbrtParam`` (without the
+    ``"string type"`` of named materials). shapes: number of ``Shape`` statements that use the
+    material (following ``AttributeBegin``/``AttributeEnd`` and ``NamedMaterial``).
+    """
+
+    name: str
+    type: str
+    line: int
+    named: bool
+    params: dict = field(repr=False, hash=False)
+    shapes: int = 0
+    file: str | None = None  # the scene file the statement is in (Include/Import), None for text
+
+    @property
+    def ignored(self) -> tuple:
+        """Parameters present but left out of the BxDF (``displacement``, ``normalmap``)."""
+        return tuple(p for p in self.params if p in _PBRT_IGNORED)
+
+    def to_bxdf(self) -> BxDF:
+        """The bsdfkit model of this material (``ValueError`` if not representable)."""
+        return _pbrt_bxdf(self)
+
+
+class _PbrtError(ValueError):
+    pass
+
+
+_TOKEN = re.compile(r"""
+    (?P<ws>[ \t\r\n]+)
+  | (?P<comment>\#[^\r\n]*)
+  | (?P<string>"(?:[^"\\\r\n]|\\.)*")
+  | (?P<badstring>"(?:[^"\\\r\n]|\\.)*)
+  | (?P<bracket>[\[\]])
+  | (?P<bare>[^ \t\r\n"\[\]]+)
+""", re.VERBOSE)
+
+
+_ESCAPES = {"b": "\b", "f": "\f", "n": "\n", "r": "\r", "t": "\t", "\\": "\\", "'": "'", '"': '"'}
+
+
+def _unescape(s, line):
+    if "\\" not in s:
+        return s
+
+    def repl(m):
+        c = m.group(1)
+        if c not in _ESCAPES:
+            raise _PbrtError(f"line {line}: unexpected escaped character '\\{c}'")
+        return _ESCAPES[c]
+    return re.sub(r"\\(.)", repl, s)
+
+
+def _tokens(text):
+    """Yield (kind, value, line): kind is "str" (unquoted value), "[", "]" or "bare"."""
+    line, last = 1, 0
+    for m in _TOKEN.finditer(text):
+        line += text.count("\n", last, m.start())
+        last = m.start()
+        kind = m.lastgroup
+        if kind in ("ws", "comment"):
+            continue
+        if kind == "badstring":
+            raise _PbrtError(f"line {line}: unterminated string {m.group()[:40]!r}")
+        s = m.group()
+        if kind == "string":
+            yield "str", _unescape(s[1:-1], line), line
+        elif kind == "bracket":
+            yield s, s, line
+        else:
+            yield "bare", s, line
+
+
+def _is_keyword(tok):
+    return tok[0] == "bare" and (tok[1][0].isalpha() or tok[1][0] == "_") and tok[1] not in ("true", "false")
+
+
+class _Stream:
+    def __init__(self, text):
+        self._it = _tokens(text)
+        self._peek = None
+
+    def peek(self):
+        if self._peek is None:
+            self._peek = next(self._it, None)
+        return self._peek
+
+    def next(self):
+        t = self.peek()
+        self._peek = None
+        return t
+
+
+def _read_value(ts, what, line):
+    """A parameter value: one token or a bracketed list. Returns (list of raw tokens)."""
+    t = ts.next()
+    if t is None:
+        raise _PbrtError(f"line {line}: {what}: missing value at end of input")
+    if t[0] == "[":
+        open_line, out = t[2], []
+        while True:
+            u = ts.next()
+            if u is None:
+                raise _PbrtError(f"line {open_line}: {what}: unterminated '[' (no matching ']')")
+            if u[0] == "]":
+                return out
+            if u[0] == "[" or _is_keyword(u):
+                raise _PbrtError(f"line {u[2]}: {what}: expected a value or ']' to close the '[' of "
+                                 f"line {open_line}, got {u[1]!r}")
+            out.append(u)
+    if t[0] == "]" or _is_keyword(t):
+        raise _PbrtError(f"line {t[2]}: {what}: expected a value, got {t[1]!r}")
+    return [t]
+
+
+def _convert_values(raw, ptype, pname, line):
+    """Raw tokens -> a tuple of str, bool or float values (homogeneous)."""
+    if not raw:
+        return ()
+    kinds = set()
+    out = []
+    for kind, s, ln in raw:
+        if kind == "str":
+            kinds.add("str")
+            out.append(s)
+        elif s in ("true", "false"):
+            kinds.add("bool")
+            out.append(s == "true")
+        else:
+            try:
+                x = float(s)
+            except ValueError:
+                raise _PbrtError(f"line {ln}: parameter {pname!r}: {s!r} is not a number") from None
+            kinds.add("num")
+            out.append(x)
+    if len(kinds) > 1:
+        raise _PbrtError(f"line {line}: parameter {pname!r}: mixed value kinds ({', '.join(sorted(kinds))})")
+    return tuple(out)
+
+
+def _read_params(ts, stmt):
+    params = {}
+    while True:
+        t = ts.peek()
+        if t is None or t[0] != "str":
+            return params
+        ts.next()
+        decl, line = t[1], t[2]
+        words = decl.split()
+        if len(words) != 2:
+            raise _PbrtError(f"line {line}: {stmt}: malformed parameter declaration {decl!r} "
+                             "(expected \"type name\")")
+        ptype, pname = words
+        if ptype == "color":          # pbrt-v3 spelling, upgraded by pbrt-v4
+            ptype = "rgb"
+        raw = _read_value(ts, f"parameter {pname!r}", line)
+        values = _convert_values(raw, ptype, pname, line)
+        if pname in params:
+            raise _PbrtError(f"line {line}: {stmt}: parameter {pname!r} given twice "
+                             f"(first on line {params[pname].line})")
+        params[pname] = PbrtParam(ptype, pname, values, line)
+
+
+def _skip_args(ts):
+    """Skip the arguments of a directive we do not interpret (checking bracket balance)."""
+    while True:
+        t = ts.peek()
+        if t is None or _is_keyword(t):
+            return
+        if t[0] == "]":
+            raise _PbrtError(f"line {t[2]}: unexpected ']'")
+        if t[0] == "[":
+            _read_value(ts, "list", t[2])
+        else:
+            ts.next()
+
+
+def _statement_name(ts, keyword, line):
+    t = ts.next()
+    if t is None or t[0] != "str":
+        got = "end of input" if t is None else repr(t[1])
+        raise _PbrtError(f"line {line}: {keyword}: expected a quoted string, got {got}")
+    return t[1]
+
+
+# pbrt-v4's scene directives (src/pbrt/parser.cpp), plus pbrt-v3's that v4 files may still carry.
+_PBRT_DIRECTIVES = frozenset("""
+    Accelerator ActiveTransform AreaLightSource Attribute AttributeBegin AttributeEnd Camera ColorSpace
+    ConcatTransform CoordinateSystem CoordSysTransform Film Identity Import Include Integrator LightSource
+    LookAt MakeNamedMaterial MakeNamedMedium Material MediumInterface NamedMaterial ObjectBegin ObjectEnd
+    ObjectInstance Option PixelFilter ReverseOrientation Rotate Sampler Scale Shape Texture Transform
+    TransformBegin TransformEnd TransformTimes Translate WorldBegin WorldEnd
+    Renderer SurfaceIntegrator VolumeIntegrator
+""".split())
+
+#: Nesting limit of Include/Import (a cycle would otherwise recurse forever).
+PBRT_MAX_INCLUDE_DEPTH = 32
+
+
+def parse_pbrt_materials(text: str, *, path=None) -> list:
+    """The material statements of pbrt-v4 scene text, in order, as ``PbrtMaterial`` records.
+
+    Understands pbrt's tokens (quoted strings with escapes, numbers, ``true``/``false``,
+    brackets, ``#`` comments to the end of the line; statements may span lines) and reads
+    ``Material "type" params...`` and ``MakeNamedMaterial "name" "string type" "..."
+    params...``. ``AttributeBegin``/``AttributeEnd``, ``NamedMaterial`` and ``Shape`` are
+    followed to count the shapes using each material; ``Include "file"`` and ``Import "file"``
+    are read in place, relative to the including file (``path``; the working directory for text
+    without one), at most :data:`PBRT_MAX_INCLUDE_DEPTH` deep; every other pbrt directive is
+    skipped. Anonymous materials are named ``"material#<n> (line <line>)"`` (``"... (<file>
+    line <line>)"`` inside an included file). Does not convert parameters: see
+    :meth:`PbrtMaterial.to_bxdf` and :func:`from_pbrt`.
+
+    ``ValueError`` with the line number (and file) for malformed text: unterminated strings or
+    brackets, stray ``]``, non-numbers in lists, malformed parameter declarations, a word that is
+    not a pbrt directive, a ``MakeNamedMaterial`` without ``"string type"``, a redefined named
+    material, Include nested too deep. ``OSError`` naming the file for a missing include.
+    """
+    if not isinstance(text, str):
+        raise TypeError(f"text: expected str (pbrt scene text), got {type(text).__name__}")
+    st = {"recs": [], "by_name": {}, "current": None, "stack": [], "n_anon": 0}
+    _parse_into(st, text, None if path is None else os.fspath(path), 0)
+    return [PbrtMaterial(name=r[0], type=r[1], line=r[2], named=r[3], params=r[4], shapes=r[5], file=r[6])
+            for r in st["recs"]]
+
+
+def _parse_into(st, text, path, depth):
+    where = "" if path is None or depth == 0 else f"{os.path.basename(path)} "
+    try:
+        _parse_statements(st, text, path, depth, where)
+    except _PbrtError as e:
+        if path is None or depth == 0 or str(e).startswith(f"{path}:"):
+            raise
+        raise _PbrtError(f"{path}: {e}") from None
+
+
+def _parse_statements(st, text, path, depth, where):
+    ts = _Stream(text)
+    recs, by_name, stack = st["recs"], st["by_name"], st["stack"]
+    while True:
+        t = ts.next()
+        if t is None:
+            break
+        if not _is_keyword(t):
+            if t[0] == "]":
+                raise _PbrtError(f"line {t[2]}: unexpected ']'")
+            if t[0] == "[":
+                _read_value(ts, "list", t[2])  # checks the bracket; pbrt would reject it anyway
+                continue
+            raise _PbrtError(f"line {t[2]}: unexpected {t[1]!r} (expected a directive)")
+        kw, line = t[1], t[2]
+        if kw not in _PBRT_DIRECTIVES:
+            hint = (" (from_pbrt takes scene text or a path to an existing file: is this a file name?)"
+                    if ("." in kw or "/" in kw) and len(recs) == 0 else "")
+            raise _PbrtError(f"line {line}: unknown directive {kw!r}{hint}")
+        if kw == "Material":
+            mtype = _statement_name(ts, kw, line)
+            params = _read_params(ts, f"Material {mtype!r}")
+            st["n_anon"] += 1
+            rec = [f"material#{st['n_anon']} ({where}line {line})", mtype, line, False, params, 0,
+                   path if depth else None]
+            recs.append(rec)
+            st["current"] = rec
+        elif kw == "MakeNamedMaterial":
+            name = _statement_name(ts, kw, line)
+            params = _read_params(ts, f"MakeNamedMaterial {name!r}")
+            tp = params.pop("type", None)
+            if tp is None or tp.type != "string" or len(tp.values) != 1 or not isinstance(tp.values[0], str):
+                raise _PbrtError(f"line {line}: MakeNamedMaterial {name!r}: needs a \"string type\" parameter")
+            if name in by_name:
+                raise _PbrtError(f"line {line}: MakeNamedMaterial {name!r}: named material redefined "
+                                 f"(first defined on line {by_name[name][2]})")
+            rec = [name, tp.values[0], line, True, params, 0, path if depth else None]
+            recs.append(rec)
+            by_name[name] = rec
+        elif kw in ("Include", "Import"):
+            fname = _statement_name(ts, kw, line)
+            base = os.path.dirname(path) if path is not None else os.getcwd()
+            full = os.path.normpath(fname if os.path.isabs(fname) else os.path.join(base, fname))
+            if depth + 1 > PBRT_MAX_INCLUDE_DEPTH:
+                raise _PbrtError(f"line {line}: {kw} {fname!r}: nested deeper than {PBRT_MAX_INCLUDE_DEPTH} "
+                                 "files (an Include cycle?)")
+            try:
+                sub = _read_scene_file(full)
+            except OSError as e:
+                raise OSError(f"{path or '<text>'}: line {line}: {kw} {fname!r}: cannot read {full!r} "
+                              f"({e.strerror or e})") from None
+            _parse_into(st, sub, full, depth + 1)
+        elif kw == "NamedMaterial":
+            name = _statement_name(ts, kw, line)
+            st["current"] = ("named", name)
+        elif kw == "AttributeBegin":
+            stack.append(st["current"])
+        elif kw == "AttributeEnd":
+            if stack:
+                st["current"] = stack.pop()
+            _skip_args(ts)
+        elif kw == "Shape":
+            cur = st["current"]
+            if isinstance(cur, tuple):
+                cur = by_name.get(cur[1])
+            if cur is not None:
+                cur[5] += 1
+            _skip_args(ts)
+        else:
+            _skip_args(ts)
+
+
+def _read_scene_file(path) -> str:
+    """A pbrt scene file's text (``.gz`` files decompressed, as pbrt-v4 reads them)."""
+    p = os.fspath(path)
+    if p.endswith(".gz"):
+        import gzip
+        with gzip.open(p, "rt", encoding="utf-8") as fh:
+            return fh.read()
+    with open(p, encoding="utf-8") as fh:
+        return fh.read()
+
+
+def _pfail(rec, msg):
+    raise _PbrtError(f"pbrt material {rec.name!r} ({rec.type}, line {rec.line}): {msg}")
+
+
+def _pfail_param(rec, p, msg):
+    raise _PbrtError(f"pbrt material {rec.name!r} ({rec.type}, line {p.line}): parameter {p.name!r}: {msg}")
+
+
+def _check_texture(rec, p):
+    if p.type == "texture":
+        tex = p.values[0] if p.values else "?"
+        _pfail_param(rec, p, f"is a texture ({tex!r}); only constant values are supported")
+
+
+def _numbers(rec, p):
+    if not all(isinstance(v, float) for v in p.values) or not p.values:
+        _pfail_param(rec, p, f"expected numbers for a {p.type!r} parameter, got {list(p.values)!r}")
+    return np.array(p.values, dtype=np.float64)
+
+
+def _named_metal(rec, p, name, part):
+    m = re.fullmatch(r"metal-(.+)-(eta|k)", name)
+    if m is None or m.group(1) not in METALS:
+        have = ", ".join(f"metal-{x}-eta/-k" for x in METALS)
+        other = ", ".join(f"metal-{x}" for x in _PBRT_OTHER_METALS)
+        extra = " (named glass spectra are only accepted for dielectric eta)" if name in PBRT_GLASS_ETA else ""
+        _pfail_param(rec, p, f"named spectrum {name!r} is not available{extra}; bsdfkit has {have} "
+                     f"(Mitsuba's RGB projections of Palik's data; pbrt's {other} are not included; "
+                     "spectrum files are not read)")
+    if m.group(2) != part:
+        _pfail_param(rec, p, f"named spectrum {name!r} is the {m.group(2)!r} part, not {part!r}")
+    return np.array(METALS[m.group(1)][0 if part == "eta" else 1], dtype=np.float64)
+
+
+def _spectrum_param(rec, pname, *, albedo):
+    """RGB (3,) of a spectrum-valued parameter, or None if absent."""
+    p = rec.params.get(pname)
+    if p is None:
+        return None
+    _check_texture(rec, p)
+    if p.type == "rgb":
+        v = _numbers(rec, p)
+        if v.size != 3:
+            _pfail_param(rec, p, f"an rgb value needs 3 numbers, got {v.size}")
+        if np.any(v < 0):
+            _pfail_param(rec, p, f"rgb has a negative component: {v.tolist()}")
+        if albedo and np.any(v > 1):
+            _pfail_param(rec, p, f"rgb used as a reflectance has a component > 1: {v.tolist()}")
+        return v
+    if p.type == "float":
+        v = _numbers(rec, p)
+        if v.size != 1:
+            _pfail_param(rec, p, f"expected one float, got {v.size}")
+        if v[0] < 0 or (albedo and v[0] > 1):
+            _pfail_param(rec, p, f"value {v[0]} out of range{' [0, 1]' if albedo else ' (>= 0)'}")
+        return np.full(3, v[0])
+    if p.type == "spectrum":
+        if p.values and all(isinstance(v, str) for v in p.values):
+            if len(p.values) != 1:
+                _pfail_param(rec, p, "expected one spectrum name")
+            if albedo:
+                _pfail_param(rec, p, f"named spectrum {p.values[0]!r} is not a reflectance; give rgb, "
+                             "float or wavelength/value pairs")
+            return _named_metal(rec, p, p.values[0], pname)
+        v = _numbers(rec, p)
+        if v.size % 2 or v.size == 0:
+            _pfail_param(rec, p, f"a spectrum needs (wavelength, value) pairs, got {v.size} numbers")
+        try:
+            return spectrum_to_rgb(v[0::2], v[1::2], d65=True, bounded=albedo)
+        except ValueError as e:
+            _pfail_param(rec, p, str(e))
+    if p.type == "blackbody":
+        _pfail_param(rec, p, "blackbody spectra describe emission; give rgb, float or a spectrum")
+    _pfail_param(rec, p, f"unsupported type {p.type!r}; expected rgb, spectrum or float")
+
+
+def _eta_param(rec, default=1.5):
+    """Scalar IOR of a dielectric: float, spectrum (value at 550 nm) or grey rgb."""
+    p = rec.params.get("eta")
+    if p is None:
+        return default
+    _check_texture(rec, p)
+    if p.type == "float":
+        eta = float(_numbers(rec, p)[0])
+    elif p.type == "spectrum" and p.values and isinstance(p.values[0], str):
+        name = p.values[0]
+        if name not in PBRT_GLASS_ETA:
+            _pfail_param(rec, p, f"named spectrum {name!r} is not available; dielectric eta accepts "
+                         f"{', '.join(PBRT_GLASS_ETA)} (evaluated at 550 nm), a float or pairs")
+        eta = PBRT_GLASS_ETA[name]
+    elif p.type == "spectrum":
+        v = _numbers(rec, p)
+        if v.size % 2 or v.size == 0:
+            _pfail_param(rec, p, f"a spectrum needs (wavelength, value) pairs, got {v.size} numbers")
+        lam, val = v[0::2], v[1::2]
+        if np.any(np.diff(lam) <= 0):
+            _pfail_param(rec, p, f"wavelengths must increase, got {lam.tolist()}")
+        if not lam[0] <= _ETA_WAVELENGTH <= lam[-1]:
+            _pfail_param(rec, p, f"the spectrum ({lam[0]:g}-{lam[-1]:g} nm) does not cover 550 nm, "
+                         "where bsdfkit evaluates dielectric eta")
+        eta = float(np.interp(_ETA_WAVELENGTH, lam, val))
+    elif p.type == "rgb":
+        v = _numbers(rec, p)
+        if v.size != 3 or not np.all(v == v[0]):
+            _pfail_param(rec, p, f"an rgb eta must be grey (bsdfkit's dielectrics have one eta), got {v.tolist()}")
+        eta = float(v[0])
+    else:
+        _pfail_param(rec, p, f"unsupported type {p.type!r}; expected float or spectrum")
+    if eta == 0:            # pbrt: "if (sampledEta == 0) sampledEta = 1"
+        eta = 1.0
+    return eta
+
+
+def _float_param(rec, pname, default):
+    p = rec.params.get(pname)
+    if p is None:
+        return default
+    _check_texture(rec, p)
+    if p.type != "float":
+        _pfail_param(rec, p, f"expected a \"float {pname}\", got type {p.type!r}")
+    v = _numbers(rec, p)
+    if v.size != 1:
+        _pfail_param(rec, p, f"expected one value, got {v.size}")
+    return float(v[0])
+
+
+def _bool_param(rec, pname, default):
+    p = rec.params.get(pname)
+    if p is None:
+        return default
+    if p.type != "bool":
+        _pfail_param(rec, p, f"expected a \"bool {pname}\", got type {p.type!r}")
+    v = p.values[0] if len(p.values) == 1 else None
+    if not (isinstance(v, bool) or v in ("true", "false")):
+        _pfail_param(rec, p, f"expected true or false, got {list(p.values)!r}")
+    return v is True or v == "true"
+
+
+def _alphas(rec):
+    r = _float_param(rec, "roughness", 0.0)
+    u = _float_param(rec, "uroughness", r)
+    v = _float_param(rec, "vroughness", r)
+    for val, n in ((u, "uroughness"), (v, "vroughness")):
+        if not (math.isfinite(val) and val >= 0):
+            _pfail(rec, f"{n if n in rec.params else 'roughness'} must be finite and >= 0, got {val}")
+    if _bool_param(rec, "remaproughness", True):
+        return roughness_to_alpha(u), roughness_to_alpha(v)
+    return u, v
+
+
+def _pbrt_bxdf(rec):
+    mtype = rec.type
+    if mtype not in _PBRT_SUPPORTED:
+        kind = "unsupported" if mtype in _PBRT_UNSUPPORTED else "unknown"
+        _pfail(rec, f"{kind} material type {mtype!r}; supported: {', '.join(_PBRT_SUPPORTED)}")
+    allowed = _PBRT_PARAMS[mtype] + _PBRT_IGNORED
+    for p in rec.params.values():
+        if p.name not in allowed:
+            _pfail_param(rec, p, f"not a parameter of pbrt-v4's {mtype} material; it takes "
+                         + ", ".join(_PBRT_PARAMS[mtype]))
+    try:
+        if mtype == "diffuse":
+            r = _spectrum_param(rec, "reflectance", albedo=True)
+            return Diffuse(0.5 if r is None else r)
+        if mtype == "diffusetransmission":
+            r = _spectrum_param(rec, "reflectance", albedo=True)
+            t = _spectrum_param(rec, "transmittance", albedo=True)
+            s = _float_param(rec, "scale", 1.0)
+            r = np.full(3, 0.25) if r is None else r
+            t = np.full(3, 0.25) if t is None else t
+            return DiffuseTransmission(np.clip(s * r, 0, 1), np.clip(s * t, 0, 1))
+        if mtype == "conductor":
+            ax, ay = _alphas(rec)
+            refl = _spectrum_param(rec, "reflectance", albedo=True)
+            eta = _spectrum_param(rec, "eta", albedo=False)
+            k = _spectrum_param(rec, "k", albedo=False)
+            if refl is not None:
+                if eta is not None or k is not None:
+                    _pfail(rec, "give either \"reflectance\" or \"eta\"/\"k\", not both (pbrt-v4 refuses it)")
+                return Conductor.from_reflectance(refl, alpha_x=ax, alpha_y=ay, masking="correlated")
+            eta = np.array(METALS["Cu"][0]) if eta is None else eta
+            k = np.array(METALS["Cu"][1]) if k is None else k
+            return Conductor(eta, k, alpha_x=ax, alpha_y=ay, masking="correlated")
+        if mtype == "dielectric":
+            ax, ay = _alphas(rec)
+            return Dielectric(_eta_param(rec), alpha_x=ax, alpha_y=ay, masking="correlated")
+        if mtype == "hair":
+            return _pbrt_hair(rec)
+        return ThinDielectric(_eta_param(rec))
+    except _PbrtError:
+        raise
+    except (ValueError, TypeError) as e:
+        _pfail(rec, str(e))
+
+
+def _pbrt_hair(rec):
+    """pbrt-v4 ``HairMaterial``: sigma_a, else reflectance, else eumelanin/pheomelanin (each
+    ignored when an earlier one is given, as pbrt-v4 warns and does); neither -> eumelanin 1.3.
+    beta_m / beta_n clamped to [0.01, 1] and reflectance to [0, 1] as pbrt-v4's material does."""
+    from ..models.hair import Hair, sigma_a_from_concentration, sigma_a_from_reflectance
+
+    bm = min(max(_float_param(rec, "beta_m", 0.3), 0.01), 1.0)
+    bn = min(max(_float_param(rec, "beta_n", 0.3), 0.01), 1.0)
+    kw = dict(eta=_float_param(rec, "eta", 1.55), beta_m=bm, beta_n=bn, alpha=_float_param(rec, "alpha", 2.0), h=0.0)
+    sigma_a = _spectrum_param(rec, "sigma_a", albedo=False)
+    if sigma_a is None:
+        p = rec.params.get("reflectance")
+        if p is not None:
+            _check_texture(rec, p)
+            c = _spectrum_param(rec, "reflectance", albedo=False)
+            sigma_a = sigma_a_from_reflectance(np.clip(c, 0.0, 1.0), bn)
+        else:
+            ce = _float_param(rec, "eumelanin", None)
+            cp = _float_param(rec, "pheomelanin", None)
+            if ce is None and cp is None:
+                ce = 1.3
+            sigma_a = sigma_a_from_concentration(ce or 0.0, cp or 0.0)
+    return Hair(sigma_a=sigma_a, **kw)
+
+
+def from_pbrt(source, *, skip_unsupported: bool = False) -> dict:
+    """bsdfkit models for the materials of a pbrt-v4 scene: ``{name: BxDF}`` in file order.
+
+    ``source``: scene text, or the path of a scene file (an ``os.PathLike``, or a ``str``
+    without a newline that names an existing file; ``.gz`` files are decompressed).
+    ``Include``/``Import`` are followed relative to the including file (text: the working
+    directory); a missing include raises ``OSError`` naming it.
+
+    Named materials keep their names; anonymous ``Material`` statements are called
+    ``"material#<n> (line <line>)"`` (see :func:`parse_pbrt_materials` for the syntax handled).
+    Types and parameters follow pbrt-v4's ``src/pbrt/materials.cpp`` (defaults in brackets):
+
+    * ``diffuse``: reflectance [0.5] -> ``Diffuse`` (clamped to [0, 1] as pbrt does).
+    * ``diffusetransmission``: reflectance [0.25], transmittance [0.25], scale [1]
+      -> ``DiffuseTransmission(clamp(scale r), clamp(scale t))``.
+    * ``conductor``: eta/k [metal-Cu-eta / metal-Cu-k] or reflectance (pbrt's artist form,
+      ``Conductor.from_reflectance``); roughness [0], uroughness/vroughness [roughness],
+      remaproughness [true] -> ``Conductor``.
+    * ``dielectric``: eta [1.5], roughness as conductor -> ``Dielectric``.
+    * ``thindielectric``: eta [1.5] -> ``ThinDielectric``.
+    * ``hair``: sigma_a, else reflectance (``Hair.from_reflectance``, clamped to [0, 1]), else
+      eumelanin / pheomelanin [1.3 / 0] (``Hair.from_concentration``); eta [1.55], beta_m, beta_n
+      [0.3] (clamped to [0.01, 1]), alpha [2 degrees] -> ``Hair(..., h=0)`` (pbrt-v4 takes h from
+      the curve's v coordinate per hit).
+
+    pbrt-v4's microfacet models use height-correlated Smith masking: ``masking="correlated"``.
+    Roughness: with remaproughness true, alpha = sqrt(roughness) (``bk.roughness_to_alpha``),
+    else alpha = roughness; uroughness is alpha along local x, vroughness along y.
+
+    Values: ``"rgb"`` (3 numbers, used as they are: pbrt's RGB-to-spectrum upsampling followed by
+    a projection back to sRGB returns them up to the upsampling error), ``"float"`` (grey; pbrt itself only takes it for dielectric
+    eta), ``"spectrum"`` as wavelength/value pairs (projected to linear sRGB as Mitsuba's RGB
+    variants do: CIE 1931 and D65, see :func:`spectrum_to_rgb`), or as a named spectrum:
+    ``metal-<X>-eta``/``metal-<X>-k`` for X in ``bsdfkit.METALS`` (Cu, Au, Ag, Al; Cr too,
+    which pbrt lacks) -- these are Mitsuba's RGB projections of Palik's measured data, not pbrt's
+    exact spectral tables, and pbrt's metal-CuZn, metal-MgO and metal-TiO2 are refused. Dielectric
+    eta is one number: a float, a grey rgb, a named glass (``PBRT_GLASS_ETA``) or pairs, the
+    spectra evaluated at 550 nm (pbrt renders them dispersively). ``displacement`` and
+    ``normalmap`` change the geometry, not the BxDF, and are left out
+    (``PbrtMaterial.ignored``).
+
+    ``ValueError`` naming the material, its line and the parameter for unsupported types
+    (coateddiffuse, coatedconductor, measured, mix, subsurface, interface, ...),
+    texture-valued or unknown parameters, bad values, and malformed text (with the line).
+    ``skip_unsupported=True`` leaves out materials that cannot be converted (unsupported types,
+    textures, unknown spectra) instead of raising, with one :class:`PbrtSkipWarning` per
+    material naming it, its line and the reason (its ``material``, ``line`` and ``reason``
+    attributes carry them); malformed text still raises.
+    """
+    text, path = _scene_source(source)
+    out = {}
+    for rec in parse_pbrt_materials(text, path=path):
+        try:
+            out[rec.name] = rec.to_bxdf()
+        except _PbrtError as e:
+            if not skip_unsupported:
+                raise
+            w = PbrtSkipWarning(f"from_pbrt: skipped {e}" + (f" [in {rec.file}]" if rec.file else ""))
+            w.material, w.line, w.file, w.reason = rec.name, rec.line, rec.file, str(e)
+            warnings.warn(w, stacklevel=2)
+    return out
+
+
+class PbrtSkipWarning(UserWarning):
+    """A material ``from_pbrt(..., skip_unsupported=True)`` left out (attributes: ``material``,
+    ``line``, ``file``, ``reason``)."""
+
+
+def _scene_source(source):
+    """(text, path or None) of from_pbrt's argument."""
+    if isinstance(source, os.PathLike):
+        p = os.fspath(source)
+        return _read_scene_file(p), p
+    if isinstance(source, bytes):
+        raise TypeError("source: expected scene text (str) or a path (str or os.PathLike), got bytes (decode the text first)")
+    if not isinstance(source, str):
+        raise TypeError(f"source: expected scene text (str) or a path (str or os.PathLike), "
+                        f"got {type(source).__name__}")
+    if "\n" not in source and source.strip() and os.path.isfile(source.strip()):
+        p = source.strip()
+        return _read_scene_file(p), p
+    if "\n" not in source and source.strip().endswith((".pbrt", ".pbrt.gz")):
+        raise FileNotFoundError(f"source: scene file {source.strip()!r} not found")
+    return source, None

@@ -1,0 +1,20 @@
+"""The models: the base class (``base``), the registry (``registry``), then one module per family.
+
+``diffuse`` (Diffuse, DiffuseTransmission), ``conductor`` (Conductor, METALS, conductor_fresnel),
+``dielectric`` (Dielectric, ThinDielectric), ``filament`` (FilamentStandard, FilamentCloth, the
+DFG table), ``normalized_fresnel`` (NormalizedFresnel, fresnel_moment1), ``hair`` (Hair and its
+sigma_a helpers). A new family is a new module here whose classes subclass :class:`BxDF`.
+"""
+from . import registry
+from .base import BxDF, SampleResult, roughness_to_alpha
+# families in registration (= gallery) order; a new family adds one line here
+from .diffuse import Diffuse, DiffuseTransmission  # noqa: I001
+from .conductor import METALS, Conductor, conductor_fresnel
+from .dielectric import Dielectric, ThinDielectric
+from .filament import FilamentCloth, FilamentStandard
+from .normalized_fresnel import NormalizedFresnel
+from .hair import Hair
+from .registry import MODELS, KnobDecl
+
+__all__ = ["BxDF", "SampleResult", "roughness_to_alpha", "METALS", "Conductor", "conductor_fresnel", "Dielectric",
+           "ThinDielectric", "Diffuse", "DiffuseTransmission", "FilamentStandard", "FilamentCloth", "NormalizedFresnel", "Hair", "MODELS", "KnobDecl"]

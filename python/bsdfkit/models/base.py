@@ -1,0 +1,422 @@
+"""The model base class (array API, value semantics) and the parameter validation shared by every model."""
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._arrays import (as_dirs, as_uniform, broadcast_batch, check_int, check_out, fast_dirs, fast_pair,
+                       fast_sample_args, flatten_to, kernel_dtype)
+from .._enums import BxDFFlags, ReflTrans, TransportMode
+from . import registry as _registry
+
+__all__ = ["roughness_to_alpha", "SampleResult", "BxDF"]
+
+
+_MASKING = {"correlated": 0, "separable": 1}
+
+
+def _scalar(x, name: str, *, lo=None, hi=None, lo_open=False) -> float:
+    if isinstance(x, bool) or not isinstance(x, (numbers.Real, np.floating, np.integer)):
+        raise TypeError(f"{name}: expected a real number, got {type(x).__name__}")
+    v = float(x)
+    if not math.isfinite(v):
+        raise ValueError(f"{name}: must be finite, got {v}")
+    if lo is not None and (v <= lo if lo_open else v < lo):
+        raise ValueError(f"{name}: must be {'>' if lo_open else '>='} {lo}, got {v}")
+    if hi is not None and v > hi:
+        raise ValueError(f"{name}: must be <= {hi}, got {v}")
+    return v
+
+
+def _rgb(x, name: str, *, lo=None, hi=None, lo_open=False) -> np.ndarray:
+    a = np.asarray(x)
+    if a.dtype.kind not in "fiu":
+        raise TypeError(f"{name}: expected a number or 3 numbers (RGB), got dtype {a.dtype}")
+    if a.ndim == 0:
+        a = np.repeat(a, 3)
+    if a.shape != (3,):
+        raise ValueError(f"{name}: expected a number or 3 numbers (RGB), got shape {a.shape}")
+    a = a.astype(np.float64)
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name}: must be finite, got {a.tolist()}")
+    if lo is not None and np.any(a <= lo if lo_open else a < lo):
+        raise ValueError(f"{name}: every channel must be {'>' if lo_open else '>='} {lo}, got {a.tolist()}")
+    if hi is not None and np.any(a > hi):
+        raise ValueError(f"{name}: every channel must be <= {hi}, got {a.tolist()}")
+    a.setflags(write=False)
+    return a
+
+
+def _alphas(alpha, alpha_x, alpha_y):
+    """(alpha_x, alpha_y) from either ``alpha`` (isotropic; None = 0, smooth) or both of
+    ``alpha_x`` and ``alpha_y``: one of the pair alone would silently leave the other at 0, and
+    ``alpha`` with the pair would silently ignore one of them."""
+    if (alpha_x is None) != (alpha_y is None):
+        given, missing = ("alpha_x", "alpha_y") if alpha_y is None else ("alpha_y", "alpha_x")
+        raise ValueError(f"{missing}: give alpha_x and alpha_y together (only {given} was given), "
+                         "or alpha alone for an isotropic lobe")
+    if alpha_x is not None:
+        if alpha is not None:
+            raise ValueError("alpha: give either alpha (isotropic) or alpha_x and alpha_y (anisotropic), not both")
+        return _scalar(alpha_x, "alpha_x", lo=0.0), _scalar(alpha_y, "alpha_y", lo=0.0)
+    a = 0.0 if alpha is None else _scalar(alpha, "alpha", lo=0.0)
+    return a, a
+
+
+#: The masking knob of the microfacet models (a modelling choice: which material it is).
+def masking_knob(moot):
+    return _registry.KnobDecl("masking", ("correlated", "separable"), "modelling",
+                              "Smith masking-shadowing: height-correlated (pbrt-v4) or separable G1 G1 (Mitsuba 3)",
+                              moot=moot)
+
+
+def _masking(m) -> str:
+    if m not in _MASKING:
+        raise ValueError(f"masking: must be one of {sorted(_MASKING)}, got {m!r}")
+    return m
+
+
+def is_smooth(p) -> bool:
+    """pbrt-v4's ``EffectivelySmooth`` on a parameter dict with alpha_x / alpha_y."""
+    return max(p["alpha_x"], p["alpha_y"]) < 1e-3
+
+
+def fmt_value(v) -> str:
+    """A number or an RGB triple, short (one number when the channels agree)."""
+    v = np.asarray(v, dtype=np.float64)
+    if v.ndim and np.allclose(v, v.flat[0]):
+        v = v.flat[0]
+    if v.ndim == 0:
+        return f"{float(v):.3g}"
+    return "(" + ", ".join(f"{x:.2g}" for x in v) + ")"
+
+
+def alpha_text(p) -> str:
+    """``", smooth"``, ``", α=0.2"`` or ``", αx=.., αy=.."`` for a parameter dict with alphas."""
+    ax, ay = p["alpha_x"], p["alpha_y"]
+    if max(ax, ay) < 1e-3:
+        return ", smooth"
+    if ax == ay:
+        return f", α={ax:.3g}"
+    return f", αx={ax:.3g}, αy={ay:.3g}"
+
+
+def rgb_dict(v) -> dict:
+    """A Mitsuba ``rgb`` texture of a scalar or RGB value."""
+    a = np.broadcast_to(np.asarray(v, dtype=np.float64), (3,))
+    return {"type": "rgb", "value": [float(x) for x in a]}
+
+
+#: pbrt-v4 / Mitsuba 3 alpha floor of the rough microfacet lobes.
+MIN_ALPHA = 1e-4
+
+
+def roughness_to_alpha(roughness):
+    """pbrt-v4's ``RoughnessToAlpha``: alpha = sqrt(roughness).
+
+    pbrt-v4 applies it to ``roughness``/``uroughness``/``vroughness`` when ``remaproughness``
+    is true (the default). pbrt-v4 issue #479 notes that r**2 would have been the perceptually
+    linear choice; sqrt is kept for compatibility with pbrt scenes. Accepts scalars or arrays;
+    roughness must be finite and >= 0.
+    """
+    r = np.asarray(roughness, dtype=np.float64)
+    if not np.all(np.isfinite(r)) or np.any(r < 0):
+        raise ValueError("roughness: must be finite and >= 0")
+    out = np.sqrt(r)
+    return float(out) if out.ndim == 0 else out
+
+
+@dataclass(frozen=True)
+class SampleResult:
+    """Sampled directions and their values; arrays share the batch shape of the inputs.
+
+    wi: (..., 3) sampled directions (outward, local frame); f: (..., 3) BSDF value (cosine
+    excluded); pdf: (...) solid-angle density, or the discrete probability for a specular lobe;
+    flags: (...) uint8 ``BxDFFlags`` of the sampled lobe; eta: (...) relative IOR along wi
+    (1 for reflection); valid: (...) bool, False where no sample exists (then f = pdf = 0,
+    wi = (0, 0, 1), the shading normal, and eta = 1: every wi is a valid ``eval`` / ``pdf`` input);
+    pdf_is_proportional: (...) bool (layered models only).
+    """
+
+    wi: np.ndarray
+    f: np.ndarray
+    pdf: np.ndarray
+    flags: np.ndarray
+    eta: np.ndarray
+    valid: np.ndarray
+    pdf_is_proportional: np.ndarray
+
+    @property
+    def weight(self) -> np.ndarray:
+        """f |cos wi| / pdf, 0 where invalid (the Monte Carlo throughput weight)."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            w = self.f * (np.abs(self.wi[..., 2]) / self.pdf)[..., None]
+        return np.where(self.valid[..., None], w, 0.0).astype(self.f.dtype)
+
+
+_RADIANCE = TransportMode.Radiance
+_ALL = ReflTrans.All
+
+
+def _new_sample_result(batch, dtype) -> SampleResult:
+    """An uninitialized SampleResult of the batch shape (filled by the kernel). Built without the
+    frozen dataclass's __init__ (seven object.__setattr__ calls): part of a small call's fixed cost."""
+    r = object.__new__(SampleResult)
+    r.__dict__.update(wi=np.empty(batch + (3,), dtype), f=np.empty(batch + (3,), dtype), pdf=np.empty(batch, dtype),
+                      flags=np.empty(batch, np.uint8), eta=np.empty(batch, dtype), valid=np.empty(batch, bool),
+                      pdf_is_proportional=np.empty(batch, bool))
+    return r
+
+
+def _mode(mode) -> int:
+    if isinstance(mode, str) and mode.capitalize() in TransportMode.__members__:
+        return int(TransportMode[mode.capitalize()])
+    try:
+        return int(TransportMode(mode))
+    except (ValueError, TypeError):
+        raise ValueError(f"mode: must be a TransportMode, got {mode!r}") from None
+
+
+def _sflags(sf) -> int:
+    try:
+        v = int(ReflTrans(sf))
+    except (ValueError, TypeError):
+        raise ValueError(f"sample_flags: must be a ReflTrans, got {sf!r}") from None
+    return v
+
+
+def _raise_bad(name: str, count: int) -> None:
+    if count:
+        raise ValueError(f"{name}: {count} direction(s) are not finite unit vectors "
+                         "(|w|^2 must equal 1 within 1e-4; normalize them first)")
+
+
+class BxDF:
+    """Common array API of every model (pbrt-v4 conventions).
+
+    Directions live in the local shading frame (z is the normal), are unit vectors and point
+    away from the surface, both ``wo`` (towards the viewer) and ``wi``. ``eval`` excludes the
+    cosine factor; ``pdf`` is per unit solid angle. Inputs broadcast with numpy rules over
+    their leading axes. float32 inputs run float32 kernels, anything else real runs float64.
+    """
+
+    _fields: tuple = ()
+    __slots__ = ("_core", "_params")
+
+    # ---- declarations read by the registry (see bsdfkit.models.registry); subclasses set them
+    #: Short names accepted by the spec parser besides the class name.
+    aliases: tuple = ()
+    #: One-line description.
+    description: str = ""
+    #: Accuracy knobs (``KnobDecl``), most influential first; precision is every model's last knob.
+    knobs: tuple = ()
+    #: f is defined over the whole sphere of wo and wi, with no "below the surface" (a fibre, e.g.
+    #: Hair): plots draw the whole sphere, and contracts that assume a hemispherical surface
+    #: model (albedo over wo's hemisphere, cosine-weighted sampling) are gated on it.
+    full_sphere: bool = False
+
+    def __init_subclass__(cls, register: bool = True, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if register:
+            _registry.register(cls)
+
+    def cost_family(self) -> str:
+        """Cost-table family: the class plus the structural variant that selects a different
+        compiled kernel (smooth/rough, optional lobes). Models override it."""
+        return type(self).__name__
+
+    def describe(self) -> str:
+        """A short human-readable name, e.g. ``"Conductor Au, α=0.2"`` (legends and titles)."""
+        from .spec import to_spec
+        rest = to_spec(self).split()[1:]
+        return type(self).__name__ + (" " + ", ".join(rest) if rest else "")
+
+    def to_mitsuba(self) -> dict:
+        """The Mitsuba 3 plugin dictionary (``mi.load_dict``) of this model. Raises
+        NotImplementedError naming the reason when Mitsuba has no equivalent plugin."""
+        raise NotImplementedError(f"{type(self).__name__}: Mitsuba 3 has no equivalent plugin")
+
+    def __init__(self, **params):
+        object.__setattr__(self, "_params", params)
+        object.__setattr__(self, "_core", self._make_core())
+
+    def _make_core(self):
+        raise NotImplementedError
+
+    # immutability, value semantics, pickling
+    def __setattr__(self, k, v):
+        raise AttributeError(f"{type(self).__name__} is immutable; build a new model instead")
+
+    def __getattr__(self, k):
+        params = object.__getattribute__(self, "_params")
+        if k in params:
+            return params[k]
+        raise AttributeError(f"{type(self).__name__!s} has no attribute {k!r}")
+
+    def _key(self):
+        return tuple((k, tuple(v.tolist()) if isinstance(v, np.ndarray) else v) for k, v in self._params.items())
+
+    def __eq__(self, other):
+        return type(self) is type(other) and self._key() == other._key()
+
+    def __hash__(self):
+        return hash((type(self).__name__, self._key()))
+
+    def __repr__(self):
+        # Python's shortest round-trip float repr, not a rounded one: eval(repr(m)) == m.
+        def fmt(v):
+            if isinstance(v, np.ndarray):
+                return "[" + ", ".join(repr(float(x)) for x in v) + "]"
+            if isinstance(v, float):
+                return repr(v)
+            return repr(v)
+        args = ", ".join(f"{k}={fmt(v)}" for k, v in self._params.items())
+        return f"{type(self).__name__}({args})"
+
+    def __reduce__(self):
+        return (_rebuild, (type(self), dict(self._params)))
+
+    @property
+    def flags(self) -> BxDFFlags:
+        """The lobes this model has (``BxDFFlags``)."""
+        return BxDFFlags(self._core.flags)
+
+    # array API
+    def eval(self, wo, wi, mode=TransportMode.Radiance, out=None) -> np.ndarray:
+        """BSDF value f(wo, wi), cosine excluded, per RGB channel: shape (..., 3).
+
+        Specular (delta) lobes evaluate to 0 for every given pair, as in pbrt-v4; use
+        ``sample`` to reach them.
+        """
+        fp = fast_pair(wo, wi) if out is None else None
+        if fp is not None:  # the common case, without the general path's fixed cost
+            o, i, batch, dtype = fp
+            out = np.empty(batch + (3,), dtype)
+            if out.size:
+                bo, bi = self._core.eval(o, i, 0 if mode is _RADIANCE else _mode(mode), out.reshape(-1, 3))
+                if bo or bi:
+                    _raise_bad("wo", bo)
+                    _raise_bad("wi", bi)
+            return out
+        wo, wi = as_dirs(wo, "wo"), as_dirs(wi, "wi")
+        dtype = kernel_dtype(wo, wi)
+        batch = broadcast_batch(("wo", "wi"), wo.shape[:-1], wi.shape[:-1])
+        out = check_out(out, batch + (3,), dtype)
+        if out.size:
+            bo, bi = self._core.eval(flatten_to(wo, batch, (3,), dtype), flatten_to(wi, batch, (3,), dtype),
+                                     _mode(mode), out.reshape(-1, 3))
+            _raise_bad("wo", bo)
+            _raise_bad("wi", bi)
+        return out
+
+    def pdf(self, wo, wi, mode=TransportMode.Radiance, sample_flags=ReflTrans.All, out=None) -> np.ndarray:
+        """Solid-angle density of ``sample`` producing wi from wo: shape (...). 0 for delta lobes."""
+        fp = fast_pair(wo, wi) if out is None else None
+        if fp is not None:  # the common case, without the general path's fixed cost
+            o, i, batch, dtype = fp
+            out = np.empty(batch, dtype)
+            if out.size:
+                bo, bi = self._core.pdf(o, i, 0 if mode is _RADIANCE else _mode(mode),
+                                        3 if sample_flags is _ALL else _sflags(sample_flags), out.reshape(-1))
+                if bo or bi:
+                    _raise_bad("wo", bo)
+                    _raise_bad("wi", bi)
+            return out
+        wo, wi = as_dirs(wo, "wo"), as_dirs(wi, "wi")
+        dtype = kernel_dtype(wo, wi)
+        batch = broadcast_batch(("wo", "wi"), wo.shape[:-1], wi.shape[:-1])
+        out = check_out(out, batch, dtype)
+        if out.size:
+            bo, bi = self._core.pdf(flatten_to(wo, batch, (3,), dtype), flatten_to(wi, batch, (3,), dtype),
+                                    _mode(mode), _sflags(sample_flags), out.reshape(-1))
+            _raise_bad("wo", bo)
+            _raise_bad("wi", bi)
+        return out
+
+    def sample(self, wo, uc=None, u=None, *, n=None, seed=None, mode=TransportMode.Radiance,
+               sample_flags=ReflTrans.All) -> SampleResult:
+        """Importance-sample wi given wo.
+
+        Either pass the uniforms ``uc`` (...) (lobe choice) and ``u`` (..., 2) (direction), in
+        [0, 1], or pass ``n`` (number of samples) and an optional integer ``seed``; then uniforms
+        come from ``numpy.random.default_rng(seed)`` and the batch shape is broadcast(wo, (n,)).
+        """
+        fs = fast_sample_args(wo, uc, u) if n is None and uc is not None and u is not None else None
+        if fs is not None:  # the common case, without the general path's fixed cost
+            o, ucf, uf, batch, dtype = fs
+            res = _new_sample_result(batch, dtype)
+            if res.pdf.size:
+                bo = self._core.sample(o, ucf, uf, 0 if mode is _RADIANCE else _mode(mode),
+                                       3 if sample_flags is _ALL else _sflags(sample_flags),
+                                       res.wi.reshape(-1, 3), res.f.reshape(-1, 3), res.pdf.reshape(-1),
+                                       res.flags.reshape(-1), res.eta.reshape(-1), res.valid.reshape(-1),
+                                       res.pdf_is_proportional.reshape(-1))
+                _raise_bad("wo", bo)
+            return res
+        wo = as_dirs(wo, "wo")
+        if n is not None:
+            if uc is not None or u is not None:
+                raise ValueError("n: give either n (and seed) or the uniforms uc and u, not both")
+            n = check_int(n, "n", 0)
+            batch = broadcast_batch(("wo", "n"), wo.shape[:-1], (n,))
+            dtype = kernel_dtype(wo)
+            if isinstance(seed, numbers.Integral) and not isinstance(seed, bool) and seed < 0:
+                raise ValueError(f"seed: must be >= 0 (or None), got {seed}")
+            try:
+                rng = np.random.default_rng(seed)
+            except (TypeError, ValueError) as e:
+                raise type(e)(f"seed: {e}") from None
+            uc = rng.random(batch, dtype=dtype)
+            u = rng.random(batch + (2,), dtype=dtype)
+        else:
+            if uc is None or u is None:
+                raise ValueError("uc, u: pass both uniforms, or n= and seed=")
+            uc, u = as_uniform(uc, "uc", ()), as_uniform(u, "u", (2,))
+            dtype = kernel_dtype(wo, uc, u)
+            batch = broadcast_batch(("wo", "uc", "u"), wo.shape[:-1], uc.shape, u.shape[:-1])
+        res = _new_sample_result(batch, dtype)
+        if res.pdf.size:
+            ucf = np.ascontiguousarray(np.broadcast_to(uc, batch), dtype=dtype).reshape(-1)
+            uf = np.ascontiguousarray(np.broadcast_to(u, batch + (2,)), dtype=dtype).reshape(-1, 2)
+            bo = self._core.sample(flatten_to(wo, batch, (3,), dtype), ucf, uf, _mode(mode), _sflags(sample_flags),
+                                   res.wi.reshape(-1, 3), res.f.reshape(-1, 3), res.pdf.reshape(-1),
+                                   res.flags.reshape(-1), res.eta.reshape(-1), res.valid.reshape(-1),
+                                   res.pdf_is_proportional.reshape(-1))
+            _raise_bad("wo", bo)
+        return res
+
+    def albedo(self, wo, n_samples: int = 65536, seed: int = 0, mode=TransportMode.Radiance) -> np.ndarray:
+        """Directional albedo rho(wo) = integral of f |cos wi| dwi, per channel: shape (..., 3).
+
+        Monte Carlo with ``n_samples`` importance samples per direction (pbrt-v4 ``rho``);
+        deterministic for a given seed and independent of the thread count. The standard error
+        falls as 1/sqrt(n_samples).
+        """
+        wo = as_dirs(wo, "wo")
+        n_samples = check_int(n_samples, "n_samples", 1)
+        seed = check_int(seed, "seed", 0)
+        fd = fast_dirs(wo)
+        rows, batch, dtype = fd if fd is not None else (None, wo.shape[:-1], kernel_dtype(wo))
+        out = np.empty(batch + (3,), dtype)
+        if out.size:
+            if rows is None:
+                rows = np.ascontiguousarray(wo, dtype=dtype).reshape(-1, 3)
+            bo = self._core.albedo(rows, n_samples,
+                                   seed & 0xFFFFFFFFFFFFFFFF, _mode(mode), out.reshape(-1, 3))
+            _raise_bad("wo", bo)
+        return out
+
+
+def _rebuild(cls, params):
+    return cls._from_params(params)
+
+
+def _pick_alpha(roughness, alpha) -> float:
+    if roughness is not None and alpha is not None:
+        raise ValueError("roughness, alpha: give one of them, not both")
+    if roughness is not None:
+        return roughness_to_alpha(_scalar(roughness, "roughness", lo=0.0))
+    return alpha

@@ -1,0 +1,164 @@
+"""A user-defined BSDF from numpy functions: ``bk.Custom(f=..., pdf=None, sample=None, name=...)``.
+
+Plugs one's own formula (BRDF Explorer's most used feature) into everything that takes a model:
+the ``bsdfkit.plot`` views, ``albedo``, ``plot.difference`` and comparisons. The functions are
+called on numpy arrays (vectorized, no per-direction loop) in the local shading frame, with the
+package's conventions (z the normal, ``wo`` and ``wi`` unit vectors pointing away from the
+surface, f without the cosine):
+
+* ``f(wo, wi) -> (..., 3)`` (or ``(...)``, grey), ``wo``/``wi`` float64 ``(..., 3)`` broadcast;
+* ``pdf(wo, wi) -> (...)``, the solid-angle density of ``sample`` (required with ``sample``);
+* ``sample(wo, uc, u) -> wi`` ``(..., 3)``, with ``uc`` ``(...)`` and ``u`` ``(..., 2)`` in [0, 1).
+
+Without ``sample`` (and ``pdf``) wi is drawn from the cosine-weighted hemisphere on wo's side
+(both hemispheres, half each, with ``transmission=True``), which is what ``albedo`` and the
+sampling view then use. Values are computed in float64 (float32 inputs give float32 outputs).
+Negative or non-finite values from ``f`` or ``pdf`` raise ``ValueError``. Two Custom models
+are equal when they wrap the same functions with the same name; ``repr`` shows the functions'
+names (it cannot be evaluated back). Pickling works for module-level functions.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .._enums import BxDFFlags, ReflTrans
+from .base import BxDF
+
+__all__ = ["Custom"]
+
+_TOL = 1e-4  # the kernels' unit-vector tolerance on |w|^2
+
+
+def _bad(w) -> int:
+    return int(np.count_nonzero(~(np.abs(np.einsum("...i,...i->...", w, w) - 1) <= _TOL)))
+
+
+class _PyCore:
+    """The ``_core`` model interface (eval / pdf / sample / albedo into preallocated outputs)
+    implemented in numpy around the user's functions, so BxDF's argument handling is shared."""
+
+    def __init__(self, p):
+        self.p = p
+        self.flags = int(BxDFFlags.GlossyReflection | (BxDFFlags.GlossyTransmission if p["transmission"] else 0))
+
+    def _f(self, wo, wi):
+        v = np.asarray(self.p["f"](wo, wi), dtype=np.float64)
+        batch = np.broadcast_shapes(wo.shape[:-1], wi.shape[:-1])
+        if v.shape == batch:
+            v = v[..., None]
+        try:
+            v = np.broadcast_to(v, batch + (3,))
+        except ValueError:
+            raise ValueError(f"f: returned shape {v.shape}; expected {batch + (3,)} or {batch}") from None
+        if not np.all(np.isfinite(v)) or np.any(v < 0):
+            raise ValueError(f"f ({self.p['name']}): returned negative or non-finite values")
+        same = wo[..., 2] * wi[..., 2] > 0
+        keep = (wo[..., 2] != 0) & (same | self.p["transmission"])
+        return np.where(keep[..., None], v, 0.0)
+
+    def _pdf(self, wo, wi, sf=3):
+        if self.p["pdf"] is not None:
+            p = np.broadcast_to(np.asarray(self.p["pdf"](wo, wi), dtype=np.float64),
+                                np.broadcast_shapes(wo.shape[:-1], wi.shape[:-1]))
+            if not np.all(np.isfinite(p)) or np.any(p < 0):
+                raise ValueError(f"pdf ({self.p['name']}): returned negative or non-finite values")
+        else:
+            p = np.abs(wi[..., 2]) / np.pi * (0.5 if self.p["transmission"] else 1.0)
+        same = wo[..., 2] * wi[..., 2] > 0
+        allowed = np.where(same, bool(sf & ReflTrans.Reflection), bool(sf & ReflTrans.Transmission))
+        allowed &= same | self.p["transmission"]
+        return np.where(allowed & (wo[..., 2] != 0), p, 0.0)
+
+    def eval(self, wo, wi, mode, out):
+        wo64, wi64 = wo.astype(np.float64), wi.astype(np.float64)
+        out[...] = self._f(wo64, wi64)
+        return _bad(wo), _bad(wi)
+
+    def pdf(self, wo, wi, mode, sf, out):
+        out[...] = self._pdf(wo.astype(np.float64), wi.astype(np.float64), sf)
+        return _bad(wo), _bad(wi)
+
+    def _draw(self, wo, uc, u):
+        if self.p["sample"] is not None:
+            return np.asarray(self.p["sample"](wo, uc, u), dtype=np.float64)
+        r, phi = np.sqrt(u[..., 0]), 2 * np.pi * u[..., 1]        # Malley: cosine-weighted
+        z = np.sqrt(np.maximum(0.0, 1 - u[..., 0]))
+        side = np.where(wo[..., 2] < 0, -1.0, 1.0)
+        if self.p["transmission"]:
+            side = np.where(uc < 0.5, side, -side)
+        return np.stack([r * np.cos(phi), r * np.sin(phi), side * z], -1)
+
+    def sample(self, wo, uc, u, mode, sf, wi_out, f_out, pdf_out, flags_out, eta_out, valid_out, prop_out):
+        n = len(uc)
+        wo64 = np.broadcast_to(wo.astype(np.float64), (n, 3))
+        uc64 = np.minimum(uc.astype(np.float64), 1 - 2 ** -53)
+        u64 = np.minimum(u.astype(np.float64), 1 - 2 ** -53)
+        wi = self._draw(wo64, uc64, u64)
+        f = self._f(wo64, wi)
+        p = self._pdf(wo64, wi, sf)
+        ok = (p > 0) & np.any(f > 0, axis=-1) & (wi[:, 2] != 0)
+        wi_out[...] = np.where(ok[:, None], wi, np.array([0.0, 0.0, 1.0]))  # invalid: the normal
+        f_out[...] = np.where(ok[:, None], f, 0.0)
+        pdf_out[...] = np.where(ok, p, 0.0)
+        refl = wo64[:, 2] * wi[:, 2] > 0
+        flags_out[...] = np.where(ok, np.where(refl, int(BxDFFlags.GlossyReflection),
+                                               int(BxDFFlags.GlossyTransmission)), 0)
+        eta_out[...] = 1.0
+        valid_out[...] = ok
+        prop_out[...] = False
+        return _bad(wo)
+
+    def albedo(self, wo, n_samples, seed, mode, out):
+        rng = np.random.default_rng(seed)
+        chunk = max(1, 1_000_000 // max(1, len(wo)))
+        acc = np.zeros((len(wo), 3))
+        done = 0
+        while done < n_samples:  # Ctrl-C lands between chunks (plain Python)
+            k = min(chunk, n_samples - done)
+            wo_k = np.repeat(wo.astype(np.float64), k, axis=0)
+            uc, u = rng.random(len(wo_k)), rng.random((len(wo_k), 2))
+            wi = self._draw(wo_k, uc, u)
+            f, p = self._f(wo_k, wi), self._pdf(wo_k, wi)
+            w = np.where(p > 0, np.abs(wi[:, 2]) / np.where(p > 0, p, 1.0), 0.0)
+            acc += (f * w[:, None]).reshape(len(wo), k, 3).sum(1)
+            done += k
+        out[...] = acc / n_samples
+        return _bad(wo)
+
+
+class Custom(BxDF, register=False):  # a user model: not in the registry of shipped models
+    __doc__ = __doc__
+
+    __slots__ = ()
+
+    def __init__(self, f, pdf=None, sample=None, name="custom", transmission=False):
+        if not callable(f):
+            raise TypeError(f"f: expected a function f(wo, wi) -> (..., 3), got {type(f).__name__}")
+        for arg, v in (("pdf", pdf), ("sample", sample)):
+            if v is not None and not callable(v):
+                raise TypeError(f"{arg}: expected a function or None, got {type(v).__name__}")
+        if (sample is None) != (pdf is None):
+            raise ValueError("pdf, sample: give both (the density of your sampler) or neither (cosine sampling)")
+        if not isinstance(name, str) or not name:
+            raise TypeError(f"name: expected a non-empty str, got {name!r}")
+        super().__init__(f=f, pdf=pdf, sample=sample, name=name, transmission=bool(transmission))
+
+    @classmethod
+    def _from_params(cls, p):
+        return cls(**p)
+
+    def _make_core(self):
+        return _PyCore(self._params)
+
+    def _key(self):
+        return tuple((k, v) for k, v in self._params.items())
+
+    def describe(self) -> str:
+        return self._params["name"]
+
+    def __repr__(self):
+        def fn(v):
+            return "None" if v is None else getattr(v, "__qualname__", repr(v))
+        p = self._params
+        return (f"Custom(f={fn(p['f'])}, pdf={fn(p['pdf'])}, sample={fn(p['sample'])}, name={p['name']!r}, "
+                f"transmission={p['transmission']})")

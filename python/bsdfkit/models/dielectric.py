@@ -1,0 +1,109 @@
+"""Dielectric interfaces: pbrt-v4's DielectricBxDF (smooth or rough) and ThinDielectricBxDF."""
+from __future__ import annotations
+
+from .. import _core
+from .base import MIN_ALPHA, BxDF, _MASKING, _alphas, _masking, _scalar, alpha_text, is_smooth, masking_knob
+
+__all__ = ["Dielectric", "ThinDielectric"]
+
+
+def _dielectric_masking_moot(q):
+    if is_smooth(q):
+        return "smooth dielectric (max alpha < 1e-3): delta lobes have no masking"
+    if q["eta"] == 1.0:
+        return "eta = 1: light passes straight through, no microfacets involved"
+    return None
+
+
+class Dielectric(BxDF):
+    """Glass-like interface: Fresnel-weighted reflection and refraction, smooth (delta) or
+    anisotropic Trowbridge-Reitz rough (pbrt-v4 ``DielectricBxDF``).
+
+    eta: relative IOR, inside over outside (> 0; < 1 when the outside is denser; 1 passes light
+    straight through). wo may be on either side. alpha / alpha_x / alpha_y / masking as in
+    ``Conductor``. In Radiance mode transmitted values are divided by eta'^2.
+    """
+
+    __slots__ = ()
+
+    aliases = ("glass",)
+    description = "Glass-like interface, smooth or GGX rough, reflection and refraction (pbrt-v4 DielectricBxDF)"
+    examples = {"glass, alpha 0.2": "dielectric 1.5 alpha=0.2", "smooth glass": "dielectric 1.5",
+                "rough glass 0.3": "dielectric 1.5 alpha=0.3",
+                "inside water, anisotropic": "dielectric 0.75188 alpha_x=0.5 alpha_y=0.1",
+                "separable masking": "dielectric 1.33 alpha=0.4 masking=separable",
+                "index matched": "dielectric 1"}
+    energy_conserving, exact_eval, two_sided, transmission, delta_only = True, True, True, True, False
+    reciprocal = True
+    mitsuba = "roughdielectric"
+    knobs = (masking_knob(_dielectric_masking_moot),)
+
+    def __init__(self, eta=1.5, alpha=None, alpha_x=None, alpha_y=None, masking="correlated"):
+        ax, ay = _alphas(alpha, alpha_x, alpha_y)
+        super().__init__(eta=_scalar(eta, "eta", lo=0.0, lo_open=True), alpha_x=ax, alpha_y=ay,
+                         masking=_masking(masking))
+
+    @classmethod
+    def _from_params(cls, p):
+        return cls(p["eta"], alpha_x=p["alpha_x"], alpha_y=p["alpha_y"], masking=p["masking"])
+
+    def _make_core(self):
+        p = self._params
+        return _core.Dielectric(eta=p["eta"], alpha_x=p["alpha_x"], alpha_y=p["alpha_y"], masking=_MASKING[p["masking"]])
+
+    def cost_family(self) -> str:
+        p = self._params
+        return "Dielectric" + ("/smooth" if is_smooth(p) or p["eta"] == 1.0 else "/rough")
+
+    def describe(self) -> str:
+        return f"Dielectric η={self._params['eta']:.3g}{alpha_text(self._params)}"
+
+    def to_mitsuba(self) -> dict:
+        """``dielectric`` / ``roughdielectric`` (ggx) with int_ior = eta, ext_ior = 1 (eta < 1 is
+        passed as is: Mitsuba accepts int_ior < ext_ior); eta == 1 -> ``null`` (pbrt's pass-through)."""
+        eta, p = float(self.eta), self._params
+        if eta == 1.0:
+            # pbrt: eta == 1 is always the smooth branch, a straight pass-through with R = 0,
+            # f = 1/|cos|, pdf = 1; Mitsuba's 'null' samples wo = -wi with weight 1 and pdf 1.
+            return {"type": "null"}
+        if is_smooth(p):
+            return {"type": "dielectric", "int_ior": eta, "ext_ior": 1.0}
+        return {"type": "roughdielectric", "distribution": "ggx", "alpha_u": max(p["alpha_x"], MIN_ALPHA),
+                "alpha_v": max(p["alpha_y"], MIN_ALPHA), "sample_visible": True, "int_ior": eta, "ext_ior": 1.0}
+
+
+
+class ThinDielectric(BxDF):
+    """Thin slab of dielectric (a window pane): specular reflection and straight-through
+    transmission, with the inter-reflections inside the slab summed (pbrt-v4 ``ThinDielectricBxDF``).
+
+    eta: IOR of the slab (> 0). Both lobes are deltas; ``eval`` and ``pdf`` are 0.
+    """
+
+    __slots__ = ()
+
+    aliases = ("thin",)
+    description = "Thin slab of dielectric: specular reflection and straight transmission (pbrt-v4 ThinDielectricBxDF)"
+    examples = {"window pane 1.5": "thin_dielectric 1.5", "dense 2.4": "thin_dielectric 2.4",
+                "index matched": "thin_dielectric 1"}
+    energy_conserving, exact_eval, two_sided, transmission, delta_only = True, True, True, True, True
+    reciprocal = True
+    mitsuba = "thindielectric"
+
+    def __init__(self, eta=1.5):
+        super().__init__(eta=_scalar(eta, "eta", lo=0.0, lo_open=True))
+
+    @classmethod
+    def _from_params(cls, p):
+        return cls(p["eta"])
+
+    def _make_core(self):
+        return _core.ThinDielectric(eta=self._params["eta"])
+
+    def describe(self) -> str:
+        return f"ThinDielectric η={self._params['eta']:.3g}"
+
+    def to_mitsuba(self) -> dict:
+        eta = float(self.eta)
+        return {"type": "null"} if eta == 1.0 else {"type": "thindielectric", "int_ior": eta, "ext_ior": 1.0}
+

@@ -1,0 +1,47 @@
+"""``difference(a, b)``: the relative difference of two models in the polar, hemisphere and
+θh×θd views (what notebook 04 built by hand)."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..models.base import BxDF
+from ..models.custom import Custom
+from ..models.describe import describe
+
+_VIEWS = ("polar", "hemisphere", "halfdiff")
+
+
+def difference_model(a: BxDF, b: BxDF, floor: float = 1e-3) -> Custom:
+    """A :class:`bsdfkit.Custom` whose value is the relative difference per channel
+    ``|f_b - f_a| / max(|f_a|, floor * max f_a)`` (``a`` is the reference; the floor is relative
+    to ``a``'s largest value over the pair batch, so that near-zero regions do not explode)."""
+    if not isinstance(a, BxDF) or not isinstance(b, BxDF):
+        raise TypeError("a, b: expected two bsdfkit models")
+    if not floor > 0:
+        raise ValueError(f"floor: must be > 0, got {floor!r}")
+
+    def rel(wo, wi):
+        fa, fb = a.eval(wo, wi), b.eval(wo, wi)
+        scale = floor * max(float(np.max(fa)) if fa.size else 0.0, 1e-300)
+        return np.abs(fb - fa) / np.maximum(np.abs(fa), scale)
+    transmission = bool((int(a.flags) | int(b.flags)) & 2)
+    return Custom(f=rel, name="|f_b − f_a| / f_a", transmission=transmission)
+
+
+def difference(a: BxDF, b: BxDF, view="polar", *, floor=1e-3, ax=None, **kwargs):
+    """Plots the relative difference of ``b`` against the reference ``a`` in one view:
+    ``"polar"`` (:func:`polar`), ``"hemisphere"`` (:func:`hemisphere`) or ``"halfdiff"``
+    (:func:`halfdiff`); ``kwargs`` go to that view (theta_o, channel, log, ...). The plotted value
+    is :func:`difference_model`'s ``|f_b - f_a| / max(|f_a|, floor max f_a)`` (1 = 100 %); delta
+    lobes are not compared (eval reports them as 0). Returns the view's Axes."""
+    from ._halfdiff import halfdiff
+    from ._hemisphere import hemisphere
+    from ._polar import polar
+    fns = {"polar": polar, "hemisphere": hemisphere, "halfdiff": halfdiff}
+    if view not in fns:
+        raise ValueError(f"view: must be one of {', '.join(map(repr, _VIEWS))}, got {view!r}")
+    m = difference_model(a, b, floor)
+    import textwrap
+    kwargs.setdefault("title", "relative difference |f_b − f_a| / f_a\n" + "\n".join(
+        textwrap.shorten(f"{k} = {describe(x)}", 70) for k, x in (("a", a), ("b", b))))
+    return fns[view](m, ax=ax, **kwargs)

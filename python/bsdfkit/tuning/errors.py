@@ -1,0 +1,254 @@
+"""Errors: the direction sets and the relative error of a configuration against a reference."""
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._enums import BxDFFlags
+from ..models import BxDF
+from .configs import Config, _check_model, _reference_config, configurations
+
+__all__ = ["FLOOR_FRACTION", "ALBEDO_COS_THETA", "MIN_COS", "DirectionSet", "direction_set", "relative_error"]
+
+
+#: floor = FLOOR_FRACTION * mean(albedo_ref) / pi (see the module docstring).
+FLOOR_FRACTION = 1e-3
+
+
+#: cos theta_o of the directional-albedo set (mirrored below the surface for transmissive models).
+ALBEDO_COS_THETA = (1.0, 0.7, 0.4, 0.15, 0.05, 0.01)
+
+
+#: Smallest |cos theta| of the default direction set.
+MIN_COS = 1e-3
+
+
+def _lhs(rng, n: int, d: int) -> np.ndarray:
+    """Latin hypercube: (n, d), every column stratified into n equal strata."""
+    perm = np.argsort(rng.random((d, n)), axis=1).T
+    return (perm + rng.random((n, d))) / n
+
+
+def _dirs(mu, phi):
+    s = np.sqrt(np.maximum(0.0, 1.0 - mu * mu))
+    return np.stack([s * np.cos(phi), s * np.sin(phi), mu], axis=-1)
+
+
+def _is_transmissive(model) -> bool:
+    return bool(model.flags & BxDFFlags.Transmission)
+
+
+def _all_delta(model) -> bool:
+    f = model.flags
+    return bool(f & BxDFFlags.Specular) and not (f & (BxDFFlags.Diffuse | BxDFFlags.Glossy))
+
+
+@dataclass(frozen=True, eq=False)
+class DirectionSet:
+    """The directions every configuration is compared on (float64 arrays).
+
+    wo, wi: (N, 3) pairs evaluated with ``eval`` (stratified pairs and the non-delta samples of
+    the reference). delta_wo, delta_uc, delta_u: inputs of the delta-lobe rows, where each
+    configuration is sampled with the same uniforms. albedo_wo (K, 3), albedo_uc (M,),
+    albedo_u (M, 2): the directional-albedo set (M samples of the reference per wo). seed: the
+    seed it was drawn with (None if given by the user).
+    """
+
+    wo: np.ndarray
+    wi: np.ndarray
+    delta_wo: np.ndarray
+    delta_uc: np.ndarray
+    delta_u: np.ndarray
+    albedo_wo: np.ndarray
+    albedo_uc: np.ndarray
+    albedo_u: np.ndarray
+    seed: int | None = None
+
+    def __len__(self):
+        return len(self.wo) + len(self.delta_wo)
+
+
+def _albedo_inputs(model, rng, n_albedo):
+    mu = np.asarray(ALBEDO_COS_THETA)
+    phi = 0.3 + 2.399963229728653 * np.arange(len(mu))          # golden-angle azimuths (anisotropy)
+    wo = _dirs(mu, phi)
+    if _is_transmissive(model):
+        below = wo.copy()
+        below[:, 2] *= -1
+        wo = np.concatenate([wo, below])
+    h = _lhs(rng, n_albedo, 3)
+    return wo, np.ascontiguousarray(h[:, 0]), np.ascontiguousarray(h[:, 1:])
+
+
+def direction_set(model, n: int = 8192, seed: int = 0, *, n_albedo: int = 4096) -> DirectionSet:
+    """The default direction set of ``model`` (see the module docstring): ``n`` rows, half
+    stratified pairs and half samples of the most accurate configuration (all samples for models
+    made only of delta lobes), plus the albedo set with ``n_albedo`` samples per wo."""
+    _check_model(model)
+    n = _check_int(n, "n", 16)
+    seed = _check_int(seed, "seed", 0)
+    n_albedo = _check_int(n_albedo, "n_albedo", 16)
+    rng = np.random.default_rng([seed, 0x7472616465])
+    trans = _is_transmissive(model)
+    ref = _reference_config(model).model
+    n_strat = 0 if _all_delta(model) else n // 2
+    h = _lhs(rng, n_strat, 6)
+    mu_o = MIN_COS + (1 - MIN_COS) * h[:, 0]
+    mu_i = MIN_COS + (1 - MIN_COS) * h[:, 2]
+    if trans:   # half of each: wi below, wo below (exactly, by stratification)
+        mu_i = np.where(h[:, 4] < 0.5, -mu_i, mu_i)
+        mu_o = np.where(h[:, 5] < 0.5, -mu_o, mu_o)
+    wo = _dirs(mu_o, 2 * np.pi * h[:, 1])
+    wi = _dirs(mu_i, 2 * np.pi * h[:, 3])
+    # samples of the reference at stratified wo
+    n_samp = n - n_strat
+    g = _lhs(rng, n_samp, 6)
+    smu = MIN_COS + (1 - MIN_COS) * g[:, 0]
+    if trans:
+        smu = np.where(g[:, 5] < 0.5, -smu, smu)
+    swo = _dirs(smu, 2 * np.pi * g[:, 1])
+    suc, su = np.ascontiguousarray(g[:, 2]), np.ascontiguousarray(g[:, 3:5])
+    s = ref.sample(swo, suc, su)
+    delta = s.valid & ((s.flags & int(BxDFFlags.Specular)) != 0)
+    smooth = s.valid & ~delta
+    a_wo, a_uc, a_u = _albedo_inputs(model, rng, n_albedo)
+    return DirectionSet(wo=np.concatenate([wo, swo[smooth]]), wi=np.concatenate([wi, s.wi[smooth]]),
+                        delta_wo=swo[delta], delta_uc=suc[delta], delta_u=su[delta],
+                        albedo_wo=a_wo, albedo_uc=a_uc, albedo_u=a_u, seed=seed)
+
+
+def _user_directions(model, directions, seed, n_albedo) -> DirectionSet:
+    if isinstance(directions, DirectionSet):
+        return directions
+    if not isinstance(directions, (tuple, list)) or len(directions) != 2:
+        raise TypeError("directions: expected None, a DirectionSet or a pair (wo, wi) of direction arrays")
+    try:
+        wo, wi = np.broadcast_arrays(np.asarray(directions[0], dtype=np.float64),
+                                     np.asarray(directions[1], dtype=np.float64))
+    except (ValueError, TypeError) as e:
+        raise ValueError(f"directions: wo and wi must be real arrays that broadcast together ({e})") from None
+    if wo.ndim < 1 or wo.shape[-1] != 3 or wo.size == 0:
+        raise ValueError(f"directions: expected direction arrays with last axis 3, got shape {wo.shape}")
+    wo, wi = wo.reshape(-1, 3).copy(), wi.reshape(-1, 3).copy()
+    for a, nm in ((wo, "wo"), (wi, "wi")):
+        if not np.all(np.isfinite(a)) or np.any(np.abs(np.einsum("ij,ij->i", a, a) - 1) > 1e-4):
+            raise ValueError(f"directions: every {nm} must be a finite unit vector")
+    rng = np.random.default_rng([seed, 0x75736572])
+    d_wo = np.empty((0, 3))
+    d_uc, d_u = np.empty(0), np.empty((0, 2))
+    if model.flags & BxDFFlags.Specular:   # delta lobes cannot be evaluated at given pairs: sample them at wo
+        g = _lhs(rng, len(wo), 3)
+        uc, u = np.ascontiguousarray(g[:, 0]), np.ascontiguousarray(g[:, 1:])
+        s = _reference_config(model).model.sample(wo, uc, u)
+        delta = s.valid & ((s.flags & int(BxDFFlags.Specular)) != 0)
+        d_wo, d_uc, d_u = wo[delta], uc[delta], u[delta]
+    a_wo, a_uc, a_u = _albedo_inputs(model, rng, n_albedo)
+    return DirectionSet(wo, wi, d_wo, d_uc, d_u, a_wo, a_uc, a_u, None)
+
+
+def relative_error(v_ref, v, floor: float) -> np.ndarray:
+    """``|v - v_ref| / max(|v_ref|, floor)`` elementwise (float64)."""
+    v_ref = np.asarray(v_ref, dtype=np.float64)
+    return np.abs(np.asarray(v, dtype=np.float64) - v_ref) / np.maximum(np.abs(v_ref), floor)
+
+
+class _Prepared:
+    """The direction set expanded against the reference: albedo sample rows and their weights."""
+
+    def __init__(self, ref: BxDF, ds: DirectionSet):
+        self.ds = ds
+        k, m = len(ds.albedo_wo), len(ds.albedo_uc)
+        wo = np.repeat(ds.albedo_wo, m, axis=0)
+        uc, u = np.tile(ds.albedo_uc, k), np.tile(ds.albedo_u, (k, 1))
+        s = ref.sample(wo, uc, u)
+        delta = s.valid & ((s.flags & int(BxDFFlags.Specular)) != 0)
+        smooth = s.valid & ~delta & (s.pdf > 0)
+        self.k, self.m = k, m
+        # albedo rows: evaluated pairs (smooth) and re-sampled rows (delta), weight 1 / (pdf m)
+        self.a_wo, self.a_wi = wo[smooth], s.wi[smooth]
+        self.a_w = 1.0 / (s.pdf[smooth] * m)
+        self.a_group = np.repeat(np.arange(k), m)[smooth]
+        self.ad_wo, self.ad_uc, self.ad_u = wo[delta], uc[delta], u[delta]
+        self.ad_wi, self.ad_flags = s.wi[delta], s.flags[delta]
+        self.ad_w = 1.0 / (s.pdf[delta] * m)
+        self.ad_group = np.repeat(np.arange(k), m)[delta]
+        # delta rows of the error set: the reference's own samples
+        if len(ds.delta_wo):
+            r = ref.sample(ds.delta_wo, ds.delta_uc, ds.delta_u)
+            self.d_wi, self.d_flags = r.wi, r.flags
+        else:
+            self.d_wi, self.d_flags = np.empty((0, 3)), np.empty(0, np.uint8)
+
+
+def _eval_cos(m, dtype, wo, wi):
+    if len(wo) == 0:
+        return np.empty((0, 3))
+    f = m.eval(wo.astype(dtype), wi.astype(dtype))
+    return f.astype(np.float64) * np.abs(wi[:, 2:3])
+
+
+def _delta_cos(m, dtype, wo, uc, u, wi_ref, flags_ref):
+    if len(wo) == 0:
+        return np.empty((0, 3))
+    s = m.sample(wo.astype(dtype), uc.astype(dtype), u.astype(dtype))
+    wi = s.wi.astype(np.float64)
+    same = s.valid & (s.flags == flags_ref) & (np.max(np.abs(wi - wi_ref), axis=1) < 1e-3)
+    v = s.f.astype(np.float64) * np.abs(wi[:, 2:3])
+    return np.where(same[:, None], v, 0.0)
+
+
+def _values(cfg: Config, prep: _Prepared):
+    """(values on the error set (N, 3), albedo (K, 3)) of one configuration."""
+    ds, m, dt = prep.ds, cfg.model, cfg.dtype
+    v = np.concatenate([_eval_cos(m, dt, ds.wo, ds.wi),
+                        _delta_cos(m, dt, ds.delta_wo, ds.delta_uc, ds.delta_u, prep.d_wi, prep.d_flags)])
+    alb = np.zeros((prep.k, 3))
+    if len(prep.a_wo):
+        np.add.at(alb, prep.a_group, _eval_cos(m, dt, prep.a_wo, prep.a_wi) * prep.a_w[:, None])
+    if len(prep.ad_wo):
+        vd = _delta_cos(m, dt, prep.ad_wo, prep.ad_uc, prep.ad_u, prep.ad_wi, prep.ad_flags)
+        np.add.at(alb, prep.ad_group, vd * prep.ad_w[:, None])
+    return v, alb
+
+
+class _Evaluation:
+    """Errors of every configuration of a model against a reference: its most accurate
+    configuration (``reference="accurate"``, :func:`tradeoff`) or the input model itself, called
+    in float64 (``reference="input"``, :func:`simplify`). ``allow`` as in :func:`configurations`."""
+
+    def __init__(self, model, directions, n, seed, n_albedo, *, allow="all", reference="accurate"):
+        self.model = model
+        self.configs = configurations(model, allow)
+        if reference == "input":
+            self.reference = next(c for c in self.configs if c.dtype is np.float64 and c.model == model)
+        else:
+            self.reference = self.configs[0]
+            assert self.reference.is_reference
+        if directions is None:
+            self.directions = direction_set(model, n, seed, n_albedo=n_albedo)
+        else:
+            self.directions = _user_directions(model, directions, seed, n_albedo)
+        prep = _Prepared(self.reference.model, self.directions)
+        v_ref, a_ref = _values(self.reference, prep)
+        self.reference_albedo = a_ref
+        mean_alb = float(np.mean(np.abs(a_ref)))
+        self.floor = FLOOR_FRACTION * mean_alb / math.pi if mean_alb > 0 else 1e-30
+        self.errors = []
+        for c in self.configs:
+            v, a = (v_ref, a_ref) if c is self.reference else _values(c, prep)
+            e = relative_error(v_ref, v, self.floor)
+            self.errors.append({
+                "max_err": float(np.max(e)) if e.size else 0.0,
+                "p99_err": float(np.quantile(e, 0.99)) if e.size else 0.0,
+                "albedo_err": float(np.max(np.abs(a - a_ref))) if a.size else 0.0})
+
+
+def _check_int(x, name, lo):
+    if isinstance(x, bool) or not isinstance(x, numbers.Integral):
+        raise TypeError(f"{name}: expected an integer, got {type(x).__name__}")
+    if int(x) < lo:
+        raise ValueError(f"{name}: must be >= {lo}, got {x}")
+    return int(x)

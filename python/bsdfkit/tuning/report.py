@@ -1,0 +1,446 @@
+"""Reports: :func:`tradeoff` (every configuration, its error and speed) and :func:`simplify`."""
+from __future__ import annotations
+
+import html as _html
+import math
+import numbers
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..models import BxDF
+from .costs import SPREAD_WARN, _check_costs, _costs_for, _measure, _op, _pick, _threads
+from .errors import _Evaluation, _check_int
+from .configs import _check_allow, _check_model, _knobs_from, _label, _specs, family
+
+__all__ = ["METRICS", "Table", "tradeoff", "SimplifyReport", "simplify"]
+
+
+#: Error metrics accepted by :func:`simplify` and :func:`pareto`, and their Table columns.
+METRICS = {"max": "max_err", "p99": "p99_err", "albedo": "albedo_err"}
+
+
+def _pareto_mask(err, thr) -> np.ndarray:
+    """True where no other point has error <= and throughput >= with one of them strict."""
+    err, thr = np.asarray(err, float), np.asarray(thr, float)
+    mask = np.ones(len(err), bool)
+    for i in range(len(err)):
+        dom = (err <= err[i]) & (thr >= thr[i]) & ((err < err[i]) | (thr > thr[i]))
+        mask[i] = not dom.any()
+    return mask
+
+
+def _fmt_cell(v, col):
+    if v is None:
+        return "—"
+    if isinstance(v, (bool, np.bool_)):
+        return "✓" if v else ""
+    if col == "evals_per_s":
+        return f"{v / 1e6:.1f}M"
+    if col in ("speedup", "expected_speedup"):
+        return f"{v:.2f}×"
+    if col == "spread":
+        return f"{v:.2f}" + ("!" if v > SPREAD_WARN else "")
+    if isinstance(v, float):
+        return "0" if v == 0 else f"{v:.2e}"
+    return str(v)
+
+
+class Table:
+    """Result of :func:`tradeoff`: one row per reachable configuration, the most accurate first.
+
+    Columns: ``config`` (what differs from the most accurate configuration), one column per
+    reachable knob, ``dtype``, ``op`` (timed operation: eval, or sample for delta-only models),
+    ``evals_per_s`` and ``speedup`` (live, this run, ratio to the most accurate configuration
+    timed back to back; ``None`` with ``measure=False``), ``spread`` (median / min of the repeats
+    of that row and the reference, 1 on a quiet machine; marked ``!`` above ``SPREAD_WARN``, and
+    :func:`tradeoff` warns), ``expected_speedup`` (from the shipped
+    cost table, ``None`` if the configuration is not in it), ``max_err``, ``p99_err``,
+    ``albedo_err`` (see the module docstring) and ``pareto`` (on the front of throughput vs
+    p99 error; throughput = live speedup, else expected speedup).
+
+    Renders as text (``str``), Markdown and HTML (Jupyter); ``to_records()`` (list of dicts),
+    ``to_dict()`` (dict of columns) and ``to_pandas()`` (needs pandas). ``table[i]`` is a row,
+    ``table["p99_err"]`` a column, ``table.configs[i]`` the :class:`Config` (``.model``,
+    ``.dtype``). Attributes: model, reference (the most accurate model), knobs, floor,
+    reference_albedo, directions (the :class:`DirectionSet`), seed, family, measured.
+    """
+
+    def __init__(self, model, evaluation: _Evaluation, rates, speedups, expected, info, spreads=None):
+        self.model = model
+        self.configs = evaluation.configs
+        self.reference = evaluation.reference.model
+        self.knobs = _knobs_from(model, self.configs)
+        self.floor = evaluation.floor
+        self.reference_albedo = evaluation.reference_albedo
+        self.directions = evaluation.directions
+        self.family = family(model)
+        self.measured = rates is not None
+        self.info = info
+        self.seed = info.get("seed")
+        self.columns = (["config"] + [k.name for k in self.knobs if k.reachable and k.name != "precision"] +
+                        ["dtype", "op", "evals_per_s", "speedup", "spread", "expected_speedup", "max_err", "p99_err",
+                         "albedo_err", "pareto"])
+        op = _op(model)
+        rows = []
+        for i, (c, e) in enumerate(zip(self.configs, evaluation.errors)):
+            r = {"config": c.describe()}
+            for k in self.knobs:
+                if k.reachable and k.name != "precision":
+                    r[k.name] = c.labels[k.name] if c.labels[k.name] is not None else "(moot)"
+            r.update(dtype=c.labels["precision"], op=op,
+                     evals_per_s=None if rates is None else rates[i],
+                     speedup=None if speedups is None else speedups[i],
+                     spread=None if spreads is None else spreads[i],
+                     expected_speedup=None if expected[i] is None else 1.0 / expected[i], **e)
+            rows.append(r)
+        thr = [r["speedup"] if r["speedup"] is not None else (r["expected_speedup"] or 1.0) for r in rows]
+        for r, p in zip(rows, _pareto_mask([r["p99_err"] for r in rows], thr)):
+            r["pareto"] = bool(p)
+        self._rows = rows
+
+    # --- access
+    def __len__(self):
+        return len(self._rows)
+
+    def __iter__(self):
+        return iter(self.to_records())
+
+    def __getitem__(self, i):
+        if isinstance(i, str):
+            if i not in self.columns:
+                raise KeyError(f"column {i!r}; columns: {', '.join(self.columns)}")
+            return [r[i] for r in self._rows]
+        return dict(self._rows[i])
+
+    def to_records(self) -> list:
+        """Rows as a list of dicts (column -> value)."""
+        return [dict(r) for r in self._rows]
+
+    def to_dict(self) -> dict:
+        """Columns as a dict of lists."""
+        return {c: [r[c] for r in self._rows] for c in self.columns}
+
+    def to_pandas(self):
+        """The table as a ``pandas.DataFrame`` (raises ImportError naming pandas when it is not
+        installed: pandas is optional; ``to_records()`` / ``to_dict()`` need nothing)."""
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("Table.to_pandas() needs pandas, which is not installed (pip install pandas); "
+                              "Table.to_records() and Table.to_dict() work without it") from None
+        return pd.DataFrame(self.to_records(), columns=self.columns)
+
+    def pareto_front(self, metric="p99") -> list:
+        """Row indices on the Pareto front of throughput (live speedup, else expected) against
+        the given error metric, sorted by error."""
+        col = _check_metric(metric)
+        thr = [r["speedup"] if r["speedup"] is not None else (r["expected_speedup"] or 1.0) for r in self._rows]
+        err = [r[col] for r in self._rows]
+        idx = [i for i, p in enumerate(_pareto_mask(err, thr)) if p]
+        return sorted(idx, key=lambda i: (err[i], -thr[i]))
+
+    # --- rendering
+    def _title(self) -> str:
+        from ..models.describe import describe
+        m = "live" if self.measured else "not measured"
+        return (f"{describe(self.model)} — {len(self)} configurations ({self.family}); errors vs the most accurate "
+                f"on {len(self.directions)} direction pairs (seed {self.seed}), floor {self.floor:.2e}; "
+                f"throughput {m}")
+
+    def _cells(self):
+        return [[_fmt_cell(r[c], c) for c in self.columns] for r in self._rows]
+
+    def __str__(self):
+        cells = self._cells()
+        w = [max(len(c), *(len(row[j]) for row in cells)) for j, c in enumerate(self.columns)]
+        lines = [self._title(), "  ".join(c.ljust(w[j]) for j, c in enumerate(self.columns)),
+                 "  ".join("-" * x for x in w)]
+        lines += ["  ".join(v.ljust(w[j]) for j, v in enumerate(row)) for row in cells]
+        return "\n".join(lines)
+
+    def __repr__(self):
+        return f"<bsdfkit.tradeoff.Table: {len(self)} configurations of {type(self.model).__name__}>"
+
+    def _repr_markdown_(self):
+        cells = self._cells()
+        lines = [f"**{self._title()}**", "", "| " + " | ".join(self.columns) + " |",
+                 "|" + "|".join("---" for _ in self.columns) + "|"]
+        for r, row in zip(self._rows, cells):
+            row = [f"**{v}**" if r["pareto"] and v else v for v in row]
+            lines.append("| " + " | ".join(v.replace("|", "\\|") for v in row) + " |")
+        return "\n".join(lines)
+
+    def _repr_html_(self):
+        esc = _html.escape
+        head = "".join(f"<th>{esc(c)}</th>" for c in self.columns)
+        body = []
+        for r, row in zip(self._rows, self._cells()):
+            style = ' style="font-weight:bold"' if r["pareto"] else ""
+            body.append(f"<tr{style}>" + "".join(f"<td>{esc(v)}</td>" for v in row) + "</tr>")
+        return (f"<div><p>{esc(self._title())} (bold: Pareto front)</p><table><thead><tr>{head}</tr></thead>"
+                f"<tbody>{''.join(body)}</tbody></table></div>")
+
+
+def _check_metric(metric) -> str:
+    if not isinstance(metric, str) or metric not in METRICS:
+        raise ValueError(f"metric: must be one of {', '.join(map(repr, METRICS))}, got {metric!r}")
+    return METRICS[metric]
+
+
+def _check_tol(tol) -> float:
+    if isinstance(tol, bool) or not isinstance(tol, (numbers.Real, np.floating, np.integer)):
+        raise TypeError(f"tol: expected a real number, got {type(tol).__name__}")
+    t = float(tol)
+    if math.isnan(t) or t < 0:
+        raise ValueError(f"tol: must be a number >= 0 (inf allowed), got {t}")
+    return t
+
+
+def tradeoff(model, directions=None, n: int = 8192, seed: int = 0, *, n_albedo: int = 4096, measure: bool = True,
+             n_timing: int = 65536, repeats: int = 5, rounds: int = 1, costs: dict | None = None) -> Table:
+    """Throughput and error of every reachable knob configuration of ``model``.
+
+    directions: ``None`` (the default set, :func:`direction_set` with ``n`` rows and ``seed``),
+    a :class:`DirectionSet`, or a pair ``(wo, wi)`` of direction arrays (float64 unit vectors;
+    delta lobes, which ``eval`` cannot reach, are then sampled at those ``wo``).
+    Errors: ``max_err`` / ``p99_err`` (relative error of f |cos theta_i|) and ``albedo_err``
+    against the most accurate configuration (definitions in the module docstring). float32
+    configurations are run on float32 directions.
+
+    Throughput (``measure=True``): each configuration's ``eval`` (``sample`` for models made only
+    of delta lobes) on ``n_timing`` pairs with a preallocated ``out=``, timed back to back with
+    the most accurate configuration, best of ``repeats`` (over ``rounds`` rounds), at the current
+    ``bsdfkit.set_num_threads``; ``speedup`` is that same-run ratio. ``expected_speedup`` is what
+    the shipped cost table predicts (the number :func:`simplify` ranks by; see the module
+    docstring for why simplify does not use the live figure). DFG tables are built before timing.
+    costs: a cost table in the :func:`knob_costs` format to use instead of the shipped one.
+    """
+    _check_model(model)
+    n, seed, n_albedo = _check_int(n, "n", 16), _check_int(seed, "seed", 0), _check_int(n_albedo, "n_albedo", 16)
+    n_timing, repeats, rounds = (_check_int(n_timing, "n_timing", 1), _check_int(repeats, "repeats", 1),
+                                 _check_int(rounds, "rounds", 1))
+    ev = _Evaluation(model, directions, n, seed, n_albedo)
+    rates = speedups = spreads = None
+    if measure:
+        rates, speedups, spreads = _measure(ev.configs, _op(model), n_timing, repeats, rounds, seed)
+        worst = max(spreads)
+        if worst > SPREAD_WARN:
+            warnings.warn(f"tradeoff: live timings are noisy (spread median/min of repeats up to {worst:.2f}x, "
+                          f"above {SPREAD_WARN}): the machine is busy and the speedup column is unreliable; "
+                          "rerun with more repeats= / rounds= on a quiet machine, or rank by expected_speedup",
+                          RuntimeWarning, stacklevel=2)
+    costs = _check_costs(costs)
+    expected = _costs_for(model, ev.configs, costs)
+    info = {"seed": seed, "n": n, "n_albedo": n_albedo, "n_timing": n_timing, "repeats": repeats, "rounds": rounds,
+            "threads": _threads(), "cost_table": costs.get("machine")}
+    return Table(model, ev, rates, speedups, expected, info, spreads)
+
+
+@dataclass
+class SimplifyReport:
+    """What :func:`simplify` chose and why.
+
+    model: the simplified model; dtype: ``np.float32`` or ``np.float64``, the precision to call
+    it with (feed directions of that dtype); config: ``{knob: label}`` of every reachable knob
+    (precision included); changes: ``[(parameter, input value, output value, reason)]`` for every
+    constructor parameter that differs between the input and the output model, and
+    ``("precision", "float64", "float32", ...)`` when float32 was chosen -- an empty list means the
+    input comes back unchanged; error: ``{"max": ..., "p99": ..., "albedo": ...}`` of the chosen
+    configuration against the input model called in float64 (``reference``); expected_speedup:
+    against the most accurate configuration simplify considered, from the cost table (``None``
+    when the configuration is not in it); speedup_vs_input: the same against the input model's
+    own configuration (float64 calls), when both are in the table; ranked_by: ``"cost table"`` or
+    ``"registry order"``; kept: ``[(knob, reason)]`` for approximation knobs left at the input's
+    setting although a cheaper one exists; fixed: ``[(knob, value)]``, the modelling choices kept
+    as given (not named in ``allow``); allow: the modelling knobs simplify was allowed to change.
+    """
+
+    input_model: BxDF
+    model: BxDF
+    dtype: type
+    config: dict
+    changes: list
+    kept: list
+    error: dict
+    tol: float
+    metric: str
+    expected_speedup: float | None
+    speedup_vs_input: float | None
+    ranked_by: str
+    reference: BxDF
+    description: str
+    n_configurations: int
+    n_within_tol: int
+    seed: int
+    floor: float
+    notes: list = field(default_factory=list)
+    fixed: list = field(default_factory=list)
+    allow: tuple = ()
+
+    @property
+    def unchanged(self) -> bool:
+        """True when the output model equals the input (the precision may still be float32)."""
+        return self.model == self.input_model
+
+    def summary(self) -> str:
+        """One line: chosen configuration, error against the input and expected speedup."""
+        ch = "unchanged" if not self.changes else ", ".join(f"{k}={b}" for k, a, b, _ in self.changes)
+        sp = "unknown" if self.speedup_vs_input is None else f"{self.speedup_vs_input:.2f}×"
+        return (f"{ch} | {self.metric} error vs input {self.error[self.metric]:.2e} <= tol {self.tol:g} | "
+                f"expected speedup over the input {sp} | dtype {np.dtype(self.dtype).name}")
+
+    def __str__(self):
+        L = [f"simplify({self.input_model.describe()}, tol={self.tol:g}, metric={self.metric!r}, seed={self.seed}"
+             + (f", allow={self.allow!r}" if self.allow else "") + ")",
+             f"  chosen: {self.summary()}",
+             f"  errors vs the input model (float64): max {self.error['max']:.2e}, p99 {self.error['p99']:.2e}, "
+             f"albedo {self.error['albedo']:.2e} (floor {self.floor:.1e})",
+             f"  {self.n_within_tol} of {self.n_configurations} configurations within tol; ranked by "
+             f"{self.ranked_by}"]
+        if self.expected_speedup is not None:
+            L.append(f"  expected speedup over the most accurate configuration: {self.expected_speedup:.2f}×")
+        if not self.changes:
+            L.append("  parameters: unchanged")
+        for k, a, b, why in self.changes:
+            L.append(f"  - {k}: {a} -> {b}: {why}")
+        for k, why in self.kept:
+            L.append(f"  - {k} kept: {why}")
+        for k, v in self.fixed:
+            L.append(f"  - {k}={v} kept: a modelling choice (pass allow=({k!r},) to let simplify change it)")
+        L += [f"  note: {x}" for x in self.notes]
+        L.append(f"  model: {self.model!r}, call with {np.dtype(self.dtype).name} directions")
+        return "\n".join(L)
+
+    def _repr_markdown_(self):
+        return "```\n" + str(self) + "\n```"
+
+
+def _input_label(model, spec) -> str:
+    if spec.name == "precision":
+        return "float64"
+    v = model._params[spec.param]
+    if spec.lobe:
+        return "keep"
+    return _label(v)
+
+
+def _param_text(v) -> str:
+    if isinstance(v, np.ndarray):
+        return _label(v)
+    return repr(v) if isinstance(v, str) else str(v)
+
+
+def _same_value(a, b) -> bool:
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return a is not None and b is not None and np.array_equal(np.asarray(a), np.asarray(b))
+    return type(a) is type(b) and a == b
+
+
+def simplify(model, tol, metric: str = "p99", directions=None, seed: int = 0, *, n: int = 8192,
+             n_albedo: int = 4096, costs: dict | None = None, allow=()):
+    """The cheapest configuration of ``model`` whose error against ``model`` itself (called in
+    float64) is <= ``tol``: returns ``(simplified_model, SimplifyReport)``.
+
+    The reference is the user's model as given. Approximation knobs (precision, Schlick/F82
+    versus exact Fresnel, Filament's fast visibility, DFG table size, dropping a negligible lobe)
+    may move in either direction; modelling knobs (masking, Lambert versus Burley, f90 rule, energy
+    compensation, ...: which material it is) keep the input's setting unless named in ``allow``,
+    e.g. ``allow=("diffuse",)``. Every parameter that differs between input and output is listed
+    in ``report.changes`` (empty: the model comes back unchanged).
+
+    metric: ``"p99"`` (default), ``"max"`` (relative error of f |cos theta_i|) or ``"albedo"``
+    (absolute directional-albedo error); definitions in the module docstring. Errors are measured
+    on ``directions`` (default: :func:`direction_set` of ``n`` rows drawn with ``seed``); float32
+    configurations on float32 directions, so ``report.dtype`` is the precision to call the result
+    with. A lobe whose removal stays within ``tol`` is dropped (a FilamentStandard with clear_coat
+    0.001 gets clear_coat 0 and the compiled variant without the coat).
+
+    "Cheapest" is ranked by the shipped cost table (bench/tradeoff.py), not by a timing taken
+    now, so the result is deterministic for a given seed: among the configurations within tol
+    that cost at most (1 + ``COST_RESOLUTION``) x the cheapest one, the one dropping the most
+    lobes, then the one closest to the input; configurations missing from the table count as
+    costing as much as the most accurate one, and a family without a table is ranked by registry
+    order (most knobs at cheaper settings). ``tol = 0`` returns the input unchanged (float64).
+    costs: a cost table in the :func:`knob_costs` format (e.g. ``bench/tradeoff.py`` run on
+    another machine) to rank by instead of the shipped one.
+    """
+    _check_model(model)
+    tol = _check_tol(tol)
+    col = _check_metric(metric)
+    allowed = _check_allow(model, allow)
+    seed, n, n_albedo = _check_int(seed, "seed", 0), _check_int(n, "n", 16), _check_int(n_albedo, "n_albedo", 16)
+    table = _check_costs(costs)
+    ev = _Evaluation(model, directions, n, seed, n_albedo, allow=allowed, reference="input")
+    costs = _costs_for(model, ev.configs, table)
+    ref_i = next(i for i, c in enumerate(ev.configs) if c is ev.reference)
+    cands = [i for i, e in enumerate(ev.errors) if e[col] <= tol] if tol > 0 else [ref_i]
+    best, ranked_by = _pick(cands, costs, ev.configs, [e[col] for e in ev.errors])
+    cfg, err = ev.configs[best], ev.errors[best]
+    # explanations: each knob's error alone (the input with only that knob changed)
+    single = {}
+    for i, c in enumerate(ev.configs):
+        r = ev.reference   # moot knobs (label None) are not changes
+        diff = {k: c.labels[k] for k in c.labels if c.labels[k] is not None and r.labels[k] is not None
+                and c.index[k] != r.index[k]}
+        if len(diff) == 1:
+            (k, lab), = diff.items()
+            single[(k, lab)] = ev.errors[i][col]
+    specs = _specs(model, allowed)
+    knob_of = {s.param: s for s in specs if s.param is not None}
+    changes, kept, notes = [], [], []
+    for k, before in model._params.items():
+        after = cfg.model._params[k]
+        if _same_value(before, after):
+            continue
+        s = knob_of.get(k)
+        lab = cfg.labels.get(s.name) if s is not None else None
+        alone = single.get((s.name, lab)) if s is not None else None
+        why = (f"{metric} error of this change alone {alone:.2e} <= tol" if alone is not None
+               else "part of the cheapest configuration within tol")
+        if s is not None and s.lobe:
+            why += "; the model gets the compiled variant without this lobe"
+        if s is not None and s.kind == "modelling":
+            why += " (modelling choice, allowed)"
+        changes.append((k, _param_text(before), _param_text(after), why))
+    if cfg.dtype is np.float32:
+        alone = single.get(("precision", "float32"))
+        changes.append(("precision", "float64", "float32",
+                        f"{metric} error of float32 alone {alone:.2e} <= tol" if alone is not None
+                        else "part of the cheapest configuration within tol"))
+    for s in specs:
+        lab = cfg.labels[s.name]
+        if lab is None or s.name == "precision" or len(s.settings) < 2:
+            continue
+        i_in = ev.reference.index[s.name]
+        if cfg.index[s.name] == i_in and i_in < len(s.settings) - 1:
+            errs = [(lab2, single[(s.name, lab2)]) for lab2 in s.labels[i_in + 1:] if (s.name, lab2) in single]
+            if errs:
+                lab2, e2 = min(errs, key=lambda t: t[1])
+                kept.append((s.name, f"cheaper {lab2!r} alone has {metric} error {e2:.2e}" +
+                             (" > tol" if e2 > tol else " (within tol, but not in the cheapest configuration)")))
+    fixed = [(d.name, _param_text(model._params[d.keyword])) for d in type(model).knobs
+             if d.kind == "modelling" and d.name not in allowed]
+    if tol == 0:
+        notes.append("tol = 0: the input, unchanged")
+    ref_cost = costs[0]
+    exp = None if costs[best] is None or ref_cost is None else ref_cost / costs[best]
+    vs_in = None
+    if costs[ref_i] is not None and costs[best] is not None:
+        vs_in = costs[ref_i] / costs[best]
+    report = SimplifyReport(
+        input_model=model, model=cfg.model, dtype=cfg.dtype, config=dict(cfg.labels), changes=changes, kept=kept,
+        error={k: err[v] for k, v in METRICS.items()}, tol=tol, metric=metric, expected_speedup=exp,
+        speedup_vs_input=vs_in, ranked_by=ranked_by, reference=model, description=cfg.describe(),
+        n_configurations=len(ev.configs), n_within_tol=len(cands), seed=seed, floor=ev.floor, notes=notes,
+        fixed=fixed, allow=tuple(sorted(allowed)))
+    return cfg.model, report
+
+
+def _input_config(model, configs):
+    """Index of the configuration equal to the input model called in float64, if reachable."""
+    for i, c in enumerate(configs):
+        if c.dtype is np.float64 and c.model == model:
+            return i
+    return None

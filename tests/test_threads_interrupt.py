@@ -1,0 +1,179 @@
+"""The batch kernels' thread pool and Ctrl-C (issue 11 items 5 and 9).
+
+Pool: results are bit-identical for any thread count, from concurrent Python threads (one batch
+holds the pool, the others run on their own thread) and in a forked child (whose pool has no
+helper threads). Its point -- the caller never waits for a helper that has not started, so a
+descheduled thread cannot stall a call for a scheduler slice -- is a timing property measured by
+bench/stalls.py, not asserted here.
+Interrupts: a long albedo or tradeoff call stops on SIGINT with KeyboardInterrupt (run in a
+subprocess that the test interrupts), as render does.
+"""
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import threading
+import time
+import warnings
+
+import numpy as np
+import pytest
+
+import bsdfkit as bk
+import importlib
+
+to = importlib.import_module("bsdfkit.tuning.costs")
+
+
+@pytest.fixture
+def restore_threads():
+    n = bk.get_num_threads()
+    yield
+    bk.set_num_threads(n)
+
+
+def _work(rng, n=100_003):
+    wo = rng.normal(size=(n, 3))
+    wo /= np.linalg.norm(wo, axis=1, keepdims=True)
+    wi = rng.normal(size=(n, 3))
+    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
+    return wo, wi
+
+
+def test_bit_identical_for_any_thread_count(restore_threads, rng):
+    m = bk.Dielectric(1.5, alpha=0.3)
+    wo, wi = _work(rng)
+    uc, u = rng.random(len(wo)), rng.random((len(wo), 2))
+    res = []
+    for nt in (1, 2, 3, 8):
+        bk.set_num_threads(nt)
+        s = m.sample(wo, uc, u)
+        res.append((m.eval(wo, wi), m.pdf(wo, wi), s.wi, m.albedo(wo[:5], n_samples=50_000, seed=3)))
+    for r in res[1:]:
+        for a, b in zip(res[0], r):
+            np.testing.assert_array_equal(a, b)
+
+
+def test_concurrent_python_threads(restore_threads, rng):
+    bk.set_num_threads(2)
+    m = bk.Conductor.from_metal("Cu", alpha=0.3)
+    wo, wi = _work(rng)
+    want = m.eval(wo, wi)
+    got, errors = [None] * 4, []
+
+    def run(k):
+        try:
+            for _ in range(5):
+                got[k] = m.eval(wo, wi)
+        except Exception as e:  # pragma: no cover - reported below
+            errors.append(e)
+    ts = [threading.Thread(target=run, args=(k,)) for k in range(4)]
+    for t in ts:
+        t.start()
+    for t in ts:
+        t.join()
+    assert not errors
+    for g in got:
+        np.testing.assert_array_equal(g, want)
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="os.fork is POSIX-only")
+def test_forked_child_computes(restore_threads, rng):
+    bk.set_num_threads(2)
+    m = bk.Diffuse(0.5)
+    wo, wi = _work(rng, 50_000)
+    want = m.eval(wo, wi)  # the parent's pool now has a helper thread
+    r, w = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # child: the pool's helper does not exist here; the call must still complete
+        try:
+            ok = np.array_equal(m.eval(wo, wi), want)
+            os.write(w, b"1" if ok else b"0")
+        finally:
+            os._exit(0)
+    os.close(w)
+    os.waitpid(pid, 0)
+    assert os.read(r, 1) == b"1"
+
+
+def _interrupt(code, after="started", deadline=20.0):
+    """Runs `code` in a subprocess, sends SIGINT once it prints `after` (+0.5 s), returns
+    (stdout, seconds from SIGINT to exit)."""
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    p = subprocess.Popen([sys.executable, "-c", textwrap.dedent(code)], stdout=subprocess.PIPE,
+                         stderr=subprocess.STDOUT, text=True, env=env)
+    try:
+        line = p.stdout.readline()
+        assert after in line, line + p.stdout.read()
+        time.sleep(0.5)
+        t0 = time.perf_counter()
+        p.send_signal(signal.SIGINT)
+        out, _ = p.communicate(timeout=deadline)
+        return line + out, time.perf_counter() - t0
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.wait()
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_albedo_stops_on_sigint(threads):
+    # ~2^31 samples: minutes of work; before the pool's interrupt hook it ran to the end
+    out, dt = _interrupt(f"""
+        import numpy as np, bsdfkit as bk
+        bk.set_num_threads({threads})
+        m = bk.Dielectric(1.5, alpha=0.3)
+        print("started", flush=True)
+        try:
+            m.albedo(bk.direction(theta=0.5, phi=0.0), n_samples=2**31)
+            print("finished")
+        except KeyboardInterrupt:
+            print("interrupted")
+    """)
+    assert "interrupted" in out, out
+
+
+def test_tradeoff_stops_on_sigint():
+    out, dt = _interrupt("""
+        import bsdfkit as bk
+        m = bk.FilamentStandard([0.8, 0.5, 0.3], clear_coat=0.5, sheen_color=0.5)
+        print("started", flush=True)
+        try:
+            bk.tradeoff(m, n_albedo=2**22, n_timing=2**18, repeats=50)
+            print("finished")
+        except KeyboardInterrupt:
+            print("interrupted")
+    """)
+    assert "interrupted" in out, out
+
+
+# ------------------------------------------------------------------ tradeoff's timing
+
+def test_tradeoff_reports_spread_and_warns_when_noisy(monkeypatch):
+    m = bk.Conductor.from_metal("Cu", alpha=0.3)
+    monkeypatch.setattr(to, "time_repeats", lambda fn, repeats=5, *a, **k: [1e-3] * repeats)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        t = bk.tradeoff(m, n=256, n_albedo=64, n_timing=256, repeats=5)  # quiet: no warning
+    assert "spread" in t.columns and all(s == pytest.approx(1.0) for s in t["spread"])
+    monkeypatch.setattr(to, "time_repeats", lambda fn, repeats=5, *a, **k: [1e-3, 4e-3, 5e-3, 6e-3, 7e-3][:repeats])
+    with pytest.warns(RuntimeWarning, match="noisy"):
+        t = bk.tradeoff(m, n=256, n_albedo=64, n_timing=256, repeats=5)
+    assert all(s == pytest.approx(5.0) for s in t["spread"])
+    assert "5.00!" in str(t)
+
+
+def test_spread():
+    assert to.spread([2.0, 1.0, 3.0]) == 2.0
+    assert to.spread([1.0] * 5) == 1.0
+
+
+def test_cost_deviations_flag_entries_off_by_more_than_half():
+    shipped = {"families": {"Dielectric/rough": {"costs": {"precision=float64": 1.0, "precision=float32": 0.14,
+                                                           "x": 0.5}}}}
+    measured = {"Dielectric/rough": {"precision=float64": 1.0, "precision=float32": 0.37, "x": 0.6}}
+    bad = to.cost_deviations(shipped, measured)
+    assert bad == [("Dielectric/rough", "precision=float32", 0.14, 0.37)]
+    assert to.cost_deviations(shipped, {"Dielectric/rough": {"x": 0.3}})  # 1.67x cheaper: flagged
+    assert not to.cost_deviations(shipped, {"Dielectric/rough": {"x": 0.36}})  # 1.39x: within 50 %
