@@ -33,10 +33,10 @@ def _preview(core_or_model):
 
 
 def test_model_names_is_the_compiled_list():
-    assert len(NAMES) == len(set(NAMES)) >= 12
+    assert len(NAMES) == len(set(NAMES)) >= 15
     for name in ("Diffuse", "DiffuseTransmission", "Conductor", "ConductorSchlick", "ConductorF82", "Dielectric",
                  "ThinDielectric", "FilamentStandard", "FilamentStandardCoat", "FilamentStandardSheen",
-                 "FilamentStandardCoatSheen", "FilamentCloth"):
+                 "FilamentStandardCoatSheen", "FilamentCloth", "NormalizedFresnel", "Hair", "HairFarField"):
         assert name in NAMES
     for name in NAMES:
         cls = getattr(_core, name)

@@ -102,7 +102,7 @@ def _run_lobes_command(args) -> int:
         return fail(f"--views: unknown view {bad[0]!r}; valid views: {', '.join(VIEWS)}" if bad else
                     f"--views: name at least one of {', '.join(VIEWS)}")
     fig = Figure(figsize=(w / args.dpi, h / args.dpi), dpi=args.dpi)
-    overview(models, theta_o=args.theta, phi_o=args.phi, views=views, log=args.log, cosine=args.cosine,
+    overview(models, theta_o=args.theta, phi_o=args.phi, views=views, log=args.log, cosine=args.cosine or None,
              channel=args.channel, fig=fig, ncols=min(3, len(views)), n_samples=args.samples)
     try:
         fig.savefig(args.output, dpi=args.dpi)

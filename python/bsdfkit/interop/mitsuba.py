@@ -31,7 +31,7 @@ MIRROR_ETA = 1e-6
 
 
 _MI_SUPPORTED = ("diffuse", "conductor", "roughconductor", "dielectric", "roughdielectric",
-                 "thindielectric", "measured", "plastic", "roughplastic", "twosided", "null")
+                 "thindielectric", "measured", "plastic", "roughplastic", "twosided", "null", "hair")
 
 
 _MI_CONSTANT_TEXTURES = ("rgb", "spectrum", "uniform", "srgb")
@@ -51,6 +51,8 @@ _MI_PARAMS = {
                      "distribution", "alpha", "sample_visible"),
     "null": (),
     "measured": ("filename",),
+    "hair": ("eumelanin", "pheomelanin", "sigma_a", "scale", "int_ior", "ext_ior", "longitudinal_roughness",
+             "azimuthal_roughness", "scale_tilt"),
 }
 
 
@@ -278,6 +280,8 @@ def _mi_bsdf(d, where):
         return Measured(fn)
     if kind in ("plastic", "roughplastic"):
         return _mi_plastic(d, label, kind == "roughplastic")
+    if kind == "hair":
+        return _mi_hair(d, label)
     eta = _mi_eta(d, label)
     if kind == "dielectric":
         return _mi_build(label, lambda: Dielectric(eta))
@@ -305,6 +309,28 @@ def _mi_plastic(d, where, rough):
         alpha = ax
     return _mi_build(where, lambda: Plastic(r, eta_int / eta_ext, alpha=alpha, nonlinear=bool(nl),
                                             masking="separable", specular_reflectance=ks))
+def _mi_hair(d, where):
+    """Mitsuba 3 ``hair`` -> ``Hair`` (h = 0: Mitsuba derives h from the direction, see
+    ``bsdfkit.testing.hair_ref.wo_for_h``)."""
+    from ..models.hair import Hair, sigma_a_from_concentration
+
+    has_pig = "eumelanin" in d or "pheomelanin" in d
+    if "sigma_a" in d and has_pig:
+        _mi_fail(where, "give either 'sigma_a' or 'eumelanin'/'pheomelanin', not both (Mitsuba refuses it)")
+    scale = _mi_float(d.get("scale", 1.0), where, "scale")
+    if "sigma_a" in d:
+        sigma_a = scale * _mi_color(d["sigma_a"], where, "sigma_a", bounded=False)
+    else:
+        if "scale" in d and scale != 1.0:
+            _mi_fail(where, "'scale' only applies to 'sigma_a' (Mitsuba ignores it for pigments)")
+        ce = _mi_float(d.get("eumelanin", 1.3), where, "eumelanin")
+        cp = _mi_float(d.get("pheomelanin", 0.2), where, "pheomelanin")
+        sigma_a = _mi_build(where, lambda: sigma_a_from_concentration(ce, cp))
+    eta = _mi_ior(d, where, "int_ior", "amber") / _mi_ior(d, where, "ext_ior", "air")
+    bm = _mi_float(d.get("longitudinal_roughness", 0.3), where, "longitudinal_roughness")
+    bn = _mi_float(d.get("azimuthal_roughness", 0.3), where, "azimuthal_roughness")
+    alpha = _mi_float(d.get("scale_tilt", 2.0), where, "scale_tilt")
+    return _mi_build(where, lambda: Hair(sigma_a=sigma_a, eta=eta, beta_m=bm, beta_n=bn, alpha=alpha, h=0.0))
 
 
 def from_mitsuba(d) -> BxDF:
@@ -340,6 +366,12 @@ def from_mitsuba(d) -> BxDF:
     ``measured``         ``filename`` (an RGL tensor file) -> ``Measured(filename)``
     ``null``             -> ``Dielectric(1.0)`` (pbrt's straight pass-through; ``to_mitsuba``
                          writes eta = 1 dielectrics and thin dielectrics as ``null``)
+    ``hair``             ``sigma_a`` (x ``scale``) or ``eumelanin`` (1.3) / ``pheomelanin``
+                         (**0.2**, pbrt's default is 0), ``int_ior`` ("amber" 1.55) / ``ext_ior``
+                         ("air"), ``longitudinal_roughness`` / ``azimuthal_roughness`` (0.3),
+                         ``scale_tilt`` (2 degrees) -> ``Hair(..., h=0)``: Mitsuba has no h, it
+                         derives it from the direction (``bsdfkit.testing.hair_ref``); its fibre
+                         axis is local y where bsdfkit's (pbrt's) is x
     ==================  ======================================================================
 
     Colours (reflectance, eta, k) may be a float, 3 numbers (a list, numpy array or

@@ -39,10 +39,10 @@ _ETA_WAVELENGTH = 550.0
 
 
 _PBRT_SUPPORTED = ("diffuse", "diffusetransmission", "conductor", "dielectric", "thindielectric",
-                   "coateddiffuse", "coatedconductor")
+                   "coateddiffuse", "coatedconductor", "hair")
 
 
-_PBRT_UNSUPPORTED = ("hair", "measured", "mix", "subsurface", "interface", "none", "")
+_PBRT_UNSUPPORTED = ("measured", "mix", "subsurface", "interface", "none", "")
 
 
 _PBRT_ROUGH = ("roughness", "uroughness", "vroughness", "remaproughness")
@@ -59,6 +59,7 @@ _PBRT_PARAMS = {
                         "conductor.roughness", "conductor.uroughness", "conductor.vroughness", "conductor.eta",
                         "conductor.k", "reflectance", "thickness", "albedo", "g", "maxdepth", "nsamples",
                         "remaproughness"),
+    "hair": ("sigma_a", "reflectance", "eumelanin", "pheomelanin", "eta", "beta_m", "beta_n", "alpha"),
 }
 
 
@@ -626,11 +627,38 @@ def _pbrt_bxdf(rec):
             eta = np.array(METALS["Cu"][0]) if eta is None else eta
             k = np.array(METALS["Cu"][1]) if k is None else k
             return CoatedConductor(eta, k, **kw)
+        if mtype == "hair":
+            return _pbrt_hair(rec)
         return ThinDielectric(_eta_param(rec))
     except _PbrtError:
         raise
     except (ValueError, TypeError) as e:
         _pfail(rec, str(e))
+
+
+def _pbrt_hair(rec):
+    """pbrt-v4 ``HairMaterial``: sigma_a, else reflectance, else eumelanin/pheomelanin (each
+    ignored when an earlier one is given, as pbrt-v4 warns and does); neither -> eumelanin 1.3.
+    beta_m / beta_n clamped to [0.01, 1] and reflectance to [0, 1] as pbrt-v4's material does."""
+    from ..models.hair import Hair, sigma_a_from_concentration, sigma_a_from_reflectance
+
+    bm = min(max(_float_param(rec, "beta_m", 0.3), 0.01), 1.0)
+    bn = min(max(_float_param(rec, "beta_n", 0.3), 0.01), 1.0)
+    kw = dict(eta=_float_param(rec, "eta", 1.55), beta_m=bm, beta_n=bn, alpha=_float_param(rec, "alpha", 2.0), h=0.0)
+    sigma_a = _spectrum_param(rec, "sigma_a", albedo=False)
+    if sigma_a is None:
+        p = rec.params.get("reflectance")
+        if p is not None:
+            _check_texture(rec, p)
+            c = _spectrum_param(rec, "reflectance", albedo=False)
+            sigma_a = sigma_a_from_reflectance(np.clip(c, 0.0, 1.0), bn)
+        else:
+            ce = _float_param(rec, "eumelanin", None)
+            cp = _float_param(rec, "pheomelanin", None)
+            if ce is None and cp is None:
+                ce = 1.3
+            sigma_a = sigma_a_from_concentration(ce or 0.0, cp or 0.0)
+    return Hair(sigma_a=sigma_a, **kw)
 
 
 def from_pbrt(source, *, skip_unsupported: bool = False) -> dict:
@@ -660,6 +688,10 @@ def from_pbrt(source, *, skip_unsupported: bool = False) -> dict:
       conductor.(u|v)roughness [0], thickness, albedo, g, maxdepth, nsamples as coateddiffuse
       -> ``CoatedConductor`` (which divides the conductor's eta and k by interface.eta, as
       pbrt-v4 does).
+    * ``hair``: sigma_a, else reflectance (``Hair.from_reflectance``, clamped to [0, 1]), else
+      eumelanin / pheomelanin [1.3 / 0] (``Hair.from_concentration``); eta [1.55], beta_m, beta_n
+      [0.3] (clamped to [0.01, 1]), alpha [2 degrees] -> ``Hair(..., h=0)`` (pbrt-v4 takes h from
+      the curve's v coordinate per hit).
 
     pbrt-v4's microfacet models use height-correlated Smith masking: ``masking="correlated"``.
     Roughness: with remaproughness true, alpha = sqrt(roughness) (``bk.roughness_to_alpha``),
@@ -678,7 +710,7 @@ def from_pbrt(source, *, skip_unsupported: bool = False) -> dict:
     (``PbrtMaterial.ignored``).
 
     ``ValueError`` naming the material, its line and the parameter for unsupported types
-    (hair, measured, mix, subsurface, interface, ...),
+    (measured, mix, subsurface, interface, ...),
     texture-valued or unknown parameters, bad values, and malformed text (with the line).
     ``skip_unsupported=True`` leaves out materials that cannot be converted (unsupported types,
     textures, unknown spectra) instead of raising, with one :class:`PbrtSkipWarning` per

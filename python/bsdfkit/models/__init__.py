@@ -2,7 +2,9 @@
 
 ``diffuse`` (Diffuse, DiffuseTransmission), ``conductor`` (Conductor, METALS, conductor_fresnel),
 ``dielectric`` (Dielectric, ThinDielectric), ``filament`` (FilamentStandard, FilamentCloth, the
-DFG table), ``measured`` (MERL, Measured: measured tables and tensor files). A new family is a new module here whose classes subclass :class:`BxDF`.
+DFG table), ``measured`` (MERL, Measured: measured tables and tensor files), ``plastic`` (Plastic),
+``layered`` (CoatedDiffuse, CoatedConductor), ``normalized_fresnel`` (NormalizedFresnel, fresnel_moment1),
+``hair`` (Hair and its sigma_a helpers). A new family is a new module here whose classes subclass :class:`BxDF`.
 """
 from . import registry
 from .base import BxDF, SampleResult, roughness_to_alpha
@@ -14,8 +16,10 @@ from .filament import FilamentCloth, FilamentStandard
 from .measured import MERL, Measured
 from .plastic import Plastic
 from .layered import CoatedConductor, CoatedDiffuse
+from .normalized_fresnel import NormalizedFresnel
+from .hair import Hair
 from .registry import MODELS, KnobDecl
 
 __all__ = ["BxDF", "SampleResult", "roughness_to_alpha", "METALS", "Conductor", "conductor_fresnel", "Dielectric",
            "ThinDielectric", "Diffuse", "DiffuseTransmission", "FilamentStandard", "FilamentCloth", "MERL", "Measured",
-           "Plastic", "CoatedDiffuse", "CoatedConductor", "MODELS", "KnobDecl"]
+           "Plastic", "CoatedDiffuse", "CoatedConductor", "NormalizedFresnel", "Hair", "MODELS", "KnobDecl"]

@@ -213,6 +213,10 @@ class BxDF:
     description: str = ""
     #: Accuracy knobs (``KnobDecl``), most influential first; precision is every model's last knob.
     knobs: tuple = ()
+    #: f is defined over the whole sphere of wo and wi, with no "below the surface" (a fibre, e.g.
+    #: Hair): plots draw the whole sphere, and contracts that assume a hemispherical surface
+    #: model (albedo over wo's hemisphere, cosine-weighted sampling) are gated on it.
+    full_sphere: bool = False
 
     def __init_subclass__(cls, register: bool = True, **kwargs):
         super().__init_subclass__(**kwargs)

@@ -230,6 +230,8 @@ def _txt(v) -> str:
         return f"{a[0]:.4g}" if np.all(a == a[0]) else ",".join(f"{x:.4g}" for x in a)
     if isinstance(v, float):
         return f"{v:.4g}"
+    if v is None:
+        return "none"
     return str(v)
 
 
@@ -243,7 +245,7 @@ def to_spec(model) -> str:
     words = [_snake(type(model).__name__)]
     for k, v in params.items():
         d = defaults.get(k, inspect.Parameter.empty)
-        if v is None or _same(v, d):
+        if _same(v, d):   # a None differing from its default is written "none" (Hair's h=None)
             continue
         words.append(f"{k}={_txt(v)}")
     return " ".join(words)

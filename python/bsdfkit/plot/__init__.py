@@ -9,7 +9,8 @@ further processing.
 Views: :func:`polar` (in-plane lobe slices), :func:`lobe3d`, :func:`hemisphere`, :func:`halfdiff`
 (Rusinkiewicz angles), :func:`albedo`, :func:`samples` / :func:`sample_stats` (sampling against
 the pdf), :func:`overview` (several views side by side), :func:`gallery` (one row per registered
-model), :func:`explore` (widgets), :func:`pareto` (a trade-off table). Shared helpers live in
+model), :func:`explore` (widgets), :func:`pareto` (a trade-off table), :func:`hair_lobes` /
+:func:`hair_lobe3d` (a hair fibre's lobes per path, module ``hair``). Shared helpers live in
 ``_common``.
 
 Angle conventions of :func:`polar`: the slice lies in the plane of azimuth ``phi_plane``
@@ -26,6 +27,7 @@ from ._difference import difference, difference_model
 from ._explore import Explorer, explore
 from ._gallery import gallery
 from ._halfdiff import halfdiff
+from .hair import hair_lobe3d, hair_lobes
 from ._hemisphere import hemisphere
 from ._lobe3d import lobe3d
 from ._overview import VIEWS, overview
@@ -34,4 +36,4 @@ from ._polar import polar
 from ._samples import sample_stats, samples
 
 __all__ = ["pareto", "difference", "difference_model", "polar", "lobe3d", "hemisphere", "halfdiff", "albedo", "samples", "sample_stats", "overview",
-           "gallery", "explore", "Explorer", "describe", "luminance", "LUMINANCE_WEIGHTS", "VIEWS"]
+           "gallery", "explore", "Explorer", "hair_lobes", "hair_lobe3d", "describe", "luminance", "LUMINANCE_WEIGHTS", "VIEWS"]

@@ -131,7 +131,9 @@ def _check_choice(v, name, allowed):
 
 
 def _transmits(models) -> bool:
-    return any(m.flags & BxDFFlags.Transmission for m in models)
+    """Whether a plot must show the whole sphere: a transmitting model, or one defined over the
+    whole sphere (the ``full_sphere`` capability, e.g. Hair)."""
+    return any((m.flags & BxDFFlags.Transmission) or getattr(m, "full_sphere", False) for m in models)
 
 
 def _new_figure(figsize):

@@ -22,7 +22,7 @@ VIEWS = ("polar", "lobe3d", "hemisphere", "halfdiff", "albedo", "samples")
 _PROJECTIONS = {"polar": "polar", "lobe3d": "3d"}
 
 
-def overview(model_or_list, theta_o=30.0, phi_o=0.0, views=VIEWS, *, log=False, cosine=False, channel="luminance",
+def overview(model_or_list, theta_o=30.0, phi_o=0.0, views=VIEWS, *, log=False, cosine=None, channel="luminance",
              fig=None, ncols=3, n_samples=100_000, albedo_samples=32768, albedo_theta=31, res=96, seed=0,
              title=None):
     """Several views of the same model(s) at one ``wo`` in one figure (the CLI ``lobes`` command,
@@ -30,13 +30,16 @@ def overview(model_or_list, theta_o=30.0, phi_o=0.0, views=VIEWS, *, log=False, 
 
     views: names from :data:`VIEWS`. ``phi_o`` is wo's azimuth (degrees); the polar slice is the
     plane of wo (its ``phi_plane = phi_o + 180``, so the mirror direction is at +θo). log,
-    cosine and channel apply to every view that has them. ``fig``: a Figure to draw into (a
-    new pyplot figure otherwise).
+    cosine and channel apply to every view that has them (``cosine=None``: f |cos| when a model is
+    defined over the whole sphere with f divided by |cos| as Hair is, else f). ``fig``: a Figure
+    to draw into (a new pyplot figure otherwise).
 
     Returns the Figure; ``fig.bsdfkit_axes`` maps each view name to its Axes (each with its
     ``bsdfkit_data``).
     """
     models = _as_models(model_or_list)
+    if cosine is None:
+        cosine = any(getattr(m, "full_sphere", False) for m in models)
     views = tuple(views)
     for v in views:
         _check_choice(v, "views", VIEWS)

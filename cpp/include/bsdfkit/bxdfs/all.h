@@ -14,6 +14,8 @@
 #include "merl.h"
 #include "layered.h"
 #include "plastic.h"
+#include "hair.h"
+#include "normalized_fresnel.h"
 #include "thin_dielectric.h"
 
 namespace bsdfkit {
@@ -35,7 +37,10 @@ using AllModels = ModelList<DiffuseBxDF,
                             MeasuredBxDF,             // measured: RGL tensor file
                             PlasticBxDF,
                             CoatedDiffuseBxDF,         // stochastic (pbrt-v4 LayeredBxDF)
-                            CoatedConductorBxDF>;
+                            CoatedConductorBxDF,
+                            NormalizedFresnelBxDF,
+                            HairBxDF,
+                            HairFarFieldBxDF>;      // Hair with h=None: 16 HairBxDF nodes
 
 static_assert(AllModels::check(), "a model of AllModels does not follow core/bxdf.h");
 static_assert(AllModels::names_unique(), "two models of AllModels have the same Name");

@@ -1,0 +1,146 @@
+"""Hair fibres (Chiang et al. 2016 as in pbrt-v4 ``HairBxDF``)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import _core
+from .base import BxDF, _rgb, _scalar
+
+__all__ = ["Hair", "EUMELANIN_SIGMA_A", "PHEOMELANIN_SIGMA_A", "sigma_a_from_concentration",
+           "sigma_a_from_reflectance"]
+
+#: Absorption of eumelanin and pheomelanin per unit concentration, per unit fibre radius, RGB
+#: (d'Eon et al. 2011 via pbrt-v4 ``SigmaAFromConcentration``; Mitsuba 3 ``hair`` uses the same).
+EUMELANIN_SIGMA_A = (0.419, 0.697, 1.37)
+PHEOMELANIN_SIGMA_A = (0.187, 0.4, 1.05)
+#: Cap on sigma_a from ``from_reflectance`` (a reflectance of 0 maps to +inf); exp(-2e4) is 0.
+SIGMA_A_MAX = 1e4
+
+
+def sigma_a_from_concentration(eumelanin=1.3, pheomelanin=0.0) -> np.ndarray:
+    """sigma_a = eumelanin (0.419, 0.697, 1.37) + pheomelanin (0.187, 0.4, 1.05), RGB (pbrt-v4
+    ``SigmaAFromConcentration``; pbrt-v4 then upsamples the RGB to a spectrum, bsdfkit renders
+    RGB). Concentrations >= 0 (1.3 / 0: pbrt-v4's default brown)."""
+    ce = _scalar(eumelanin, "eumelanin", lo=0.0)
+    cp = _scalar(pheomelanin, "pheomelanin", lo=0.0)
+    return ce * np.asarray(EUMELANIN_SIGMA_A) + cp * np.asarray(PHEOMELANIN_SIGMA_A)
+
+
+def sigma_a_from_reflectance(color, beta_n=0.3) -> np.ndarray:
+    """sigma_a giving roughly the multiply-scattered colour ``color`` (Chiang 2016 eq. 9; pbrt-v4
+    ``SigmaAFromReflectance``): sigma_a = (ln c / (5.969 - 0.215 bn + 2.532 bn^2 - 10.73 bn^3
+    + 5.574 bn^4 + 0.245 bn^5))^2 per channel. ``color`` in [0, 1] (scalar or RGB); a channel of
+    0 (sigma_a = inf) is capped at ``SIGMA_A_MAX``."""
+    c = _rgb(color, "color", lo=0.0, hi=1.0)
+    bn = _scalar(beta_n, "beta_n", lo=0.0, hi=1.0)
+    den = 5.969 - 0.215 * bn + 2.532 * bn**2 - 10.73 * bn**3 + 5.574 * bn**4 + 0.245 * bn**5
+    with np.errstate(divide="ignore"):
+        s = (np.log(c) / den) ** 2
+    return np.minimum(s, SIGMA_A_MAX)
+
+
+def _h(h):
+    if h is None:
+        return None
+    return _scalar(h, "h", lo=-1.0, hi=1.0)
+
+
+class Hair(BxDF):
+    """A hair fibre: Chiang, Bitterli, Tappan & Burley 2016, "A Practical and Controllable Hair and
+    Fur Model for Production Path Tracing", exactly as pbrt-v4's ``HairBxDF`` (lobes R, TT, TRT of
+    Marschner et al. 2003 plus one lobe for all longer paths; d'Eon et al. 2011's longitudinal
+    Mp in log space for small variance; logistic azimuthal lobes).
+
+    sigma_a: absorption coefficient inside the fibre per unit fibre *radius*, scalar or RGB >= 0
+    (see ``from_concentration`` and ``from_reflectance``; None: pbrt-v4's default, eumelanin 1.3,
+    a brown). eta: IOR of the fibre (>= 1; 1.55).
+    beta_m, beta_n: longitudinal and azimuthal roughness in [0.01, 1] (pbrt-v4's material clamps
+    to the same range; v_p and s follow Chiang 2016 eqs. 7-8). alpha: cuticle scale tilt in
+    **degrees** in [-90, 90] (R shifts by -2 alpha, TT by alpha, TRT by 4 alpha). h: offset across
+    the fibre in [-1, 1] at which the ray from wo hits it (pbrt-v4 takes h = -1 + 2 v of the curve
+    uv), or **None: the far-field fibre**, f averaged over h in [-1, 1], (1/2) int f(h) dh,
+    integrated in gamma = asin h (smooth there; dh = cos gamma dgamma) by 16-point Gauss-Legendre
+    with the weights normalised to 1; sampled as the same mixture (exact pdf). 16 times the
+    cost of one h. For fibres thinner than a pixel.
+
+    **Frame** (pbrt-v4): local **x is the fibre axis** (tangent; sin theta = w.x, theta the
+    longitudinal angle), **y and z span the normal plane** with azimuth phi = atan2(w.z, w.y);
+    **z is the normal of the ribbon** the fibre is rendered as (pbrt-v4 curves face the ray), so
+    a renderer's shading normal is +z. ``f`` is defined over the **whole sphere** (there is no
+    "below the surface") and, as in pbrt-v4, divided by |wi.z| so that the |cos| a renderer
+    multiplies by cancels: f |wi.z| = sum_p Mp Ap Np. The transport mode is ignored (as pbrt-v4).
+    Not reciprocal. Sampling is exact for sigma_a = 0 (weights 1).
+    """
+
+    __slots__ = ()
+    aliases = ("fiber", "fibre")
+    # (the far-field fibre, h=None, costs 16 single-h kernels: its chi2 / oracle tests live in
+    # tests/models/test_hair.py rather than in every generic contract)
+    examples = {"brown": "hair", "blonde, off-centre": "hair concentration=0.3 h=0.5",
+                "dark rough": "hair concentration=8 beta_m=0.5 beta_n=0.5", "teal": "hair reflectance=0.1,0.5,0.5"}
+    description = "Hair fibre of Chiang et al. 2016 (pbrt-v4 HairBxDF): R, TT, TRT lobes + rest"
+    # f lives on the whole sphere (no "below the surface"; f is divided by |wi.z|): both sides of
+    # z are valid (two_sided), the lobes through the fibre are still "reflection" by pbrt-v4's flags
+    full_sphere = True
+    energy_conserving = True
+    exact_eval = True
+    reciprocal = False   # pbrt-v4's hair is not (the theta_o tilt and Ap depend on wo)
+    two_sided = True
+    transmission = False
+    delta_only = False
+    mitsuba = "hair"
+    knobs = ()           # pbrt-v4's HairBxDF has no accuracy setting (p_max = 3 is fixed)
+
+    def cost_family(self) -> str:
+        return "Hair/far-field" if self._params["h"] is None else "Hair"   # far field: 16 single-h kernels
+
+    def to_mitsuba(self) -> dict:
+        """Mitsuba 3 ``hair`` (sigma_a form, ext_ior 1). Mitsuba has no ``h``: it derives it from
+        wo (``bsdfkit.testing.hair_ref.wo_for_h``), and its fibre axis is local y where bsdfkit's
+        (pbrt-v4's) is x (``hair_ref.to_mitsuba_frame``); so only h = 0 converts, other h and the
+        far-field fibre (h=None) raise ValueError."""
+        if self._params["h"] != 0.0:
+            raise ValueError(f"Hair(h={self._params['h']!r}): Mitsuba 3's hair has no h parameter (it derives h "
+                             "from the direction); only h=0 converts")
+        from ..testing.hair_ref import mitsuba_dict
+        return mitsuba_dict(self)
+
+    def __init__(self, sigma_a=None, eta=1.55, beta_m=0.3, beta_n=0.3, alpha=2.0, h=0.0):
+        if sigma_a is None:  # pbrt-v4's default: eumelanin 1.3
+            sigma_a = sigma_a_from_concentration(1.3, 0.0)
+        super().__init__(sigma_a=_rgb(sigma_a, "sigma_a", lo=0.0),
+                         eta=_scalar(eta, "eta", lo=1.0),
+                         beta_m=_scalar(beta_m, "beta_m", lo=0.01, hi=1.0),
+                         beta_n=_scalar(beta_n, "beta_n", lo=0.01, hi=1.0),
+                         alpha=_scalar(alpha, "alpha", lo=-90.0, hi=90.0),
+                         h=_h(h))
+
+    @classmethod
+    def from_concentration(cls, eumelanin=1.3, pheomelanin=0.0, **kw) -> "Hair":
+        """Hair whose sigma_a comes from melanin concentrations (see
+        ``sigma_a_from_concentration``); other keywords as ``Hair``."""
+        return cls(sigma_a_from_concentration(eumelanin, pheomelanin), **kw)
+
+    @classmethod
+    def from_reflectance(cls, color, **kw) -> "Hair":
+        """Hair of roughly the given multiply-scattered colour (see ``sigma_a_from_reflectance``,
+        which uses this model's ``beta_n``); other keywords as ``Hair``."""
+        return cls(sigma_a_from_reflectance(color, kw.get("beta_n", 0.3)), **kw)
+
+    @classmethod
+    def _from_params(cls, p):
+        return cls(**p)
+
+    def __repr__(self):
+        p = self._params
+        return (f"Hair(sigma_a=[{', '.join(repr(float(x)) for x in p['sigma_a'])}], eta={p['eta']!r}, "
+                f"beta_m={p['beta_m']!r}, beta_n={p['beta_n']!r}, alpha={p['alpha']!r}, h={p['h']!r})")
+
+    def _make_core(self):
+        p = self._params
+        kw = dict(sigma_a=p["sigma_a"].tolist(), eta=p["eta"], beta_m=p["beta_m"], beta_n=p["beta_n"], alpha=p["alpha"])
+        if p["h"] is None:
+            return _core.HairFarField(**kw)
+        return _core.Hair(h=p["h"], **kw)

@@ -1,0 +1,57 @@
+"""The normalized-Fresnel exit lobe of a BSSRDF boundary (pbrt-v4 ``NormalizedFresnelBxDF``)."""
+from __future__ import annotations
+
+from .. import _core
+from .base import BxDF, _scalar
+
+__all__ = ["NormalizedFresnel", "fresnel_moment1"]
+
+
+def fresnel_moment1(eta) -> float:
+    """pbrt-v4's ``FresnelMoment1(eta)`` polynomial. Its convention: it fits
+    int_0^1 Fr(mu, 1/eta) mu dmu, with Fr the dielectric reflectance for relative IOR 1/eta (checked
+    against quadrature in the tests; about 1e-4 absolute)."""
+    return _core.fresnel_moment1(_scalar(eta, "eta", lo=0.0, lo_open=True))
+
+
+class NormalizedFresnel(BxDF):
+    """Light leaving a subsurface-scattering boundary (pbrt-v4 ``NormalizedFresnelBxDF``; the S_w
+    term of Jensen et al. 2001 / d'Eon & Irving 2011):
+
+    f = (1 - Fr(cos wi, eta)) / (c pi),   c = 1 - 2 FresnelMoment1(1 / eta) = 1 - 2 int_0^1 Fr(mu, eta) mu dmu,
+
+    on wo's side, 0 across; cos wi is signed as in pbrt-v4 (below the surface Fr uses 1 / eta).
+    In Radiance mode f is multiplied by eta^2 (pbrt-v4's adjoint correction), so for wo above
+    the surface the albedo is 1 in Importance mode and eta^2 in Radiance mode (up to the
+    polynomial fit of FresnelMoment1, ~1e-4). Cosine-weighted sampling. eta > 0.
+    """
+
+    __slots__ = ()
+    aliases = ("bssrdf_exit",)
+    examples = {"skin": "normalized_fresnel eta=1.4", "water": "normalized_fresnel eta=1.33"}
+    description = "BSSRDF exit lobe (1 - Fr) / (c pi) of pbrt-v4"
+    energy_conserving = True   # albedo 1 in Importance mode (eta^2 in Radiance mode: the adjoint factor)
+    exact_eval = True
+    reciprocal = False         # f depends on wi only, through Fr(cos wi)
+    two_sided = True
+    transmission = False
+    delta_only = False
+    mitsuba = None
+    knobs = ()                 # no accuracy setting (FresnelMoment1 is pbrt-v4's fixed polynomial)
+
+    def to_mitsuba(self) -> dict:
+        raise NotImplementedError("Mitsuba 3 has no normalized-Fresnel (BSSRDF exit) plugin; use "
+                                  "bsdfkit.testing.hair_ref.normalized_fresnel_f as the reference")
+
+    def __init__(self, eta=1.33):
+        super().__init__(eta=_scalar(eta, "eta", lo=0.0, lo_open=True))
+
+    @classmethod
+    def _from_params(cls, p):
+        return cls(**p)
+
+    def __repr__(self):
+        return f"NormalizedFresnel(eta={self._params['eta']!r})"
+
+    def _make_core(self):
+        return _core.NormalizedFresnel(eta=self._params["eta"])
