@@ -21,9 +21,10 @@ namespace bsdfkit {
 
 enum class ConductorFresnel : uint8_t { Exact = 0, Schlick = 1, F82 = 2 };
 
-struct ConductorParams {
-    std::array<double, 3> eta{0.201006, 0.923749, 1.102215}, k{3.913262, 2.453045, 2.142090};  // Cu (bk.METALS)
-    double alpha_x = 0, alpha_y = 0;
+// S: the parameters' scalar type, double (core/math.h param_t; a Dual for gradients, core/dual.h).
+template <typename S = double> struct ConductorParamsT {
+    std::array<S, 3> eta{0.201006, 0.923749, 1.102215}, k{3.913262, 2.453045, 2.142090};  // Cu (bk.METALS)
+    S alpha_x = 0, alpha_y = 0;
     Masking masking = Masking::Correlated;
     template <class V> void fields(V &&v) {
         v("eta", eta);
@@ -33,23 +34,25 @@ struct ConductorParams {
         v("masking", masking);
     }
 };
+using ConductorParams = ConductorParamsT<>;
 
 template <typename F, ConductorFresnel FR = ConductorFresnel::Exact> struct ConductorBxDF {
-    using Params = ConductorParams;
+    using Params = ConductorParamsT<param_t<F>>;
     static constexpr const char *Name = FR == ConductorFresnel::Schlick ? "ConductorSchlick"
                                         : FR == ConductorFresnel::F82   ? "ConductorF82"
                                                                         : "Conductor";
     TrowbridgeReitz<F> mfd;
     Spectrum<F> eta, k;
-    // Per-channel Schlick F0 and F82-tint a, computed in double at construction (unused by Exact).
+    // Per-channel Schlick F0 and F82-tint a, computed in double at construction (unused by Exact);
+    // for a Dual model in the Dual (param_t), so their derivatives reach eta and k.
     Spectrum<F> f0{F(0)}, f82_a{F(0)};
 
     ConductorBxDF() = default;
     ConductorBxDF(const TrowbridgeReitz<F> &mfd_, const Spectrum<F> &eta_, const Spectrum<F> &k_)
         : mfd(mfd_), eta(eta_), k(k_) {
         for (int i = 0; i < Spectrum<F>::Size; ++i) {
-            f0[i] = F(ConductorF0(double(eta[i]), double(k[i])));
-            f82_a[i] = F(ConductorF82A(double(eta[i]), double(k[i])));
+            f0[i] = F(ConductorF0(param_t<F>(eta[i]), param_t<F>(k[i])));
+            f82_a[i] = F(ConductorF82A(param_t<F>(eta[i]), param_t<F>(k[i])));
         }
     }
 

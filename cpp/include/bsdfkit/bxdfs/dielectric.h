@@ -13,8 +13,9 @@
 
 namespace bsdfkit {
 
-struct DielectricParams {
-    double eta = 1.5, alpha_x = 0, alpha_y = 0;
+// S: the parameters' scalar type, double (core/math.h param_t; a Dual for gradients, core/dual.h).
+template <typename S = double> struct DielectricParamsT {
+    S eta = 1.5, alpha_x = 0, alpha_y = 0;
     Masking masking = Masking::Correlated;
     template <class V> void fields(V &&v) {
         v("eta", eta);
@@ -23,9 +24,10 @@ struct DielectricParams {
         v("masking", masking);
     }
 };
+using DielectricParams = DielectricParamsT<>;
 
 template <typename F> struct DielectricBxDF {
-    using Params = DielectricParams;
+    using Params = DielectricParamsT<param_t<F>>;
     static constexpr const char *Name = "Dielectric";
     F eta;
     TrowbridgeReitz<F> mfd;
@@ -59,7 +61,7 @@ template <typename F> struct DielectricBxDF {
         F len2 = length_squared(h);
         *len2_out = len2;
         bool ok = (cos_i != F(0)) & (cos_o != F(0)) & (len2 > F(0));
-        F inv_len = F(1) / std::sqrt(ok ? len2 : F(1));
+        F inv_len = F(1) / sqrt(ok ? len2 : F(1));
         F sgn = h.z < F(0) ? -inv_len : inv_len; // normalize and face +z in one scale
         h = h * sgn;
         *wm = h;
@@ -78,13 +80,13 @@ template <typename F> struct DielectricBxDF {
         F Fr, Ft;
         FrDielectricRT(dot(wo, wm), eta, &Fr, &Ft); // Ft = 1 - Fr without cancellation
         F dg = mfd.D(wm) * mfd.G(wo, wi);
-        F cc = std::abs(cos_i * cos_o);
+        F cc = abs(cos_i * cos_o);
         // Reflection: D G F / |4 cos_i cos_o|
         F fr = dg * Fr / (F(4) * cc);
         // Transmission (Walter 2007 eq. 21): D G (1 - F) |wi.wm wo.wm| / (|cos_i cos_o| (wi.wm + wo.wm/etap)^2),
         // the squared sum being |h|^2 / etap^2 (half_vector); Radiance mode divides by etap^2,
         // which cancels the etap^2 of that denominator.
-        F ft = dg * Ft * std::abs(dot(wi, wm) * dot(wo, wm)) / (len2 * cc);
+        F ft = dg * Ft * abs(dot(wi, wm) * dot(wo, wm)) / (len2 * cc);
         ft = mode == TransportMode::Radiance ? ft : ft * sqr(etap);
         F v = reflect ? fr : ft;
         return Spectrum<F>(ok ? v : F(0));

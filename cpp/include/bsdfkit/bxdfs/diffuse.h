@@ -8,13 +8,15 @@
 
 namespace bsdfkit {
 
-struct DiffuseParams {
-    std::array<double, 3> reflectance{0.5, 0.5, 0.5};
+// S: the parameters' scalar type, double (core/math.h param_t; a Dual for gradients, core/dual.h).
+template <typename S = double> struct DiffuseParamsT {
+    std::array<S, 3> reflectance{0.5, 0.5, 0.5};
     template <class V> void fields(V &&v) { v("reflectance", reflectance); }
 };
+using DiffuseParams = DiffuseParamsT<>;
 
 template <typename F> struct DiffuseBxDF {
-    using Params = DiffuseParams;
+    using Params = DiffuseParamsT<param_t<F>>;
     static constexpr const char *Name = "Diffuse";
     Spectrum<F> R;
 

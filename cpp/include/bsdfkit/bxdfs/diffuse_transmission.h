@@ -9,16 +9,18 @@
 
 namespace bsdfkit {
 
-struct DiffuseTransmissionParams {
-    std::array<double, 3> reflectance{0.25, 0.25, 0.25}, transmittance{0.25, 0.25, 0.25};
+// S: the parameters' scalar type, double (core/math.h param_t; a Dual for gradients, core/dual.h).
+template <typename S = double> struct DiffuseTransmissionParamsT {
+    std::array<S, 3> reflectance{0.25, 0.25, 0.25}, transmittance{0.25, 0.25, 0.25};
     template <class V> void fields(V &&v) {
         v("reflectance", reflectance);
         v("transmittance", transmittance);
     }
 };
+using DiffuseTransmissionParams = DiffuseTransmissionParamsT<>;
 
 template <typename F> struct DiffuseTransmissionBxDF {
-    using Params = DiffuseTransmissionParams;
+    using Params = DiffuseTransmissionParamsT<param_t<F>>;
     static constexpr const char *Name = "DiffuseTransmission";
     Spectrum<F> R, T;
 

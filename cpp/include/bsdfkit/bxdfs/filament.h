@@ -87,7 +87,7 @@ template <typename F> inline F D_GGX(const TrowbridgeReitz<F> &mfd, const Vec3<F
 template <typename F> inline F D_Charlie_sin2(F alpha, F sin2h) {
     F inv = F(1) / alpha;
     F s2 = max_(sin2h, F(kCharlieSin2Floor));
-    return (F(2) + inv) * std::pow(s2, inv * F(0.5)) * (F(0.5) * InvPi<F>);
+    return (F(2) + inv) * pow(s2, inv * F(0.5)) * (F(0.5) * InvPi<F>);
 }
 template <typename F> inline F D_Charlie(F alpha, F NoH) { return D_Charlie_sin2(alpha, F(1) - NoH * NoH); }
 
@@ -111,8 +111,8 @@ template <typename F> inline F D_Ashikhmin(F alpha, F NoH) {
 // V_SmithGGXCorrelated (Heitz 2014, brdf.fs): 0.5 / (NoL sqrt(NoV^2 (1 - a^2) + a^2) + NoV sqrt(NoL^2 (1 - a^2) + a^2)).
 template <typename F> inline F V_SmithGGXCorrelated(F alpha, F NoV, F NoL) {
     F a2 = alpha * alpha;
-    F lambdaV = NoL * std::sqrt((NoV - a2 * NoV) * NoV + a2);
-    F lambdaL = NoV * std::sqrt((NoL - a2 * NoL) * NoL + a2);
+    F lambdaV = NoL * sqrt((NoV - a2 * NoV) * NoV + a2);
+    F lambdaL = NoV * sqrt((NoL - a2 * NoL) * NoL + a2);
     return F(0.5) / (lambdaV + lambdaL);
 }
 
@@ -125,8 +125,8 @@ template <typename F> inline F V_SmithGGXCorrelated_Fast(F alpha, F NoV, F NoL) 
 // 0.5 / (NoL |(at ToV, ab BoV, NoV)| + NoV |(at ToL, ab BoL, NoL)|).
 template <typename F>
 inline F V_SmithGGXCorrelated_Anisotropic(F at, F ab, F ToV, F BoV, F ToL, F BoL, F NoV, F NoL) {
-    F lambdaV = NoL * std::sqrt(sqr(at * ToV) + sqr(ab * BoV) + NoV * NoV);
-    F lambdaL = NoV * std::sqrt(sqr(at * ToL) + sqr(ab * BoL) + NoL * NoL);
+    F lambdaV = NoL * sqrt(sqr(at * ToV) + sqr(ab * BoV) + NoV * NoV);
+    F lambdaL = NoV * sqrt(sqr(at * ToL) + sqr(ab * BoL) + NoL * NoL);
     return F(0.5) / (lambdaV + lambdaL);
 }
 
@@ -158,9 +158,10 @@ template <typename F> inline F Fd_Burley(F alpha, F NoV, F NoL, F LoH) {
 // Fd_Wrap (brdf.fs, energy-conserving wrap, no 1/pi): saturate((NoL + w) / (1 + w)^2).
 template <typename F> inline F Fd_Wrap(F NoL, F w) { return saturate((NoL + w) / sqr(F(1) + w)); }
 
-// f0ClearCoatToSurface (common_material.fs, desktop fit of iorToF0(f0ToIor(f0), 1.5)).
-inline double f0ClearCoatToSurface(double f0) {
-    return saturate(f0 * (f0 * (0.941892 - 0.263008 * f0) + 0.346479) - 0.0285998);
+// f0ClearCoatToSurface (common_material.fs, desktop fit of iorToF0(f0ToIor(f0), 1.5)); T is
+// double (make() computes in double) or a Dual (core/dual.h).
+template <typename T> inline T f0ClearCoatToSurface(T f0) {
+    return saturate(f0 * (f0 * (T(0.941892) - T(0.263008) * f0) + T(0.346479)) - T(0.0285998));
 }
 
 // ------------------------------------------------------------------ samplers
@@ -195,12 +196,14 @@ template <typename F> inline F WrapHemispherePDF(F mu, F w) {
 
 // ====================================================================== standard model
 
-struct FilamentStandardParams {
-    std::array<double, 3> base_color{0.8, 0.8, 0.8};
-    double metallic = 0, roughness = 0.5, reflectance = 0.5, anisotropy = 0;
-    double clear_coat = 0, clear_coat_roughness = 0;
-    std::array<double, 3> sheen_color{0, 0, 0};
-    double sheen_roughness = 0;
+// S: the continuous parameters' scalar type, double (core/math.h param_t; a Dual for gradients,
+// core/dual.h); the knobs stay plain.
+template <typename S = double> struct FilamentStandardParamsT {
+    std::array<S, 3> base_color{0.8, 0.8, 0.8};
+    S metallic = 0, roughness = 0.5, reflectance = 0.5, anisotropy = 0;
+    S clear_coat = 0, clear_coat_roughness = 0;
+    std::array<S, 3> sheen_color{0, 0, 0};
+    S sheen_roughness = 0;
     filament::DiffuseTerm diffuse = filament::DiffuseTerm::Lambert;
     filament::VisibilityTerm visibility = filament::VisibilityTerm::Correlated;
     bool f90_filament = true;
@@ -230,6 +233,7 @@ struct FilamentStandardParams {
         v("dfg", dfg);
     }
 };
+using FilamentStandardParams = FilamentStandardParamsT<>;
 
 // Written for the batch kernels' vectorizer: uniform switches are stored as F (0 or 1) and
 // applied with compares/selects or as arithmetic factors (a bool loaded from the model cannot
@@ -388,50 +392,56 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardKernel {
 // whose parameters stay in registers) plus the shared DFG table it points into (core/table.h).
 template <typename F, bool Coat, bool Sheen> struct FilamentStandardT : FilamentStandardKernel<F, Coat, Sheen> {
     using Kernel = FilamentStandardKernel<F, Coat, Sheen>;
-    using Params = FilamentStandardParams;
+    using Params = FilamentStandardParamsT<param_t<F>>;
     static constexpr const char *Name = Coat ? (Sheen ? "FilamentStandardCoatSheen" : "FilamentStandardCoat")
                                              : (Sheen ? "FilamentStandardSheen" : "FilamentStandard");
     SharedTable<FilamentDFG> dfg;  // keeps the table alive
 
+    // Derived parameters in S = param_t<F>: double, or the Dual of a gradient model, so that
+    // derivatives flow through this preprocessing (core/dual.h lists the one-sided points: the
+    // roughness clamps, saturate(f90), the alpha floors, the DFG rows' bilinear weights).
     static FilamentStandardT make(const Params &p) {
         using namespace filament;
+        using S = param_t<F>;
         const FilamentDFG *table = p.dfg.get();
         FilamentStandardT m;
         double min_pr = p.min_perceptual_roughness, min_alpha = min_pr * min_pr;
-        double cc = p.clear_coat;
-        double f0d = 0.16 * p.reflectance * p.reflectance;  // computeDielectricF0
+        S cc = p.clear_coat;
+        S f0d = S(0.16) * p.reflectance * p.reflectance;  // computeDielectricF0
         for (int c = 0; c < 3; ++c) {
-            double f0 = p.base_color[c] * p.metallic + f0d * (1 - p.metallic);  // computeF0
+            S f0 = p.base_color[c] * p.metallic + f0d * (S(1) - p.metallic);  // computeF0
             if (p.clear_coat_ior_change) f0 = lerp(cc, f0, f0ClearCoatToSurface(f0));  // CLEAR_COAT_IOR_CHANGE
             m.f0[c] = F(f0);
-            m.diffuse_color[c] = F(p.base_color[c] * (1 - p.metallic));  // computeDiffuseColor
+            m.diffuse_color[c] = F(p.base_color[c] * (S(1) - p.metallic));  // computeDiffuseColor
             m.sheen_color[c] = Sheen ? F(p.sheen_color[c]) : F(0);
         }
-        double sum_f0 = double(m.f0[0]) + double(m.f0[1]) + double(m.f0[2]);
-        m.f90 = p.f90_filament ? F(saturate(kF90Scale * sum_f0)) : F(1);  // fresnel(), quality > LOW
+        S sum_f0 = S(m.f0[0]) + S(m.f0[1]) + S(m.f0[2]);
+        m.f90 = p.f90_filament ? F(saturate(S(kF90Scale) * sum_f0)) : F(1);  // fresnel(), quality > LOW
         // getClearCoatPixelParams / getRoughnessPixelParams
-        double cc_pr = clamp(p.clear_coat_roughness, min_pr, 1.0);
-        double pr = lerp(cc, p.roughness, p.roughness > cc_pr ? p.roughness : cc_pr);
-        pr = clamp(pr, min_pr, 1.0);
-        double a = pr * pr;
+        S cc_pr = clamp(p.clear_coat_roughness, S(min_pr), S(1));
+        S pr = lerp(cc, p.roughness, p.roughness > cc_pr ? p.roughness : cc_pr);
+        pr = clamp(pr, S(min_pr), S(1));
+        S a = pr * pr;
         // anisotropicLobe: at = max(a (1 + aniso), MIN_ROUGHNESS), ab = max(a (1 - aniso), MIN_ROUGHNESS)
-        double at = a * (1 + p.anisotropy), ab = a * (1 - p.anisotropy);
-        at = at > min_alpha ? at : min_alpha;
-        ab = ab > min_alpha ? ab : min_alpha;
+        S at = a * (S(1) + p.anisotropy), ab = a * (S(1) - p.anisotropy);
+        at = at > S(min_alpha) ? at : S(min_alpha);
+        ab = ab > S(min_alpha) ? ab : S(min_alpha);
         m.alpha = F(a);
         m.spec = TrowbridgeReitz<F>(F(at), F(ab), Masking::Correlated);
         m.coat = TrowbridgeReitz<F>(F(cc_pr * cc_pr), F(cc_pr * cc_pr), Masking::Correlated);
         m.clear_coat = Coat ? F(cc) : F(0);
-        double s_pr = clamp(p.sheen_roughness, min_pr, 1.0);  // getSheenPixelParams
+        S s_pr = clamp(p.sheen_roughness, S(min_pr), S(1));  // getSheenPixelParams
         m.sheen_alpha = F(s_pr * s_pr);
         m.sheen_max = m.sheen_color.max_component();
         m.diffuse_max = m.diffuse_color.max_component();
-        m.anisotropic = p.anisotropy != 0 ? F(1) : F(0);
+        // A differentiated anisotropy takes the anisotropic V even at 0 (equal in value there; the
+        // isotropic form would miss d V / d anisotropy).
+        m.anisotropic = (p.anisotropy != S(0)) | is_variable(p.anisotropy) ? F(1) : F(0);
         m.fast_v = p.visibility == VisibilityTerm::Fast ? F(1) : F(0);
         m.burley = p.diffuse == DiffuseTerm::Burley ? F(1) : F(0);
         m.energy_compensation = p.energy_compensation ? F(1) : F(0);
         m.doc_layering = p.layering == Layering::Doc ? F(1) : F(0);
-        const F *d = table->template data<F>();
+        const scalar_t<F> *d = table->template data<scalar_t<F>>();
         m.dfg_base = DFGRow<F>(d, table->size, pr);
         m.dfg_coat = DFGRow<F>(d, table->size, cc_pr);
         m.dfg_sheen = DFGRow<F>(d, table->size, s_pr);

@@ -53,24 +53,28 @@ SharedTable<FilamentDFG> make_filament_dfg(int size, int samples, const double *
 
 // One roughness row of the table, fixed per model: the row indices and weight are computed once
 // at construction, so a per-element lookup only interpolates along NoV.
+// F may be a Dual (core/dual.h): the table holds its scalar_t, and the row weight ty carries the
+// derivative of the bilinear interpolant along roughness.
 template <typename F> struct DFGRow {
-    const F *data = nullptr;
+    const scalar_t<F> *data = nullptr;
     int size = 0;
     int j0 = 0, j1 = 0;
     F ty = 0;
 
     DFGRow() = default;
-    DFGRow(const F *d, int n, double perceptual_roughness) : data(d), size(n) {
-        double t = clamp(perceptual_roughness * (n - 1), 0.0, double(n - 1));
-        j0 = int(t) < n - 1 ? int(t) : n - 2;
+    template <typename S>
+    DFGRow(const scalar_t<F> *d, int n, S perceptual_roughness) : data(d), size(n) {
+        S t = clamp(perceptual_roughness * S(n - 1), S(0), S(n - 1));
+        int ti = int(value_of(t));
+        j0 = ti < n - 1 ? ti : n - 2;
         j1 = j0 + 1;
-        ty = F(t - j0);
+        ty = F(t - S(j0));
     }
 
     // Channel c at NoV in [0, 1] (bilinear on the end-point grid).
     F operator()(F NoV, int c) const {
         F t = clamp(NoV * F(size - 1), F(0), F(size - 1));
-        int i0 = int(t) < size - 1 ? int(t) : size - 2;
+        int i0 = int(value_of(t)) < size - 1 ? int(value_of(t)) : size - 2;
         F tx = t - F(i0);
         int k0 = 3 * (size * j0 + i0) + c, k1 = 3 * (size * j1 + i0) + c;
         F a = lerp(tx, at(k0), at(k0 + 3));
@@ -81,8 +85,9 @@ template <typename F> struct DFGRow {
     // Table entry k, read through its bits: an integer load cannot alias the float output
     // arrays of the batch kernels, which lets the vectorizer gather from the table.
     F at(int k) const {
-        using U = std::conditional_t<std::is_same_v<F, float>, uint32_t, uint64_t>;
-        return __builtin_bit_cast(F, reinterpret_cast<const U *>(data)[k]);
+        using T = scalar_t<F>;
+        using U = std::conditional_t<std::is_same_v<T, float>, uint32_t, uint64_t>;
+        return F(__builtin_bit_cast(T, reinterpret_cast<const U *>(data)[k]));
     }
 };
 

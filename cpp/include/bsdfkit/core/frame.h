@@ -6,9 +6,9 @@ namespace bsdfkit {
 
 template <typename F> inline F CosTheta(const Vec3<F> &w) { return w.z; }
 template <typename F> inline F Cos2Theta(const Vec3<F> &w) { return w.z * w.z; }
-template <typename F> inline F AbsCosTheta(const Vec3<F> &w) { return std::abs(w.z); }
+template <typename F> inline F AbsCosTheta(const Vec3<F> &w) { return abs(w.z); }
 template <typename F> inline F Sin2Theta(const Vec3<F> &w) { return max_(F(0), F(1) - Cos2Theta(w)); }
-template <typename F> inline F SinTheta(const Vec3<F> &w) { return std::sqrt(Sin2Theta(w)); }
+template <typename F> inline F SinTheta(const Vec3<F> &w) { return sqrt(Sin2Theta(w)); }
 // +inf on the horizon; callers test for it (pbrt-v4 D and Lambda).
 template <typename F> inline F Tan2Theta(const Vec3<F> &w) { return Sin2Theta(w) / Cos2Theta(w); }
 template <typename F> inline F CosPhi(const Vec3<F> &w) {
@@ -33,7 +33,7 @@ template <typename F> inline Vec3<F> reflection_half_vector(const Vec3<F> &wo, c
     Vec3<F> h = wo + wi;
     F len2 = length_squared(h);
     active &= len2 > F(0);
-    return h / std::sqrt(active ? len2 : F(1));
+    return h / sqrt(active ? len2 : F(1));
 }
 
 // Mirror wo about n (pbrt-v4 Reflect).

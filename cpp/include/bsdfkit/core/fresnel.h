@@ -10,7 +10,7 @@ template <typename F> inline F FrDielectric(F cos_i, F eta) {
     cos_i = clamp(cos_i, F(-1), F(1));
     bool inside = cos_i < F(0);
     eta = inside ? F(1) / eta : eta;
-    cos_i = std::abs(cos_i);
+    cos_i = abs(cos_i);
     F sin2_t = (F(1) - sqr(cos_i)) / sqr(eta);
     bool tir = sin2_t >= F(1);
     F cos_t = safe_sqrt(F(1) - sin2_t);
@@ -28,7 +28,7 @@ template <typename F> inline void FrDielectricRT(F cos_i, F eta, F *R, F *T) {
     cos_i = clamp(cos_i, F(-1), F(1));
     bool inside = cos_i < F(0);
     eta = inside ? F(1) / eta : eta;
-    cos_i = std::abs(cos_i);
+    cos_i = abs(cos_i);
     F sin2_t = (F(1) - sqr(cos_i)) / sqr(eta);
     bool tir = sin2_t >= F(1);
     F cos_t = safe_sqrt(F(1) - sin2_t);
@@ -54,7 +54,7 @@ template <typename F> inline Cplx<F> cmul(Cplx<F> a, Cplx<F> b) {
 template <typename F> inline F cnorm(Cplx<F> a) { return a.re * a.re + a.im * a.im; }
 // Principal square root: sqrt(a+ib) = (sqrt((|z|+a)/2), sign(b) sqrt((|z|-a)/2)).
 template <typename F> inline Cplx<F> csqrt(Cplx<F> z) {
-    F n = std::sqrt(cnorm(z));
+    F n = sqrt(cnorm(z));
     F re = safe_sqrt((n + z.re) * F(0.5));
     F im = safe_sqrt((n - z.re) * F(0.5));
     return {re, copysign1(im, z.im)};
@@ -69,7 +69,7 @@ template <typename F> inline F FrComplex(F cos_i, F eta, F k) {
     F cos2 = cos_i * cos_i, sin2 = F(1) - cos2;
     F eta2 = eta * eta, k2 = k * k;
     F t0 = eta2 - k2 - sin2;
-    F a2pb2 = std::sqrt(t0 * t0 + F(4) * eta2 * k2); // a^2 + b^2
+    F a2pb2 = sqrt(t0 * t0 + F(4) * eta2 * k2); // a^2 + b^2
     F a = safe_sqrt(F(0.5) * (a2pb2 + t0));
     F t1 = a2pb2 + cos2, t2 = F(2) * a * cos_i;
     F t3 = a2pb2 * cos2 + sin2 * sin2, t4 = t2 * sin2;
@@ -92,16 +92,18 @@ inline Spectrum<F, N> FrComplex(F cos_i, const Spectrum<F, N> &eta, const Spectr
 inline constexpr double kF82Cos = 1.0 / 7.0;
 
 // Normal-incidence reflectance of eta + i k: F0 = ((eta-1)^2 + k^2) / ((eta+1)^2 + k^2).
-inline double ConductorF0(double eta, double k) {
-    return (sqr(eta - 1.0) + k * k) / (sqr(eta + 1.0) + k * k);
+// T is double (models compute it at construction in double) or a Dual (core/dual.h).
+template <typename T> inline T ConductorF0(T eta, T k) {
+    return (sqr(eta - T(1)) + k * k) / (sqr(eta + T(1)) + k * k);
 }
 
 // F82-tint coefficient a (Kutz et al. 2021 eq. for a, with the tinted target replaced by the
 // exact Fresnel): a = (Schlick(mu_bar) - F_exact(mu_bar)) / (mu_bar (1 - mu_bar)^6).
-inline double ConductorF82A(double eta, double k) {
-    double f0 = ConductorF0(eta, k), m = 1.0 - kF82Cos;
-    double schlick = f0 + (1.0 - f0) * (m * m * m * m * m);
-    return (schlick - FrComplex(kF82Cos, eta, k)) / (kF82Cos * (m * m * m * m * m * m));
+template <typename T> inline T ConductorF82A(T eta, T k) {
+    T f0 = ConductorF0(eta, k);
+    double m = 1.0 - kF82Cos;
+    T schlick = f0 + (T(1) - f0) * T(m * m * m * m * m);
+    return (schlick - FrComplex(T(kF82Cos), eta, k)) / T(kF82Cos * (m * m * m * m * m * m));
 }
 
 // Schlick 1994: F = F0 + (1 - F0)(1 - cos)^5, per channel.

@@ -25,6 +25,34 @@
 
 namespace bsdfkit {
 
+// Math functions are called unqualified in model code (sqrt(x), not std::sqrt(x)), so that the
+// overloads of a number type of namespace bsdfkit (core/dual.h's Dual) are found too.
+using std::abs;
+using std::acos;
+using std::asin;
+using std::atan2;
+using std::copysign;
+using std::cos;
+using std::erf;
+using std::exp;
+using std::floor;
+using std::fma;
+using std::log;
+using std::pow;
+using std::sin;
+using std::sqrt;
+
+// The scalar type under F (F itself; a Dual's value type, core/dual.h) and the type a model's
+// Params hold and its make() computes derived parameters in (double for float and double
+// models; the Dual itself for a Dual model, so derivatives flow through the preprocessing).
+template <typename F> struct ScalarOf { using type = F; };
+template <typename F> using scalar_t = typename ScalarOf<F>::type;
+template <typename F> struct ParamOf { using type = double; };
+template <typename F> using param_t = typename ParamOf<F>::type;
+// x without derivatives, and whether x carries any (plain numbers: itself, false; core/dual.h).
+template <typename T> constexpr T value_of(T x) { return x; }
+template <typename T> constexpr bool is_variable(T) { return false; }
+
 template <typename Float> inline constexpr Float Pi = Float(3.14159265358979323846);
 template <typename Float> inline constexpr Float InvPi = Float(0.31830988618379067154);
 template <typename Float> inline constexpr Float Inv2Pi = Float(0.15915494309189533577);
@@ -38,7 +66,7 @@ template <typename T> inline T max_(T a, T b) { return a > b ? a : b; }
 template <typename T> inline T min_(T a, T b) { return a < b ? a : b; }
 template <typename T> inline T clamp(T x, T lo, T hi) { return x < lo ? lo : (x > hi ? hi : x); }
 template <typename T> inline T lerp(T t, T a, T b) { return (1 - t) * a + t * b; }
-template <typename T> inline T safe_sqrt(T x) { return std::sqrt(x > T(0) ? x : T(0)); }
+template <typename T> inline T safe_sqrt(T x) { return sqrt(x > T(0) ? x : T(0)); }
 template <typename T> inline T safe_div(T a, T b) { return b != T(0) ? a / b : T(0); }
 template <typename T> inline T copysign1(T mag, T sgn) { return sgn < T(0) ? -mag : mag; }
 
@@ -111,14 +139,14 @@ template <typename Float> inline Float dot(const Vec3<Float> &a, const Vec3<Floa
     return a.x * b.x + a.y * b.y + a.z * b.z;
 }
 template <typename Float> inline Float absdot(const Vec3<Float> &a, const Vec3<Float> &b) {
-    return std::abs(dot(a, b));
+    return abs(dot(a, b));
 }
 template <typename Float> inline Vec3<Float> cross(const Vec3<Float> &a, const Vec3<Float> &b) {
     return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 template <typename Float> inline Float length_squared(const Vec3<Float> &v) { return dot(v, v); }
 template <typename Float> inline Vec3<Float> normalize(const Vec3<Float> &v) {
-    return v / std::sqrt(dot(v, v));
+    return v / sqrt(dot(v, v));
 }
 template <typename Float> inline Vec3<Float> select(bool c, const Vec3<Float> &a, const Vec3<Float> &b) {
     return {c ? a.x : b.x, c ? a.y : b.y, c ? a.z : b.z};

@@ -52,7 +52,7 @@ template <typename F> struct TrowbridgeReitz {
         // A horizon direction (or tan^2 overflowing) gives Lambda = inf, so G1 = G = 0: the
         // limit of a fully masked direction. pbrt-v4 returns 0 here and relies on callers
         // excluding cos = 0; returning inf keeps f finite for cos down to the underflow limit.
-        return (std::sqrt(F(1) + a2t2) - F(1)) / F(2);
+        return (sqrt(F(1) + a2t2) - F(1)) / F(2);
     }
 
     F G1(const Vec3<F> &w) const { return F(1) / (F(1) + Lambda(w)); }
@@ -94,6 +94,6 @@ template <typename F> struct TrowbridgeReitz {
 
 // pbrt-v4 RoughnessToAlpha: alpha = sqrt(roughness). pbrt-v4 #479 notes r^2 would be the
 // perceptually linear choice; kept for compatibility with pbrt scenes.
-template <typename F> inline F RoughnessToAlpha(F r) { return std::sqrt(r); }
+template <typename F> inline F RoughnessToAlpha(F r) { return sqrt(r); }
 
 } // namespace bsdfkit

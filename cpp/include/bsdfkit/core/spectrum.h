@@ -35,8 +35,8 @@ inline Spectrum<Float, N> select(bool c, const Spectrum<Float, N> &a, const Spec
     Spectrum<Float, N> r; for (int i = 0; i < N; ++i) r.v[i] = c ? a.v[i] : b.v[i]; return r;
 }
 
-// An RGB parameter (Params field, double) at the model's precision.
-template <typename Float> inline Spectrum<Float> to_spectrum(const std::array<double, 3> &a) {
+// An RGB parameter (Params field: double, or a Dual for a Dual model) at the model's precision.
+template <typename Float, typename S> inline Spectrum<Float> to_spectrum(const std::array<S, 3> &a) {
     Spectrum<Float> s;
     for (int i = 0; i < 3; ++i) s[i] = Float(a[size_t(i)]);
     return s;
