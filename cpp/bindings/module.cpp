@@ -23,6 +23,7 @@ void bind_filament_models(py::module_ &m);
 void bind_measured_models(py::module_ &m);
 void bind_plastic_extras(py::module_ &m);
 void bind_hair_models(py::module_ &m);
+void bind_grad_models(py::module_ &m);
 void bind_render(py::module_ &m);
 
 } // namespace bsdfkit::py_bind
@@ -50,6 +51,7 @@ PYBIND11_MODULE(_core, m) {
     py_bind::bind_pbrt_models(m);
     py_bind::bind_plastic_extras(m);
     py_bind::bind_hair_models(m);
+    py_bind::bind_grad_models(m);  // eval_grad on the bound classes (after bind_all)
     py_bind::bind_render(m);
 
     m.def("read_image", [](const std::string &path) {
