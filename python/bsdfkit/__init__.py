@@ -12,6 +12,7 @@ Subpackages, by concern:
 ``models``    the model classes and their registry (one module per family; ``bk.MODELS``)
 ``plot``      matplotlib views (polar, hemisphere, half/diff, albedo, samples, gallery, pareto, ...)
 ``tuning``    speed versus accuracy: knobs, errors, costs, ``tradeoff`` and ``simplify``
+``fitting``   parameter gradients (``eval_grad``) and least-squares fits (``fit``)
 ``interop``   scene materials in: Mitsuba 3 dictionaries, pbrt-v4 scene text
 ``render``    the path-traced preview renderer
 ``spectral``  spectra as values: named, sampled, RGB uplift; wavelength sampling, colour estimates
@@ -21,7 +22,7 @@ Subpackages, by concern:
 
 This module only re-exports.
 """
-from . import _core, filament, interop, io, models, plot, render, tuning  # noqa: F401
+from . import _core, filament, fitting, interop, io, models, plot, render, tuning  # noqa: F401
 from ._enums import BxDFFlags, ReflTrans, TransportMode
 from ._version import __version__
 from .directions import direction, hemisphere_grid
@@ -32,9 +33,10 @@ from . import measured  # noqa: E402  (writers and tabulation of measured materi
 from .spectral import Spectrum, sample_wavelengths, spectrum_to_rgb
 from .threads import get_num_threads, set_num_threads
 from .tuning import Table, knobs, simplify, tradeoff
+from .fitting import FitReport, fit
 
 __all__ = models.__all__ + [
     "BxDFFlags", "ReflTrans", "TransportMode", "direction", "get_num_threads", "hemisphere_grid", "set_num_threads",
     "Custom", "filament", "models", "plot", "tuning", "render", "io", "tradeoff", "simplify", "knobs", "Table", "from_mitsuba",
     "from_pbrt", "parse_pbrt_materials", "interop", "spectral", "Spectrum", "sample_wavelengths", "spectrum_to_rgb",
-    "__version__", "measured"]
+    "__version__", "measured", "fitting", "fit", "FitReport"]

@@ -409,6 +409,21 @@ class BxDF:
             _raise_bad("wo", bo)
         return out
 
+    # ---- parameter gradients (bsdfkit.fitting; kept as one block)
+    #: Fitting bounds of the differentiable parameters, name -> (lo, hi) (bsdfkit.fitting.fit).
+    param_ranges: dict = {}
+
+    def eval_grad(self, wo, wi, params=None, mode=TransportMode.Radiance):
+        """``(f, grad)``: f(wo, wi) (..., 3) and d f / d theta (..., 3, P), float64, from the
+        model's own C++ code with forward-mode dual numbers. ``params``: names of the parameters
+        (default: all differentiable ones); an RGB parameter gives three columns (``"eta"`` ->
+        eta.r, eta.g, eta.b; ``"eta.g"`` one), ``"alpha"`` the isotropic alpha_x = alpha_y
+        direction. Columns: ``bsdfkit.fitting.grad_columns``; one-sided and zero derivatives
+        (smooth/rough switch, clamps, tables): ``bsdfkit.fitting.grad``. A bad name raises
+        ValueError listing the differentiable parameters."""
+        from ..fitting.grad import eval_grad
+        return eval_grad(self, wo, wi, params, mode)
+
 
 def _rebuild(cls, params):
     return cls._from_params(params)

@@ -83,6 +83,8 @@ class Conductor(BxDF):
     energy_conserving, exact_eval, two_sided, transmission, delta_only = True, True, True, False, False
     reciprocal = True
     mitsuba = "roughconductor"
+    # fitting bounds (bk.fit): the validated ranges, alphas kept in the rough regime (>= 1e-3)
+    param_ranges = {"eta": (1e-3, 10.0), "k": (0.0, 20.0), "alpha_x": (1e-3, 2.0), "alpha_y": (1e-3, 2.0)}
     knobs = (
         KnobDecl("fresnel", ("exact", "f82", "schlick"), "approximation",
                  "conductor Fresnel: complex (exact), F82-tint, Schlick"),

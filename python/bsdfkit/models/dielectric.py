@@ -36,6 +36,8 @@ class Dielectric(BxDF):
     energy_conserving, exact_eval, two_sided, transmission, delta_only = True, True, True, True, False
     reciprocal = True
     mitsuba = "roughdielectric"
+    # fitting bounds (bk.fit): alphas kept in the rough regime (>= 1e-3)
+    param_ranges = {"eta": (1.001, 4.0), "alpha_x": (1e-3, 2.0), "alpha_y": (1e-3, 2.0)}
     knobs = (masking_knob(_dielectric_masking_moot),)
 
     def __init__(self, eta=1.5, alpha=None, alpha_x=None, alpha_y=None, masking="correlated"):

@@ -21,6 +21,7 @@ class Diffuse(BxDF):
     energy_conserving, exact_eval, two_sided, transmission, delta_only = True, True, True, False, False
     reciprocal = True
     mitsuba = "diffuse"
+    param_ranges = {"reflectance": (0.0, 1.0)}  # fitting bounds (bk.fit)
 
     def __init__(self, reflectance=0.5):
         super().__init__(reflectance=_rgb(reflectance, "reflectance", lo=0.0, hi=1.0))
@@ -56,6 +57,7 @@ class DiffuseTransmission(BxDF):
     energy_conserving, exact_eval, two_sided, transmission, delta_only = True, True, True, True, False
     reciprocal = True
     mitsuba = None
+    param_ranges = {"reflectance": (0.0, 1.0), "transmittance": (0.0, 1.0)}  # fitting bounds (bk.fit)
 
     def __init__(self, reflectance=0.25, transmittance=0.25):
         super().__init__(reflectance=_rgb(reflectance, "reflectance", lo=0.0, hi=1.0),

@@ -43,8 +43,46 @@ CHARLIE_SIN2_FLOOR = 0.0078125           # brdf.fs D_Charlie / D_Ashikhmin: 2^-7
 PI = np.pi
 
 def _bk():
-    """(dr, Dr.Jit array module), shared with the other references."""
+    """(dr, Dr.Jit array module), shared with the other references; the AD module while
+    bsdfkit.testing.drjit_grad traces a call."""
+    from . import drjit_models as _dm
+    if _dm._TRACE is not None:
+        import drjit.llvm.ad as B
+        return _drjit_backend()[0], B
     return _drjit_backend()
+
+
+# Parameters may be Dr.Jit arrays (width 1, with gradients: bsdfkit.testing.drjit_grad) or
+# numbers; these helpers take either.
+def _is_dr(x):
+    return hasattr(x, "numpy") and not isinstance(x, np.ndarray)
+
+
+def _val(x):
+    """The plain value of a number or a width-1 Dr.Jit array."""
+    return float(x.numpy()[0]) if _is_dr(x) else float(x)
+
+
+def _mx(a, b):
+    return _sel(a > b, a, b) if (_is_dr(a) or _is_dr(b)) else float(max(a, b))
+
+
+def _mn(a, b):
+    return _sel(a < b, a, b) if (_is_dr(a) or _is_dr(b)) else float(min(a, b))
+
+
+def _num(x):
+    """A Dr.Jit array as is, a number as a Python float (a numpy scalar times a Dr.Jit array
+    would turn the product into a numpy array)."""
+    return x if _is_dr(x) else float(x)
+
+
+def _rgb3(x):
+    """An RGB parameter as a list of 3 numbers (or Dr.Jit arrays)."""
+    if isinstance(x, (list, tuple)) and any(_is_dr(v) for v in x):
+        return list(x)
+    a = np.broadcast_to(np.asarray(x, dtype=np.float64), (3,))
+    return [float(v) for v in a]
 
 
 def _F(a):
@@ -252,8 +290,9 @@ class _Lut:
         self.flat = _F(lut)
 
     def row(self, r):
-        t = min(max(float(r) * (self.n - 1), 0.0), self.n - 1.0)
-        j0 = min(int(np.floor(t)), self.n - 2)
+        """(j0, ty): the row and its weight (ty a Dr.Jit array carrying r's gradient if r has one)."""
+        t = _mn(_mx(r * (self.n - 1), 0.0), self.n - 1.0)
+        j0 = min(int(np.floor(_val(t))), self.n - 2)
         return j0, t - j0
 
     def __call__(self, r, NoV, c):
@@ -282,26 +321,31 @@ def _min_pr(v):
 def standard_params(model) -> dict:
     """The derived shading parameters of a ``FilamentStandard`` (surface_shading_lit.fs
     getPixelParams), in float64: f0, f90, diffuse color, roughnesses and alphas."""
-    base = np.asarray(model.base_color, dtype=np.float64)
-    metal, cc = float(model.metallic), float(model.clear_coat)
+    def num(x):
+        return x if _is_dr(x) else float(x)
+    base = _rgb3(model.base_color)
+    metal, cc = num(model.metallic), num(model.clear_coat)
     min_pr = _min_pr(model.min_roughness)
-    f0 = base * metal + 0.16 * float(model.reflectance) ** 2 * (1.0 - metal)  # computeF0, computeDielectricF0
+    refl = num(model.reflectance)
+    f0 = [b * metal + 0.16 * refl * refl * (1.0 - metal) for b in base]       # computeF0, computeDielectricF0
     if model.clear_coat_ior_change:                                           # CLEAR_COAT_IOR_CHANGE
-        fit = np.clip(f0 * (f0 * (0.941892 - 0.263008 * f0) + 0.346479) - 0.0285998, 0.0, 1.0)
-        f0 = f0 * (1.0 - cc) + fit * cc
-    f90 = min(max(16.5 * float(np.sum(f0)), 0.0), 1.0) if model.f90 == "filament" else 1.0
-    cc_pr = min(max(float(model.clear_coat_roughness), min_pr), 1.0)
-    r = float(model.roughness)
-    r = r * (1.0 - cc) + max(r, cc_pr) * cc                                   # base at least as rough as the coat
-    r = min(max(r, min_pr), 1.0)
+        fit = [_mn(_mx(x * (x * (0.941892 - 0.263008 * x) + 0.346479) - 0.0285998, 0.0), 1.0) for x in f0]
+        f0 = [x * (1.0 - cc) + y * cc for x, y in zip(f0, fit)]
+    f90 = _mn(_mx(16.5 * (f0[0] + f0[1] + f0[2]), 0.0), 1.0) if model.f90 == "filament" else 1.0
+    cc_pr = _mn(_mx(num(model.clear_coat_roughness), min_pr), 1.0)
+    r = num(model.roughness)
+    r = r * (1.0 - cc) + _mx(r, cc_pr) * cc                                   # base at least as rough as the coat
+    r = _mn(_mx(r, min_pr), 1.0)
     a = r * r
-    an = float(model.anisotropy)
-    at, ab = max(a * (1.0 + an), min_pr ** 2), max(a * (1.0 - an), min_pr ** 2)  # Kulla 2017, MIN_ROUGHNESS
-    s_pr = min(max(float(model.sheen_roughness), min_pr), 1.0)
-    return {"f0": f0, "f90": f90, "diffuse_color": base * (1.0 - metal), "roughness": r, "alpha": a,
-            "at": at, "ab": ab, "anisotropic": an != 0.0, "clear_coat": cc, "cc_roughness": cc_pr,
-            "cc_alpha": cc_pr ** 2, "sheen_color": np.asarray(model.sheen_color, dtype=np.float64),
-            "sheen_roughness": s_pr, "sheen_alpha": s_pr ** 2}
+    an = num(model.anisotropy)
+    at, ab = _mx(a * (1.0 + an), min_pr ** 2), _mx(a * (1.0 - an), min_pr ** 2)  # Kulla 2017, MIN_ROUGHNESS
+    s_pr = _mn(_mx(num(model.sheen_roughness), min_pr), 1.0)
+    sheen = _rgb3(model.sheen_color)
+    plain = not any(_is_dr(v) for v in f0 + sheen + [r, at, cc, s_pr])
+    arr = (lambda v: np.asarray(v, dtype=np.float64)) if plain else (lambda v: v)
+    return {"f0": arr(f0), "f90": f90, "diffuse_color": arr([b * (1.0 - metal) for b in base]), "roughness": r,
+            "alpha": a, "at": at, "ab": ab, "anisotropic": _val(an) != 0.0, "clear_coat": cc, "cc_roughness": cc_pr,
+            "cc_alpha": cc_pr * cc_pr, "sheen_color": arr(sheen), "sheen_roughness": s_pr, "sheen_alpha": s_pr * s_pr}
 
 
 def _geometry(wo, wi):
@@ -326,6 +370,9 @@ def _dirs(wo, wi):
 
 def _rgb_out(batch, cols):
     dr, _ = _bk()
+    from . import drjit_models as _dm
+    if _dm._TRACE is not None:
+        _dm._TRACE.out(batch, cols, True)
     dr.eval(*cols)
     return np.stack([np.asarray(c.numpy(), dtype=np.float64) for c in cols], axis=-1).reshape(batch + (3,))
 
@@ -356,26 +403,30 @@ def standard_f(model, wo, wi, lut):
     fd = _Fd_Burley(a, NoV, NoL, LoH) if model.diffuse == "burley" else 1.0 / PI
     y = L(p["roughness"], NoV, 1)
     cc = p["clear_coat"]
+    # a lobe of strength 0 is present when its strength is differentiated (a Dr.Jit leaf,
+    # bsdfkit.testing.drjit_grad): its value is 0 there, its right derivative is not
+    has_cc = _val(cc) > 0 or _is_dr(cc)
     Fc = _F_Schlick(0.04, 1.0, LoH) * cc
     sheen = p["sheen_color"]
-    has_sheen = float(np.max(sheen)) > 0
+    sheen_max = _mx(_mx(sheen[0], sheen[1]), sheen[2])
+    has_sheen = _val(sheen_max) > 0 or _is_dr(sheen_max)
     if has_sheen:
-        scale = 1.0 - float(np.max(sheen)) * L(p["sheen_roughness"], NoV, 2)
+        scale = 1.0 - sheen_max * L(p["sheen_roughness"], NoV, 2)
         scale = _sel(scale > 0, scale, 0.0)  # bsdfkit floors Filament's sheen scaling at 0 (z > 1 at grazing NoV)
         Ds = _D_Charlie(p["sheen_alpha"], NoH) * _V_Neubelt(NoV, NoL)
     Dc = _D_GGX(p["cc_alpha"], NoH) * _V_Kelemen(LoH) * Fc
     cols = []
     for c in range(3):
-        f0 = float(p["f0"][c])
+        f0 = _num(p["f0"][c])
         Fr = D * V * _F_Schlick(f0, p["f90"], LoH)
         if model.energy_compensation:
             Fr = Fr * (1.0 + f0 * (1.0 / y - 1.0))                     # energy compensation
-        if model.clear_coat_layering == "doc" and cc > 0:
+        if model.clear_coat_layering == "doc" and has_cc:
             Fr = Fr * (1.0 - Fc)
-        col = p["diffuse_color"][c] * fd + Fr
+        col = _num(p["diffuse_color"][c]) * fd + Fr
         if has_sheen:
-            col = col * scale + sheen[c] * Ds
-        if cc > 0:
+            col = col * scale + _num(sheen[c]) * Ds
+        if has_cc:
             col = col * (1.0 - Fc) + Dc
         cols.append(_sel(ok, col, 0.0))
     return _rgb_out(batch, cols)

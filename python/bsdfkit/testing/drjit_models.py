@@ -34,9 +34,17 @@ SMOOTH_ALPHA = 1e-3  # pbrt-v4 TrowbridgeReitzDistribution::EffectivelySmooth
 MIN_ALPHA = 1e-4     # pbrt-v4 TrowbridgeReitzDistribution constructor floor
 INV_PI = 1.0 / np.pi
 
+#: Forward-mode AD tracer (bsdfkit.testing.drjit_grad): when set, arrays are drjit.llvm.ad
+#: Float64, ``_prep`` lets it enable gradients on the parameters and ``_out``/``_out3`` let it
+#: propagate them. None: plain evaluation.
+_TRACE = None
+
+
 def _bk():
     """(dr, Float64 array type) of the shared backend (references._drjit_backend)."""
     dr, B = _drjit_backend()
+    if _TRACE is not None:
+        return dr, _TRACE.Float64
     return dr, (B.Float64 if dr.has_backend(dr.JitBackend.LLVM) else B.ArrayXf64)
 
 
@@ -94,12 +102,16 @@ def _prep(scalars=(), vectors=(), spectra=()):
     fs = [conv(a) for a in s]
     vs = [tuple(conv(a[..., i]) for i in range(3)) for a in v]
     cs = [tuple(conv(a[..., i]) for i in range(3)) for a in c]
+    if _TRACE is not None:
+        _TRACE.prep(fs, cs)
     return batch, n, fs, vs, cs
 
 
 def _out(batch, *arrs):
     """Evaluate Dr.Jit arrays in one kernel and return float64 numpy arrays of shape batch."""
     dr, _ = _bk()
+    if _TRACE is not None:
+        _TRACE.out(batch, arrs, False)
     dr.eval(*arrs)
     res = [np.asarray(a.numpy(), dtype=np.float64).reshape(batch) for a in arrs]
     return res[0] if len(res) == 1 else res
@@ -107,6 +119,8 @@ def _out(batch, *arrs):
 
 def _out3(batch, c):
     dr, _ = _bk()
+    if _TRACE is not None:
+        _TRACE.out(batch, c, True)
     dr.eval(*c)
     return np.stack([np.asarray(x.numpy(), dtype=np.float64).reshape(batch) for x in c], axis=-1)
 

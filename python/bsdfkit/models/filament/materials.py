@@ -183,6 +183,9 @@ class FilamentStandard(BxDF):
     energy_conserving, exact_eval, two_sided, transmission, delta_only = False, True, False, False, False
     reciprocal = False  # energy compensation and sheen scaling depend on wo only
     mitsuba = None
+    param_ranges = {"base_color": (0.0, 1.0), "metallic": (0.0, 1.0), "roughness": (0.0, 1.0),  # bk.fit bounds
+                    "reflectance": (0.0, 1.0), "anisotropy": (-1.0, 1.0), "clear_coat": (0.0, 1.0),
+                    "clear_coat_roughness": (0.0, 1.0), "sheen_color": (0.0, 1.0), "sheen_roughness": (0.0, 1.0)}
     knobs = (
         KnobDecl("clear_coat", _lobe_settings("clear_coat"), "approximation",
                  "clear-coat lobe: keep, or drop (clear_coat = 0, compiled variant without the coat)",
@@ -245,7 +248,25 @@ class FilamentStandard(BxDF):
         # cost nothing; the sheen lobe's pow() keeps a kernel scalar); each equals the general
         # model with the missing lobe's strength 0.
         p = self._params
-        coat, sheen = p["clear_coat"] > 0, float(np.max(p["sheen_color"])) > 0
+        return self._core_variant(p["clear_coat"] > 0, float(np.max(p["sheen_color"])) > 0)
+
+    def _grad_core(self, params):
+        """``eval_grad``'s kernel: the model's own variant, or the one with the clear-coat / sheen
+        lobe when a parameter of that lobe is differentiated (at strength 0 the lobe's value is 0
+        but its derivative is not). ``params`` as ``eval_grad`` (None: every parameter)."""
+        p = self._params
+        names = ("clear_coat", "sheen_color") if params is None else (params,) if isinstance(params, str) else params
+        names = [str(n).partition(".")[0] for n in names]
+        coat = p["clear_coat"] > 0 or any(n.startswith("clear_coat") for n in names)
+        sheen = float(np.max(p["sheen_color"])) > 0 or any(n.startswith("sheen") for n in names)
+        return self._core if (coat, sheen) == self._core_variant_key() else self._core_variant(coat, sheen)
+
+    def _core_variant_key(self):
+        p = self._params
+        return p["clear_coat"] > 0, float(np.max(p["sheen_color"])) > 0
+
+    def _core_variant(self, coat, sheen):
+        p = self._params
         cls = {(False, False): _core.FilamentStandard, (True, False): _core.FilamentStandardCoat,
                (False, True): _core.FilamentStandardSheen, (True, True): _core.FilamentStandardCoatSheen}[coat, sheen]
         return cls(base_color=p["base_color"].tolist(), metallic=p["metallic"], roughness=p["roughness"],

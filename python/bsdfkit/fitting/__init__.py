@@ -1,0 +1,11 @@
+"""Fitting: parameter gradients of the models and least-squares fits.
+
+``eval_grad`` (also ``BxDF.eval_grad``): f and d f / d theta from the models' own C++ code,
+instantiated with forward-mode dual numbers (``cpp/include/bsdfkit/core/dual.h``).
+``fit``: a model family fitted to a model or to raw samples with scipy's ``least_squares`` and
+that analytic Jacobian; ``FitReport`` says what it reached.
+"""
+from .fit import FitReport, fit
+from .grad import differentiable_params, eval_grad, grad_columns
+
+__all__ = ["FitReport", "fit", "eval_grad", "grad_columns", "differentiable_params"]

@@ -1,0 +1,279 @@
+"""``bk.fit``: least-squares fit of a model family to a target, with the analytic Jacobian of
+``eval_grad``."""
+from __future__ import annotations
+
+import html
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .grad import _columns, differentiable_params
+
+__all__ = ["FitReport", "fit"]
+
+_LOSSES = ("log", "relative", "l2")
+#: Residual floor of the "log" and "relative" losses and of the report's relative errors:
+#: FLOOR_FRACTION * mean(target f |cos|) (as bsdfkit.tuning's errors).
+FLOOR_FRACTION = 1e-3
+
+
+@dataclass(frozen=True, eq=False)
+class FitReport:
+    """What ``bk.fit`` reached.
+
+    model: the fitted model; params: fitted value per gradient column; init: the starting values
+    of the best start; loss: the loss name and cost (half the sum of squared residuals);
+    rel_p50 / rel_p90 / rel_p99: per-channel percentiles of |f - f_target| |cos| /
+    max(f_target |cos|, floor) over the fitted pairs; albedo_error: max over the albedo directions
+    and channels of |albedo - albedo_target| (Monte Carlo, ``None`` for raw-sample targets);
+    nfev / njev: residual and Jacobian evaluations (all starts); time: seconds; starts: number of
+    starting points; success / message: scipy's for the best start.
+    """
+
+    model: object
+    params: dict
+    init: dict
+    loss: str
+    cost: float
+    rel_p50: np.ndarray
+    rel_p90: np.ndarray
+    rel_p99: np.ndarray
+    albedo_error: float | None
+    nfev: int
+    njev: int
+    time: float
+    starts: int
+    success: bool
+    message: str
+    n_pairs: int
+    start_costs: tuple = field(default=())
+
+    def _rows(self):
+        rows = [("model", repr(self.model))]
+        rows += [(f"  {k}", f"{v:.9g}  (start {self.init[k]:.6g})") for k, v in self.params.items()]
+        rows += [("loss", f"{self.loss}, cost {self.cost:.4g} over {self.n_pairs} pairs x 3 channels"),
+                 ("rel. error p50", _rgb_txt(self.rel_p50)), ("rel. error p90", _rgb_txt(self.rel_p90)),
+                 ("rel. error p99", _rgb_txt(self.rel_p99)),
+                 ("albedo error", "n/a (raw samples)" if self.albedo_error is None else f"{self.albedo_error:.3g}"),
+                 ("evaluations", f"{self.nfev} residuals, {self.njev} Jacobians, {self.starts} start(s)"),
+                 ("time", f"{self.time:.3g} s"), ("status", ("ok: " if self.success else "FAILED: ") + self.message)]
+        return rows
+
+    def __repr__(self):
+        w = max(len(k) for k, _ in self._rows())
+        return "FitReport\n" + "\n".join(f"  {k:<{w}}  {v}" for k, v in self._rows())
+
+    def _repr_html_(self):
+        body = "".join(f"<tr><th style='text-align:left'>{html.escape(k)}</th><td style='text-align:left'>"
+                       f"<code>{html.escape(v)}</code></td></tr>" for k, v in self._rows())
+        return f"<table><caption>bsdfkit fit</caption>{body}</table>"
+
+
+def _rgb_txt(v):
+    return ", ".join(f"{x:.3g}" for x in np.asarray(v))
+
+
+def _target_samples(target, directions, n, seed):
+    """(wo, wi, y = f |cos wi| (N, 3), target model or None)."""
+    from ..models.base import BxDF
+    if isinstance(target, BxDF):
+        if directions is None:
+            from ..tuning.errors import direction_set
+            ds = direction_set(target, n=n, seed=seed, n_albedo=16)
+            wo, wi = ds.wo, ds.wi
+        else:
+            if not isinstance(directions, (tuple, list)) or len(directions) != 2:
+                raise TypeError("directions: expected None or a pair (wo, wi) of direction arrays")
+            wo, wi = np.broadcast_arrays(np.asarray(directions[0], np.float64), np.asarray(directions[1], np.float64))
+            wo, wi = wo.reshape(-1, 3), wi.reshape(-1, 3)
+        f = target.eval(wo, wi).astype(np.float64)
+        return wo, wi, f * np.abs(wi[:, 2:3]), target
+    if isinstance(target, (tuple, list)) and len(target) == 3:
+        if directions is not None:
+            raise ValueError("directions: not used with raw samples (wo, wi, value); pass them in the target")
+        wo, wi, v = (np.asarray(a, dtype=np.float64) for a in target)
+        try:
+            wo, wi = np.broadcast_arrays(wo, wi)
+            v = np.broadcast_to(v, wo.shape)
+        except ValueError:
+            raise ValueError("target: wo, wi and value must broadcast to (N, 3)") from None
+        wo, wi, v = wo.reshape(-1, 3), wi.reshape(-1, 3), v.reshape(-1, 3)
+        if not (np.all(np.isfinite(v)) and np.all(v >= 0)):
+            raise ValueError("target: values must be finite and >= 0")
+        if len(wo) == 0:
+            raise ValueError("target: no samples")
+        return wo, wi, v * np.abs(wi[:, 2:3]), None
+    raise TypeError("target: expected a bsdfkit model or raw samples (wo, wi, value)")
+
+
+def _start_model(family, init, fixed):
+    """The family's model at the starting point: its first registered example, then ``fixed``
+    and ``init`` (a dict of parameter values, or a model of the family)."""
+    from ..models.base import BxDF
+    from ..models.spec import example_model
+    if not (isinstance(family, type) and issubclass(family, BxDF)):
+        raise TypeError(f"family: expected a model class (e.g. bk.Conductor), got {family!r}")
+    if isinstance(init, family):
+        p = dict(init._params)
+    elif isinstance(init, BxDF):
+        raise TypeError(f"init: expected a {family.__name__} or a dict, got a {type(init).__name__}")
+    else:
+        p = dict(example_model(family)._params)
+    for name, d in (("fixed", fixed), ("init", init if isinstance(init, dict) else None)):
+        if d is None:
+            continue
+        if not isinstance(d, dict):
+            raise TypeError(f"{name}: expected a dict of parameter values")
+        for k, v in d.items():
+            if k == "alpha" and "alpha_x" in p:
+                p["alpha_x"] = p["alpha_y"] = v
+            elif k not in p:
+                raise ValueError(f"{name}: {family.__name__} has no parameter {k!r} ({', '.join(p)})")
+            else:
+                p[k] = v
+    try:
+        return family._from_params(p)
+    except (TypeError, ValueError) as e:
+        raise type(e)(f"init/fixed: {e}") from None
+
+
+def _get(model, col):
+    field_, ch = col[0]
+    v = model._params[field_]
+    return float(v if ch == -1 else np.asarray(v)[ch])
+
+
+def _set(family, params, cols, x):
+    p = dict(params)
+    for col, v in zip(cols, x):
+        for field_, ch in col:
+            if ch == -1:
+                p[field_] = float(v)
+            else:
+                a = np.array(p[field_], dtype=np.float64)
+                a[ch] = v
+                p[field_] = a
+    return family._from_params(p)
+
+
+def _bounds(family, names):
+    ranges = getattr(family, "param_ranges", {})
+    lo, hi = [], []
+    for nm in names:
+        base = "alpha_x" if nm == "alpha" else nm.partition(".")[0]
+        if base not in ranges:
+            raise ValueError(f"params: {family.__name__} declares no fitting range for {nm!r}")
+        a, b = ranges[base]
+        lo.append(a)
+        hi.append(b)
+    return np.array(lo, float), np.array(hi, float)
+
+
+def _residuals(loss, y_t, floor, w):
+    """(r(y_m), dr/dy_m(y_m)) for the loss, elementwise on (N, 3)."""
+    if loss == "l2":
+        s = w / np.mean(y_t)
+        return (lambda y: (y - y_t) * s), (lambda y: s)
+    if loss == "relative":
+        s = w / np.maximum(y_t, floor)
+        return (lambda y: (y - y_t) * s), (lambda y: s)
+    lt = np.log(y_t + floor)
+    return (lambda y: w * (np.log(y + floor) - lt)), (lambda y: w / (y + floor))
+
+
+def fit(target, family, params=None, init=None, fixed=None, directions=None, loss="log", weights=None, *,
+        starts=1, n=4096, seed=0, max_nfev=200, tol=1e-12, albedo=True):
+    """Fit the model class ``family`` to ``target`` by least squares on f |cos theta_i|.
+
+    target: a bsdfkit model (analytic or measured), evaluated on ``directions`` (a pair (wo, wi);
+    default: the trade-off module's direction set of ``n`` pairs, stratified plus samples of the
+    target's lobes, grazing angles included, ``bsdfkit.tuning.errors.direction_set``), or raw
+    samples ``(wo, wi, value)`` with value = f (cosine excluded), (N, 3).
+    family: a model class with a gradient kernel (see ``bsdfkit.fitting.differentiable_params``).
+    params: the parameters to fit (``eval_grad`` names: RGB parameters fit per channel, "eta.g"
+    one channel, "alpha" an isotropic alpha); default: every differentiable parameter not in
+    ``fixed``. init: starting values (dict) or a model of the family; fixed: values (and knobs,
+    e.g. ``{"masking": "separable"}``) held constant; both default to the family's first example.
+    loss: "log" (log(f cos + floor) differences, default: balances peak and tail), "relative"
+    (differences over max(target, floor)) or "l2" (differences over the target's mean).
+    weights: (N,) or (N, 3) residual weights. starts: number of starting points (the given one
+    plus starts - 1 drawn uniformly within the bounds, seeded by ``seed``); the best is kept.
+    Bounds come from the family's validated parameter ranges (``param_ranges``).
+
+    Uses scipy.optimize.least_squares (trust-region reflective) with the analytic Jacobian.
+    Returns ``(model, FitReport)``.
+    """
+    from scipy.optimize import least_squares
+    t0 = time.perf_counter()
+    if loss not in _LOSSES:
+        raise ValueError(f"loss: must be one of {_LOSSES}, got {loss!r}")
+    if isinstance(starts, bool) or not isinstance(starts, int) or starts < 1:
+        raise ValueError(f"starts: must be an integer >= 1, got {starts!r}")
+    wo, wi, y_t, target_model = _target_samples(target, directions, n, seed)
+    m0 = _start_model(family, init, fixed)
+    if params is None:
+        fixed_names = set(fixed or ())
+        params = [p for p in differentiable_params(m0) if p not in fixed_names and p != "alpha"
+                  and not (p in ("alpha_x", "alpha_y") and "alpha" in fixed_names)]
+    names, cols = _columns(m0, params)
+    lo, hi = _bounds(family, names)
+    x0 = np.clip(np.array([_get(m0, c) for c in cols]), lo, hi)
+    cos_i = np.abs(wi[:, 2:3])
+    floor = FLOOR_FRACTION * float(np.mean(y_t))
+    if not floor > 0:
+        raise ValueError("target: f |cos| is zero on every pair; nothing to fit")
+    w = np.ones_like(y_t) if weights is None else np.broadcast_to(np.asarray(weights, np.float64)[..., None]
+                                                                  if np.ndim(weights) == 1 else weights, y_t.shape)
+    if not (np.all(np.isfinite(w)) and np.all(w >= 0)):
+        raise ValueError("weights: must be finite and >= 0")
+    res_fn, dres_fn = _residuals(loss, y_t, floor, w)
+    base = dict(m0._params)
+    cache = {}
+
+    def evaluate(x):
+        key = x.tobytes()
+        if key not in cache:
+            cache.clear()
+            m = _set(family, base, cols, x)
+            f, g = m.eval_grad(wo, wi, params)
+            cache[key] = (f * cos_i, g * cos_i[..., None])
+        return cache[key]
+
+    def fun(x):
+        y, _ = evaluate(x)
+        return res_fn(y).ravel()
+
+    def jac(x):
+        y, g = evaluate(x)
+        return (g * dres_fn(y)[..., None]).reshape(-1, len(x))
+
+    rng = np.random.default_rng([seed, 0x666974])
+    finite_hi = np.where(np.isfinite(hi), hi, np.maximum(lo, 0) + 4.0)
+    x_starts = [x0] + [lo + (finite_hi - lo) * rng.random(len(x0)) for _ in range(starts - 1)]
+    best, nfev, njev, costs = None, 0, 0, []
+    for xs in x_starts:
+        r = least_squares(fun, xs, jac=jac, bounds=(lo, hi), method="trf", x_scale="jac", max_nfev=max_nfev,
+                          xtol=tol, ftol=tol, gtol=tol)
+        nfev += int(r.nfev)
+        njev += int(r.njev or 0)
+        costs.append(float(r.cost))
+        if best is None or r.cost < best[0].cost:
+            best = (r, xs)
+    r, xs = best
+    model = _set(family, base, cols, r.x)
+    y_m = model.eval(wo, wi) * cos_i
+    rel = np.abs(y_m - y_t) / np.maximum(y_t, floor)
+    alb = None
+    if albedo and target_model is not None:
+        from ..tuning.errors import ALBEDO_COS_THETA
+        mu = np.asarray(ALBEDO_COS_THETA)
+        a_wo = np.stack([np.sqrt(1 - mu * mu), np.zeros_like(mu), mu], axis=-1)
+        alb = float(np.max(np.abs(model.albedo(a_wo, 1 << 16) - target_model.albedo(a_wo, 1 << 16))))
+    rep = FitReport(model=model, params=dict(zip(names, map(float, r.x))), init=dict(zip(names, map(float, xs))),
+                    loss=loss, cost=float(r.cost), rel_p50=np.percentile(rel, 50, axis=0),
+                    rel_p90=np.percentile(rel, 90, axis=0), rel_p99=np.percentile(rel, 99, axis=0),
+                    albedo_error=alb, nfev=nfev, njev=njev, time=time.perf_counter() - t0, starts=len(x_starts),
+                    success=bool(r.success), message=str(r.message), n_pairs=len(wo), start_costs=tuple(costs))
+    return model, rep

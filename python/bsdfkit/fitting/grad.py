@@ -1,0 +1,130 @@
+"""Parameter gradients of the models: ``eval_grad``.
+
+The derivatives come from the models' own C++ code instantiated with a forward-mode dual number
+as its float type (``cpp/include/bsdfkit/core/dual.h``), not from a second, hand-differentiated
+copy: the model is rebuilt from dual-valued parameters, so d f / d theta flows through each
+model's parameter preprocessing (the conductor's Schlick F0 / F82 terms, Filament's f0, roughness
+remapping and DFG rows).
+
+Gradient columns. ``params`` names the parameters to differentiate, in order; a scalar parameter
+is one column, an RGB parameter three (``"eta"`` -> ``eta.r, eta.g, eta.b``), and one channel
+can be named alone (``"eta.g"``). Microfacet models with ``alpha_x`` / ``alpha_y`` also accept
+``"alpha"``: the derivative along alpha_x = alpha_y (d/dt f(alpha_x + t, alpha_y + t)), which is
+the derivative with respect to the isotropic alpha. :func:`grad_columns` lists the columns.
+
+Where the derivative is one-sided or zero (see core/dual.h): the smooth/rough switch
+(max(alpha) < 1e-3: the delta lobe evaluates to 0, and so does its derivative; at and above
+1e-3 the rough lobe's derivative), clamps and selects (the derivative of the branch taken; 0
+where a bound is active, e.g. Filament's roughness clamp at its minimum, f90 = saturate(...) at
+1, the alpha floor 1e-4), and Filament's DFG table (the derivative of the bilinear
+interpolant along roughness).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .._arrays import as_dirs, broadcast_batch, flatten_to
+from .._enums import TransportMode
+
+__all__ = ["eval_grad", "grad_columns", "differentiable_params"]
+
+_CHANNELS = ("r", "g", "b")
+
+
+def _core_fields(core) -> dict:
+    fields = getattr(core, "grad_fields", None)
+    if fields is None:
+        return {}
+    return {name: int(n) for name, n in fields}
+
+
+def _supported(model) -> bool:
+    return hasattr(model._core, "eval_grad")
+
+
+def differentiable_params(model) -> tuple:
+    """Names ``eval_grad`` accepts for ``model`` (RGB parameters as one name; ``"alpha"`` where
+    the model has alpha_x and alpha_y). Empty for a model without a gradient kernel."""
+    if not _supported(model):
+        return ()
+    fields = _core_fields(model._core)
+    names = list(fields)
+    if "alpha_x" in fields and "alpha_y" in fields:
+        names.insert(names.index("alpha_x"), "alpha")
+    return tuple(names)
+
+
+def _columns(model, params):
+    """([column names], [column seeds]) for ``params`` (None = every differentiable field)."""
+    if not _supported(model):
+        from .. import _core
+        from ..models.registry import classes
+        ok = [c.__name__ for c in classes() if hasattr(getattr(_core, c.__name__, None), "eval_grad")]
+        raise TypeError(f"eval_grad: {type(model).__name__} has no gradient kernel"
+                        + (f" (models with one: {', '.join(ok)})" if ok else ""))
+    fields = _core_fields(model._core)
+    if params is None:
+        params = tuple(fields)
+    elif isinstance(params, str):
+        params = (params,)
+    else:
+        try:
+            params = tuple(params)
+        except TypeError:
+            raise TypeError(f"params: expected a sequence of parameter names, got {type(params).__name__}") from None
+    if not params:
+        raise ValueError("params: name at least one parameter to differentiate")
+    names, cols = [], []
+    for p in params:
+        if not isinstance(p, str):
+            raise TypeError(f"params: expected parameter names (str), got {type(p).__name__}")
+        base, _, ch = p.partition(".")
+        if p == "alpha" and "alpha_x" in fields and "alpha_y" in fields:
+            names.append("alpha")
+            cols.append([("alpha_x", -1), ("alpha_y", -1)])
+        elif base in fields and fields[base] == 3 and ch == "":
+            for c, cn in enumerate(_CHANNELS):
+                names.append(f"{base}.{cn}")
+                cols.append([(base, c)])
+        elif base in fields and fields[base] == 3 and ch in _CHANNELS:
+            names.append(p)
+            cols.append([(base, _CHANNELS.index(ch))])
+        elif p in fields and fields[p] == 1:
+            names.append(p)
+            cols.append([(p, -1)])
+        else:
+            raise ValueError(f"params: {p!r} is not a differentiable parameter of {type(model).__name__}; "
+                             f"differentiable: {', '.join(differentiable_params(model))} "
+                             "(RGB ones also per channel, e.g. 'name.r')")
+    if len(set(names)) != len(names):
+        raise ValueError(f"params: a parameter is named twice ({', '.join(names)})")
+    limit = int(model._core.grad_max_columns)
+    if len(cols) > limit:
+        raise ValueError(f"params: at most {limit} gradient columns for {type(model).__name__}, got {len(cols)}")
+    return names, cols
+
+
+def grad_columns(model, params=None) -> tuple:
+    """The gradient columns of ``eval_grad(..., params=params)``, e.g. ``("eta.r", "eta.g",
+    "eta.b", "alpha")``."""
+    return tuple(_columns(model, params)[0])
+
+
+def eval_grad(model, wo, wi, params=None, mode=TransportMode.Radiance):
+    """``(f, grad)``: f(wo, wi) (..., 3) and its derivatives (..., 3, P) with respect to the
+    columns of ``params`` (see :func:`grad_columns`), in float64 (float32 directions are
+    evaluated in float64 too). Inputs as ``model.eval``."""
+    from ..models.base import _mode, _raise_bad
+    core = model._grad_core(params) if hasattr(model, "_grad_core") else model._core
+    names, cols = _columns(model, params)
+    wo, wi = as_dirs(wo, "wo"), as_dirs(wi, "wi")
+    batch = broadcast_batch(("wo", "wi"), wo.shape[:-1], wi.shape[:-1])
+    P = len(cols)
+    f = np.empty(batch + (3,))
+    g = np.empty(batch + (3, P))
+    if f.size:
+        bo, bi = core.eval_grad(flatten_to(wo, batch, (3,), np.float64), flatten_to(wi, batch, (3,), np.float64),
+                                _mode(mode), cols, f.reshape(-1, 3), g.reshape(-1, 3, P))
+        _raise_bad("wo", bo)
+        _raise_bad("wi", bi)
+    return f, g
