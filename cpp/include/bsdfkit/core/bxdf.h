@@ -9,6 +9,9 @@
 //                                             enum_names() overload, std::array<double, 3> (RGB),
 //                                             SharedTable<T> (a large read-only table, core/table.h);
 //                                             the defaults are the defaults of the Python class.
+//                                             Differentiable models template it on the scalar S
+//                                             of their continuous fields (XParamsT<param_t<F>>:
+//                                             double here, a Dual for eval_grad, core/dual.h).
 //   static constexpr const char *Name         the compiled class's name (bsdfkit._core.<Name>)
 //   static X make(const Params &)             parameters validated by the caller (Python)
 //   uint8_t flags() const                                             BxDFFlags of the lobes
