@@ -89,3 +89,27 @@ def test_fit_errors():
         bk.fit(t, bk.Conductor, fixed={"colour": 1})
     with pytest.raises(ValueError, match="starts"):
         bk.fit(t, bk.Conductor, starts=0)
+
+
+def test_simplify_families_measured_to_analytic(tmp_path):
+    """A MERL table of a rough copper: Diffuse cannot fit it, Conductor can, to the table's own
+    error (the p99 relative error of the generating model against its MERL tabulation, ~0.37,
+    from MERL's grazing bins); the choice is the cheapest family within tol, all are reported."""
+    from bsdfkit.tuning.errors import direction_set
+    src = bk.Conductor.from_metal("Cu", alpha=0.3)
+    target = bk.MERL.load(bk.measured.write_merl(tmp_path / "cu.binary", src), interpolation="linear")
+    ds = direction_set(target, n=4096, seed=0, n_albedo=16)   # fit's default set (seed 0)
+    y_t = target.eval(ds.wo, ds.wi) * np.abs(ds.wi[:, 2:3])
+    y_s = src.eval(ds.wo, ds.wi) * np.abs(ds.wi[:, 2:3])
+    floor_err = np.max(np.percentile(np.abs(y_s - y_t) / np.maximum(y_t, 1e-3 * y_t.mean()), 99, axis=0))
+    m, rep = bk.simplify(target, 0.5, families=(bk.Diffuse, bk.Conductor))
+    by = {f.family: f for f in rep.fits}
+    assert set(by) == {"Diffuse", "Conductor"}
+    assert by["Diffuse"].error > 0.5 and not by["Diffuse"].ok
+    assert by["Conductor"].ok and isinstance(m, bk.Conductor) and rep.chosen is by["Conductor"]
+    assert by["Conductor"].error <= 1.1 * floor_err, (by["Conductor"].error, floor_err)
+    assert abs(m.alpha_x - 0.3) < 0.01 and abs(m.alpha_y - 0.3) < 0.01
+    assert [f.cost for f in rep.fits] == sorted(f.cost for f in rep.fits)
+    assert "Conductor <- chosen" in repr(rep) and "<table>" in rep._repr_html_()
+    m2, rep2 = bk.simplify(target, 1e-3, families=(bk.Diffuse,))
+    assert m2 is None and rep2.chosen is None and "none within tol" in repr(rep2)

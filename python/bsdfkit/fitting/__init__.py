@@ -3,9 +3,12 @@
 ``eval_grad`` (also ``BxDF.eval_grad``): f and d f / d theta from the models' own C++ code,
 instantiated with forward-mode dual numbers (``cpp/include/bsdfkit/core/dual.h``).
 ``fit``: a model family fitted to a model or to raw samples with scipy's ``least_squares`` and
-that analytic Jacobian; ``FitReport`` says what it reached.
+that analytic Jacobian; ``FitReport`` says what it reached. ``simplify_families`` (also
+``bk.simplify(model, tol, families=...)``): the cheapest family that fits a target within tol.
 """
 from .fit import FitReport, fit
 from .grad import differentiable_params, eval_grad, grad_columns
+from .simplify import FamilySimplifyReport, simplify_families
 
-__all__ = ["FitReport", "fit", "eval_grad", "grad_columns", "differentiable_params"]
+__all__ = ["FitReport", "fit", "eval_grad", "grad_columns", "differentiable_params", "simplify_families",
+           "FamilySimplifyReport"]

@@ -25,7 +25,7 @@ class FitReport:
 
     model: the fitted model; params: fitted value per gradient column; init: the starting values
     of the best start; loss: the loss name and cost (half the sum of squared residuals);
-    rel_p50 / rel_p90 / rel_p99: per-channel percentiles of |f - f_target| |cos| /
+    rel_p50 / rel_p90 / rel_p99 / rel_max: per-channel percentiles (and maximum) of |f - f_target| |cos| /
     max(f_target |cos|, floor) over the fitted pairs; albedo_error: max over the albedo directions
     and channels of |albedo - albedo_target| (Monte Carlo, ``None`` for raw-sample targets);
     nfev / njev: residual and Jacobian evaluations (all starts); time: seconds; starts: number of
@@ -40,6 +40,7 @@ class FitReport:
     rel_p50: np.ndarray
     rel_p90: np.ndarray
     rel_p99: np.ndarray
+    rel_max: np.ndarray
     albedo_error: float | None
     nfev: int
     njev: int
@@ -274,6 +275,6 @@ def fit(target, family, params=None, init=None, fixed=None, directions=None, los
     rep = FitReport(model=model, params=dict(zip(names, map(float, r.x))), init=dict(zip(names, map(float, xs))),
                     loss=loss, cost=float(r.cost), rel_p50=np.percentile(rel, 50, axis=0),
                     rel_p90=np.percentile(rel, 90, axis=0), rel_p99=np.percentile(rel, 99, axis=0),
-                    albedo_error=alb, nfev=nfev, njev=njev, time=time.perf_counter() - t0, starts=len(x_starts),
+                    rel_max=rel.max(axis=0), albedo_error=alb, nfev=nfev, njev=njev, time=time.perf_counter() - t0, starts=len(x_starts),
                     success=bool(r.success), message=str(r.message), n_pairs=len(wo), start_costs=tuple(costs))
     return model, rep

@@ -339,7 +339,7 @@ def _same_value(a, b) -> bool:
 
 
 def simplify(model, tol, metric: str = "p99", directions=None, seed: int = 0, *, n: int = 8192,
-             n_albedo: int = 4096, costs: dict | None = None, allow=(), margin: float = 0.5):
+             n_albedo: int = 4096, costs: dict | None = None, allow=(), margin: float = 0.5, families=None):
     """The cheapest configuration of ``model`` whose error against ``model`` itself (called in
     float64) is <= ``tol``: returns ``(simplified_model, SimplifyReport)``.
 
@@ -371,7 +371,14 @@ def simplify(model, tol, metric: str = "p99", directions=None, seed: int = 0, *,
     order (most knobs at cheaper settings). ``tol = 0`` returns the input unchanged (float64).
     costs: a cost table in the :func:`knob_costs` format (e.g. ``bench/tradeoff.py`` run on
     another machine) to rank by instead of the shipped one.
+
+    families: model classes (e.g. ``(bk.Diffuse, bk.Conductor, bk.FilamentStandard)``): instead
+    of configurations of ``model``, fit each family to it and return the cheapest fitted model
+    within ``tol`` (``bsdfkit.fitting.simplify_families``: measured -> analytic).
     """
+    if families is not None:  # measured -> analytic (bsdfkit.fitting; one hook)
+        from ..fitting.simplify import simplify_families
+        return simplify_families(model, tol, families, metric=metric, directions=directions, seed=seed, costs=costs)
     _check_model(model)
     tol = _check_tol(tol)
     col = _check_metric(metric)
