@@ -19,7 +19,7 @@ CELL_TIMEOUT = 180
 def test_the_notebooks_are_there():
     assert [p.name for p in NOTEBOOKS] == ["01_lobes.ipynb", "02_gallery.ipynb", "03_extremes.ipynb",
                                            "04_mitsuba_crosscheck.ipynb", "05_speed_vs_accuracy.ipynb",
-                                           "06_measured.ipynb"]
+                                           "06_measured.ipynb", "07_fitting.ipynb"]
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.stem)

@@ -378,7 +378,8 @@ def simplify(model, tol, metric: str = "p99", directions=None, seed: int = 0, *,
     """
     if families is not None:  # measured -> analytic (bsdfkit.fitting; one hook)
         from ..fitting.simplify import simplify_families
-        return simplify_families(model, tol, families, metric=metric, directions=directions, seed=seed, costs=costs)
+        return simplify_families(model, tol, families, metric=metric, directions=directions, seed=seed, costs=costs,
+                                 **({} if n is None else {"n": n}))
     _check_model(model)
     tol = _check_tol(tol)
     col = _check_metric(metric)
