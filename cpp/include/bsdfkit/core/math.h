@@ -16,6 +16,9 @@
 //     tests repeated between a model and the BSDF-level rules: GCC's PRE merges them into bool
 //     selects. -ffp-contract=off keeps vector body and scalar remainder bit-identical.
 // Check with the CMake option BSDFKIT_VEC_REPORT=ON (-fopt-info-vec-optimized).
+// These rules serve the models on the scalar, auto-vectorized loops. Models with `Vectorized = true`
+// (Diffuse, Conductor, Dielectric) run on explicit packets instead (core/simd.h, batch.h), where
+// the same mask idiom holds but the compiler's vectorizer is not involved.
 #pragma once
 #include <cmath>
 #include <cstdint>
