@@ -39,6 +39,87 @@ template <typename F, int S> inline Vec3<F> load3(const F *p, int64_t i) {
     return Vec3<F>(p[i * S], p[i * S + 1], p[i * S + 2]);
 }
 
+// ---- The packet path (models with `Vectorized = true`, core/bxdf.h): the model code runs on
+// Packet<F> (core/simd.h), kPacketWidth elements at a time. The array's tail is padded to a
+// full packet (with the direction (0, 0, 1) and uniforms 0) and runs through the same vector
+// code, so each element's result depends on nothing but its own inputs: bit-identical for any
+// array position, chunking and thread count (tests/test_vectorization.py checks). Interleaved
+// (N, 3) and (N, 2) arrays are transposed through small aligned buffers, in loops GCC turns
+// into shuffles.
+template <typename F> inline constexpr int64_t kW = int64_t(kPacketWidth);
+
+// Lanes [i, i + cnt) of an (N, S) array (S = 3 or 2; S = 0: one broadcast row of 3) as C
+// packets; lanes past cnt hold `pad`.
+template <int S, int C, typename F>
+inline void load_lanes(const F *p, int64_t i, int64_t cnt, const F (&pad)[C], Packet<F> (&out)[C]) {
+    using P = Packet<F>;
+    constexpr int64_t W = kW<F>;
+    if constexpr (S == 0) {
+        for (int c = 0; c < C; ++c) out[c] = P(p[c]);
+    } else {
+        static_assert(S == C, "load_lanes: row width");
+        alignas(64) F tail[S * W];
+        alignas(64) F soa[C][W];
+        const F *q = p + S * i;
+        if (cnt < W) {
+            for (int64_t j = 0; j < S * W; ++j) tail[j] = j < S * cnt ? q[j] : pad[j % S];
+            q = tail;
+        }
+        for (int64_t j = 0; j < W; ++j)
+            for (int c = 0; c < C; ++c) soa[c][j] = q[S * j + c];
+        for (int c = 0; c < C; ++c) out[c] = drjit::load_aligned<P>(soa[c]);
+    }
+}
+template <int S, typename F> inline Vec3<Packet<F>> load3_lanes(const F *p, int64_t i, int64_t cnt) {
+    static constexpr F pad[3] = {F(0), F(0), F(1)};
+    Packet<F> v[3];
+    load_lanes<S, 3>(p, i, cnt, pad, v);
+    return Vec3<Packet<F>>(v[0], v[1], v[2]);
+}
+// Lanes [i, i + cnt) of a contiguous array; past cnt, pad.
+template <typename F> inline Packet<F> load1_lanes(const F *p, int64_t i, int64_t cnt, F pad) {
+    using P = Packet<F>;
+    if (cnt == kW<F>) return drjit::load<P>(p + i);
+    alignas(64) F t[kW<F>];
+    for (int64_t j = 0; j < kW<F>; ++j) t[j] = j < cnt ? p[i + j] : pad;
+    return drjit::load_aligned<P>(t);
+}
+// Stores the first cnt lanes of C packets as rows [i, i + cnt) of an (N, C) array.
+template <int C, typename F> inline void store_lanes(F *p, int64_t i, int64_t cnt, const Packet<F> (&v)[C]) {
+    constexpr int64_t W = kW<F>;
+    alignas(64) F soa[C][W];
+    for (int c = 0; c < C; ++c) drjit::store_aligned(soa[c], v[c]);
+    F *q = p + C * i;
+    if (cnt == W) {
+        for (int64_t j = 0; j < W; ++j)
+            for (int c = 0; c < C; ++c) q[C * j + c] = soa[c][j];
+    } else {
+        for (int64_t j = 0; j < cnt; ++j)
+            for (int c = 0; c < C; ++c) q[C * j + c] = soa[c][j];
+    }
+}
+template <typename F> inline void store3_lanes(F *p, int64_t i, int64_t cnt, const Spectrum<Packet<F>> &s) {
+    const Packet<F> v[3] = {s[0], s[1], s[2]};
+    store_lanes<3>(p, i, cnt, v);
+}
+template <typename F> inline void store3_lanes(F *p, int64_t i, int64_t cnt, const Vec3<Packet<F>> &w) {
+    const Packet<F> v[3] = {w.x, w.y, w.z};
+    store_lanes<3>(p, i, cnt, v);
+}
+template <typename F> inline void store1_lanes(F *p, int64_t i, int64_t cnt, const Packet<F> &v) {
+    if (cnt == kW<F>) {
+        drjit::store(p + i, v);
+    } else {
+        alignas(64) F t[kW<F>];
+        drjit::store_aligned(t, v);
+        for (int64_t j = 0; j < cnt; ++j) p[i + j] = t[j];
+    }
+}
+// Lanes that fail not_unit (the padding is unit length).
+template <typename F> inline int64_t count_not_unit(const Vec3<Packet<F>> &w) {
+    return int64_t(drjit::count(!(abs(dot(w, w) - F(1)) <= kUnitTol<F>)));
+}
+
 struct BadCounts {
     std::atomic<int64_t> wo{0}, wi{0};
 };
@@ -52,6 +133,23 @@ template <typename Model> using LocalModel = const KernelOf_t<Model>;
 template <int SO, int SI, typename Model, typename F>
 void eval_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMode mode, F *out, int nthreads,
                 BadCounts &bad) {
+    if constexpr (is_vectorized<Model>::value) {
+        parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
+            int64_t bo = 0, bi = 0;
+            LocalModel<Model> mloc = m;
+            for (int64_t i = b; i < e; i += kW<F>) {
+                int64_t cnt = std::min(kW<F>, e - i);
+                Vec3<Packet<F>> o = load3_lanes<SO>(wo, i, cnt), w = load3_lanes<SI>(wi, i, cnt);
+                bo += count_not_unit(o);
+                bi += count_not_unit(w);
+                store3_lanes(out, i, cnt, bsdf_f(mloc, o, w, mode));
+            }
+            // A broadcast direction was counted once per packet lane: once per element is meant.
+            bad.wo += SO == 0 ? (bo > 0 ? e - b : 0) : bo;
+            bad.wi += SI == 0 ? (bi > 0 ? e - b : 0) : bi;
+        });
+        return;
+    }
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
         int64_t bo = 0, bi = 0;
         LocalModel<Model> mloc = m;
@@ -72,6 +170,22 @@ void eval_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMo
 template <int SO, int SI, typename Model, typename F>
 void pdf_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMode mode, uint8_t sf, F *out,
                int nthreads, BadCounts &bad) {
+    if constexpr (is_vectorized<Model>::value) {
+        parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
+            int64_t bo = 0, bi = 0;
+            LocalModel<Model> mloc = m;
+            for (int64_t i = b; i < e; i += kW<F>) {
+                int64_t cnt = std::min(kW<F>, e - i);
+                Vec3<Packet<F>> o = load3_lanes<SO>(wo, i, cnt), w = load3_lanes<SI>(wi, i, cnt);
+                bo += count_not_unit(o);
+                bi += count_not_unit(w);
+                store1_lanes(out, i, cnt, bsdf_pdf(mloc, o, w, mode, sf));
+            }
+            bad.wo += SO == 0 ? (bo > 0 ? e - b : 0) : bo;
+            bad.wi += SI == 0 ? (bi > 0 ? e - b : 0) : bi;
+        });
+        return;
+    }
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
         int64_t bo = 0, bi = 0;
         LocalModel<Model> mloc = m;
@@ -132,6 +246,43 @@ inline void sample_chunk(const Model &m, const Sampler &smp, bool model_ok, int6
     *bo_out = bo;
 }
 
+// sample_chunk on the packet path: the same outputs and rules, kPacketWidth lanes at a time.
+template <int SO, typename Model, typename F, typename Sampler>
+inline void sample_chunk_packet(const Model &m, const Sampler &smp, bool model_ok, int64_t b, int64_t e,
+                                const F *__restrict wo, const F *__restrict uc, const F *__restrict u,
+                                F *__restrict owi, F *__restrict of, F *__restrict opdf, F *__restrict oeta,
+                                F *__restrict stage, uint8_t *__restrict ofl, bool *__restrict ovalid,
+                                bool *__restrict oprop, int64_t *bo_out) {
+    using P = Packet<F>;
+    int64_t bo = 0;
+    const Mask<P> model_mask(model_ok);
+    static constexpr F pad_u[2] = {F(0), F(0)};
+    for (int64_t i = b; i < e; i += kW<F>) {
+        int64_t cnt = std::min(kW<F>, e - i);
+        Vec3<P> o = load3_lanes<SO>(wo, i, cnt);
+        bo += count_not_unit(o);
+        P uv[2];
+        load_lanes<2, 2>(u, i, cnt, pad_u, uv);
+        // Uniforms on [0, 1) (OneMinusEpsilon), as in bsdf_sample.
+        BSDFSample<P> s = smp(m, o, clamp_uniform(load1_lanes(uc, i, cnt, F(0))),
+                              clamp_uniform(Point2<P>{uv[0], uv[1]}));
+        Mask<P> ok = sample_accepted(s, o) & model_mask; // bsdf_sample's rule (core/bsdf.h)
+        store3_lanes(of, i, cnt, select(ok, s.f, Spectrum<P>(P(0))));
+        store3_lanes(owi, i, cnt, select(ok, s.wi, kInvalidSampleWi<P>()));
+        store1_lanes(opdf, i, cnt, select(ok, s.pdf, P(0)));
+        store1_lanes(oeta, i, cnt, select(ok, s.eta, P(1)));
+        P tag = s.flags + select(s.pdf_is_proportional, P(256), P(0)); // flags + 256 * proportional
+        store1_lanes(stage, i - b, cnt, select(ok, tag, P(0)));
+    }
+    for (int64_t i = b; i < e; ++i) {
+        int32_t t = int32_t(stage[i - b]);
+        ofl[i] = uint8_t(t & 255);
+        oprop[i] = (t >> 8) != 0;
+        ovalid[i] = opdf[i] > F(0);
+    }
+    *bo_out = SO == 0 ? (bo > 0 ? e - b : 0) : bo;
+}
+
 template <int SO, typename Model, typename F, typename Sampler>
 void sample_batch_loop(const Model &m, const Sampler &sampler, const F *wo, const F *uc, const F *u, int64_t n,
                        uint8_t sf, const SampleOut<F> &out, int nthreads, BadCounts &bad) {
@@ -140,8 +291,12 @@ void sample_batch_loop(const Model &m, const Sampler &sampler, const F *wo, cons
         F stage[kChunk];
         LocalModel<Model> mloc = m;
         int64_t bo = 0;
-        sample_chunk<SO>(mloc, sampler, model_ok, b, e, wo, uc, u, out.wi, out.f, out.pdf, out.eta, stage,
-                         out.flags, out.valid, out.proportional, &bo);
+        if constexpr (is_vectorized<Model>::value)
+            sample_chunk_packet<SO>(mloc, sampler, model_ok, b, e, wo, uc, u, out.wi, out.f, out.pdf, out.eta, stage,
+                                    out.flags, out.valid, out.proportional, &bo);
+        else
+            sample_chunk<SO>(mloc, sampler, model_ok, b, e, wo, uc, u, out.wi, out.f, out.pdf, out.eta, stage,
+                             out.flags, out.valid, out.proportional, &bo);
         bad.wo += bo;
     });
 }
@@ -150,16 +305,17 @@ template <int SO, typename Model, typename F>
 void sample_batch(const Model &m, const F *wo, const F *uc, const F *u, int64_t n, TransportMode mode, uint8_t sf,
                   const SampleOut<F> &out, int nthreads, BadCounts &bad) {
     if constexpr (has_split_sample<Model>::value) {
-        auto smooth = [mode, sf](const auto &mm, const Vec3<F> &o, F c, Point2<F>) {
+        // Generic on the evaluation type (F, or Packet<F> on the packet path).
+        auto smooth = [mode, sf](const auto &mm, const auto &o, auto c, auto) {
             return mm.sample_smooth(o, c, mode, sf);
         };
-        auto rough = [mode, sf](const auto &mm, const Vec3<F> &o, F c, Point2<F> p) {
+        auto rough = [mode, sf](const auto &mm, const auto &o, auto c, auto p) {
             return mm.sample_rough(o, c, p, mode, sf);
         };
         if (m.is_smooth()) sample_batch_loop<SO>(m, smooth, wo, uc, u, n, sf, out, nthreads, bad);
         else sample_batch_loop<SO>(m, rough, wo, uc, u, n, sf, out, nthreads, bad);
     } else {
-        auto any = [mode, sf](const auto &mm, const Vec3<F> &o, F c, Point2<F> p) {
+        auto any = [mode, sf](const auto &mm, const auto &o, auto c, auto p) {
             return mm.sample_f(o, c, p, mode, sf);
         };
         sample_batch_loop<SO>(m, any, wo, uc, u, n, sf, out, nthreads, bad);

@@ -63,71 +63,97 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact> struct Cond
 
     uint8_t flags() const { return mfd.effectively_smooth() ? SpecularReflection : GlossyReflection; }
 
+    // The model runs on packets in the batch kernels (batch.h): every method is written once on
+    // the evaluation type V (F, or a packet of F; core/simd.h).
+    static constexpr bool Vectorized = true;
+
     // The Fresnel reflectance at |wo.wm| = cos_i, per channel (the FR knob).
-    Spectrum<F> fresnel(F cos_i) const {
+    template <typename V> Spectrum<V> fresnel(V cos_i) const {
         if constexpr (FR == ConductorFresnel::Schlick) return FrSchlick(cos_i, f0);
         else if constexpr (FR == ConductorFresnel::F82) return FrF82Tint(cos_i, f0, f82_a);
         else return FrComplex(cos_i, eta, k);
     }
 
-    // Torrance-Sparrow: f = D(wm) F(wo.wm) G(wo, wi) / (4 cos_o cos_i), wm = normalize(wo + wi).
-    Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode) const {
-        F cos_o = AbsCosTheta(wo), cos_i = AbsCosTheta(wi);
-        F denom = F(4) * cos_o * cos_i;
-        bool active = SameHemisphere(wo, wi) & !mfd.effectively_smooth() & (denom > F(0));
-        Vec3<F> wm = reflection_half_vector(wi, wo, active);
-        F scale = mfd.D(wm) * mfd.G(wo, wi) / denom;
-        Spectrum<F> fr = fresnel(absdot(wo, wm));
-        return select(active, fr * scale, Spectrum<F>(F(0)));
+    // Fresnel / denom per channel with the fewest divisions: the exact term's own denominator
+    // joins denom (one division per channel); the polynomial knobs share one reciprocal.
+    template <typename V> Spectrum<V> fresnel_over(V cos_i, V denom) const {
+        Spectrum<V> r;
+        if constexpr (FR == ConductorFresnel::Exact) {
+            for (int c = 0; c < Spectrum<F>::Size; ++c) {
+                V num, den;
+                FrComplexRatio(cos_i, eta[c], k[c], &num, &den);
+                r[c] = num / (den * denom);
+            }
+        } else {
+            r = fresnel(cos_i) * (V(1) / denom);
+        }
+        return r;
+    }
+
+    // Torrance-Sparrow: f = D(wm) F(wo.wm) G(wo, wi) / (4 cos_o cos_i), wm = normalize(wo + wi),
+    // as F / (D_denom G_denom) (core/microfacet.h): Exact 4 divisions and 9 square roots per
+    // element (1 + 3 and 3 + 6), Schlick / F82 2 and 3.
+    template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
+        V cos_o = AbsCosTheta(wo), cos_i = AbsCosTheta(wi);
+        Mask<V> active = SameHemisphere(wo, wi) & Mask<V>(!mfd.effectively_smooth());
+        Vec3<V> wm = reflection_half_vector(wi, wo, active);
+        V denom = mfd.D_denom(wm, active) *
+                  mfd.G_denom(cos_o, cos_i, mfd.smith_root(wo), mfd.smith_root(wi));
+        Spectrum<V> fr = fresnel_over(abs(dot(wo, wm)), denom);
+        return select(active, fr, Spectrum<V>(V(0)));
     }
 
     bool is_smooth() const { return mfd.effectively_smooth(); }
 
-    BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode, uint8_t sample_flags) const {
+    template <typename V>
+    BSDFSample<V> sample_f(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode mode, uint8_t sample_flags) const {
         return is_smooth() ? sample_smooth(wo, uc, mode, sample_flags) : sample_rough(wo, uc, u, mode, sample_flags);
     }
 
     // Delta mirror: f = Fr / |cos_i|, discrete probability 1.
-    BSDFSample<F> sample_smooth(const Vec3<F> &wo, F /*uc*/, TransportMode, uint8_t sample_flags) const {
-        BSDFSample<F> s;
+    template <typename V>
+    BSDFSample<V> sample_smooth(const Vec3<V> &wo, V /*uc*/, TransportMode, uint8_t sample_flags) const {
+        BSDFSample<V> s;
         bool allowed = (sample_flags & RT_Reflection) != 0;
-        s.wi = Vec3<F>(-wo.x, -wo.y, wo.z);
-        F cos_i = DeltaAbsCos(s.wi);
-        s.f = fresnel(cos_i) / cos_i;
-        s.pdf = F(1);
+        s.wi = Vec3<V>(-wo.x, -wo.y, wo.z);
+        V cos_i = DeltaAbsCos(s.wi);
+        s.f = fresnel_over(cos_i, cos_i);
+        s.pdf = V(1);
         s.flags = SpecularReflection;
-        s.valid = allowed; // cos_i >= the smallest normal number (DeltaAbsCos), even for a NaN wo
+        s.valid = Mask<V>(allowed); // cos_i >= the smallest normal number (DeltaAbsCos), even for a NaN wo
         return s;
     }
 
-    // Sample a visible normal on wo's side and mirror wo about it.
-    BSDFSample<F> sample_rough(const Vec3<F> &wo, F /*uc*/, Point2<F> u, TransportMode,
-                               uint8_t sample_flags) const {
-        BSDFSample<F> s;
-        bool allowed = (sample_flags & RT_Reflection) != 0;
-        Vec3<F> wm = mfd.Sample_wm(wo, u);
-        Vec3<F> wi = Reflect(wo, wm);
-        F cos_o = AbsCosTheta(wo), cos_i = AbsCosTheta(wi);
-        bool ok = allowed & SameHemisphere(wo, wi) & (cos_o > F(0)) & (cos_i > F(0));
-        F pdf = mfd.PDF(wo, wm) / (F(4) * absdot(wo, wm));
-        Spectrum<F> fr = fresnel(absdot(wo, wm));
-        s.f = fr * (mfd.D(wm) * mfd.G(wo, wi) / (F(4) * cos_o * cos_i));
+    // Sample a visible normal on wo's side and mirror wo about it. pdf = 1 / (D_denom P) with
+    // P = 2 (cos_o + R_o), f = F / (D_denom G_denom) (core/microfacet.h).
+    template <typename V>
+    BSDFSample<V> sample_rough(const Vec3<V> &wo, V /*uc*/, Point2<V> u, TransportMode, uint8_t sample_flags) const {
+        BSDFSample<V> s;
+        Vec3<V> wm = mfd.Sample_wm(wo, u);
+        Vec3<V> wi = Reflect(wo, wm);
+        V cos_o = AbsCosTheta(wo), cos_i = AbsCosTheta(wi);
+        // SameHemisphere is strict: cos_o > 0 and cos_i > 0.
+        Mask<V> active = Mask<V>((sample_flags & RT_Reflection) != 0) & SameHemisphere(wo, wi);
+        V dd = mfd.D_denom(wm, active); // D = 0 there: f = pdf = 0, an invalid sample
+        V root_o = mfd.smith_root(wo);
+        s.pdf = select(active, V(1) / (dd * mfd.reflection_pdf_denom(cos_o, root_o)), V(0));
+        s.f = fresnel_over(abs(dot(wo, wm)), dd * mfd.G_denom(cos_o, cos_i, root_o, mfd.smith_root(wi)));
         s.wi = wi;
-        s.pdf = pdf;
         s.flags = GlossyReflection;
-        s.valid = ok;
+        s.valid = active;
         return s;
     }
 
-    // Visible-normal density mapped through the reflection Jacobian 1 / (4 |wo.wm|).
-    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
-        Vec3<F> wm = wo + wi;
-        F len2 = length_squared(wm);
-        bool active = SameHemisphere(wo, wi) & (len2 > F(0));
-        wm = face_forward(wm / std::sqrt(active ? len2 : F(1)), Vec3<F>(0, 0, 1));
-        F p = mfd.PDF(wo, wm) / (F(4) * absdot(wo, wm));
-        p = keep_or_zero(active ? p : F(0), (sample_flags & RT_Reflection) != 0);
-        return keep_or_zero(p, !mfd.effectively_smooth());
+    // Visible-normal density mapped through the reflection Jacobian 1 / (4 |wo.wm|):
+    // G1(wo) D(wm) / (4 cos_o) = 1 / (D_denom 2 (cos_o + R_o)). 2 divisions, 2 square roots.
+    template <typename V>
+    V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
+        Mask<V> active = SameHemisphere(wo, wi) &
+                         Mask<V>(((sample_flags & RT_Reflection) != 0) & !mfd.effectively_smooth());
+        Vec3<V> wm = reflection_half_vector(wo, wi, active);
+        V dd = mfd.D_denom(wm, active);
+        V p = V(1) / (dd * mfd.reflection_pdf_denom(AbsCosTheta(wo), mfd.smith_root(wo)));
+        return select(active, p, V(0));
     }
 
     void regularize() { mfd.regularize(); }

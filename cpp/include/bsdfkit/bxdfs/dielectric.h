@@ -44,140 +44,152 @@ template <typename F> struct DielectricBxDF {
         return uint8_t(f | (mfd.effectively_smooth() ? Specular : Glossy));
     }
 
+    // Runs on packets in the batch kernels (batch.h): every method is written once on the
+    // evaluation type V (F, or a packet of F; core/simd.h).
+    static constexpr bool Vectorized = true;
+
     // Lobe probabilities restricted by sample_flags.
-    static void lobe_probs(F R, F T, uint8_t sample_flags, F *pr, F *pt) { restrict_lobes(R, T, sample_flags, pr, pt); }
+    template <typename V> static void lobe_probs(V R, V T, uint8_t sample_flags, V *pr, V *pt) {
+        restrict_lobes(R, T, sample_flags, pr, pt);
+    }
 
     // Generalized half vector of a pair, facing +z, and the relative IOR etap along wi.
     // Returns false where pbrt-v4 returns 0: a horizon direction, a degenerate half vector,
     // or a back-facing microfacet.
     // *len2 = |wi etap + wo|^2, from which the transmission Jacobian's denominator follows
     // without cancellation: (wi.wm + wo.wm / etap)^2 = (h.wm / etap)^2 = |h|^2 / etap^2.
-    bool half_vector(const Vec3<F> &wo, const Vec3<F> &wi, Vec3<F> *wm, F *etap, F *len2_out) const {
-        F cos_o = CosTheta(wo), cos_i = CosTheta(wi);
-        bool reflect = cos_i * cos_o > F(0);
-        F eta_side = cos_o > F(0) ? eta : F(1) / eta;
-        *etap = reflect ? F(1) : eta_side;
-        Vec3<F> h = wi * *etap + wo;
-        F len2 = length_squared(h);
+    // One division, one square root.
+    template <typename V>
+    Mask<V> half_vector(const Vec3<V> &wo, const Vec3<V> &wi, Vec3<V> *wm, V *etap, V *len2_out) const {
+        V cos_o = CosTheta(wo), cos_i = CosTheta(wi);
+        Mask<V> reflect = cos_i * cos_o > V(0);
+        V eta_side = select(cos_o > V(0), V(eta), V(F(1) / eta));
+        *etap = select(reflect, V(1), eta_side);
+        Vec3<V> h = wi * *etap + wo;
+        V len2 = length_squared(h);
         *len2_out = len2;
-        bool ok = (cos_i != F(0)) & (cos_o != F(0)) & (len2 > F(0));
-        F inv_len = F(1) / sqrt(ok ? len2 : F(1));
-        F sgn = h.z < F(0) ? -inv_len : inv_len; // normalize and face +z in one scale
+        Mask<V> ok = (cos_i != V(0)) & (cos_o != V(0)) & (len2 > V(0));
+        V inv_len = V(1) / sqrt(select(ok, len2, V(1)));
+        V sgn = select(h.z < V(0), -inv_len, inv_len); // normalize and face +z in one scale
         h = h * sgn;
         *wm = h;
         // Discard back-facing microfacets (Walter 2007 sec. 5.1)
-        ok = ok & (dot(h, wi) * cos_i >= F(0)) & (dot(h, wo) * cos_o >= F(0));
+        ok = ok & (dot(h, wi) * cos_i >= V(0)) & (dot(h, wo) * cos_o >= V(0));
         return ok;
     }
 
-    Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode) const {
+    // Reflection D G F / |4 cos_i cos_o| = F / (D_denom G_denom); transmission (Walter 2007
+    // eq. 21) D G (1 - F) |wi.wm wo.wm| / (|cos_i cos_o| (wi.wm + wo.wm/etap)^2) =
+    // 4 (1 - F) |wi.wm wo.wm| / (D_denom G_denom |h|^2 / etap^2) (core/microfacet.h;
+    // half_vector), Radiance mode dividing by etap^2, which cancels the etap^2. One division
+    // for the value: 3 divisions and 4 square roots per element in all.
+    template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode mode) const {
         // Delta lobes evaluate to 0: folded into the mask (no early return).
-        Vec3<F> wm;
-        F etap, len2;
-        bool ok = half_vector(wo, wi, &wm, &etap, &len2) & !is_smooth();
-        bool reflect = CosTheta(wi) * CosTheta(wo) > F(0);
-        F cos_o = CosTheta(wo), cos_i = CosTheta(wi);
-        F Fr, Ft;
-        FrDielectricRT(dot(wo, wm), eta, &Fr, &Ft); // Ft = 1 - Fr without cancellation
-        F dg = mfd.D(wm) * mfd.G(wo, wi);
-        F cc = abs(cos_i * cos_o);
-        // Reflection: D G F / |4 cos_i cos_o|
-        F fr = dg * Fr / (F(4) * cc);
-        // Transmission (Walter 2007 eq. 21): D G (1 - F) |wi.wm wo.wm| / (|cos_i cos_o| (wi.wm + wo.wm/etap)^2),
-        // the squared sum being |h|^2 / etap^2 (half_vector); Radiance mode divides by etap^2,
-        // which cancels the etap^2 of that denominator.
-        F ft = dg * Ft * abs(dot(wi, wm) * dot(wo, wm)) / (len2 * cc);
+        Vec3<V> wm;
+        V etap, len2;
+        Mask<V> active = half_vector(wo, wi, &wm, &etap, &len2) & Mask<V>(!is_smooth());
+        V cos_o = CosTheta(wo), cos_i = CosTheta(wi);
+        Mask<V> reflect = cos_i * cos_o > V(0);
+        V Fr, Ft;
+        V wo_wm = dot(wo, wm);
+        FrDielectricRT(wo_wm, eta, &Fr, &Ft); // Ft = 1 - Fr without cancellation
+        V dg = mfd.D_denom(wm, active) * mfd.G_denom(abs(cos_o), abs(cos_i), mfd.smith_root(wo), mfd.smith_root(wi));
+        V ft = V(4) * Ft * abs(dot(wi, wm) * wo_wm);
         ft = mode == TransportMode::Radiance ? ft : ft * sqr(etap);
-        F v = reflect ? fr : ft;
-        return Spectrum<F>(ok ? v : F(0));
+        V v = select(reflect, Fr, ft) / (dg * select(reflect, V(1), len2));
+        return Spectrum<V>(select(active, v, V(0)));
     }
 
-    BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode,
-                           uint8_t sample_flags) const {
-        return is_smooth() ? sample_smooth(wo, uc, mode, sample_flags)
-                           : sample_rough(wo, uc, u, mode, sample_flags);
+    template <typename V>
+    BSDFSample<V> sample_f(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode mode, uint8_t sample_flags) const {
+        return is_smooth() ? sample_smooth(wo, uc, mode, sample_flags) : sample_rough(wo, uc, u, mode, sample_flags);
     }
 
-    BSDFSample<F> sample_smooth(const Vec3<F> &wo, F uc, TransportMode mode, uint8_t sample_flags) const {
-        BSDFSample<F> s;
+    // 3 divisions (the Fresnel reciprocal, f, pdf), 2 square roots.
+    template <typename V>
+    BSDFSample<V> sample_smooth(const Vec3<V> &wo, V uc, TransportMode mode, uint8_t sample_flags) const {
+        BSDFSample<V> s;
         // eta == 1 is a pure pass-through; force R = 0 rather than trusting rounding.
-        F R = keep_or_zero(FrDielectric(CosTheta(wo), eta), eta != F(1)), pr, pt;
-        lobe_probs(R, F(1) - R, sample_flags, &pr, &pt);
-        bool reflect = ChooseFirstLobe(uc, pr, pt);
+        V R = keep_or_zero(FrDielectric(CosTheta(wo), eta), eta != F(1)), pr, pt;
+        lobe_probs(R, V(1) - R, sample_flags, &pr, &pt);
+        Mask<V> reflect = ChooseFirstLobe(uc, pr, pt);
         // Specular reflection about +z, or refraction through the flat interface.
-        Vec3<F> wr(-wo.x, -wo.y, wo.z), wt;
-        F etap;
-        bool refr_ok = Refract(wo, Vec3<F>(0, 0, 1), eta, &etap, &wt);
-        s.wi = reflect ? wr : wt;
-        F cos_i = DeltaAbsCos(s.wi);
-        F ft = (F(1) - R) / cos_i;
-        ft = mode == TransportMode::Radiance ? ft / sqr(etap) : ft;
-        s.f = Spectrum<F>(reflect ? R / cos_i : ft);
-        s.pdf = (reflect ? pr : pt) / (pr + pt);
-        s.flags = lobe_flag(SpecularReflection, !reflect);
-        s.eta = reflect ? F(1) : etap;
+        Vec3<V> wr(-wo.x, -wo.y, wo.z), wt;
+        V etap, inv_etap;
+        Mask<V> refr_ok = Refract(wo, Vec3<V>(V(0), V(0), V(1)), eta, &etap, &wt, &inv_etap);
+        s.wi = select(reflect, wr, wt);
+        V cos_i = DeltaAbsCos(s.wi);
+        V ft = V(1) - R;
+        ft = mode == TransportMode::Radiance ? ft * sqr(inv_etap) : ft;
+        s.f = Spectrum<V>(select(reflect, R, ft) / cos_i);
+        s.pdf = select(reflect, pr, pt) / (pr + pt);
+        s.flags = lobe_flag<V>(SpecularReflection, !reflect);
+        s.eta = select(reflect, V(1), etap);
         // cos_i > 0 always holds (DeltaAbsCos).
-        s.valid = ((pr + pt) > F(0)) & (reflect | refr_ok);
+        s.valid = ((pr + pt) > V(0)) & (reflect | refr_ok);
         return s;
     }
 
-    BSDFSample<F> sample_rough(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode,
-                               uint8_t sample_flags) const {
-        BSDFSample<F> s;
-        Vec3<F> wm = mfd.Sample_wm(wo, u);
-        F R, T, pr, pt;
-        FrDielectricRT(dot(wo, wm), eta, &R, &T);
+    // Only the chosen lobe's value is computed. pdf = G1(wo) D / (4 cos_o) = 1 / (D_denom P)
+    // for reflection, times 4 |wo.wm| |wi.wm| / (wi.wm + wo.wm / etap)^2 for transmission
+    // (the half-vector Jacobian), P = 2 (cos_o + R_o); f as in f(). 6 divisions (3 in
+    // Sample_wm, the lobe choice, f, pdf), 9 square roots per element.
+    template <typename V>
+    BSDFSample<V> sample_rough(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode mode, uint8_t sample_flags) const {
+        BSDFSample<V> s;
+        Vec3<V> wm = mfd.Sample_wm(wo, u);
+        V wo_wm = dot(wo, wm);
+        V R, T, pr, pt;
+        FrDielectricRT(wo_wm, eta, &R, &T);
         lobe_probs(R, T, sample_flags, &pr, &pt);
-        bool reflect = ChooseFirstLobe(uc, pr, pt);
-        F cos_o = CosTheta(wo);
-        F pdf_wm = mfd.PDF(wo, wm);
+        Mask<V> reflect = ChooseFirstLobe(uc, pr, pt);
+        V cos_o = CosTheta(wo);
 
-        // Reflection about the sampled normal.
-        Vec3<F> wr = Reflect(wo, wm);
-        F pdf_r = pdf_wm / (F(4) * absdot(wo, wm)) * pr / (pr + pt);
-        F f_r = mfd.D(wm) * mfd.G(wo, wr) * R / std::abs(F(4) * CosTheta(wr) * cos_o);
-        bool ok_r = SameHemisphere(wo, wr);
+        // Reflection about the sampled normal, or refraction through it.
+        Vec3<V> wr = Reflect(wo, wm), wt;
+        V etap, inv_etap;
+        Mask<V> ok_t = Refract(wo, wm, eta, &etap, &wt, &inv_etap);
+        // wt.z == 0 is left to the BSDF-level check on wi.z (bsdf_sample).
+        Mask<V> ok = (reflect & SameHemisphere(wo, wr)) | (!reflect & ok_t & !SameHemisphere(wo, wt));
+        ok &= ((pr + pt) > V(0)) & (cos_o != V(0));
+        Vec3<V> wi = select(reflect, wr, wt);
 
-        // Refraction through the sampled normal, with the half-vector Jacobian.
-        Vec3<F> wt;
-        F etap;
-        bool ok_t = Refract(wo, wm, eta, &etap, &wt);
-        // wt.z == 0 is left to the BSDF-level check on wi.z (bsdf_sample; rule V5, core/math.h).
-        ok_t = ok_t & !SameHemisphere(wo, wt);
-        F denom = sqr(dot(wt, wm) + dot(wo, wm) / etap);
-        F dwm_dwi = absdot(wt, wm) / denom;
-        F pdf_t = pdf_wm * dwm_dwi * pt / (pr + pt);
-        F f_t = T * mfd.D(wm) * mfd.G(wo, wt) *
-                std::abs(dot(wt, wm) * dot(wo, wm) / (CosTheta(wt) * cos_o * denom));
-        f_t = mode == TransportMode::Radiance ? f_t / sqr(etap) : f_t;
-
-        s.wi = reflect ? wr : wt;
-        s.f = Spectrum<F>(reflect ? f_r : f_t);
-        // The chosen lobe's validity is folded into its pdf (0 = invalid; rule V2, core/math.h).
-        pdf_r = ok_r ? pdf_r : F(0);
-        pdf_t = ok_t ? pdf_t : F(0);
-        s.pdf = reflect ? pdf_r : pdf_t;
-        s.flags = lobe_flag(GlossyReflection, !reflect);
-        s.eta = reflect ? F(1) : etap;
-        s.valid = ((pr + pt) > F(0)) & (cos_o != F(0)) & (s.pdf > F(0));
+        V abs_o = abs(cos_o), root_o = mfd.smith_root(wo);
+        V dd = mfd.D_denom(wm, ok);
+        // Transmission: 4 |wo.wm| |wi.wm| / (wi.wm + wo.wm / etap)^2; reflection: 1.
+        V wi_wm = dot(wi, wm);
+        V jac_num = select(reflect, V(1), V(4) * abs(wo_wm * wi_wm));
+        V jac_den = select(reflect, V(1), sqr(wi_wm + wo_wm * inv_etap));
+        V ft = mode == TransportMode::Radiance ? T * sqr(inv_etap) : T;
+        s.pdf = select(ok, select(reflect, pr, pt) * jac_num /
+                               (dd * mfd.reflection_pdf_denom(abs_o, root_o) * jac_den * (pr + pt)), V(0));
+        V gd = mfd.G_denom(abs_o, AbsCosTheta(wi), root_o, mfd.smith_root(wi));
+        s.f = Spectrum<V>(select(reflect, R, ft) * jac_num / (dd * gd * jac_den));
+        s.wi = wi;
+        s.flags = lobe_flag<V>(GlossyReflection, !reflect);
+        s.eta = select(reflect, V(1), etap);
+        s.valid = ok & (s.pdf > V(0));
         return s;
     }
 
-    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
-        Vec3<F> wm;
-        F etap, len2;
-        bool ok = half_vector(wo, wi, &wm, &etap, &len2) & !is_smooth();
-        bool reflect = CosTheta(wi) * CosTheta(wo) > F(0);
-        F R, T, pr, pt;
-        FrDielectricRT(dot(wo, wm), eta, &R, &T);
+    // Reflection pr / (D_denom P (pr + pt)); transmission 4 |wo.wm| |wi.wm| etap^2 pt /
+    // (D_denom P |h|^2 (pr + pt)), P = 2 (cos_o + R_o): 3 divisions, 3 square roots.
+    template <typename V>
+    V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
+        Vec3<V> wm;
+        V etap, len2;
+        Mask<V> ok = half_vector(wo, wi, &wm, &etap, &len2) & Mask<V>(!is_smooth());
+        Mask<V> reflect = CosTheta(wi) * CosTheta(wo) > V(0);
+        V R, T, pr, pt;
+        V wo_wm = dot(wo, wm);
+        FrDielectricRT(wo_wm, eta, &R, &T);
         lobe_probs(R, T, sample_flags, &pr, &pt);
-        F pdf_wm = mfd.PDF(wo, wm);
-        F p_r = pdf_wm / (F(4) * absdot(wo, wm)) * pr;
-        // dwm/dwi = |wi.wm| / (wi.wm + wo.wm/etap)^2 = |wi.wm| etap^2 / |h|^2 (half_vector)
-        F p_t = pdf_wm * absdot(wi, wm) * sqr(etap) / len2 * pt;
-        F p = (reflect ? p_r : p_t) / (pr + pt);
-        ok &= ((pr + pt) > F(0)); // len2 > 0 is in half_vector's ok
-        return ok ? p : F(0);
+        V dd = mfd.D_denom(wm, ok);
+        V num = select(reflect, pr, V(4) * abs(wo_wm * dot(wi, wm)) * sqr(etap) * pt);
+        V den = dd * mfd.reflection_pdf_denom(AbsCosTheta(wo), mfd.smith_root(wo)) * select(reflect, V(1), len2) *
+                (pr + pt);
+        ok &= ((pr + pt) > V(0)); // len2 > 0 is in half_vector's ok
+        return select(ok, num / den, V(0));
     }
 
     void regularize() { mfd.regularize(); }

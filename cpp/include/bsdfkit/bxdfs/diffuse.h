@@ -24,28 +24,39 @@ template <typename F> struct DiffuseBxDF {
 
     uint8_t flags() const { return R.is_black() ? Unset : DiffuseReflection; }
 
-    // f = R / pi on the side of wo, 0 across the surface.
-    Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode) const {
-        return select(SameHemisphere(wo, wi), R * InvPi<F>, Spectrum<F>(F(0)));
+    // Runs on packets in the batch kernels (batch.h; core/simd.h). No divisions or square
+    // roots in f and pdf; sample: 1 division (the concentric map's ratio) and 1 square root.
+    static constexpr bool Vectorized = true;
+
+    template <typename V> Spectrum<V> R_over_pi() const {
+        Spectrum<V> r;
+        for (int c = 0; c < Spectrum<F>::Size; ++c) r[c] = V(R[c] * InvPi<F>);
+        return r;
     }
 
-    BSDFSample<F> sample_f(const Vec3<F> &wo, F /*uc*/, Point2<F> u, TransportMode /*mode*/,
+    // f = R / pi on the side of wo, 0 across the surface.
+    template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
+        return select(SameHemisphere(wo, wi), R_over_pi<V>(), Spectrum<V>(V(0)));
+    }
+
+    template <typename V>
+    BSDFSample<V> sample_f(const Vec3<V> &wo, V /*uc*/, Point2<V> u, TransportMode /*mode*/,
                            uint8_t sample_flags) const {
-        BSDFSample<F> s;
-        Vec3<F> wi = SampleCosineHemisphere(u);
-        wi.z = wo.z < F(0) ? -wi.z : wi.z; // two-sided: sample wo's side
+        BSDFSample<V> s;
+        Vec3<V> wi = SampleCosineHemisphere(u);
+        wi.z = select(wo.z < V(0), -wi.z, wi.z); // two-sided: sample wo's side
         s.wi = wi;
         // wi is on wo's side unless one of them lies on the horizon: folded into the pdf
-        // (0 = invalid; rules V2, V5 of core/math.h).
-        s.pdf = SameHemisphere(wo, wi) ? CosineHemispherePDF(AbsCosTheta(wi)) : F(0);
-        s.f = R * InvPi<F>;
+        // (0 = invalid).
+        s.pdf = select(SameHemisphere(wo, wi), CosineHemispherePDF(AbsCosTheta(wi)), V(0));
+        s.f = R_over_pi<V>();
         s.flags = DiffuseReflection;
-        s.valid = ((sample_flags & RT_Reflection) != 0) & (s.pdf > F(0));
+        s.valid = Mask<V>((sample_flags & RT_Reflection) != 0) & (s.pdf > V(0));
         return s;
     }
 
-    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
-        F p = SameHemisphere(wo, wi) ? CosineHemispherePDF(AbsCosTheta(wi)) : F(0);
+    template <typename V> V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
+        V p = select(SameHemisphere(wo, wi), CosineHemispherePDF(AbsCosTheta(wi)), V(0));
         return keep_or_zero(p, (sample_flags & RT_Reflection) != 0);
     }
 

@@ -102,7 +102,11 @@ template <typename F> struct MeasuredKernel {
         return v * scale;
     }
 
-    Spectrum<F> f(Vec3<F> wo, Vec3<F> wi, TransportMode) const {
+    // f and pdf of one pair (either may be skipped: a null pointer, a constant after
+    // inlining) through ONE flip + fold + coordinates prelude and ONE VNDF inverse, shared by
+    // f(), pdf() and sample_f(). pdf is that of wi (upper hemisphere, folded) as sample_f
+    // produces it, with all lobes allowed.
+    void f_pdf(Vec3<F> wo, Vec3<F> wi, Spectrum<F> *f_out, F *pdf_out) const {
         bool active = SameHemisphere(wo, wi);
         bool flip = wo.z < F(0);
         wo = select(flip, -wo, wo);
@@ -110,30 +114,29 @@ template <typename F> struct MeasuredKernel {
         F sx, sy;
         fold(wo, wi, &sx, &sy);
         Coords c = coords(wo, wi);
-        Point2<F> s = vndf.invert(c.u_wm, c.params).first;
-        Spectrum<F> v = f_cos(s, c) * (F(1) / max_(wi.z, F(measured::kMinCos)));
-        return select(active & (wi.z > F(0)), v, Spectrum<F>(F(0)));
+        auto [s, vndf_pdf] = vndf.invert(c.u_wm, c.params);
+        if (f_out) {
+            Spectrum<F> v = f_cos(s, c) * (F(1) / max_(wi.z, F(measured::kMinCos)));
+            *f_out = select(active & (wi.z > F(0)), v, Spectrum<F>(F(0)));
+        }
+        if (pdf_out) {
+            F lum_pdf = luminance.eval(s, c.params);
+            F sin_m = std::sqrt(c.wm.x * c.wm.x + c.wm.y * c.wm.y);
+            F jac = max_(F(2) * sqr(Pi<F>) * c.u_wm.x * sin_m, F(1e-6)) * F(4) * dot(wo, c.wm);
+            *pdf_out = active ? vndf_pdf * lum_pdf / jac : F(0);
+        }
     }
 
-    // pdf of wi (upper hemisphere, folded) as sample_f produces it.
-    F pdf_folded(const Vec3<F> &wo, const Vec3<F> &wi, const Coords &c) const {
-        auto [s, vndf_pdf] = vndf.invert(c.u_wm, c.params);
-        F lum_pdf = luminance.eval(s, c.params);
-        F sin_m = std::sqrt(c.wm.x * c.wm.x + c.wm.y * c.wm.y);
-        F jac = max_(F(2) * sqr(Pi<F>) * c.u_wm.x * sin_m, F(1e-6)) * F(4) * dot(wo, c.wm);
-        return vndf_pdf * lum_pdf / jac;
+    Spectrum<F> f(Vec3<F> wo, Vec3<F> wi, TransportMode) const {
+        Spectrum<F> v;
+        f_pdf(wo, wi, &v, nullptr);
+        return v;
     }
 
     F pdf(Vec3<F> wo, Vec3<F> wi, TransportMode, uint8_t sample_flags) const {
-        bool active = SameHemisphere(wo, wi);
-        bool flip = wo.z < F(0);
-        wo = select(flip, -wo, wo);
-        wi = select(flip, -wi, wi);
-        F sx, sy;
-        fold(wo, wi, &sx, &sy);
-        Coords c = coords(wo, wi);
-        F p = pdf_folded(wo, wi, c);
-        return keep_or_zero(active ? p : F(0), (sample_flags & RT_Reflection) != 0);
+        F p;
+        f_pdf(wo, wi, nullptr, &p);
+        return keep_or_zero(p, (sample_flags & RT_Reflection) != 0);
     }
 
     BSDFSample<F> sample_f(Vec3<F> wo, F, Point2<F> u, TransportMode mode, uint8_t sample_flags) const {
@@ -166,10 +169,11 @@ template <typename F> struct MeasuredKernel {
         wi.x = mulsign_neg(wi.x, sx);
         wi.y = mulsign_neg(wi.y, sy);
         r.wi = select(flip, -wi, wi);
-        // f and pdf of the final direction through eval's own path (the warp inverse), so that
-        // sample() agrees with eval()/pdf() to the last bit, not only to the inverse's round trip.
-        r.f = f(wo_in, r.wi, mode);
-        r.pdf = pdf(wo_in, r.wi, mode, uint8_t(RT_All));
+        // f and pdf of the final direction through eval's own path (the warp inverse, once for
+        // both), so that sample() agrees with eval()/pdf() to the last bit, not only to the
+        // inverse's round trip.
+        (void)mode;
+        f_pdf(wo_in, r.wi, &r.f, &r.pdf);
         r.flags = uint8_t(GlossyReflection);
         r.valid = ((sample_flags & RT_Reflection) != 0) & (wo.z > F(0)) & (wi.z > F(0));
         return r;

@@ -14,31 +14,32 @@ namespace bsdfkit {
 template <typename F> inline F finite_or_zero(F v) {
     // Two float selects rather than one select on (a && b): GCC 12's vectorizer cannot handle
     // the boolean-valued COND_EXPRs that if-conversion makes of the && form.
-    v = v >= F(0) ? v : F(0);
-    return v <= std::numeric_limits<F>::max() ? v : F(0);
+    v = select(v >= F(0), v, F(0));
+    return select(v <= F(std::numeric_limits<scalar_t<F>>::max()), v, F(0));
 }
-template <typename F> inline Spectrum<F> finite_or_zero(const Spectrum<F> &s) {
+template <typename F, int N> inline Spectrum<F, N> finite_or_zero(const Spectrum<F, N> &s) {
     Spectrum<F> r;
     for (int i = 0; i < Spectrum<F>::Size; ++i) r[i] = finite_or_zero(s[i]);
     return r;
 }
 // Mask forms (bitwise &/|, no short-circuit), so the checks vectorize in the sample kernels.
-template <typename F> inline bool nonzero_mask(const Spectrum<F> &s) {
-    bool b = false;
-    for (int i = 0; i < Spectrum<F>::Size; ++i) b = b | (s[i] != F(0));
+template <typename F> inline Mask<F> nonzero_mask(const Spectrum<F> &s) {
+    Mask<F> b = s[0] != F(0);
+    for (int i = 1; i < Spectrum<F>::Size; ++i) b = b | (s[i] != F(0));
     return b;
 }
-template <typename F> inline bool finite_nonneg_mask(const Spectrum<F> &s) {
-    bool ok = true;
-    for (int i = 0; i < Spectrum<F>::Size; ++i) ok = ok & (s[i] >= F(0)) & (s[i] <= std::numeric_limits<F>::max());
+template <typename F> inline Mask<F> finite_nonneg_mask(const Spectrum<F> &s) {
+    const F big(std::numeric_limits<scalar_t<F>>::max());
+    Mask<F> ok = (s[0] >= F(0)) & (s[0] <= big);
+    for (int i = 1; i < Spectrum<F>::Size; ++i) ok = ok & (s[i] >= F(0)) & (s[i] <= big);
     return ok;
 }
 
 // Whether a raw BxDF sample survives pbrt-v4's BSDF-level rules (the lobe-flag test against
 // sample_flags aside, which the batch kernel hoists out of its loop).
-template <typename F> inline bool sample_accepted(const BSDFSample<F> &s, const Vec3<F> &wo) {
+template <typename F> inline Mask<F> sample_accepted(const BSDFSample<F> &s, const Vec3<F> &wo) {
     return s.valid & (wo.z != F(0)) & nonzero_mask(s.f) & (s.pdf > F(0)) & (s.wi.z != F(0)) &
-           finite_nonneg_mask(s.f) & (s.pdf <= std::numeric_limits<F>::max());
+           finite_nonneg_mask(s.f) & (s.pdf <= F(std::numeric_limits<scalar_t<F>>::max()));
 }
 
 // The direction an invalid sample carries (with f = pdf = 0): the shading normal +z.
@@ -53,7 +54,7 @@ inline Spectrum<F> bsdf_f(const Model &m, const Vec3<F> &wo, const Vec3<F> &wi, 
 template <typename Model, typename F>
 inline F bsdf_pdf(const Model &m, const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode, uint8_t sf) {
     F p = finite_or_zero(m.pdf(wo, wi, mode, sf));
-    return wo.z != F(0) ? p : F(0);
+    return select(wo.z != F(0), p, F(0));
 }
 
 template <typename Model, typename F>

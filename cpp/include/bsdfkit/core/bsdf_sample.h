@@ -6,14 +6,17 @@
 
 namespace bsdfkit {
 
+// For a packet F, `flags` holds each lane's BxDFFlags as a float (see lobe_flag) and the bools
+// are lane masks.
 template <typename F> struct BSDFSample {
+    using Flags = std::conditional_t<is_packet_v<F>, F, uint8_t>;
     Spectrum<F> f{F(0)};
-    Vec3<F> wi{0, 0, 0};
-    F pdf = 0;
-    uint8_t flags = Unset;
-    F eta = 1;
-    bool pdf_is_proportional = false;
-    bool valid = false;
+    Vec3<F> wi{F(0), F(0), F(0)};
+    F pdf = F(0);
+    Flags flags = Flags(Unset);
+    F eta = F(1);
+    Mask<F> pdf_is_proportional = Mask<F>(false);
+    Mask<F> valid = Mask<F>(false);
 
     bool is_reflection() const { return flags & Reflection; }
     bool is_transmission() const { return flags & Transmission; }
@@ -27,6 +30,11 @@ template <typename F> inline BSDFSample<F> invalid_sample() { return BSDFSample<
 static_assert(DiffuseTransmission == DiffuseReflection + 1 && GlossyTransmission == GlossyReflection + 1 &&
               SpecularTransmission == SpecularReflection + 1);
 inline uint8_t lobe_flag(BxDFFlags reflection, bool transmit) { return uint8_t(reflection + int(transmit)); }
+// The same per lane, for an evaluation type V (lobe_flag<V>(GlossyReflection, !reflect)).
+template <typename V> inline typename BSDFSample<V>::Flags lobe_flag(BxDFFlags reflection, const Mask<V> &transmit) {
+    if constexpr (is_packet_v<V>) return V(scalar_t<V>(reflection)) + mask_to_float<V>(transmit);
+    else return lobe_flag(reflection, transmit);
+}
 
 // Lobe weights restricted to the lobes sample_flags allows (pbrt-v4's `if (!(sampleFlags &
 // Reflection)) pr = 0;`), as bit masks (rule V3, core/math.h).

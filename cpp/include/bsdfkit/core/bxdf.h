@@ -52,7 +52,14 @@ template <typename M> using KernelOf_t = typename KernelOf<M>::type;
 // Whether a model splits sample_f into sample_smooth / sample_rough (see above).
 template <typename M, typename = void> struct has_split_sample : std::false_type {};
 template <typename M>
-struct has_split_sample<M, std::void_t<decltype(&M::is_smooth), decltype(&M::sample_rough)>> : std::true_type {};
+struct has_split_sample<M, std::void_t<decltype(&M::is_smooth)>> : std::true_type {};
+// (check_bxdf requires sample_smooth / sample_rough of a model with is_smooth(); they may be
+// member templates on the evaluation type, which have no address to test.)
+
+// Whether a model runs on packets in the batch kernels (batch.h): `static constexpr bool
+// Vectorized = true;` and every method a template on the evaluation type V (core/simd.h).
+template <typename M, typename = void> struct is_vectorized : std::false_type {};
+template <typename M> struct is_vectorized<M, std::void_t<decltype(M::Vectorized)>> : std::bool_constant<M::Vectorized> {};
 
 // An enum field of a Params struct names its values by an overload found by argument-dependent
 // lookup:  inline constexpr std::array<const char *, 2> enum_names(Masking) { return {...}; }

@@ -148,8 +148,13 @@ template <typename T, int K> struct Dual {
 template <typename T> struct is_dual : std::false_type {};
 template <typename T, int K> struct is_dual<Dual<T, K>> : std::true_type {};
 
-// core/math.h traits: the scalar of a Dual is its value type; a Dual model's Params hold Duals.
-template <typename T, int K> struct ScalarOf<Dual<T, K>> { using type = T; };
+// core/simd.h traits: a Dual is a scalar evaluation type (Mask = bool, one lane) whose scalar_t
+// (the type of constants and tables) is its value type; core/math.h: a Dual model's Params hold Duals.
+template <typename T, int K> struct simd_traits<Dual<T, K>, void> {
+    using Scalar = T;
+    using Mask = bool;
+    static constexpr size_t Width = 1;
+};
 template <typename T, int K> struct ParamOf<Dual<T, K>> { using type = Dual<T, K>; };
 
 template <typename T, int K> constexpr T value_of(const Dual<T, K> &x) { return x.v; }

@@ -13,27 +13,27 @@ template <typename F> inline F SinTheta(const Vec3<F> &w) { return sqrt(Sin2Thet
 template <typename F> inline F Tan2Theta(const Vec3<F> &w) { return Sin2Theta(w) / Cos2Theta(w); }
 template <typename F> inline F CosPhi(const Vec3<F> &w) {
     F s = SinTheta(w);
-    return s == F(0) ? F(1) : clamp(w.x / s, F(-1), F(1));
+    return select(s == F(0), F(1), clamp(w.x / s, F(-1), F(1)));
 }
 template <typename F> inline F SinPhi(const Vec3<F> &w) {
     F s = SinTheta(w);
-    return s == F(0) ? F(0) : clamp(w.y / s, F(-1), F(1));
+    return select(s == F(0), F(0), clamp(w.y / s, F(-1), F(1)));
 }
 // |cos theta| for a delta lobe's f = F / |cos|: floored at the smallest normal number so a
 // denormal cosine cannot overflow f to inf (the lobe's weight f |cos| / pdf stays <= F).
 template <typename F> inline F DeltaAbsCos(const Vec3<F> &w) {
-    return max_(AbsCosTheta(w), std::numeric_limits<F>::min());
+    return max_(AbsCosTheta(w), F(std::numeric_limits<scalar_t<F>>::min()));
 }
 // Strict: a direction on the horizon is in neither hemisphere.
-template <typename F> inline bool SameHemisphere(const Vec3<F> &a, const Vec3<F> &b) { return a.z * b.z > F(0); }
+template <typename F> inline Mask<F> SameHemisphere(const Vec3<F> &a, const Vec3<F> &b) { return a.z * b.z > F(0); }
 
 // The reflection half vector normalize(wo + wi) (Walter 2007 eq. 13). `active &= (wo + wi != 0)`;
 // where it ends up false the result is wo + wi unnormalized, for the caller's mask to discard.
-template <typename F> inline Vec3<F> reflection_half_vector(const Vec3<F> &wo, const Vec3<F> &wi, bool &active) {
+template <typename F> inline Vec3<F> reflection_half_vector(const Vec3<F> &wo, const Vec3<F> &wi, Mask<F> &active) {
     Vec3<F> h = wo + wi;
     F len2 = length_squared(h);
     active &= len2 > F(0);
-    return h / sqrt(active ? len2 : F(1));
+    return h / sqrt(select(active, len2, F(1)));
 }
 
 // Mirror wo about n (pbrt-v4 Reflect).
@@ -42,20 +42,24 @@ template <typename F> inline Vec3<F> Reflect(const Vec3<F> &wo, const Vec3<F> &n
 }
 
 // Refraction of wi about n with relative IOR eta (inside/outside); handles wi below n by
-// inverting eta. Returns false on total internal reflection (pbrt-v4 Refract).
-template <typename F>
-inline bool Refract(const Vec3<F> &wi, Vec3<F> n, F eta, F *etap, Vec3<F> *wt) {
+// inverting eta. Returns false on total internal reflection (pbrt-v4 Refract). eta is a scalar
+// or V; one reciprocal of eta serves the whole formula.
+template <typename F, typename E>
+inline Mask<F> Refract(const Vec3<F> &wi, Vec3<F> n, E eta_, F *etap, Vec3<F> *wt, F *inv_etap_out = nullptr) {
     F cos_i = dot(n, wi);
-    bool inside = cos_i < F(0);
-    eta = inside ? F(1) / eta : eta;
-    cos_i = inside ? -cos_i : cos_i;
-    n = inside ? -n : n;
+    Mask<F> inside = cos_i < F(0);
+    F eta(eta_), inv_eta_s = F(E(1) / eta_);
+    F inv_eta = select(inside, eta, inv_eta_s); // 1 / etap
+    eta = select(inside, inv_eta_s, eta);
+    cos_i = abs(cos_i);
+    n = select(inside, -n, n);
     F sin2_i = max_(F(0), F(1) - sqr(cos_i));
-    F sin2_t = sin2_i / sqr(eta);
-    bool tir = sin2_t >= F(1);
+    F sin2_t = sin2_i * sqr(inv_eta);
+    Mask<F> tir = sin2_t >= F(1);
     F cos_t = safe_sqrt(F(1) - sin2_t);
-    *wt = -wi / eta + (cos_i / eta - cos_t) * n;
+    *wt = -wi * inv_eta + (cos_i * inv_eta - cos_t) * n;
     *etap = eta;
+    if (inv_etap_out) *inv_etap_out = inv_eta;
     return !tir;
 }
 

@@ -5,43 +5,39 @@
 
 namespace bsdfkit {
 
-// Exact dielectric Fresnel with inside flip and total internal reflection (pbrt-v4 FrDielectric).
-template <typename F> inline F FrDielectric(F cos_i, F eta) {
-    cos_i = clamp(cos_i, F(-1), F(1));
-    bool inside = cos_i < F(0);
-    eta = inside ? F(1) / eta : eta;
-    cos_i = abs(cos_i);
-    F sin2_t = (F(1) - sqr(cos_i)) / sqr(eta);
-    bool tir = sin2_t >= F(1);
-    F cos_t = safe_sqrt(F(1) - sin2_t);
-    F r_parl = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    F r_perp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    F fr = (sqr(r_parl) + sqr(r_perp)) / F(2);
-    return tir ? F(1) : fr;
-}
-
-// FrDielectric's reflectance R and transmittance T = 1 - R, each from its own closed form
-// (Born & Wolf: 1 - r^2 = 4 eta cos_i cos_t / (eta cos_i + cos_t)^2 per polarization), so
+// Exact dielectric Fresnel reflectance R and transmittance T = 1 - R, unpolarised, with the
+// inside flip and total internal reflection (pbrt-v4 FrDielectric). Each from its own closed
+// form (Born & Wolf: 1 - r^2 = 4 eta cos_i cos_t / (eta cos_i + cos_t)^2 per polarization), so
 // that T keeps full relative precision where R -> 1 (near the critical angle) instead of
-// losing it to the cancellation in 1 - R. One reciprocal serves both.
-template <typename F> inline void FrDielectricRT(F cos_i, F eta, F *R, F *T) {
+// losing it to the cancellation in 1 - R. One reciprocal of eta and one of the shared
+// denominator 2 a^2 b^2 serve both. eta is a scalar or V.
+template <typename F, typename E> inline void FrDielectricRT(F cos_i, E eta_, F *R, F *T) {
     cos_i = clamp(cos_i, F(-1), F(1));
-    bool inside = cos_i < F(0);
-    eta = inside ? F(1) / eta : eta;
+    Mask<F> inside = cos_i < F(0);
+    F eta(eta_), inv_eta = F(E(1) / eta_); // a scalar division for a scalar eta
+    F inv_etap = select(inside, eta, inv_eta);
+    eta = select(inside, inv_eta, eta);
     cos_i = abs(cos_i);
-    F sin2_t = (F(1) - sqr(cos_i)) / sqr(eta);
-    bool tir = sin2_t >= F(1);
+    F sin2_t = (F(1) - sqr(cos_i)) * sqr(inv_etap);
+    Mask<F> tir = sin2_t >= F(1);
     F cos_t = safe_sqrt(F(1) - sin2_t);
     F a = eta * cos_i + cos_t, b = cos_i + eta * cos_t;     // parallel / perpendicular denominators
     F a2 = sqr(a), b2 = sqr(b);
-    F inv = F(1) / (F(2) * a2 * b2);
+    // a = b = 0 only at cos_i = 0 with cos_t = 0 (grazing TIR): then R = 1, T = 0.
+    Mask<F> ok = (a2 * b2 > F(0)) & !tir;
+    F inv = F(1) / select(ok, F(2) * a2 * b2, F(1));
     F pa = eta * cos_i - cos_t, pb = cos_i - eta * cos_t;
     F r = (sqr(pa) * b2 + sqr(pb) * a2) * inv;
     F t = F(4) * eta * cos_i * cos_t * (a2 + b2) * inv;
-    // a = b = 0 only at cos_i = 0 with cos_t = 0 (grazing TIR): then R = 1, T = 0.
-    bool ok = (a2 * b2 > F(0)) & !tir;
-    *R = ok ? r : F(1);
-    *T = ok ? t : F(0);
+    *R = select(ok, r, F(1));
+    *T = select(ok, t, F(0));
+}
+
+// The reflectance alone: FrDielectricRT's R.
+template <typename F, typename E> inline F FrDielectric(F cos_i, E eta) {
+    F R, T;
+    FrDielectricRT(cos_i, eta, &R, &T);
+    return R;
 }
 
 // Minimal complex arithmetic in real form, so the conductor term vectorizes.
@@ -61,27 +57,36 @@ template <typename F> inline Cplx<F> csqrt(Cplx<F> z) {
 }
 
 // Complex Fresnel for a conductor with index eta + i k, unpolarised (Born & Wolf; the same
-// value as pbrt-v4 FrComplex). Written in real arithmetic after Lagarde 2013, "Memo on Fresnel
-// equations": two square roots and two divisions, which vectorizes and is half the cost of
-// the complex-number form.
-template <typename F> inline F FrComplex(F cos_i, F eta, F k) {
+// value as pbrt-v4 FrComplex), in real arithmetic after Lagarde 2013, "Memo on Fresnel
+// equations": Rs = (t1 - t2) / (t1 + t2), Rp = Rs (t3 - t4) / (t3 + t4), F = (Rs + Rp) / 2,
+// written as num / den with ONE division ((t3 + t4) + (t3 - t4) = 2 t3). FrComplexRatio
+// returns num and den so that a kernel can fold den into its own single division. Two square
+// roots. eta and k are scalars or V.
+template <typename F, typename E> inline void FrComplexRatio(F cos_i, E eta, E k, F *num, F *den) {
     cos_i = clamp(cos_i, F(0), F(1));
     F cos2 = cos_i * cos_i, sin2 = F(1) - cos2;
-    F eta2 = eta * eta, k2 = k * k;
-    F t0 = eta2 - k2 - sin2;
-    F a2pb2 = sqrt(t0 * t0 + F(4) * eta2 * k2); // a^2 + b^2
+    E eta2 = eta * eta, k2 = k * k;
+    F t0 = F(eta2 - k2) - sin2;
+    F a2pb2 = sqrt(t0 * t0 + F(E(4) * eta2 * k2)); // a^2 + b^2
     F a = safe_sqrt(F(0.5) * (a2pb2 + t0));
     F t1 = a2pb2 + cos2, t2 = F(2) * a * cos_i;
     F t3 = a2pb2 * cos2 + sin2 * sin2, t4 = t2 * sin2;
-    // Both denominators vanish only for eta~ = 1 at grazing incidence, where F is 1.
-    F rs = t1 + t2 > F(0) ? (t1 - t2) / (t1 + t2) : F(1);
-    F rp_over_rs = t3 + t4 > F(0) ? (t3 - t4) / (t3 + t4) : F(1);
-    return F(0.5) * (rs + rs * rp_over_rs);
+    // Both denominators vanish only for eta~ = 1 at grazing incidence, where Rs = Rp / Rs = 1.
+    Mask<F> ok_s = t1 + t2 > F(0), ok_p = t3 + t4 > F(0);
+    F ns = select(ok_s, t1 - t2, F(1)), ds = select(ok_s, t1 + t2, F(1));
+    F np = select(ok_p, t3 - t4, F(1)), dp = select(ok_p, t3 + t4, F(1));
+    *num = F(0.5) * ns * (dp + np); // = ns t3 where ok_p
+    *den = ds * dp;
+}
+template <typename F, typename E> inline F FrComplex(F cos_i, E eta, E k) {
+    F num, den;
+    FrComplexRatio(cos_i, eta, k, &num, &den);
+    return num / den;
 }
 
-template <typename F, int N>
-inline Spectrum<F, N> FrComplex(F cos_i, const Spectrum<F, N> &eta, const Spectrum<F, N> &k) {
-    Spectrum<F, N> r;
+template <typename V, typename F, int N>
+inline Spectrum<V, N> FrComplex(V cos_i, const Spectrum<F, N> &eta, const Spectrum<F, N> &k) {
+    Spectrum<V, N> r;
     for (int i = 0; i < N; ++i) r[i] = FrComplex(cos_i, eta[i], k[i]);
     return r;
 }
@@ -107,25 +112,25 @@ template <typename T> inline T ConductorF82A(T eta, T k) {
 }
 
 // Schlick 1994: F = F0 + (1 - F0)(1 - cos)^5, per channel.
-template <typename F, int N>
-inline Spectrum<F, N> FrSchlick(F cos_i, const Spectrum<F, N> &f0) {
-    F m = F(1) - clamp(cos_i, F(0), F(1));
-    F m2 = m * m, m5 = m2 * m2 * m;
-    Spectrum<F, N> r;
-    for (int i = 0; i < N; ++i) r[i] = f0[i] + (F(1) - f0[i]) * m5;
+template <typename V, typename F, int N>
+inline Spectrum<V, N> FrSchlick(V cos_i, const Spectrum<F, N> &f0) {
+    V m = V(1) - clamp(cos_i, V(0), V(1));
+    V m2 = m * m, m5 = m2 * m2 * m;
+    Spectrum<V, N> r;
+    for (int i = 0; i < N; ++i) r[i] = V(f0[i]) + V(F(1) - f0[i]) * m5;
     return r;
 }
 
 // F82-tint (Hoffman 2019, "Fresnel Equations Considered Harmful"; Kutz et al. 2021, Adobe
 // Standard Material): F = F0 + (1 - F0)(1 - cos)^5 - a cos (1 - cos)^6, clamped to [0, 1]
 // (the polynomial leaves [0, 1] for non-metallic eta + i k, e.g. eta ~ 1 with k ~ 0).
-template <typename F, int N>
-inline Spectrum<F, N> FrF82Tint(F cos_i, const Spectrum<F, N> &f0, const Spectrum<F, N> &a) {
-    F c = clamp(cos_i, F(0), F(1));
-    F m = F(1) - c;
-    F m2 = m * m, m5 = m2 * m2 * m, cm6 = c * m5 * m;
-    Spectrum<F, N> r;
-    for (int i = 0; i < N; ++i) r[i] = clamp(f0[i] + (F(1) - f0[i]) * m5 - a[i] * cm6, F(0), F(1));
+template <typename V, typename F, int N>
+inline Spectrum<V, N> FrF82Tint(V cos_i, const Spectrum<F, N> &f0, const Spectrum<F, N> &a) {
+    V c = clamp(cos_i, V(0), V(1));
+    V m = V(1) - c;
+    V m2 = m * m, m5 = m2 * m2 * m, cm6 = c * m5 * m;
+    Spectrum<V, N> r;
+    for (int i = 0; i < N; ++i) r[i] = clamp(V(f0[i]) + V(F(1) - f0[i]) * m5 - V(a[i]) * cm6, V(0), V(1));
     return r;
 }
 

@@ -16,6 +16,9 @@
 //     tests repeated between a model and the BSDF-level rules: GCC's PRE merges them into bool
 //     selects. -ffp-contract=off keeps vector body and scalar remainder bit-identical.
 // Check with the CMake option BSDFKIT_VEC_REPORT=ON (-fopt-info-vec-optimized).
+// These rules serve the models on the scalar, auto-vectorized loops. Models with `Vectorized = true`
+// (Diffuse, Conductor, Dielectric) run on explicit packets instead (core/simd.h, batch.h), where
+// the same mask idiom holds but the compiler's vectorizer is not involved.
 #pragma once
 #include <cmath>
 #include <cstdint>
@@ -23,10 +26,12 @@
 #include <limits>
 #include <type_traits>
 
+#include "simd.h"
+
 namespace bsdfkit {
 
-// Math functions are called unqualified in model code (sqrt(x), not std::sqrt(x)), so that the
-// overloads of a number type of namespace bsdfkit (core/dual.h's Dual) are found too.
+// Math calls in model code are unqualified (sqrt(x)): std:: for scalars, and argument-dependent
+// lookup finds the packet (drjit::) or dual-number (core/dual.h) overloads for other evaluation types.
 using std::abs;
 using std::acos;
 using std::asin;
@@ -42,11 +47,9 @@ using std::pow;
 using std::sin;
 using std::sqrt;
 
-// The scalar type under F (F itself; a Dual's value type, core/dual.h) and the type a model's
-// Params hold and its make() computes derived parameters in (double for float and double
-// models; the Dual itself for a Dual model, so derivatives flow through the preprocessing).
-template <typename F> struct ScalarOf { using type = F; };
-template <typename F> using scalar_t = typename ScalarOf<F>::type;
+// The type a model's Params hold and its make() computes derived parameters in: double for float,
+// double and packet models; the Dual itself for a Dual model (core/dual.h), so derivatives flow
+// through the preprocessing. (scalar_t<V>, core/simd.h, is the scalar under V; a Dual's value type.)
 template <typename F> struct ParamOf { using type = double; };
 template <typename F> using param_t = typename ParamOf<F>::type;
 // x without derivatives, and whether x carries any (plain numbers: itself, false; core/dual.h).
@@ -59,16 +62,16 @@ template <typename Float> inline constexpr Float Inv2Pi = Float(0.15915494309189
 template <typename Float> inline constexpr Float PiOver2 = Float(1.57079632679489661923);
 template <typename Float> inline constexpr Float PiOver4 = Float(0.78539816339744830962);
 
+// (sqr, safe_sqrt, clamp and lerp have Dr.Jit namesakes; core/simd.h overloads them for packets.)
 template <typename T> inline T sqr(T x) { return x * x; }
-template <typename T> inline T select(bool c, T a, T b) { return c ? a : b; }
 // max/min as selects: operands are finite in every use, and selects vectorize.
-template <typename T> inline T max_(T a, T b) { return a > b ? a : b; }
-template <typename T> inline T min_(T a, T b) { return a < b ? a : b; }
-template <typename T> inline T clamp(T x, T lo, T hi) { return x < lo ? lo : (x > hi ? hi : x); }
+template <typename T> inline T max_(T a, T b) { return select(a > b, a, b); }
+template <typename T> inline T min_(T a, T b) { return select(a < b, a, b); }
+template <typename T> inline T clamp(T x, T lo, T hi) { return select(x < lo, lo, select(x > hi, hi, x)); }
 template <typename T> inline T lerp(T t, T a, T b) { return (1 - t) * a + t * b; }
-template <typename T> inline T safe_sqrt(T x) { return sqrt(x > T(0) ? x : T(0)); }
-template <typename T> inline T safe_div(T a, T b) { return b != T(0) ? a / b : T(0); }
-template <typename T> inline T copysign1(T mag, T sgn) { return sgn < T(0) ? -mag : mag; }
+template <typename T> inline T safe_sqrt(T x) { return sqrt(select(x > T(0), x, T(0))); }
+template <typename T> inline T safe_div(T a, T b) { return select(b != T(0), a / b, T(0)); }
+template <typename T> inline T copysign1(T mag, T sgn) { return select(sgn < T(0), -mag, mag); }
 
 // sin and cos of x together, written to vectorize (libm's sin/cos have no vector variant
 // without -ffast-math). Cody-Waite reduction by pi/2 with a 3-part constant, then Cephes-style
@@ -85,7 +88,7 @@ template <> struct SinCosConst<double> {
 };
 template <typename F> inline void sincos_poly(F r, F *s, F *c) {
     F z = r * r;
-    if constexpr (sizeof(F) == 4) {
+    if constexpr (sizeof(scalar_t<F>) == 4) {
         *s = r + r * z * ((F(-1.9515295891e-4) * z + F(8.3321608736e-3)) * z + F(-1.6666654611e-1));
         *c = F(1) - F(0.5) * z +
              z * z * ((F(2.443315711809948e-5) * z + F(-1.388731625493765e-3)) * z + F(4.166664568298827e-2));
@@ -101,27 +104,31 @@ template <typename F> inline void sincos_poly(F r, F *s, F *c) {
     }
 }
 template <typename F> inline void sincos_(F x, F *sin_out, F *cos_out) {
-    using K = SinCosConst<F>;
-    F k = std::floor(x * F(0.63661977236758134308) + F(0.5)); // nearest multiple of pi/2
-    F r = ((x - k * K::C1) - k * K::C2) - k * K::C3;
-    F q = k - F(4) * std::floor(k * F(0.25)); // quadrant 0..3, exact
+    using K = SinCosConst<scalar_t<F>>;
+    F k = floor(x * F(0.63661977236758134308) + F(0.5)); // nearest multiple of pi/2
+    F r = ((x - k * F(K::C1)) - k * F(K::C2)) - k * F(K::C3);
+    F q = k - F(4) * floor(k * F(0.25)); // quadrant 0..3, exact
     F s, c;
     sincos_poly(r, &s, &c);
-    bool swap = (q == F(1)) | (q == F(3));
-    F s0 = swap ? c : s, c0 = swap ? s : c;
-    *sin_out = q >= F(2) ? -s0 : s0;
-    *cos_out = ((q == F(1)) | (q == F(2))) ? -c0 : c0;
+    Mask<F> swap = (q == F(1)) | (q == F(3));
+    F s0 = select(swap, c, s), c0 = select(swap, s, c);
+    *sin_out = select(q >= F(2), -s0, s0);
+    *cos_out = select((q == F(1)) | (q == F(2)), -c0, c0);
 }
 
 // x if keep, else +0, by masking the bits: bit-exact (a NaN x stays NaN when kept). For a
 // loop-invariant keep, where GCC 12 cannot vectorize a select on an invariant bool.
 template <typename F> inline F keep_or_zero(F x, bool keep) {
+    if constexpr (!std::is_floating_point_v<F>) {
+        return keep ? x : F(0); // packets (and other evaluation types): a uniform branch
+    } else {
     using U = std::conditional_t<sizeof(F) == 4, uint32_t, uint64_t>;
     U b, m = keep ? ~U(0) : U(0);
     std::memcpy(&b, &x, sizeof b);
     b &= m;
     std::memcpy(&x, &b, sizeof b);
     return x;
+    }
 }
 
 template <typename Float> struct Vec3 {
@@ -134,6 +141,7 @@ template <typename Float> struct Vec3 {
     Vec3 operator*(Float s) const { return {x * s, y * s, z * s}; }
     Vec3 operator/(Float s) const { Float r = Float(1) / s; return {x * r, y * r, z * r}; }
 };
+template <typename Float> struct is_lane_struct<Vec3<Float>> : std::true_type {};
 template <typename Float> inline Vec3<Float> operator*(Float s, const Vec3<Float> &v) { return v * s; }
 template <typename Float> inline Float dot(const Vec3<Float> &a, const Vec3<Float> &b) {
     return a.x * b.x + a.y * b.y + a.z * b.z;
@@ -148,12 +156,13 @@ template <typename Float> inline Float length_squared(const Vec3<Float> &v) { re
 template <typename Float> inline Vec3<Float> normalize(const Vec3<Float> &v) {
     return v / sqrt(dot(v, v));
 }
-template <typename Float> inline Vec3<Float> select(bool c, const Vec3<Float> &a, const Vec3<Float> &b) {
-    return {c ? a.x : b.x, c ? a.y : b.y, c ? a.z : b.z};
+template <typename Float>
+inline Vec3<Float> select(const Mask<Float> &c, const Vec3<Float> &a, const Vec3<Float> &b) {
+    return {select(c, a.x, b.x), select(c, a.y, b.y), select(c, a.z, b.z)};
 }
 // Flip v into the hemisphere of n.
 template <typename Float> inline Vec3<Float> face_forward(const Vec3<Float> &v, const Vec3<Float> &n) {
-    return dot(v, n) < Float(0) ? -v : v;
+    return select(dot(v, n) < Float(0), -v, v);
 }
 
 template <typename Float> struct Point2 {

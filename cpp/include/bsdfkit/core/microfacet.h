@@ -34,55 +34,82 @@ template <typename F> struct TrowbridgeReitz {
     bool effectively_smooth() const { return max_(alpha_x, alpha_y) < F(kSmoothAlpha); }
 
     // Normal distribution D(wm) (Trowbridge & Reitz 1975; anisotropic form, Heitz 2014 eq. 85).
-    F D(const Vec3<F> &wm) const {
-        F cos2 = Cos2Theta(wm), sin2 = Sin2Theta(wm);
-        F cos4 = cos2 * cos2;
+    template <typename V> V D(const Vec3<V> &wm) const {
+        V cos2 = Cos2Theta(wm), sin2 = Sin2Theta(wm);
+        V cos4 = cos2 * cos2;
         // e = tan^2(theta) (cos^2 phi / ax^2 + sin^2 phi / ay^2), written without phi
-        F e = (sqr(wm.x / alpha_x) + sqr(wm.y / alpha_y)) / cos2;
-        F d = F(1) / (Pi<F> * alpha_x * alpha_y * cos4 * sqr(F(1) + e));
+        V e = (sqr(wm.x / alpha_x) + sqr(wm.y / alpha_y)) / cos2;
+        V d = V(1) / (V(Pi<scalar_t<V>>) * alpha_x * alpha_y * cos4 * sqr(V(1) + e));
         // tan^2 = inf on the horizon and tiny cos^4 both mean D = 0 (pbrt-v4 safeguards)
-        return (cos4 < F(1e-16) || !(sin2 / cos2 < std::numeric_limits<F>::infinity())) ? F(0) : d;
+        return select((cos4 < V(1e-16)) | !(sin2 / cos2 < V(std::numeric_limits<scalar_t<V>>::infinity())), V(0), d);
     }
 
     // Smith auxiliary function Lambda(w) (Heitz 2014 eq. 86).
-    F Lambda(const Vec3<F> &w) const {
-        F cos2 = Cos2Theta(w);
+    template <typename V> V Lambda(const Vec3<V> &w) const {
+        V cos2 = Cos2Theta(w);
         // alpha^2 tan^2 theta along phi, written without phi
-        F a2t2 = (sqr(w.x * alpha_x) + sqr(w.y * alpha_y)) / cos2;
+        V a2t2 = (sqr(w.x * alpha_x) + sqr(w.y * alpha_y)) / cos2;
         // A horizon direction (or tan^2 overflowing) gives Lambda = inf, so G1 = G = 0: the
         // limit of a fully masked direction. pbrt-v4 returns 0 here and relies on callers
         // excluding cos = 0; returning inf keeps f finite for cos down to the underflow limit.
-        return (sqrt(F(1) + a2t2) - F(1)) / F(2);
+        return (sqrt(V(1) + a2t2) - V(1)) / V(2);
     }
 
-    F G1(const Vec3<F> &w) const { return F(1) / (F(1) + Lambda(w)); }
+    template <typename V> V G1(const Vec3<V> &w) const { return V(1) / (V(1) + Lambda(w)); }
 
     // Masking-shadowing for the pair, per the knob.
-    F G(const Vec3<F> &wo, const Vec3<F> &wi) const {
-        F lo = Lambda(wo), li = Lambda(wi);
-        return masking == Masking::Correlated ? F(1) / (F(1) + lo + li)
-                                              : F(1) / ((F(1) + lo) * (F(1) + li));
+    template <typename V> V G(const Vec3<V> &wo, const Vec3<V> &wi) const {
+        V lo = Lambda(wo), li = Lambda(wi);
+        return masking == Masking::Correlated ? V(1) / (V(1) + lo + li) : V(1) / ((V(1) + lo) * (V(1) + li));
     }
 
     // Distribution of visible normals D_w(wm) = G1(w) max(0, w.wm) D(wm) / cos(w) (Heitz 2014 eq. 2).
-    F D(const Vec3<F> &w, const Vec3<F> &wm) const {
+    template <typename V> V D(const Vec3<V> &w, const Vec3<V> &wm) const {
         return safe_div(G1(w) * absdot(w, wm) * D(wm), AbsCosTheta(w));
     }
-    F PDF(const Vec3<F> &w, const Vec3<F> &wm) const { return D(w, wm); }
+    template <typename V> V PDF(const Vec3<V> &w, const Vec3<V> &wm) const { return D(w, wm); }
+
+    // ---- The same terms as shared denominators, for kernels with the fewest divides and
+    // square roots (one reciprocal per quantity; the caller combines them into one divide).
+
+    // 1 / D(wm) for a unit wm: pi ax ay (cos^2 + (x/ax)^2 + (y/ay)^2)^2 (eq. 85 with
+    // cos^4 (1 + tan^2 (...))^2 expanded; no phi, no tan). `active &=` D's safeguard (D = 0
+    // where cos^4 < 1e-16, which includes the horizon).
+    template <typename V> V D_denom(const Vec3<V> &wm, Mask<V> &active) const {
+        using S = scalar_t<V>;
+        V cos2 = Cos2Theta(wm);
+        active &= cos2 * cos2 >= V(1e-16);
+        V q = cos2 + sqr(wm.x * V(S(1) / alpha_x)) + sqr(wm.y * V(S(1) / alpha_y));
+        return V(Pi<S> * alpha_x * alpha_y) * sqr(q);
+    }
+    // |cos| sqrt(1 + alpha^2 tan^2) = sqrt(cos^2 + (ax x)^2 + (ay y)^2), so that
+    // 1 + Lambda(w) = (|cos| + root) / (2 |cos|) (eq. 86): finite down to cos = 0.
+    template <typename V> V smith_root(const Vec3<V> &w) const {
+        return sqrt(Cos2Theta(w) + sqr(w.x * alpha_x) + sqr(w.y * alpha_y));
+    }
+    // G(wo, wi) / (4 cos_o cos_i) = 1 / G_denom: height-correlated 2 (cos_i R_o + cos_o R_i),
+    // separable (cos_o + R_o)(cos_i + R_i), with R = smith_root.
+    template <typename V> V G_denom(V cos_o, V cos_i, V root_o, V root_i) const {
+        return masking == Masking::Correlated ? V(2) * (cos_i * root_o + cos_o * root_i)
+                                              : (cos_o + root_o) * (cos_i + root_i);
+    }
+    // PDF(w, wm) / (4 |w.wm|) = G1(w) D(wm) / (4 |cos|) = 1 / (2 (|cos| + R) / D): the
+    // reflection pdf's denominator without D, 2 (|cos| + R).
+    template <typename V> V reflection_pdf_denom(V cos_o, V root_o) const { return V(2) * (cos_o + root_o); }
 
     // Visible-normal sampling, hemisphere variant (Heitz 2018; pbrt-v4 Sample_wm).
-    Vec3<F> Sample_wm(const Vec3<F> &w, Point2<F> u) const {
-        Vec3<F> wh = normalize(Vec3<F>(alpha_x * w.x, alpha_y * w.y, w.z));
-        wh = wh.z < F(0) ? -wh : wh;
-        bool pole = wh.z >= F(0.99999);
-        Vec3<F> t1 = pole ? Vec3<F>(1, 0, 0) : normalize(cross(Vec3<F>(0, 0, 1), wh));
-        Vec3<F> t2 = cross(wh, t1);
-        Point2<F> p = SampleUniformDiskPolar(u);
-        F h = std::sqrt(max_(F(0), F(1) - sqr(p.x)));
-        p.y = lerp((F(1) + wh.z) / F(2), h, p.y);
-        F pz = std::sqrt(max_(F(0), F(1) - sqr(p.x) - sqr(p.y)));
-        Vec3<F> nh = p.x * t1 + p.y * t2 + pz * wh;
-        return normalize(Vec3<F>(alpha_x * nh.x, alpha_y * nh.y, max_(F(1e-6), nh.z)));
+    template <typename V> Vec3<V> Sample_wm(const Vec3<V> &w, Point2<V> u) const {
+        Vec3<V> wh = normalize(Vec3<V>(alpha_x * w.x, alpha_y * w.y, w.z));
+        wh = select(wh.z < V(0), -wh, wh);
+        Mask<V> pole = wh.z >= V(0.99999);
+        Vec3<V> t1 = select(pole, Vec3<V>(V(1), V(0), V(0)), normalize(cross(Vec3<V>(V(0), V(0), V(1)), wh)));
+        Vec3<V> t2 = cross(wh, t1);
+        Point2<V> p = SampleUniformDiskPolar(u);
+        V h = sqrt(max_(V(0), V(1) - sqr(p.x)));
+        p.y = lerp((V(1) + wh.z) / V(2), h, p.y);
+        V pz = sqrt(max_(V(0), V(1) - sqr(p.x) - sqr(p.y)));
+        Vec3<V> nh = p.x * t1 + p.y * t2 + pz * wh;
+        return normalize(Vec3<V>(alpha_x * nh.x, alpha_y * nh.y, max_(V(1e-6), nh.z)));
     }
 
     // Roughen near-specular lobes for path regularization (pbrt-v4 Regularize).

@@ -9,25 +9,29 @@ namespace bsdfkit {
 // The largest value below 1 (pbrt-v4 OneMinusEpsilon): uniforms documented on [0, 1] are
 // used on [0, 1), so a warp or a lobe CDF never sees u = 1.
 template <typename F> inline constexpr F OneMinusEpsilon = F(1) - std::numeric_limits<F>::epsilon() / F(2);
-template <typename F> inline F clamp_uniform(F u) { return u < OneMinusEpsilon<F> ? u : OneMinusEpsilon<F>; }
+template <typename F> inline F clamp_uniform(F u) {
+    const F one_minus = F(OneMinusEpsilon<scalar_t<F>>);
+    return select(u < one_minus, u, one_minus);
+}
 template <typename F> inline Point2<F> clamp_uniform(Point2<F> u) { return {clamp_uniform(u.x), clamp_uniform(u.y)}; }
 
 // Lobe choice between two lobes of (unnormalized) probabilities pr, pt with uc in [0, 1]: the
 // first is taken with probability pr / (pr + pt); a lobe of probability 0 is never taken and
 // the only nonzero lobe always is, at both ends of uc (uc = 1 with pt = 0 picks the first).
-template <typename F> inline bool ChooseFirstLobe(F uc, F pr, F pt) {
+template <typename F> inline Mask<F> ChooseFirstLobe(F uc, F pr, F pt) {
     return (pr > F(0)) & ((pt <= F(0)) | (uc < pr / (pr + pt)));
 }
 
 // Shirley & Chiu 1997 concentric map, (0,0) -> centre.
 template <typename F> inline Point2<F> SampleUniformDiskConcentric(Point2<F> u) {
     F ox = F(2) * u.x - F(1), oy = F(2) * u.y - F(1);
-    bool first = std::abs(ox) > std::abs(oy);
-    F r = first ? ox : oy, num = first ? oy : ox;
+    Mask<F> first = abs(ox) > abs(oy);
+    F r = select(first, ox, oy), num = select(first, oy, ox);
     // den == 0 only at the centre (num == 0 too), where ratio = 0 as in safe_div. One division
     // of selected operands: two safe_divs let GCC's PRE build bool selects that do not vectorize.
-    F ratio = num / (r != F(0) ? r : F(1));
-    F theta = first ? PiOver4<F> * ratio : PiOver2<F> - PiOver4<F> * ratio;
+    using S = scalar_t<F>;
+    F ratio = num / select(r != F(0), r, F(1));
+    F theta = select(first, F(PiOver4<S>) * ratio, F(PiOver2<S>) - F(PiOver4<S>) * ratio);
     F st, ct;
     sincos_(theta, &st, &ct);
     return {r * ct, r * st};
@@ -35,7 +39,7 @@ template <typename F> inline Point2<F> SampleUniformDiskConcentric(Point2<F> u) 
 
 // r = sqrt(u0), phi = 2 pi u1.
 template <typename F> inline Point2<F> SampleUniformDiskPolar(Point2<F> u) {
-    F r = std::sqrt(u.x), phi = F(2) * Pi<F> * u.y, sp, cp;
+    F r = sqrt(u.x), phi = F(2 * Pi<scalar_t<F>>) * u.y, sp, cp;
     sincos_(phi, &sp, &cp);
     return {r * cp, r * sp};
 }
@@ -46,7 +50,7 @@ template <typename F> inline Vec3<F> SampleCosineHemisphere(Point2<F> u) {
     F z = safe_sqrt(F(1) - d.x * d.x - d.y * d.y);
     return {d.x, d.y, z};
 }
-template <typename F> inline F CosineHemispherePDF(F cos_theta) { return cos_theta * InvPi<F>; }
+template <typename F> inline F CosineHemispherePDF(F cos_theta) { return cos_theta * F(InvPi<scalar_t<F>>); }
 
 template <typename F> inline Vec3<F> SampleUniformHemisphere(Point2<F> u) {
     F z = u.x, r = safe_sqrt(F(1) - z * z), phi = F(2) * Pi<F> * u.y;

@@ -26,13 +26,14 @@ template <typename Float, int N = 3> struct Spectrum {
     Float average() const { Float s = 0; for (int i = 0; i < N; ++i) s += v[i]; return s / N; }
     bool is_black() const { bool b = true; for (int i = 0; i < N; ++i) b = b && (v[i] == Float(0)); return b; }
 };
+template <typename Float, int N> struct is_lane_struct<Spectrum<Float, N>> : std::true_type {};
 template <typename Float, int N>
 inline Spectrum<Float, N> operator*(Float s, const Spectrum<Float, N> &a) { return a * s; }
 template <typename Float, int N>
 inline Spectrum<Float, N> operator-(Float s, const Spectrum<Float, N> &a) { return Spectrum<Float, N>(s) - a; }
 template <typename Float, int N>
-inline Spectrum<Float, N> select(bool c, const Spectrum<Float, N> &a, const Spectrum<Float, N> &b) {
-    Spectrum<Float, N> r; for (int i = 0; i < N; ++i) r.v[i] = c ? a.v[i] : b.v[i]; return r;
+inline Spectrum<Float, N> select(const Mask<Float> &c, const Spectrum<Float, N> &a, const Spectrum<Float, N> &b) {
+    Spectrum<Float, N> r; for (int i = 0; i < N; ++i) r.v[i] = select(c, a.v[i], b.v[i]); return r;
 }
 
 // An RGB parameter (Params field: double, or a Dual for a Dual model) at the model's precision.

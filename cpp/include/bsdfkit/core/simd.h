@@ -1,0 +1,80 @@
+// The mask / select vocabulary shared by scalar and packet instantiations of the model code.
+//
+// Model code is written once on an evaluation type V: a scalar (float, double; Mask<V> = bool)
+// or a packet of kPacketWidth lanes (Packet<float> / Packet<double>, Dr.Jit's header-only packet
+// arrays from the `drjit` wheel, the types Mitsuba's own kernels are written in; Mask<V> is
+// their lane mask). The idiom is Mitsuba's: a per-element condition is a mask, accumulated with
+// `active &= ...` and applied once with `select(active, value, 0)`; no ternaries, `&&`/`||` or
+// early returns on per-element values. Math calls are unqualified (sqrt(x), abs(x), floor(x);
+// core/math.h brings std:: into bsdfkit), so argument-dependent lookup picks drjit:: for
+// packets. Divide and sqrt are the exact IEEE ones in both forms (no rcp/rsqrt approximations).
+#pragma once
+#include <cstddef>
+#include <type_traits>
+
+#include <drjit/packet.h>
+
+namespace bsdfkit {
+
+// Lanes per packet of the batch kernels (measured on Zen 3 / AVX2: 16 lanes = two ymm
+// registers per value beat 8 on the rough conductor eval, see bench/RESULTS.md).
+inline constexpr size_t kPacketWidth = 16;
+
+template <typename T> using Packet = drjit::Packet<T, kPacketWidth>;
+
+template <typename T, typename = void> struct simd_traits {
+    using Scalar = T;
+    using Mask = bool;
+    static constexpr size_t Width = 1;
+};
+template <typename T> struct simd_traits<T, std::enable_if_t<drjit::is_array_v<T>>> {
+    using Scalar = drjit::scalar_t<T>;
+    using Mask = drjit::mask_t<T>;
+    static constexpr size_t Width = drjit::size_v<T>;
+};
+
+// Lane mask of V (bool for a scalar), its scalar element type, and its width.
+template <typename V> using Mask = typename simd_traits<V>::Mask;
+template <typename V> using scalar_t = typename simd_traits<V>::Scalar;
+template <typename V> inline constexpr bool is_packet_v = drjit::is_array_v<V>;
+
+// Scalar forms of the mask reductions; packets use drjit::any/all/none by ADL.
+inline bool any(bool b) { return b; }
+inline bool all(bool b) { return b; }
+inline bool none(bool b) { return !b; }
+
+// Structs of per-lane values (Vec3, Spectrum) have their own select overloads.
+template <typename T> struct is_lane_struct : std::false_type {};
+
+// select(mask, a, b) for scalars (drjit::select serves packets by ADL).
+template <typename T, std::enable_if_t<!is_lane_struct<T>::value, int> = 0>
+inline T select(bool c, const T &a, const T &b) { return c ? a : b; }
+
+// A mask as V: 1 where set, else 0.
+template <typename V> inline V mask_to_float(const Mask<V> &m) {
+    if constexpr (is_packet_v<V>) return drjit::select(m, V(1), V(0));
+    else return m ? V(1) : V(0);
+}
+
+// Our helpers whose names Dr.Jit also defines (deprecated there, or with another argument
+// order: drjit::lerp(a, b, t)), as exact overloads for packets, which argument-dependent lookup
+// would otherwise make ambiguous. Same formulas as the scalar ones in core/math.h.
+template <typename T, size_t N> using PacketT = drjit::Packet<T, N>;
+template <typename T, size_t N> inline PacketT<T, N> sqr(const PacketT<T, N> &x) { return x * x; }
+template <typename T, size_t N>
+inline PacketT<T, N> clamp(const PacketT<T, N> &x, const PacketT<T, N> &lo, const PacketT<T, N> &hi) {
+    return drjit::select(x < lo, lo, drjit::select(x > hi, hi, x));
+}
+template <typename T, size_t N>
+inline PacketT<T, N> lerp(const PacketT<T, N> &t, const PacketT<T, N> &a, const PacketT<T, N> &b) {
+    return (T(1) - t) * a + t * b;
+}
+template <typename T, size_t N> inline PacketT<T, N> safe_sqrt(const PacketT<T, N> &x) {
+    return drjit::sqrt(drjit::select(x > T(0), x, PacketT<T, N>(0)));
+}
+
+// Packet load / store of W consecutive scalars (unaligned).
+template <typename V> inline V load_packet(const scalar_t<V> *p) { return drjit::load<V>(p); }
+template <typename V> inline void store_packet(scalar_t<V> *p, const V &v) { drjit::store(p, v); }
+
+} // namespace bsdfkit
