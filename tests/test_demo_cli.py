@@ -74,7 +74,7 @@ def test_run_demo_returns_paths(tmp_path):
     # run_demo itself (the CLI path is covered by the demo_dir fixture)
     paths = run_demo(str(tmp_path / "d"), verbose=False)
     assert [os.path.basename(p) for p in paths] == ["lobes.png", "albedo.png", "albedo.md", "views.png",
-                                                    "gallery.exr", "gallery.png"]
+                                                    "gallery.exr", "gallery.png", "gallery_labelled.png"]
     assert all(os.path.getsize(p) > 0 for p in paths)
 
 

@@ -177,3 +177,19 @@ def test_cost_deviations_flag_entries_off_by_more_than_half():
     assert bad == [("Dielectric/rough", "precision=float32", 0.14, 0.37)]
     assert to.cost_deviations(shipped, {"Dielectric/rough": {"x": 0.3}})  # 1.67x cheaper: flagged
     assert not to.cost_deviations(shipped, {"Dielectric/rough": {"x": 0.36}})  # 1.39x: within 50 %
+
+
+def test_tabulate_stops_on_sigint():
+    # resolution 256: one (N^2, 96^2) clamped-cosine matrix was 4.8 GB and ran in one numpy call
+    # (10-20 s without a chance to stop at resolution 128); now formed in row blocks
+    out, dt = _interrupt("""
+        import bsdfkit as bk
+        m = bk.Conductor.from_metal("Cu", alpha=0.3)
+        print("started", flush=True)
+        try:
+            bk.measured.tabulate(m, resolution=256, isotropic=True)
+            print("finished")
+        except KeyboardInterrupt:
+            print("interrupted")
+    """)
+    assert "interrupted" in out, out

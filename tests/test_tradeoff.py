@@ -534,3 +534,44 @@ def test_simplify_keeps_modelling_choices_unless_allowed():
         bk.simplify(sep, 1e-3, allow=("fresnel",))
     with pytest.raises(ValueError, match="modelling knobs: masking"):
         bk.simplify(sep, 1e-3, allow="diffuse")
+
+
+# ------------------------------------------------------------------ a user's model as the reference (issue 11)
+
+def _lambert(rho):
+    return bk.Custom(f=lambda wo, wi: np.full(np.broadcast_shapes(wo.shape, wi.shape)[:-1] + (3,), rho / np.pi),
+                     name=f"lambert {rho}")
+
+
+def test_tradeoff_against_a_custom_reference():
+    # closed form: Diffuse(0.5) against a user Lambert of 0.6 is off by 1/6 everywhere it reflects,
+    # and its albedo (estimated with the reference's cosine samples, exact here) by 0.1
+    t = bk.tradeoff(bk.Diffuse(0.5), reference=_lambert(0.6), n=N, n_albedo=N_ALB, measure=False)
+    assert t.external_reference is t.reference and t.reference.name == "lambert 0.6"
+    assert "errors vs Custom" in str(t) or "errors vs lambert 0.6" in str(t)
+    for cfg, row in zip(t.configs, t.to_records()):
+        tol = 1e-12 if cfg.dtype is np.float64 else 1e-7
+        assert row["max_err"] == pytest.approx(1 / 6, abs=tol)
+        assert row["albedo_err"] == pytest.approx(0.1, abs=tol)
+    np.testing.assert_allclose(t.reference_albedo, 0.6, rtol=1e-12)
+    # a Custom wrapping the most accurate configuration's own eval: the same pointwise errors as the
+    # default reference (same direction set, drawn from the model)
+    m = bk.Conductor.from_metal("Cu", alpha=0.3, fresnel="schlick")
+    exact = bk.Conductor.from_metal("Cu", alpha=0.3)
+    c = bk.Custom(f=lambda wo, wi: exact.eval(np.ascontiguousarray(wo), np.ascontiguousarray(wi)), name="exact Cu")
+    t0 = bk.tradeoff(m, n=N, n_albedo=N_ALB, measure=False)
+    t1 = bk.tradeoff(m, reference=c, n=N, n_albedo=N_ALB, measure=False)
+    assert t0.external_reference is None
+    for r0, r1 in zip(t0.to_records(), t1.to_records()):
+        assert (r1["max_err"], r1["p99_err"]) == (r0["max_err"], r0["p99_err"])
+
+
+def test_custom_reference_refused_against_delta_lobes_and_simplify_of_custom():
+    with pytest.raises(ValueError, match="reference: Dielectric has specular"):
+        bk.tradeoff(bk.Dielectric(1.5), reference=_lambert(0.5), n=N, n_albedo=N_ALB, measure=False)
+    with pytest.raises(TypeError, match="reference"):
+        bk.tradeoff(bk.Diffuse(0.5), reference="lambert", n=N, n_albedo=N_ALB, measure=False)
+    # simplify's reference is its input: a Custom model as the input is its own reference
+    c = _lambert(0.5)
+    out, rep = bk.simplify(c, 1e-3, n=N, n_albedo=N_ALB)
+    assert out == c and rep.error["p99"] <= 1e-3

@@ -1,11 +1,20 @@
-// Generic pybind11 binding of one model: holds a float and a double instance and dispatches
-// on the dtype of the arrays the Python layer has already validated and broadcast. The checks
-// here are a second line of defence: a misuse of _core raises, it never reads out of bounds.
+// Generic pybind11 binding of one model: holds a float and a double instance and dispatches on
+// the dtype of the arrays. Two sets of entry points:
+// - eval_fast / pdf_fast / sample_fast / albedo_fast take the user's arguments as given and do
+//   the whole call when they are plain (Plain below): the shape and dtype decisions, the output
+//   allocation, the kernel (which counts non-unit directions and out-of-range uniforms) and the
+//   ValueError for a bad value. Anything else returns None; the Python layer (models/base.py)
+//   then converts and broadcasts the arguments, words every argument error, and calls
+// - eval / pdf / sample / albedo, which take validated row arrays and preallocated outputs and
+//   return the counts of bad values. Their checks are a second line of defence: a misuse of
+//   _core raises, it never reads out of bounds.
 #pragma once
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <algorithm>
 #include <string>
+#include <vector>
 
 #include "bsdfkit/batch.h"
 #include "bsdfkit/core/microfacet.h"
@@ -62,6 +71,126 @@ inline uint8_t to_sflags(int s) {
     return uint8_t(s);
 }
 
+
+// Messages of the values the kernels count (the Python layer words the same, base.py _raise_bad).
+inline std::string bad_message(const char *name, int64_t count) {
+    if (name[0] == 'u')  // uc, u
+        return std::string(name) + ": " + std::to_string(count) +
+               " sample value(s) are outside [0, 1] or NaN (uniforms must lie in [0, 1])";
+    return std::string(name) + ": " + std::to_string(count) +
+           " direction(s) are not finite unit vectors (|w|^2 must equal 1 within 1e-4; normalize them first)";
+}
+inline void raise_bad(const BadCounts &bad, bool dirs_wi, bool uniforms) {
+    int64_t bo = bad.wo.load(), bi = dirs_wi ? bad.wi.load() : 0;
+    int64_t buc = uniforms ? bad.uc.load() : 0, bu = uniforms ? bad.u.load() : 0;
+    if (bo) value_error(bad_message("wo", bo));
+    if (bi) value_error(bad_message("wi", bi));
+    if (buc) value_error(bad_message("uc", buc));
+    if (bu) value_error(bad_message("u", bu));
+}
+
+// ---- "plain" arguments of the fast entry points (PyModel::*_fast) ----
+// An argument is plain when it is exactly a numpy.ndarray of float32 or float64, C-contiguous,
+// with the expected trailing axis. The fast entries take the whole call on plain arguments and
+// return None on anything else; the Python layer then takes its general path (conversion,
+// broadcasting, and the wording of every argument error). Reads the array struct directly: a
+// call on one direction pair should cost a few microseconds, not tens.
+struct Plain {
+    PyObject *obj = nullptr;
+    int type = 0;  // npy type number
+    int ndim = 0;
+    const py::ssize_t *shape = nullptr;
+    void *data = nullptr;
+    int64_t rows = 1;  // product of the leading axes (all axes when tail == 0)
+    bool writeable = false;
+};
+
+inline bool plain(py::handle h, int tail, py::ssize_t last, Plain &a) {
+    auto &api = py::detail::npy_api::get();
+    if (Py_TYPE(h.ptr()) != api.PyArray_Type_) return false;
+    auto *p = py::detail::array_proxy(h.ptr());
+    if (!(p->flags & py::detail::npy_api::NPY_ARRAY_C_CONTIGUOUS_)) return false;
+    a.type = py::detail::array_descriptor_proxy(p->descr)->type_num;
+    if (a.type != py::detail::npy_api::NPY_FLOAT_ && a.type != py::detail::npy_api::NPY_DOUBLE_) return false;
+    a.ndim = p->nd;
+    if (a.ndim < tail || (tail && p->dimensions[a.ndim - 1] != last)) return false;
+    a.obj = h.ptr();
+    a.shape = p->dimensions;
+    a.data = p->data;
+    a.writeable = (p->flags & py::detail::npy_api::NPY_ARRAY_WRITEABLE_) != 0;
+    a.rows = 1;
+    for (int d = 0; d < a.ndim - tail; ++d) a.rows *= a.shape[d];
+    return true;
+}
+
+// numpy broadcasting of two batch shapes when they are equal or one of them is a single item
+// that broadcasts without adding axes; false otherwise (the general path broadcasts the rest).
+// On success `big` is the side whose batch shape is the result.
+inline bool simple_batch(const Plain &a, int ta, const Plain &b, int tb, const Plain *&big) {
+    int na = a.ndim - ta, nb = b.ndim - tb;
+    if (na == nb && std::equal(a.shape, a.shape + na, b.shape)) { big = &a; return true; }
+    if (a.rows == 1 && na <= nb) { big = &b; return true; }
+    if (b.rows == 1 && nb <= na) { big = &a; return true; }
+    return false;
+}
+
+inline std::vector<py::ssize_t> batch_shape(const Plain &a, int tail, std::initializer_list<py::ssize_t> extra) {
+    std::vector<py::ssize_t> s(a.shape, a.shape + (a.ndim - tail));
+    s.insert(s.end(), extra);
+    return s;
+}
+
+// A plain int (or IntEnum) in [lo, hi], or -1.
+inline int small_int(py::handle h, int lo, int hi) {
+    if (!PyLong_Check(h.ptr())) return -1;
+    long v = PyLong_AsLong(h.ptr());
+    if (v == -1 && PyErr_Occurred()) { PyErr_Clear(); return -1; }
+    return (v < lo || v > hi) ? -1 : int(v);
+}
+
+// A plain output array of the given type and exact shape, writeable, or false.
+inline bool plain_out(py::handle h, int type, const std::vector<py::ssize_t> &shape) {
+    Plain o;
+    if (!plain(h, 0, 0, o) || o.type != type || !o.writeable || o.ndim != int(shape.size())) return false;
+    return std::equal(shape.begin(), shape.end(), o.shape);
+}
+
+// One allocation for the seven sample outputs, the arrays views of it (in this order: wi, f,
+// pdf, eta as F, 64-byte aligned; flags, valid, pdf_is_proportional as bytes). numpy leaves a
+// large block untouched (and asks for huge pages), so the sample kernel's worker threads
+// first-touch it, each its own chunks.
+template <typename F> struct SampleBlock {
+    py::tuple arrays;  // wi, f, pdf, flags, eta, valid, pdf_is_proportional (SampleResult order)
+    SampleOut<F> out;
+    SampleBlock(const std::vector<py::ssize_t> &batch, int64_t n) {
+        auto pad = [](int64_t b) { return (b + 63) & ~int64_t(63); };
+        const int64_t s = int64_t(sizeof(F));
+        int64_t o_wi = 0, o_f = pad(o_wi + 3 * n * s), o_pdf = pad(o_f + 3 * n * s), o_eta = pad(o_pdf + n * s),
+                o_fl = pad(o_eta + n * s), o_va = o_fl + n, o_pr = o_va + n, total = o_pr + n + 64;
+        py::array_t<uint8_t> blk(total);
+        auto base = reinterpret_cast<uintptr_t>(blk.mutable_data());
+        uintptr_t start = (base + 63) & ~uintptr_t(63);
+        auto at = [&](int64_t off) { return reinterpret_cast<void *>(start + uintptr_t(off)); };
+        std::vector<py::ssize_t> b3(batch);
+        b3.push_back(3);
+        auto view = [&](py::dtype dt, const std::vector<py::ssize_t> &shape, void *p) {
+            return py::array(dt, shape, p, blk);  // a view: its base keeps the block alive
+        };
+        py::array wi = view(py::dtype::of<F>(), b3, at(o_wi)), f = view(py::dtype::of<F>(), b3, at(o_f)),
+                  pdf = view(py::dtype::of<F>(), batch, at(o_pdf)), eta = view(py::dtype::of<F>(), batch, at(o_eta)),
+                  fl = view(py::dtype::of<uint8_t>(), batch, at(o_fl)), va = view(py::dtype::of<bool>(), batch, at(o_va)),
+                  pr = view(py::dtype::of<bool>(), batch, at(o_pr));
+        out.wi = static_cast<F *>(at(o_wi));
+        out.f = static_cast<F *>(at(o_f));
+        out.pdf = static_cast<F *>(at(o_pdf));
+        out.eta = static_cast<F *>(at(o_eta));
+        out.flags = static_cast<uint8_t *>(at(o_fl));
+        out.valid = static_cast<bool *>(at(o_va));
+        out.proportional = static_cast<bool *>(at(o_pr));
+        arrays = py::make_tuple(wi, f, pdf, fl, eta, va, pr);
+    }
+};
+
 // One bound model (core/bxdf.h): both precisions, built from one Params (kept for `params`).
 template <template <typename> class Model> struct PyModel {
     Model<float> m32;
@@ -70,6 +199,143 @@ template <template <typename> class Model> struct PyModel {
 
     template <typename F> const Model<F> &get() const {
         if constexpr (std::is_same_v<F, float>) return m32; else return m64;
+    }
+
+
+    // ---- fast entry points: the whole call on plain arguments (see Plain), None otherwise ----
+    template <typename F>
+    py::object eval_plain(const Plain &o, const Plain &i, const Plain &big, TransportMode md, py::handle out) const {
+        std::vector<py::ssize_t> shape = batch_shape(big, 1, {3});
+        py::array res;
+        if (out.is_none()) res = py::array_t<F>(shape);
+        else if (plain_out(out, o.type, shape)) res = py::reinterpret_borrow<py::array>(out);
+        else return py::none();
+        int64_t n = big.rows;
+        if (n == 0) return std::move(res);
+        const F *po = static_cast<const F *>(o.data), *pi = static_cast<const F *>(i.data);
+        F *pout = static_cast<F *>(res.mutable_data());
+        BadCounts bad;
+        {
+            py::gil_scoped_release release;
+            const Model<F> &m = get<F>();
+            int nt = num_threads();
+            if (o.rows == n && i.rows == n) eval_batch<3, 3>(m, po, pi, n, md, pout, nt, bad);
+            else if (o.rows == n) eval_batch<3, 0>(m, po, pi, n, md, pout, nt, bad);
+            else if (i.rows == n) eval_batch<0, 3>(m, po, pi, n, md, pout, nt, bad);
+            else eval_batch<0, 0>(m, po, pi, n, md, pout, nt, bad);
+        }
+        raise_if_interrupted();
+        raise_bad(bad, true, false);
+        return std::move(res);
+    }
+
+    py::object eval_fast(py::handle wo, py::handle wi, py::handle mode, py::handle out) const {
+        Plain o, i;
+        const Plain *big;
+        int md = small_int(mode, 0, 1);
+        if (md < 0 || !plain(wo, 1, 3, o) || !plain(wi, 1, 3, i) || o.type != i.type || !simple_batch(o, 1, i, 1, big))
+            return py::none();
+        return o.type == py::detail::npy_api::NPY_FLOAT_ ? eval_plain<float>(o, i, *big, TransportMode(md), out)
+                                                         : eval_plain<double>(o, i, *big, TransportMode(md), out);
+    }
+
+    template <typename F>
+    py::object pdf_plain(const Plain &o, const Plain &i, const Plain &big, TransportMode md, uint8_t sf,
+                         py::handle out) const {
+        std::vector<py::ssize_t> shape = batch_shape(big, 1, {});
+        py::array res;
+        if (out.is_none()) res = py::array_t<F>(shape);
+        else if (plain_out(out, o.type, shape)) res = py::reinterpret_borrow<py::array>(out);
+        else return py::none();
+        int64_t n = big.rows;
+        if (n == 0) return std::move(res);
+        const F *po = static_cast<const F *>(o.data), *pi = static_cast<const F *>(i.data);
+        F *pout = static_cast<F *>(res.mutable_data());
+        BadCounts bad;
+        {
+            py::gil_scoped_release release;
+            const Model<F> &m = get<F>();
+            int nt = num_threads();
+            if (o.rows == n && i.rows == n) pdf_batch<3, 3>(m, po, pi, n, md, sf, pout, nt, bad);
+            else if (o.rows == n) pdf_batch<3, 0>(m, po, pi, n, md, sf, pout, nt, bad);
+            else if (i.rows == n) pdf_batch<0, 3>(m, po, pi, n, md, sf, pout, nt, bad);
+            else pdf_batch<0, 0>(m, po, pi, n, md, sf, pout, nt, bad);
+        }
+        raise_if_interrupted();
+        raise_bad(bad, true, false);
+        return std::move(res);
+    }
+
+    py::object pdf_fast(py::handle wo, py::handle wi, py::handle mode, py::handle sflags, py::handle out) const {
+        Plain o, i;
+        const Plain *big;
+        int md = small_int(mode, 0, 1), sf = small_int(sflags, 0, 3);
+        if (md < 0 || sf < 0 || !plain(wo, 1, 3, o) || !plain(wi, 1, 3, i) || o.type != i.type ||
+            !simple_batch(o, 1, i, 1, big))
+            return py::none();
+        return o.type == py::detail::npy_api::NPY_FLOAT_
+                   ? pdf_plain<float>(o, i, *big, TransportMode(md), uint8_t(sf), out)
+                   : pdf_plain<double>(o, i, *big, TransportMode(md), uint8_t(sf), out);
+    }
+
+    template <typename F>
+    py::object sample_plain(const Plain &o, const Plain &c, const Plain &u, TransportMode md, uint8_t sf) const {
+        int64_t n = c.rows;
+        SampleBlock<F> blk(batch_shape(c, 0, {}), n);
+        if (n == 0) return std::move(blk.arrays);
+        const F *po = static_cast<const F *>(o.data), *pc = static_cast<const F *>(c.data),
+                *pu = static_cast<const F *>(u.data);
+        BadCounts bad;
+        {
+            py::gil_scoped_release release;
+            const Model<F> &m = get<F>();
+            if (o.rows == n) sample_batch<3>(m, po, pc, pu, n, md, sf, blk.out, num_threads(), bad);
+            else sample_batch<0>(m, po, pc, pu, n, md, sf, blk.out, num_threads(), bad);
+        }
+        raise_if_interrupted();
+        raise_bad(bad, false, true);
+        return std::move(blk.arrays);
+    }
+
+    // uc of the batch shape, u of the batch shape + (2,), wo of the batch shape + (3,) or one
+    // direction. Returns the SampleResult fields (wi, f, pdf, flags, eta, valid, pdf_is_proportional).
+    py::object sample_fast(py::handle wo, py::handle uc, py::handle u, py::handle mode, py::handle sflags) const {
+        Plain o, c, w;
+        const Plain *big;
+        int md = small_int(mode, 0, 1), sf = small_int(sflags, 0, 3);
+        if (md < 0 || sf < 0 || !plain(wo, 1, 3, o) || !plain(uc, 0, 0, c) || !plain(u, 1, 2, w) ||
+            c.type != o.type || w.type != o.type || w.ndim != c.ndim + 1 || !std::equal(c.shape, c.shape + c.ndim, w.shape) ||
+            !simple_batch(c, 0, o, 1, big) || big != &c)  // uc's shape is the batch (equal shapes: c)
+            return py::none();
+        return o.type == py::detail::npy_api::NPY_FLOAT_ ? sample_plain<float>(o, c, w, TransportMode(md), uint8_t(sf))
+                                                         : sample_plain<double>(o, c, w, TransportMode(md), uint8_t(sf));
+    }
+
+    template <typename F> py::object albedo_plain(const Plain &o, int64_t n_samples, uint64_t seed, TransportMode md) const {
+        py::array_t<F> res(batch_shape(o, 1, {3}));
+        if (o.rows == 0) return std::move(res);
+        BadCounts bad;
+        {
+            py::gil_scoped_release release;
+            albedo_batch(get<F>(), static_cast<const F *>(o.data), o.rows, n_samples, seed, md, res.mutable_data(),
+                         num_threads(), bad);
+        }
+        raise_if_interrupted();
+        raise_bad(bad, false, false);
+        return std::move(res);
+    }
+
+    // n_samples >= 1 and seed >= 0 plain ints (the Python layer words their errors).
+    py::object albedo_fast(py::handle wo, py::handle n_samples, py::handle seed, py::handle mode) const {
+        Plain o;
+        int md = small_int(mode, 0, 1);
+        if (md < 0 || !plain(wo, 1, 3, o) || !PyLong_CheckExact(n_samples.ptr()) || !PyLong_CheckExact(seed.ptr()))
+            return py::none();
+        long long n = PyLong_AsLongLong(n_samples.ptr()), sd = PyLong_AsLongLong(seed.ptr());
+        if (PyErr_Occurred()) { PyErr_Clear(); return py::none(); }  // beyond 64 bits: the general path
+        if (n < 1 || sd < 0) return py::none();
+        return o.type == py::detail::npy_api::NPY_FLOAT_ ? albedo_plain<float>(o, n, uint64_t(sd), TransportMode(md))
+                                                         : albedo_plain<double>(o, n, uint64_t(sd), TransportMode(md));
     }
 
     template <typename F>
@@ -118,7 +384,7 @@ template <template <typename> class Model> struct PyModel {
     }
 
     template <typename F>
-    int64_t sample_t(const py::array &wo, const py::array &uc, const py::array &u, int mode, int sf,
+    py::tuple sample_t(const py::array &wo, const py::array &uc, const py::array &u, int mode, int sf,
                      py::array &wi_out, py::array &f_out, py::array &pdf_out, py::array &flags_out,
                      py::array &eta_out, py::array &valid_out, py::array &prop_out) const {
         int64_t no, nuc, nu, r;
@@ -154,7 +420,7 @@ template <template <typename> class Model> struct PyModel {
             else sample_batch<0>(m, po, puc, pu, n, md, s, o, num_threads(), bad);
         }
         raise_if_interrupted();
-        return bad.wo.load();
+        return py::make_tuple(bad.wo.load(), bad.uc.load(), bad.u.load());
     }
 
     template <typename F>
@@ -198,6 +464,10 @@ py::class_<PyModel<Model>> bind_model(py::module_ &m, const char *name) {
             return is_dtype<float>(wo) ? self.template albedo_t<float>(wo, n, seed, mode, out)
                                        : self.template albedo_t<double>(wo, n, seed, mode, out);
         })
+        .def("eval_fast", &P::eval_fast)
+        .def("pdf_fast", &P::pdf_fast)
+        .def("sample_fast", &P::sample_fast)
+        .def("albedo_fast", &P::albedo_fast)
         .def_property_readonly("flags", [](const P &self) { return int(self.m64.flags()); });
     return c;
 }

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import os
+import textwrap
 import time
 
 import numpy as np
@@ -53,9 +54,9 @@ def _lobes_figure(configs, path):
 
     nrow, ncol = len(configs), len(THETAS)
     # fixed margins: constrained layout would more than double the (polar-heavy) drawing time
-    w, h = 3.3 * ncol + 1.1, 3.45 * nrow + 1.7
+    w, h = 3.3 * ncol + 1.5, 3.45 * nrow + 1.7
     fig = Figure(figsize=(w, h))
-    fig.subplots_adjust(left=0.8 / w, right=1 - 0.35 / w, top=1 - 1.45 / h, bottom=0.3 / h,
+    fig.subplots_adjust(left=1.2 / w, right=1 - 0.35 / w, top=1 - 1.45 / h, bottom=0.3 / h,
                         wspace=0.32, hspace=0.42)
     axes = fig.subplots(nrow, ncol, subplot_kw=dict(projection="polar"), squeeze=False)
     for i, (name, m) in enumerate(configs):
@@ -71,14 +72,14 @@ def _lobes_figure(configs, path):
                 _plot.polar(m, theta_o=th, cosine=True, ax=ax, title="", legend=False, colors=[f"C{i % 10}"])
             ax.set_title(f"θo = {th}°", fontsize="medium", pad=8)
             if j == 0:
-                row = _plot.describe(m)
+                # class name (bold) over its parameters, wrapped to the row's height
+                cls, _, rest = _plot.describe(m).partition(" ")
+                lines = textwrap.wrap(rest, 34)
                 if _anisotropic(m):
-                    row = f"$\\bf{{{row.replace(' ', '~')}}}$\nsolid: φ = 0° plane, dashed: φ = 90°"
-                    ax.text(-0.27, 0.5, row, transform=ax.transAxes, rotation=90, ha="center", va="center",
-                            fontsize="medium", linespacing=1.4)
-                else:
-                    ax.text(-0.24, 0.5, row, transform=ax.transAxes, rotation=90, ha="center", va="center",
-                            fontsize="medium", fontweight="bold")
+                    lines.append("solid: φ = 0° plane, dashed: φ = 90°")
+                ax.text(-0.33 if len(lines) > 1 else -0.27, 0.5, f"$\\bf{{{cls}}}$\n" + "\n".join(lines),
+                        transform=ax.transAxes, rotation=90, ha="center", va="center", fontsize="medium",
+                        linespacing=1.3)
     fig.suptitle("In-plane lobe slices: f·|cos θi| [1/sr] (luminance) vs signed angle θi from the normal [°]\n"
                  "reflection above the surface line, transmission below; dashed: ωo at −θo (mirror at +θo); "
                  "arrows: delta lobes, length = reflectance R / transmittance T [unitless]",
@@ -92,7 +93,8 @@ def _albedo_figure(configs, path):
     ncol = 4
     nrow = math.ceil(len(configs) / ncol)
     fig = Figure(figsize=(4.6 * ncol, 3.9 * nrow + 0.8), layout="constrained")
-    axes = fig.subplots(nrow, ncol, squeeze=False, sharex=True, sharey=True)
+    # y not shared: most albedos are <= 1, but a radiance-mode albedo can exceed it (NormalizedFresnel: eta^2)
+    axes = fig.subplots(nrow, ncol, squeeze=False, sharex=True)
     for k, (name, m) in enumerate(configs):
         ax = axes.flat[k]
         gray = _is_gray(m)
@@ -108,15 +110,15 @@ def _albedo_figure(configs, path):
         handles, labels = ax.get_legend_handles_labels()
         keep = [(h, lab.replace(" [", "").replace("]", "") if lab.startswith(" [") else lab)
                 for h, lab in zip(handles, labels)]
-        ax.legend(*zip(*keep), fontsize="small", loc="lower left", ncol=1 if gray else 2)
+        top = max([1.0] + [float(np.nanmax(ln.get_ydata())) for ln in ax.lines if len(ln.get_ydata())])
+        ax.set_ylim(0, 1.1 * top)
+        ax.legend(*zip(*keep), fontsize="small", loc="best", ncol=1 if gray else 2, framealpha=0.85)
         if k % ncol:
             ax.set_ylabel("")
         if k < len(configs) - ncol:
             ax.set_xlabel("")
     for ax in axes.flat[len(configs):]:
         ax.set_visible(False)
-    ymax = max(ax.get_ylim()[1] for ax in axes.flat)
-    axes.flat[0].set_ylim(0, max(ymax, 1.1))
     fig.suptitle(f"Directional albedo ρ(θo) = ∫ f |cos θi| dωi, Radiance mode, {PLOT_SAMPLES} samples per θo "
                  "(R, G, B and luminance; dashed: white furnace ρ = 1)", fontsize="large")
     fig.savefig(path, dpi=90)
@@ -178,8 +180,9 @@ def _albedo_table(configs, path, n_samples=TABLE_SAMPLES):
 
 
 def run_demo(outdir="bsdfkit-demo", *, verbose=True):
-    """Write ``lobes.png``, ``albedo.png``, ``albedo.md``, ``views.png``, ``gallery.exr`` and
-    ``gallery.png`` into ``outdir`` (created if missing); returns the list of written paths."""
+    """Write ``lobes.png``, ``albedo.png``, ``albedo.md``, ``views.png``, ``gallery.exr``,
+    ``gallery.png`` and ``gallery_labelled.png`` (the render with each sphere numbered and a key
+    of the specs) into ``outdir`` (created if missing); returns the list of written paths."""
     t0 = time.perf_counter()
     os.makedirs(outdir, exist_ok=True)
     configs = configurations()

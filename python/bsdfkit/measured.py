@@ -146,8 +146,32 @@ def projected_area(ndf: np.ndarray, dirs: np.ndarray, n: int = 96) -> np.ndarray
     """sigma(w) = integral of D(m) max(0, w . m) dm for the NDF table ``ndf`` (bilinear over the
     unit square, as the file is evaluated), at directions (..., 3)."""
     pts, m, w = ndf_quadrature(n)
-    d = _bilinear(ndf, pts) * w
-    return np.maximum(dirs.reshape(-1, 3) @ m.T, 0) @ d
+    return _clamped_cos_apply(dirs.reshape(-1, 3), m, _bilinear(ndf, pts) * w)
+
+
+#: Rows of the (rows, quadrature points) clamped-cosine kernel formed per step. Each step is a
+#: fraction of a second, and Ctrl-C (KeyboardInterrupt) lands between steps -- one matrix of all
+#: rows at once ran for 10-20 s at resolution 128 without a chance to stop.
+_KERNEL_ROWS = 256
+#: The kernel is kept between power iterations (tabulate's step 1) up to this many bytes.
+_KERNEL_CACHE_BYTES = 512 << 20
+
+
+def _clamped_cos_apply(w_rows: np.ndarray, m_q: np.ndarray, d: np.ndarray, cache: list | None = None) -> np.ndarray:
+    """``max(0, w_rows @ m_q.T) @ d`` in row blocks of _KERNEL_ROWS. ``cache``: a list that keeps
+    the blocks for the next call with the same ``w_rows`` and ``m_q`` while they fit in
+    _KERNEL_CACHE_BYTES (blocks beyond it are recomputed each call)."""
+    out = np.empty(len(w_rows))
+    limit = _KERNEL_CACHE_BYTES // max(1, len(m_q) * 8 * _KERNEL_ROWS)
+    for k, i in enumerate(range(0, len(w_rows), _KERNEL_ROWS)):
+        if cache is not None and k < len(cache):
+            kern = cache[k]
+        else:
+            kern = np.maximum(w_rows[i:i + _KERNEL_ROWS] @ m_q.T, 0)
+            if cache is not None and k < limit:
+                cache.append(kern)
+        out[i:i + len(kern)] = kern @ d
+    return out
 
 
 def tabulate(model, resolution: int = 32, *, n_theta: int | None = None, n_phi: int | None = None,
@@ -208,10 +232,10 @@ def tabulate(model, resolution: int = 32, *, n_theta: int | None = None, n_phi: 
     if isotropic:
         retro = np.broadcast_to(retro.mean(axis=0, keepdims=True), retro.shape).copy()
     pts, m_q, w_q = ndf_quadrature(96)
-    kern = np.maximum(w_nodes.reshape(-1, 3) @ m_q.T, 0)       # (N*N, Q)
+    w_rows, kern = w_nodes.reshape(-1, 3), []                   # kern: blocks of max(0, w . m), (N*N, Q)
     ndf = np.ones((N, N))
     for _ in range(max(1, int(iterations))):
-        sigma = kern @ (_bilinear(ndf, pts) * w_q)
+        sigma = _clamped_cos_apply(w_rows, m_q, _bilinear(ndf, pts) * w_q, kern)
         ndf = retro * sigma.reshape(N, N)
         norm = float(np.sum(_bilinear(ndf, pts) * m_q[:, 2] * w_q))
         if not norm > 0:
@@ -219,7 +243,7 @@ def tabulate(model, resolution: int = 32, *, n_theta: int | None = None, n_phi: 
         ndf /= norm
     # ---- 2. projected area on the nodes (exact directions, horizon included)
     w_exact = _sph(_u2theta(ux), _u2phi(uy))
-    sigma = (np.maximum(w_exact.reshape(-1, 3) @ m_q.T, 0) @ (_bilinear(ndf, pts) * w_q)).reshape(N, N)
+    sigma = _clamped_cos_apply(w_exact.reshape(-1, 3), m_q, _bilinear(ndf, pts) * w_q).reshape(N, N)
     # ---- incidence grid
     theta_i = _u2theta(np.linspace(0, _theta2u(np.radians(88.0)), nth))
     phi_i = np.array([0.0]) if isotropic else np.linspace(-np.pi, -np.pi + 2 * np.pi / reduction, nph)

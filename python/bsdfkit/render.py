@@ -423,29 +423,34 @@ def default_scene(model, *, shape=None, envmap=None) -> Scene:
     return sc
 
 
-def gallery_scene(models, *, columns=4, envmap=None, spacing=2.5, aspect=2.0) -> Scene:
+def gallery_scene(models, *, columns=5, envmap=None, spacing=2.5, aspect=2.0) -> Scene:
     """One unit sphere per model on the checkerboard ground, in rows of ``columns`` from the
-    back row to the front, left to right (rows staggered by half a spacing), framed for an
-    image of width / height = ``aspect`` (camera fov 40 degrees)."""
+    back row to the front, left to right (rows staggered by half a spacing), seen from above
+    (about 24 degrees down) so that no sphere hides another, framed for an image of width /
+    height = ``aspect`` (camera fov 40 degrees)."""
     models = list(models)
     if not models:
         raise ValueError("models: need at least one model")
     columns = max(1, min(int(columns), len(models)))
     rows = math.ceil(len(models) / columns)
     sc = Scene(environment="sky" if envmap is None else envmap)
-    row_gap = 0.8 * spacing
+    row_gap = 1.1 * spacing
     for k, m in enumerate(models):
         r, c = divmod(k, columns)
         x = (c - (columns - 1) / 2 + (0.25 if r % 2 == 0 else -0.25) * (rows > 1)) * spacing
         z = (r - (rows - 1) / 2) * row_gap
         sc.add_sphere(m, center=(x, 1.0, z), radius=1.0)
     fov = 40.0
+    t = math.tan(math.radians(fov / 2))
     half_w = ((columns - 1) / 2 + 0.25 * (rows > 1)) * spacing + 1.35
     depth = (rows - 1) * row_gap
-    dist = half_w / math.tan(math.radians(fov / 2)) + depth / 2 + 1.0
-    # tilt down ~9 degrees; keep the spheres' vertical extent inside the frame for this aspect
-    dist = max(dist, (1.7 + depth * 0.35) * aspect / math.tan(math.radians(fov / 2)))
-    sc.camera = Camera(origin=(0.0, 1.0 + 0.16 * dist, depth / 2 + dist), target=(0.0, 0.95, 0.0),
+    tilt = math.radians(24.0)
+    # far enough for the width, and for the rows' vertical extent (depth seen at the tilt, plus a
+    # sphere's height) within the frame's vertical half-angle
+    half_h = 0.5 * (depth * math.sin(tilt) + 2.0 * math.cos(tilt)) + 0.6
+    dist = max(half_w / t, half_h * aspect / t) + depth / 2 * math.cos(tilt)
+    target = (0.0, 1.0, 0.0)
+    sc.camera = Camera(origin=(0.0, 1.0 + dist * math.sin(tilt), dist * math.cos(tilt)), target=target,
                        up=(0.0, 1.0, 0.0), fov=fov)
     sc.add_ground()
     return sc
@@ -456,10 +461,65 @@ GALLERY_SIZE = (640, 320)
 GALLERY_SPP = 48
 
 
-def write_gallery(outdir, configs, *, size=GALLERY_SIZE, spp=GALLERY_SPP, progress=True, verbose=True):
+def project(camera: Camera, points, size) -> np.ndarray:
+    """Pixel coordinates (x right, y down, pixel centres at +0.5) of world ``points`` (..., 3) in
+    an image of ``size`` = (width, height) seen by the pinhole ``camera`` (the renderer's
+    convention: full horizontal fov, image x along forward x up)."""
+    o, t, u, fov = (np.asarray(v, dtype=np.float64) for v in camera._checked())
+    f = (t - o) / np.linalg.norm(t - o)
+    r = np.cross(f, u)
+    r /= np.linalg.norm(r)
+    up = np.cross(r, f)
+    d = np.asarray(points, dtype=np.float64) - o
+    z = d @ f
+    th = math.tan(math.radians(float(fov)) / 2)
+    w, h = size
+    x = (1 + (d @ r) / (z * th)) * w / 2
+    y = (1 - (d @ up) / (z * th * h / w)) * h / 2
+    return np.stack([x, y], axis=-1)
+
+
+def _labelled_gallery(path, img, sc, names, size):
+    """gallery_labelled.png: the render with a number on each sphere and a key of the
+    configurations under it (the 640 x 320 render is too small to write the specs on)."""
+    import textwrap
+
+    import matplotlib.pyplot as plt
+
+    from .io import linear_to_srgb
+    centers = np.array([o["center"] for o in sc.objects if o["kind"] == "sphere"])
+    cols, width = 2, 56                                      # key: 2 columns, long specs wrapped
+    entries = [textwrap.wrap(f"{k + 1:>2}  {n}", width, subsequent_indent="      ") for k, n in enumerate(names)]
+    per_col = math.ceil(len(entries) / cols)
+    key_lines = max(sum(len(e) for e in entries[c * per_col:(c + 1) * per_col]) for c in range(cols))
+    w_in, line_in = 10.0, 0.2
+    img_h = w_in * size[1] / size[0]
+    fig_h = img_h + 0.25 + line_in * key_lines
+    fig = plt.figure(figsize=(w_in, fig_h))
+    ax = fig.add_axes([0, 1 - img_h / fig_h, 1, img_h / fig_h])
+    ax.imshow(linear_to_srgb(np.asarray(img, dtype=np.float64)), interpolation="lanczos")
+    ax.set_axis_off()
+    if len(centers):
+        for k, (x, y) in enumerate(project(sc.camera, centers, size)):
+            ax.text(x - 0.5, y - 0.5, str(k + 1), ha="center", va="center", fontsize=11, fontweight="bold",
+                    color="white", bbox=dict(boxstyle="circle,pad=0.2", fc="black", ec="white", alpha=0.75, lw=0.8))
+    for c in range(cols):
+        line = 0
+        for e in entries[c * per_col:(c + 1) * per_col]:
+            for text in e:
+                fig.text(0.01 + 0.5 * c, 1 - (img_h + 0.12 + line * line_in) / fig_h, text, ha="left", va="top",
+                         fontsize=9, family="monospace")
+                line += 1
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def write_gallery(outdir, configs, *, size=GALLERY_SIZE, spp=GALLERY_SPP, progress=True, verbose=True,
+                  labelled=True):
     """Renders one sphere per (name, model) of ``configs`` with :func:`gallery_scene` under the
-    default sky and writes ``gallery.exr`` (linear radiance) and ``gallery.png`` (sRGB);
-    returns the two paths."""
+    default sky and writes ``gallery.exr`` (linear radiance), ``gallery.png`` (sRGB) and, with
+    ``labelled``, ``gallery_labelled.png`` (each sphere numbered, with a key of the names);
+    returns the paths."""
     from .io import write_image
     names = [n for n, _ in configs]
     sc = gallery_scene([m for _, m in configs], aspect=size[0] / size[1])
@@ -467,6 +527,9 @@ def write_gallery(outdir, configs, *, size=GALLERY_SIZE, spp=GALLERY_SPP, progre
     paths = [os.path.join(outdir, "gallery.exr"), os.path.join(outdir, "gallery.png")]
     write_image(paths[0], img)
     write_image(paths[1], img)
+    if labelled:
+        paths.append(os.path.join(outdir, "gallery_labelled.png"))
+        _labelled_gallery(paths[2], img, sc, names, size)
     if verbose:
         cols = 4
         rows = [names[i:i + cols] for i in range(0, len(names), cols)]

@@ -121,8 +121,16 @@ template <typename F> inline int64_t count_not_unit(const Vec3<Packet<F>> &w) {
 }
 
 struct BadCounts {
-    std::atomic<int64_t> wo{0}, wi{0};
+    std::atomic<int64_t> wo{0}, wi{0}, uc{0}, u{0};  // bad directions; uniforms outside [0, 1] or NaN
 };
+
+// Uniforms in [b, e) outside [0, 1] or NaN (a NaN fails both comparisons). The sample kernel
+// still maps every uniform into [0, 1) (clamp_uniform); the bindings turn a count into a ValueError.
+template <typename F> inline int64_t count_bad_uniforms(const F *p, int64_t b, int64_t e) {
+    int64_t c = 0;
+    for (int64_t i = b; i < e; ++i) c += !((p[i] >= F(0)) & (p[i] <= F(1)));
+    return c;
+}
 
 // f(wo, wi) for N pairs; SO / SI are 3 for a full array, 0 for one broadcast direction.
 // A per-chunk local copy of the model's trivially copyable kernel (core/bxdf.h: the model, or
@@ -290,7 +298,7 @@ void sample_batch_loop(const Model &m, const Sampler &sampler, const F *wo, cons
     parallel_chunks(n, nthreads, kChunk, [&, model_ok](int64_t b, int64_t e) __attribute__((flatten)) {
         F stage[kChunk];
         LocalModel<Model> mloc = m;
-        int64_t bo = 0;
+        int64_t bo = 0, buc = count_bad_uniforms(uc, b, e), bu = count_bad_uniforms(u, 2 * b, 2 * e);
         if constexpr (is_vectorized<Model>::value)
             sample_chunk_packet<SO>(mloc, sampler, model_ok, b, e, wo, uc, u, out.wi, out.f, out.pdf, out.eta, stage,
                                     out.flags, out.valid, out.proportional, &bo);
@@ -298,6 +306,8 @@ void sample_batch_loop(const Model &m, const Sampler &sampler, const F *wo, cons
             sample_chunk<SO>(mloc, sampler, model_ok, b, e, wo, uc, u, out.wi, out.f, out.pdf, out.eta, stage,
                              out.flags, out.valid, out.proportional, &bo);
         bad.wo += bo;
+        bad.uc += buc;
+        bad.u += bu;
     });
 }
 

@@ -7,8 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._arrays import (as_dirs, as_uniform, broadcast_batch, check_int, check_out, fast_dirs, fast_pair,
-                       fast_sample_args, flatten_to, kernel_dtype)
+from .._arrays import as_dirs, as_uniform, broadcast_batch, check_int, check_out, flatten_to, kernel_dtype
 from .._enums import BxDFFlags, ReflTrans, TransportMode
 from . import registry as _registry
 
@@ -159,16 +158,46 @@ class SampleResult:
 
 _RADIANCE = TransportMode.Radiance
 _ALL = ReflTrans.All
+_SAMPLE_FIELDS = ("wi", "f", "pdf", "flags", "eta", "valid", "pdf_is_proportional")
+
+
+def _sample_result(arrays) -> SampleResult:
+    """A SampleResult of the seven arrays (SampleResult field order), without the frozen
+    dataclass's __init__ (seven object.__setattr__ calls): part of a small call's fixed cost."""
+    r = object.__new__(SampleResult)
+    r.__dict__.update(zip(_SAMPLE_FIELDS, arrays))
+    return r
 
 
 def _new_sample_result(batch, dtype) -> SampleResult:
-    """An uninitialized SampleResult of the batch shape (filled by the kernel). Built without the
-    frozen dataclass's __init__ (seven object.__setattr__ calls): part of a small call's fixed cost."""
-    r = object.__new__(SampleResult)
-    r.__dict__.update(wi=np.empty(batch + (3,), dtype), f=np.empty(batch + (3,), dtype), pdf=np.empty(batch, dtype),
-                      flags=np.empty(batch, np.uint8), eta=np.empty(batch, dtype), valid=np.empty(batch, bool),
-                      pdf_is_proportional=np.empty(batch, bool))
-    return r
+    """Uninitialized outputs of the batch shape in one allocation, the arrays views of it (as the
+    compiled fast path makes them): wi, f, pdf, eta as ``dtype``, then flags, valid,
+    pdf_is_proportional as bytes. The kernel's threads first-touch it."""
+    n, s = math.prod(batch), dtype.itemsize
+    blk = np.empty(8 * n * s + 3 * n, np.uint8)
+    fl = blk[: 8 * n * s].view(dtype)
+    by = blk[8 * n * s:]
+    return _sample_result((fl[: 3 * n].reshape(batch + (3,)), fl[3 * n: 6 * n].reshape(batch + (3,)),
+                           fl[6 * n: 7 * n].reshape(batch), by[:n].reshape(batch),
+                           fl[7 * n:].reshape(batch), by[n: 2 * n].view(bool).reshape(batch),
+                           by[2 * n:].view(bool).reshape(batch)))
+
+
+def _check_sample_out(out, batch, dtype) -> SampleResult:
+    """A user-supplied ``out=`` for sample: a SampleResult whose arrays have the shapes and dtypes
+    this call produces (e.g. the result of an earlier call of the same size), writeable, C-contiguous."""
+    if not isinstance(out, SampleResult):
+        raise TypeError(f"out: expected a SampleResult (e.g. an earlier result of sample), got {type(out).__name__}")
+    want = {"wi": (batch + (3,), dtype), "f": (batch + (3,), dtype), "pdf": (batch, dtype),
+            "flags": (batch, np.dtype(np.uint8)), "eta": (batch, dtype), "valid": (batch, np.dtype(bool)),
+            "pdf_is_proportional": (batch, np.dtype(bool))}
+    for name, (shape, dt) in want.items():
+        a = getattr(out, name)
+        try:
+            check_out(a, shape, dt)
+        except (TypeError, ValueError) as e:
+            raise type(e)(f"out.{name}: {str(e)[len('out: '):]}") from None
+    return out
 
 
 def _mode(mode) -> int:
@@ -188,10 +217,26 @@ def _sflags(sf) -> int:
     return v
 
 
+def _bad_message(name: str, count: int) -> str:
+    """The words of cpp/bindings/bind_model.h bad_message (the compiled fast path raises those)."""
+    if name in ("uc", "u"):
+        return f"{name}: {count} sample value(s) are outside [0, 1] or NaN (uniforms must lie in [0, 1])"
+    return (f"{name}: {count} direction(s) are not finite unit vectors "
+            "(|w|^2 must equal 1 within 1e-4; normalize them first)")
+
+
 def _raise_bad(name: str, count: int) -> None:
     if count:
-        raise ValueError(f"{name}: {count} direction(s) are not finite unit vectors "
-                         "(|w|^2 must equal 1 within 1e-4; normalize them first)")
+        raise ValueError(_bad_message(name, count))
+
+
+def _checked(counts, names) -> None:
+    """Raises for the first nonzero count of bad values a core call returned (one per name)."""
+    if isinstance(counts, tuple):
+        for name, c in zip(names, counts):
+            _raise_bad(name, c)
+    else:
+        _raise_bad(names[0], counts)
 
 
 class BxDF:
@@ -284,78 +329,57 @@ class BxDF:
         """The lobes this model has (``BxDFFlags``)."""
         return BxDFFlags(self._core.flags)
 
-    # array API
+    # array API. Each op first offers the arguments as given to the compiled core's fast entry
+    # (cpp/bindings/bind_model.h: it takes the whole call when they are plain ndarrays and returns
+    # None otherwise); the general path then converts, broadcasts and checks them, words every
+    # argument error, and calls the core's row-array entry (whose bad-value counts _checked raises).
     def eval(self, wo, wi, mode=TransportMode.Radiance, out=None) -> np.ndarray:
         """BSDF value f(wo, wi), cosine excluded, per RGB channel: shape (..., 3).
 
         Specular (delta) lobes evaluate to 0 for every given pair, as in pbrt-v4; use
         ``sample`` to reach them.
         """
-        fp = fast_pair(wo, wi) if out is None else None
-        if fp is not None:  # the common case, without the general path's fixed cost
-            o, i, batch, dtype = fp
-            out = np.empty(batch + (3,), dtype)
-            if out.size:
-                bo, bi = self._core.eval(o, i, 0 if mode is _RADIANCE else _mode(mode), out.reshape(-1, 3))
-                if bo or bi:
-                    _raise_bad("wo", bo)
-                    _raise_bad("wi", bi)
-            return out
-        wo, wi = as_dirs(wo, "wo"), as_dirs(wi, "wi")
-        dtype = kernel_dtype(wo, wi)
-        batch = broadcast_batch(("wo", "wi"), wo.shape[:-1], wi.shape[:-1])
+        r = self._core.eval_fast(wo, wi, mode, out)
+        if r is not None:
+            return r
+        wo, wi, batch, dtype = self._pair(wo, wi)
         out = check_out(out, batch + (3,), dtype)
         if out.size:
-            bo, bi = self._core.eval(flatten_to(wo, batch, (3,), dtype), flatten_to(wi, batch, (3,), dtype),
-                                     _mode(mode), out.reshape(-1, 3))
-            _raise_bad("wo", bo)
-            _raise_bad("wi", bi)
+            _checked(self._core.eval(flatten_to(wo, batch, (3,), dtype), flatten_to(wi, batch, (3,), dtype),
+                                     _mode(mode), out.reshape(-1, 3)), ("wo", "wi"))
         return out
 
     def pdf(self, wo, wi, mode=TransportMode.Radiance, sample_flags=ReflTrans.All, out=None) -> np.ndarray:
         """Solid-angle density of ``sample`` producing wi from wo: shape (...). 0 for delta lobes."""
-        fp = fast_pair(wo, wi) if out is None else None
-        if fp is not None:  # the common case, without the general path's fixed cost
-            o, i, batch, dtype = fp
-            out = np.empty(batch, dtype)
-            if out.size:
-                bo, bi = self._core.pdf(o, i, 0 if mode is _RADIANCE else _mode(mode),
-                                        3 if sample_flags is _ALL else _sflags(sample_flags), out.reshape(-1))
-                if bo or bi:
-                    _raise_bad("wo", bo)
-                    _raise_bad("wi", bi)
-            return out
-        wo, wi = as_dirs(wo, "wo"), as_dirs(wi, "wi")
-        dtype = kernel_dtype(wo, wi)
-        batch = broadcast_batch(("wo", "wi"), wo.shape[:-1], wi.shape[:-1])
+        r = self._core.pdf_fast(wo, wi, mode, sample_flags, out)
+        if r is not None:
+            return r
+        wo, wi, batch, dtype = self._pair(wo, wi)
         out = check_out(out, batch, dtype)
         if out.size:
-            bo, bi = self._core.pdf(flatten_to(wo, batch, (3,), dtype), flatten_to(wi, batch, (3,), dtype),
-                                    _mode(mode), _sflags(sample_flags), out.reshape(-1))
-            _raise_bad("wo", bo)
-            _raise_bad("wi", bi)
+            _checked(self._core.pdf(flatten_to(wo, batch, (3,), dtype), flatten_to(wi, batch, (3,), dtype),
+                                    _mode(mode), _sflags(sample_flags), out.reshape(-1)), ("wo", "wi"))
         return out
 
+    @staticmethod
+    def _pair(wo, wi):
+        wo, wi = as_dirs(wo, "wo"), as_dirs(wi, "wi")
+        return wo, wi, broadcast_batch(("wo", "wi"), wo.shape[:-1], wi.shape[:-1]), kernel_dtype(wo, wi)
+
     def sample(self, wo, uc=None, u=None, *, n=None, seed=None, mode=TransportMode.Radiance,
-               sample_flags=ReflTrans.All) -> SampleResult:
+               sample_flags=ReflTrans.All, out=None) -> SampleResult:
         """Importance-sample wi given wo.
 
         Either pass the uniforms ``uc`` (...) (lobe choice) and ``u`` (..., 2) (direction), in
         [0, 1], or pass ``n`` (number of samples) and an optional integer ``seed``; then uniforms
         come from ``numpy.random.default_rng(seed)`` and the batch shape is broadcast(wo, (n,)).
+        ``out``: a SampleResult of this call's shapes and dtypes (e.g. an earlier result) to
+        write into instead of allocating; it is returned.
         """
-        fs = fast_sample_args(wo, uc, u) if n is None and uc is not None and u is not None else None
-        if fs is not None:  # the common case, without the general path's fixed cost
-            o, ucf, uf, batch, dtype = fs
-            res = _new_sample_result(batch, dtype)
-            if res.pdf.size:
-                bo = self._core.sample(o, ucf, uf, 0 if mode is _RADIANCE else _mode(mode),
-                                       3 if sample_flags is _ALL else _sflags(sample_flags),
-                                       res.wi.reshape(-1, 3), res.f.reshape(-1, 3), res.pdf.reshape(-1),
-                                       res.flags.reshape(-1), res.eta.reshape(-1), res.valid.reshape(-1),
-                                       res.pdf_is_proportional.reshape(-1))
-                _raise_bad("wo", bo)
-            return res
+        if n is None and out is None:
+            r = self._core.sample_fast(wo, uc, u, mode, sample_flags)
+            if r is not None:
+                return _sample_result(r)
         wo = as_dirs(wo, "wo")
         if n is not None:
             if uc is not None or u is not None:
@@ -374,18 +398,17 @@ class BxDF:
         else:
             if uc is None or u is None:
                 raise ValueError("uc, u: pass both uniforms, or n= and seed=")
-            uc, u = as_uniform(uc, "uc", ()), as_uniform(u, "u", (2,))
+            uc, u = as_uniform(uc, "uc", ()), as_uniform(u, "u", (2,))  # ranges: counted by the kernel
             dtype = kernel_dtype(wo, uc, u)
             batch = broadcast_batch(("wo", "uc", "u"), wo.shape[:-1], uc.shape, u.shape[:-1])
-        res = _new_sample_result(batch, dtype)
+        md, sf = _mode(mode), _sflags(sample_flags)
+        res = _new_sample_result(batch, dtype) if out is None else _check_sample_out(out, batch, dtype)
         if res.pdf.size:
             ucf = np.ascontiguousarray(np.broadcast_to(uc, batch), dtype=dtype).reshape(-1)
             uf = np.ascontiguousarray(np.broadcast_to(u, batch + (2,)), dtype=dtype).reshape(-1, 2)
-            bo = self._core.sample(flatten_to(wo, batch, (3,), dtype), ucf, uf, _mode(mode), _sflags(sample_flags),
-                                   res.wi.reshape(-1, 3), res.f.reshape(-1, 3), res.pdf.reshape(-1),
-                                   res.flags.reshape(-1), res.eta.reshape(-1), res.valid.reshape(-1),
-                                   res.pdf_is_proportional.reshape(-1))
-            _raise_bad("wo", bo)
+            _checked(self._core.sample(flatten_to(wo, batch, (3,), dtype), ucf, uf, md, sf,
+                                       *(getattr(res, k).reshape((-1, 3) if k in ("wi", "f") else -1)
+                                         for k in _SAMPLE_FIELDS)), ("wo", "uc", "u"))
         return res
 
     def albedo(self, wo, n_samples: int = 65536, seed: int = 0, mode=TransportMode.Radiance) -> np.ndarray:
@@ -395,18 +418,17 @@ class BxDF:
         deterministic for a given seed and independent of the thread count. The standard error
         falls as 1/sqrt(n_samples).
         """
+        r = self._core.albedo_fast(wo, n_samples, seed, mode)
+        if r is not None:
+            return r
         wo = as_dirs(wo, "wo")
         n_samples = check_int(n_samples, "n_samples", 1)
         seed = check_int(seed, "seed", 0)
-        fd = fast_dirs(wo)
-        rows, batch, dtype = fd if fd is not None else (None, wo.shape[:-1], kernel_dtype(wo))
+        batch, dtype = wo.shape[:-1], kernel_dtype(wo)
         out = np.empty(batch + (3,), dtype)
         if out.size:
-            if rows is None:
-                rows = np.ascontiguousarray(wo, dtype=dtype).reshape(-1, 3)
-            bo = self._core.albedo(rows, n_samples,
-                                   seed & 0xFFFFFFFFFFFFFFFF, _mode(mode), out.reshape(-1, 3))
-            _raise_bad("wo", bo)
+            _checked(self._core.albedo(np.ascontiguousarray(wo, dtype=dtype).reshape(-1, 3), n_samples,
+                                       seed & 0xFFFFFFFFFFFFFFFF, _mode(mode), out.reshape(-1, 3)), ("wo",))
         return out
 
     # ---- parameter gradients (bsdfkit.fitting; kept as one block)

@@ -33,6 +33,10 @@ def _bad(w) -> int:
     return int(np.count_nonzero(~(np.abs(np.einsum("...i,...i->...", w, w) - 1) <= _TOL)))
 
 
+def _bad_uniform(u) -> int:
+    return int(np.count_nonzero(~((u >= 0) & (u <= 1))))  # NaN fails both
+
+
 class _PyCore:
     """The ``_core`` model interface (eval / pdf / sample / albedo into preallocated outputs)
     implemented in numpy around the user's functions, so BxDF's argument handling is shared."""
@@ -40,6 +44,12 @@ class _PyCore:
     def __init__(self, p):
         self.p = p
         self.flags = int(BxDFFlags.GlossyReflection | (BxDFFlags.GlossyTransmission if p["transmission"] else 0))
+
+    # no fast entry points (bind_model.h's *_fast): every call takes BxDF's general path
+    def eval_fast(self, *args):
+        return None
+
+    pdf_fast = sample_fast = albedo_fast = eval_fast
 
     def _f(self, wo, wi):
         v = np.asarray(self.p["f"](wo, wi), dtype=np.float64)
@@ -106,7 +116,7 @@ class _PyCore:
         eta_out[...] = 1.0
         valid_out[...] = ok
         prop_out[...] = False
-        return _bad(wo)
+        return _bad(wo), _bad_uniform(uc), _bad_uniform(u)
 
     def albedo(self, wo, n_samples, seed, mode, out):
         rng = np.random.default_rng(seed)

@@ -222,7 +222,10 @@ class _Evaluation:
     def __init__(self, model, directions, n, seed, n_albedo, *, allow="all", reference="accurate"):
         self.model = model
         self.configs = configurations(model, allow)
-        if reference == "input":
+        if isinstance(reference, BxDF):   # a user's reference (e.g. a bk.Custom), called in float64
+            _check_comparable(model, reference)
+            self.reference = Config({}, {}, reference, np.float64, "reference")
+        elif reference == "input":
             self.reference = next(c for c in self.configs if c.dtype is np.float64 and c.model == model)
         else:
             self.reference = self.configs[0]
@@ -244,6 +247,18 @@ class _Evaluation:
                 "max_err": float(np.max(e)) if e.size else 0.0,
                 "p99_err": float(np.quantile(e, 0.99)) if e.size else 0.0,
                 "albedo_err": float(np.max(np.abs(a - a_ref))) if a.size else 0.0})
+
+
+def _check_comparable(model, reference) -> None:
+    """A reference other than the model's own configurations must have the same kind of specular
+    (delta) lobes: delta rows are compared by sampling both with the same uniforms."""
+    _check_model(reference, "reference")
+    spec = int(BxDFFlags.Specular)
+    if bool(model.flags & spec) != bool(reference.flags & spec):
+        has, lacks = (model, reference) if model.flags & spec else (reference, model)
+        raise ValueError(f"reference: {type(has).__name__} has specular (delta) lobes and {type(lacks).__name__} "
+                         "has none; their values cannot be compared pair by pair (give a reference with the "
+                         "same kind of lobes, e.g. a rough model against a rough or user-defined one)")
 
 
 def _check_int(x, name, lo):

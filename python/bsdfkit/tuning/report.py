@@ -63,7 +63,8 @@ class Table:
     Renders as text (``str``), Markdown and HTML (Jupyter); ``to_records()`` (list of dicts),
     ``to_dict()`` (dict of columns) and ``to_pandas()`` (needs pandas). ``table[i]`` is a row,
     ``table["p99_err"]`` a column, ``table.configs[i]`` the :class:`Config` (``.model``,
-    ``.dtype``). Attributes: model, reference (the most accurate model), knobs, floor,
+    ``.dtype``). Attributes: model, reference (the most accurate model, or tradeoff's
+    ``reference=``), external_reference (that model, else None), knobs, floor,
     reference_albedo, directions (the :class:`DirectionSet`), seed, family, measured.
     """
 
@@ -71,6 +72,8 @@ class Table:
         self.model = model
         self.configs = evaluation.configs
         self.reference = evaluation.reference.model
+        #: the ``reference=`` model given to tradeoff (None: the most accurate configuration)
+        self.external_reference = None if evaluation.reference in evaluation.configs else self.reference
         self.knobs = _knobs_from(model, self.configs)
         self.floor = evaluation.floor
         self.reference_albedo = evaluation.reference_albedo
@@ -145,7 +148,8 @@ class Table:
     def _title(self) -> str:
         from ..models.describe import describe
         m = "live" if self.measured else "not measured"
-        return (f"{describe(self.model)} — {len(self)} configurations ({self.family}); errors vs the most accurate "
+        vs = "the most accurate" if self.external_reference is None else describe(self.external_reference)
+        return (f"{describe(self.model)} — {len(self)} configurations ({self.family}); errors vs {vs} "
                 f"on {len(self.directions)} direction pairs (seed {self.seed}), floor {self.floor:.2e}; "
                 f"throughput {m}")
 
@@ -199,7 +203,8 @@ def _check_tol(tol) -> float:
 
 
 def tradeoff(model, directions=None, n: int = 8192, seed: int = 0, *, n_albedo: int = 4096, measure: bool = True,
-             n_timing: int = 65536, repeats: int = 5, rounds: int = 1, costs: dict | None = None) -> Table:
+             n_timing: int = 65536, repeats: int = 5, rounds: int = 1, costs: dict | None = None,
+             reference=None) -> Table:
     """Throughput and error of every reachable knob configuration of ``model``.
 
     directions: ``None`` (the default set, :func:`direction_set` with ``n`` rows and ``seed``),
@@ -216,12 +221,19 @@ def tradeoff(model, directions=None, n: int = 8192, seed: int = 0, *, n_albedo: 
     the shipped cost table predicts (the number :func:`simplify` ranks by; see the module
     docstring for why simplify does not use the live figure). DFG tables are built before timing.
     costs: a cost table in the :func:`knob_costs` format to use instead of the shipped one.
+    reference: another model to measure the errors against instead of the most accurate
+    configuration (called in float64; e.g. a ``bk.Custom`` wrapping your own formula, or a
+    measured material): every configuration of ``model`` is compared with it on the same
+    directions (drawn from ``model``; the albedo from the reference's own samples). It must have
+    specular (delta) lobes exactly when ``model`` has.
     """
     _check_model(model)
     n, seed, n_albedo = _check_int(n, "n", 16), _check_int(seed, "seed", 0), _check_int(n_albedo, "n_albedo", 16)
     n_timing, repeats, rounds = (_check_int(n_timing, "n_timing", 1), _check_int(repeats, "repeats", 1),
                                  _check_int(rounds, "rounds", 1))
-    ev = _Evaluation(model, directions, n, seed, n_albedo)
+    if reference is not None:
+        _check_model(reference, "reference")
+    ev = _Evaluation(model, directions, n, seed, n_albedo, reference="accurate" if reference is None else reference)
     rates = speedups = spreads = None
     if measure:
         rates, speedups, spreads = _measure(ev.configs, _op(model), n_timing, repeats, rounds, seed)

@@ -1,0 +1,156 @@
+"""The compiled fast entry points (bind_model.h *_fast, issue 10 per-call overhead, issue 17
+item 3): on plain ndarrays they take the whole call, on anything else the Python general path
+does. Both must give the same values and the same errors; uniforms are checked by the kernel;
+sample's outputs are views of one block; sample accepts out=."""
+import numpy as np
+import pytest
+
+import bsdfkit as bk
+
+
+def _dirs(rng, n, upper=True):
+    w = rng.normal(size=(n, 3))
+    if upper:
+        w[:, 2] = np.abs(w[:, 2])
+    return w / np.linalg.norm(w, axis=1, keepdims=True)
+
+
+MODELS = [lambda: bk.Conductor.from_metal("Cu", alpha=0.3), lambda: bk.Dielectric(1.5, alpha=0.2),
+          lambda: bk.Diffuse([0.2, 0.5, 0.8])]
+
+
+@pytest.mark.parametrize("make", MODELS)
+def test_fast_and_general_paths_agree(make, rng):
+    m = make()
+    wo, wi = _dirs(rng, 40), _dirs(rng, 40, upper=False)
+    uc, u = rng.random(40), rng.random((40, 2))
+    # plain ndarrays (fast) vs lists / a strided view (general): bit-identical
+    np.testing.assert_array_equal(m.eval(wo, wi), m.eval(wo.tolist(), wi.tolist()))
+    np.testing.assert_array_equal(m.pdf(wo, wi), m.pdf(wo.tolist(), wi[:, :].copy(order="F")))
+    s_fast, s_gen = m.sample(wo, uc, u), m.sample(wo.tolist(), uc.tolist(), u.tolist())
+    for k in ("wi", "f", "pdf", "flags", "eta", "valid", "pdf_is_proportional"):
+        a, b = getattr(s_fast, k), getattr(s_gen, k)
+        assert a.dtype == b.dtype and a.shape == b.shape
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(m.albedo(wo[:3], n_samples=256, seed=5),
+                                  m.albedo(wo[:3].tolist(), n_samples=256, seed=5))
+    # one direction against many, both ways, and (1, 3) against (n, 3): numpy broadcasting
+    for a, b in ((wo[0], wi), (wo, wi[0]), (wo[:1], wi), (wo, wi[:1])):
+        want = m.eval(np.broadcast_to(a, wi.shape).tolist(), np.broadcast_to(b, wi.shape).tolist())
+        np.testing.assert_array_equal(m.eval(a, b), want)
+        assert m.eval(a, b).shape == (40, 3) and m.pdf(a, b).shape == (40,)
+    # (1, 1, 3) against (40, 3) broadcasts to (1, 40): the general path
+    assert m.eval(wo[:1, None], wi).shape == (1, 40, 3)
+    # batch shapes are kept, float32 runs float32
+    assert m.eval(wo.reshape(4, 10, 3), wi.reshape(4, 10, 3)).shape == (4, 10, 3)
+    assert m.sample(wo.reshape(4, 10, 3), uc.reshape(4, 10), u.reshape(4, 10, 2)).wi.shape == (4, 10, 3)
+    assert m.sample(wo[0], uc.reshape(4, 10), u.reshape(4, 10, 2)).pdf.shape == (4, 10)
+    f32 = m.eval(wo.astype(np.float32), wi.astype(np.float32))
+    assert f32.dtype == np.float32
+    assert m.sample(wo.astype(np.float32), uc.astype(np.float32), u.astype(np.float32)).f.dtype == np.float32
+    assert m.albedo(wo[:2].astype(np.float32), n_samples=16).dtype == np.float32
+    # mode and sample_flags: IntEnum, int and string spellings agree
+    imp = m.eval(wo, wi, mode=bk.TransportMode.Importance)
+    np.testing.assert_array_equal(imp, m.eval(wo, wi, mode=1))
+    np.testing.assert_array_equal(imp, m.eval(wo, wi, mode="importance"))
+    np.testing.assert_array_equal(m.pdf(wo, wi, sample_flags=bk.ReflTrans.Reflection), m.pdf(wo, wi, sample_flags=1))
+
+
+def test_empty_batches():
+    m = bk.Diffuse(0.5)
+    e = np.empty((0, 3))
+    assert m.eval(e, e).shape == (0, 3) and m.pdf(e, e).shape == (0,)
+    s = m.sample(e, np.empty(0), np.empty((0, 2)))
+    assert s.wi.shape == (0, 3) and s.valid.shape == (0,)
+    assert m.albedo(e).shape == (0, 3)
+
+
+def test_bad_values_name_the_argument_on_both_paths():
+    m = bk.Conductor.from_metal("Au", alpha=0.2)
+    z = np.array([[0, 0, 1.0]] * 4)
+    bad = z.copy()
+    bad[1] = [0, 0, 2.0]
+    bad[3, 0] = np.nan
+    for conv in (np.asarray, lambda a: a.tolist()):   # fast path, general path
+        with pytest.raises(ValueError, match=r"^wo: 2 direction\(s\) are not finite unit vectors"):
+            m.eval(conv(bad), conv(z))
+        with pytest.raises(ValueError, match=r"^wi: 2 direction\(s\)"):
+            m.pdf(conv(z), conv(bad))
+        with pytest.raises(ValueError, match=r"^wo: 2 direction\(s\)"):
+            m.sample(conv(bad), conv(np.full(4, 0.5)), conv(np.full((4, 2), 0.5)))
+        with pytest.raises(ValueError, match=r"^wo: 2 direction\(s\)"):
+            m.albedo(conv(bad), n_samples=8)
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_uniforms_are_checked_by_the_kernel(dtype):
+    m = bk.Dielectric(1.5, alpha=0.1)
+    z = np.array([0, 0, 1.0], dtype)
+    uc, u = np.full(5, 0.5, dtype), np.full((5, 2), 0.5, dtype)
+    for conv in (np.asarray, lambda a: a.tolist()):
+        for bad_uc, n in (([1.5], 1), ([np.nan, -0.1], 2), ([np.inf], 1), ([-np.inf, 2, 3], 3)):
+            c = uc.copy()
+            c[:len(bad_uc)] = bad_uc
+            with pytest.raises(ValueError, match=rf"^uc: {n} sample value\(s\) are outside \[0, 1\] or NaN"):
+                m.sample(conv(z), conv(c), conv(u))
+        w = u.copy()
+        w[2, 1], w[4, 0] = np.nan, 1.0 + 1e-6
+        with pytest.raises(ValueError, match=r"^u: 2 sample value\(s\) are outside \[0, 1\] or NaN"):
+            m.sample(conv(z), conv(uc), conv(w))
+    # the closed ends are valid
+    ends = np.array([0.0, 1.0, 0.0, 1.0, 0.5], dtype)
+    s = m.sample(z, ends, np.stack([ends, ends[::-1]], -1))
+    assert np.all(np.isfinite(s.f)) and np.all(np.isfinite(s.pdf))
+
+
+def test_sample_outputs_are_views_of_one_block(rng):
+    m = bk.Conductor.from_metal("Cu", alpha=0.3)
+    wo = _dirs(rng, 1000)
+    for s in (m.sample(wo, rng.random(1000), rng.random((1000, 2))),            # fast path
+              m.sample(wo.tolist(), rng.random(1000).tolist(), rng.random((1000, 2)))):  # general path
+        arrays = [s.wi, s.f, s.pdf, s.flags, s.eta, s.valid, s.pdf_is_proportional]
+        base = s.wi.base
+        assert base is not None and all(a.base is base for a in arrays)
+        assert all(a.flags.c_contiguous and a.flags.writeable for a in arrays)
+        # disjoint: writing one output leaves the others alone
+        for a in arrays:
+            for b in arrays:
+                assert a is b or not np.shares_memory(a, b)
+        # every value was written (an invalid sample has the documented defaults)
+        assert np.all(np.isfinite(s.wi)) and np.all(np.isfinite(s.f)) and np.all(s.pdf >= 0)
+        np.testing.assert_array_equal(s.valid, s.pdf > 0)
+
+
+def test_sample_out_argument(rng):
+    m = bk.Dielectric(1.5, alpha=0.3)
+    wo, uc, u = _dirs(rng, 200), rng.random(200), rng.random((200, 2))
+    want = m.sample(wo, uc, u)
+    out = m.sample(wo, np.zeros(200), np.zeros((200, 2)))   # a result of the same shapes
+    got = m.sample(wo, uc, u, out=out)
+    assert got is out
+    for k in ("wi", "f", "pdf", "flags", "eta", "valid", "pdf_is_proportional"):
+        np.testing.assert_array_equal(getattr(got, k), getattr(want, k))
+    with pytest.raises(TypeError, match="out"):
+        m.sample(wo, uc, u, out=np.empty((200, 3)))
+    with pytest.raises(ValueError, match="out.wi"):
+        m.sample(wo[:100], uc[:100], u[:100], out=out)
+    with pytest.raises(TypeError, match="out.wi: dtype"):
+        m.sample(wo.astype(np.float32), uc.astype(np.float32), u.astype(np.float32), out=out)
+    n = m.sample(wo, n=200, seed=3)
+    assert m.sample(wo, n=200, seed=3, out=out) is out
+    np.testing.assert_array_equal(out.wi, n.wi)
+
+
+def test_eval_out_on_the_fast_path(rng):
+    m = bk.Diffuse(0.5)
+    wo, wi = _dirs(rng, 10), _dirs(rng, 10)
+    out = np.full((10, 3), np.nan)
+    assert m.eval(wo, wi, out=out) is out
+    np.testing.assert_array_equal(out, m.eval(wo, wi))
+    pout = np.full(10, np.nan)
+    assert m.pdf(wo, wi, out=pout) is pout
+    np.testing.assert_array_equal(pout, m.pdf(wo, wi))
+    ro = np.empty((10, 3))
+    ro.setflags(write=False)
+    with pytest.raises(ValueError, match="out"):
+        m.eval(wo, wi, out=ro)
