@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['CoatedConductor', 'CoatedDiffuse', 'Conductor', 'ConductorF82', 'ConductorSchlick', 'Dielectric', 'Diffuse', 'DiffuseTransmission', 'FilamentCloth', 'FilamentDFG', 'FilamentStandard', 'FilamentStandardCoat', 'FilamentStandardCoatSheen', 'FilamentStandardSheen', 'Hair', 'HairFarField', 'MERLLinear', 'MERLNearest', 'MERLTable', 'Measured', 'MeasuredTable', 'NormalizedFresnel', 'Plastic', 'RenderScene', 'ThinDielectric', 'Warp2D', 'conductor_fresnel', 'embree_version', 'filament_dfg_rows', 'filament_term', 'fresnel_diffuse_reflectance', 'fresnel_moment1', 'get_num_threads', 'hardware_concurrency', 'load_mesh', 'model_names', 'openimageio_version', 'read_image', 'set_num_threads', 'write_image']
+__all__: list[str] = ['CoatedConductor', 'CoatedConductorAnalytic', 'CoatedDiffuse', 'CoatedDiffuseAnalytic', 'Conductor', 'ConductorF82', 'ConductorSchlick', 'Dielectric', 'Diffuse', 'DiffuseTransmission', 'FilamentCloth', 'FilamentDFG', 'FilamentStandard', 'FilamentStandardCoat', 'FilamentStandardCoatSheen', 'FilamentStandardSheen', 'Hair', 'HairFarField', 'MERLLinear', 'MERLNearest', 'MERLTable', 'Measured', 'MeasuredTable', 'NormalizedFresnel', 'Plastic', 'RenderScene', 'ThinDielectric', 'Warp2D', 'conductor_fresnel', 'embree_version', 'filament_dfg_rows', 'filament_term', 'fresnel_diffuse_reflectance', 'fresnel_moment1', 'get_num_threads', 'hardware_concurrency', 'load_mesh', 'model_names', 'openimageio_version', 'read_image', 'set_num_threads', 'write_image']
 class FilamentDFG:
     def __eq__(self, arg0: typing.Any) -> bool:
         ...
@@ -471,6 +471,48 @@ class CoatedDiffuse:
 class CoatedConductor:
     """
     bsdfkit model CoatedConductor (bxdfs/all.h); keyword arguments: conductor_eta, conductor_k, conductor_alpha_x, conductor_alpha_y, interface_eta, interface_alpha_x, interface_alpha_y, masking, thickness, albedo, g, max_depth, n_samples, seed, consistent_mis (a missing one keeps its C++ Params default).
+    """
+    fields: typing.ClassVar[tuple] = ('conductor_eta', 'conductor_k', 'conductor_alpha_x', 'conductor_alpha_y', 'interface_eta', 'interface_alpha_x', 'interface_alpha_y', 'masking', 'thickness', 'albedo', 'g', 'max_depth', 'n_samples', 'seed', 'consistent_mis')
+    def __init__(self, *args, **kwargs) -> None:
+        ...
+    def albedo(self, arg0: numpy.ndarray, arg1: typing.SupportsInt | typing.SupportsIndex, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> int:
+        ...
+    def eval(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: numpy.ndarray) -> tuple:
+        ...
+    def pdf(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> tuple:
+        ...
+    def sample(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: numpy.ndarray, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: typing.SupportsInt | typing.SupportsIndex, arg5: numpy.ndarray, arg6: numpy.ndarray, arg7: numpy.ndarray, arg8: numpy.ndarray, arg9: numpy.ndarray, arg10: numpy.ndarray, arg11: numpy.ndarray) -> int:
+        ...
+    @property
+    def flags(self) -> int:
+        ...
+    @property
+    def params(self) -> dict:
+        ...
+class CoatedDiffuseAnalytic:
+    """
+    bsdfkit model CoatedDiffuseAnalytic (bxdfs/all.h); keyword arguments: reflectance, eta, alpha_x, alpha_y, masking, thickness, albedo, g, max_depth, n_samples, seed, consistent_mis (a missing one keeps its C++ Params default).
+    """
+    fields: typing.ClassVar[tuple] = ('reflectance', 'eta', 'alpha_x', 'alpha_y', 'masking', 'thickness', 'albedo', 'g', 'max_depth', 'n_samples', 'seed', 'consistent_mis')
+    def __init__(self, *args, **kwargs) -> None:
+        ...
+    def albedo(self, arg0: numpy.ndarray, arg1: typing.SupportsInt | typing.SupportsIndex, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> int:
+        ...
+    def eval(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: numpy.ndarray) -> tuple:
+        ...
+    def pdf(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> tuple:
+        ...
+    def sample(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: numpy.ndarray, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: typing.SupportsInt | typing.SupportsIndex, arg5: numpy.ndarray, arg6: numpy.ndarray, arg7: numpy.ndarray, arg8: numpy.ndarray, arg9: numpy.ndarray, arg10: numpy.ndarray, arg11: numpy.ndarray) -> int:
+        ...
+    @property
+    def flags(self) -> int:
+        ...
+    @property
+    def params(self) -> dict:
+        ...
+class CoatedConductorAnalytic:
+    """
+    bsdfkit model CoatedConductorAnalytic (bxdfs/all.h); keyword arguments: conductor_eta, conductor_k, conductor_alpha_x, conductor_alpha_y, interface_eta, interface_alpha_x, interface_alpha_y, masking, thickness, albedo, g, max_depth, n_samples, seed, consistent_mis (a missing one keeps its C++ Params default).
     """
     fields: typing.ClassVar[tuple] = ('conductor_eta', 'conductor_k', 'conductor_alpha_x', 'conductor_alpha_y', 'interface_eta', 'interface_alpha_x', 'interface_alpha_y', 'masking', 'thickness', 'albedo', 'g', 'max_depth', 'n_samples', 'seed', 'consistent_mis')
     def __init__(self, *args, **kwargs) -> None:

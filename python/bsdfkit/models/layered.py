@@ -33,6 +33,19 @@ _LAYER_DOC = """
         density of the same inner direction under the other strategy (top.PDF(wi, -w) in the
         adjoint mode), so the weights sum to one.
 
+    method: "stochastic" (default, the model: pbrt-v4's random walk below) or "analytic", a
+        deterministic closed-form approximation of the same layered material (Weidlich & Wilkie
+        2007: the coating's reflection lobe, the base evaluated at the refracted directions and
+        attenuated by (1 - F(wo)) (1 - F(wi)) / eta^2 and by the absorption exp(-thickness
+        (1/cos_o' + 1/cos_i')) along the refracted paths, the internal reflections summed as
+        1 / (1 - rho_base Fdr_int t_d^2); plus the medium's single scattering, Hanrahan &
+        Krueger 1993). It is cheap and noise-free but biased (no multiple scattering in the
+        medium, no blurring of the base by a rough coat, Fresnel at the macro normal); its
+        error against the converged stochastic model is in bench/LAYERED.md (relative RMS of
+        f |cos|: ANALYTIC_ERRORS). Its eval / pdf / sample are exact and consistent (sample()
+        equals eval() / pdf()), reciprocal, and ignore max_depth, n_samples, seed and mis.
+        A knob of the trade-off registry (an approximation: ``bk.simplify`` may choose it).
+
     The estimators are pbrt-v4's (book section 14.3; Guo et al. 2018): ``eval`` is a stochastic
     estimate of f (unbiased up to max_depth), ``sample`` returns a path sample whose ``pdf`` is
     only proportional to the true density (``pdf_is_proportional`` is True: use
@@ -44,9 +57,10 @@ _LAYER_DOC = """
 
 
 _MIS = ("pbrt", "consistent")
+_METHODS = ("stochastic", "analytic")
 
 
-def _layer(thickness, albedo, g, max_depth, n_samples, seed, mis):
+def _layer(thickness, albedo, g, max_depth, n_samples, seed, mis, method="stochastic"):
     t = _scalar(thickness, "thickness", lo=0.0)
     a = _rgb(albedo, "albedo", lo=0.0, hi=1.0)
     gg = _scalar(g, "g", lo=-1.0, hi=1.0)
@@ -59,7 +73,9 @@ def _layer(thickness, albedo, g, max_depth, n_samples, seed, mis):
         raise ValueError("max_depth, n_samples: must be <= 1e6")
     if mis not in _MIS:
         raise ValueError(f"mis: must be one of {list(_MIS)}, got {mis!r}")
-    return dict(thickness=t, albedo=a, g=gg, max_depth=md, n_samples=ns, seed=sd, mis=mis)
+    if method not in _METHODS:
+        raise ValueError(f"method: must be one of {list(_METHODS)}, got {method!r}")
+    return dict(thickness=t, albedo=a, g=gg, max_depth=md, n_samples=ns, seed=sd, mis=mis, method=method)
 
 
 def _layer_kw(p):
@@ -67,18 +83,69 @@ def _layer_kw(p):
                 n_samples=p["n_samples"], seed=p["seed"], consistent_mis=p["mis"] == "consistent")
 
 
-#: The layered models' knobs: the estimator's sample count and walk depth are approximations
-#: (the same material, noisier or truncated); the MIS rule and the masking are modelling choices
-#: ("pbrt" is biased high with a rough coat, so it is a different f()).
-_KNOBS = (KnobDecl("n_samples", (64, 16, 4, 1), "approximation", "random walks averaged per evaluation"),
-          KnobDecl("max_depth", (100, 20, 10, 5, 2), "approximation", "longest random walk (deeper ones are cut)"),
+def _with_own(name, settings):
+    """Knob settings, most accurate (largest) first, including the instance's own value."""
+    return lambda p: tuple(sorted(set(settings) | {p[name]}, reverse=True))
+
+
+def _analytic(p):
+    return "analytic method: no random walk" if p["method"] == "analytic" else None
+
+
+#: The layered models' knobs: the method, the estimator's sample count and walk depth are
+#: approximations (the same material, computed by a biased closed form, noisier or truncated);
+#: the MIS rule and the masking are modelling choices ("pbrt" is biased high with a rough coat,
+#: so it is a different f()).
+_KNOBS = (KnobDecl("method", _METHODS, "approximation",
+                   "stochastic random walk (the model) or the analytic closed-form approximation (biased)"),
+          KnobDecl("n_samples", _with_own("n_samples", (64, 32, 16, 8, 4, 2, 1)), "approximation",
+                   "random walks averaged per evaluation", moot=_analytic),
+          KnobDecl("max_depth", _with_own("max_depth", (100, 20, 10, 5, 2, 1)), "approximation",
+                   "longest random walk (deeper ones are cut)", moot=_analytic),
           KnobDecl("mis", ("consistent", "pbrt"), "modelling",
-                   "exit MIS weight: consistent (unbiased) or pbrt-v4's (biased high with a rough coat)"),
+                   "exit MIS weight: consistent (unbiased) or pbrt-v4's (biased high with a rough coat)",
+                   moot=_analytic),
           masking_knob(None))
+
+
+class _ByMethod:
+    """A capability flag that depends on ``method``: the class value (read by the registry and
+    by code holding only the class) is the stochastic model's; an instance answers for itself
+    (the analytic method is an exact, reciprocal closed form)."""
+
+    def __init__(self, stochastic: bool, analytic: bool):
+        self.stochastic, self.analytic = stochastic, analytic
+
+    def __get__(self, obj, cls=None):
+        if obj is None:
+            return self.stochastic
+        return self.analytic if obj._params["method"] == "analytic" else self.stochastic
+
+
+#: Cost of a random walk per evaluation against max_depth, relative to max_depth = 10 (Russian
+#: roulette ends most walks early; bench/LAYERED.md, CoatedDiffuse and CoatedConductor rows).
+_DEPTH_COST = ((1, 0.5), (2, 0.68), (5, 1.0), (10, 1.0), (20, 1.05), (50, 1.1), (100, 1.1))
+#: Cost of the analytic method relative to one random walk (bench/LAYERED.md).
+ANALYTIC_COST = 0.1
+
+
+def _relative_cost(params, dtype=None) -> float:
+    """The cost model the trade-off registry ranks these models by (no measured cost table for
+    stochastic families): linear in n_samples, a step function of max_depth, the analytic method
+    a fraction of one walk; precision is taken as free."""
+    if params["method"] == "analytic":
+        return ANALYTIC_COST
+    d = params["max_depth"]
+    depth = next((c for m, c in _DEPTH_COST if d <= m), _DEPTH_COST[-1][1])
+    return params["n_samples"] * depth
 
 
 def _medium(p) -> str:
     return ", medium" if np.any(np.asarray(p["albedo"]) > 0) else ""
+
+
+def _method_text(p) -> str:
+    return ", analytic" if p["method"] == "analytic" else ""
 
 
 class CoatedDiffuse(BxDF):
@@ -95,20 +162,26 @@ class CoatedDiffuse(BxDF):
 
     aliases = ()
     examples = {"varnished wood": "coated_diffuse reflectance=0.6,0.35,0.15 alpha=0.05",
-                "lacquer with a scattering medium": "coated_diffuse reflectance=0.2 albedo=0.8 thickness=0.2 g=0.3"}
+                "lacquer with a scattering medium": "coated_diffuse reflectance=0.2 albedo=0.8 thickness=0.2 g=0.3",
+                "varnished wood, analytic": "coated_diffuse reflectance=0.6,0.35,0.15 alpha=0.05 method=analytic",
+                "lacquer with a medium, analytic":
+                    "coated_diffuse reflectance=0.2 albedo=0.8 thickness=0.2 g=0.3 method=analytic"}
     description = "diffuse base under a dielectric coat with an optional HG medium (pbrt-v4, stochastic)"
     # reciprocal = False: each eval is one random-walk realization seeded by (wo, wi), so
     # f(wo, wi) != f(wi, wo) call by call (and pbrt's MIS rule is not reciprocal in expectation)
-    energy_conserving, exact_eval, reciprocal, two_sided, transmission, delta_only = True, False, False, True, False, False
+    energy_conserving, two_sided, transmission, delta_only = True, True, False, False
+    exact_eval, reciprocal = _ByMethod(False, True), _ByMethod(False, True)   # per instance: see _ByMethod
     mitsuba = None
     knobs = _KNOBS
 
     def __init__(self, reflectance=0.5, eta=1.5, alpha=None, alpha_x=None, alpha_y=None, thickness=0.01,
-                 albedo=0.0, g=0.0, max_depth=10, n_samples=1, seed=0, masking="correlated", mis="pbrt"):
+                 albedo=0.0, g=0.0, max_depth=10, n_samples=1, seed=0, masking="correlated", mis="pbrt",
+                 method="stochastic"):
         ax, ay = _alphas(alpha, alpha_x, alpha_y)
         super().__init__(reflectance=_rgb(reflectance, "reflectance", lo=0.0, hi=1.0),
                          eta=_scalar(eta, "eta", lo=0.0, lo_open=True), alpha_x=ax, alpha_y=ay,
-                         **_layer(thickness, albedo, g, max_depth, n_samples, seed, mis), masking=_masking(masking))
+                         **_layer(thickness, albedo, g, max_depth, n_samples, seed, mis, method),
+                         masking=_masking(masking))
 
     @classmethod
     def _from_params(cls, p):
@@ -116,16 +189,23 @@ class CoatedDiffuse(BxDF):
 
     def _make_core(self):
         p = self._params
-        return _core.CoatedDiffuse(reflectance=p["reflectance"].tolist(), eta=p["eta"], alpha_x=p["alpha_x"],
+        core = _core.CoatedDiffuseAnalytic if p["method"] == "analytic" else _core.CoatedDiffuse
+        return core(reflectance=p["reflectance"].tolist(), eta=p["eta"], alpha_x=p["alpha_x"],
                                    alpha_y=p["alpha_y"], masking=_MASKING[p["masking"]], **_layer_kw(p))
 
+    @staticmethod
+    def relative_cost(params, dtype=None) -> float:
+        """Relative cost of a configuration (the tuning registry's cost model; see _relative_cost)."""
+        return _relative_cost(params, dtype)
+
     def cost_family(self) -> str:
-        return "CoatedDiffuse" + _medium(self._params).replace(", ", "/")
+        return "CoatedDiffuse" + (_medium(self._params) + _method_text(self._params)).replace(", ", "/")
 
     def describe(self) -> str:
         p = self._params
         a = p["alpha_x"]
-        return f"CoatedDiffuse R={fmt_value(p['reflectance'])}, " + (f"α={a:.2g}" if a >= 1e-3 else "smooth") + _medium(p)
+        return (f"CoatedDiffuse R={fmt_value(p['reflectance'])}, " + (f"α={a:.2g}" if a >= 1e-3 else "smooth")
+                + _medium(p) + _method_text(p))
 
 
 class CoatedConductor(BxDF):
@@ -151,16 +231,20 @@ class CoatedConductor(BxDF):
 
     aliases = ("carpaint",)
     examples = {"car paint": "coated_conductor metal=Cu conductor_alpha=0.3 interface_alpha=0.02 albedo=0.5,0.1,0.1 "
-                             "thickness=0.1"}
+                             "thickness=0.1",
+                "car paint, analytic": "coated_conductor metal=Cu conductor_alpha=0.3 interface_alpha=0.02 "
+                                       "albedo=0.5,0.1,0.1 thickness=0.1 method=analytic",
+                "lacquered gold, smooth, analytic": "coated_conductor metal=Au thickness=0.05 method=analytic"}
     description = "metal under a dielectric coat with an optional HG medium (pbrt-v4, stochastic)"
-    energy_conserving, exact_eval, reciprocal, two_sided, transmission, delta_only = True, False, False, True, False, False
+    energy_conserving, two_sided, transmission, delta_only = True, True, False, False
+    exact_eval, reciprocal = _ByMethod(False, True), _ByMethod(False, True)   # per instance: see _ByMethod
     mitsuba = None
     knobs = _KNOBS
 
     def __init__(self, conductor_eta, conductor_k, conductor_alpha=0.0, conductor_alpha_x=None,
                  conductor_alpha_y=None, interface_eta=1.5, interface_alpha=0.0, interface_alpha_x=None,
                  interface_alpha_y=None, thickness=0.01, albedo=0.0, g=0.0, max_depth=10, n_samples=1, seed=0,
-                 masking="correlated", mis="pbrt"):
+                 masking="correlated", mis="pbrt", method="stochastic"):
         cax, cay = _named_alphas(conductor_alpha, conductor_alpha_x, conductor_alpha_y, "conductor_alpha")
         iax, iay = _named_alphas(interface_alpha, interface_alpha_x, interface_alpha_y, "interface_alpha")
         super().__init__(conductor_eta=_rgb(conductor_eta, "conductor_eta", lo=0.0, lo_open=True),
@@ -168,7 +252,8 @@ class CoatedConductor(BxDF):
                          conductor_alpha_x=cax, conductor_alpha_y=cay,
                          interface_eta=_scalar(interface_eta, "interface_eta", lo=0.0, lo_open=True),
                          interface_alpha_x=iax, interface_alpha_y=iay,
-                         **_layer(thickness, albedo, g, max_depth, n_samples, seed, mis), masking=_masking(masking))
+                         **_layer(thickness, albedo, g, max_depth, n_samples, seed, mis, method),
+                         masking=_masking(masking))
 
     @classmethod
     def _from_params(cls, p):
@@ -194,21 +279,28 @@ class CoatedConductor(BxDF):
 
     def _make_core(self):
         p = self._params
-        return _core.CoatedConductor(conductor_eta=p["conductor_eta"].tolist(), conductor_k=p["conductor_k"].tolist(),
+        core = _core.CoatedConductorAnalytic if p["method"] == "analytic" else _core.CoatedConductor
+        return core(conductor_eta=p["conductor_eta"].tolist(), conductor_k=p["conductor_k"].tolist(),
                                      conductor_alpha_x=p["conductor_alpha_x"], conductor_alpha_y=p["conductor_alpha_y"],
                                      interface_eta=p["interface_eta"], interface_alpha_x=p["interface_alpha_x"],
                                      interface_alpha_y=p["interface_alpha_y"], masking=_MASKING[p["masking"]],
                                      **_layer_kw(p))
 
+    @staticmethod
+    def relative_cost(params, dtype=None) -> float:
+        """Relative cost of a configuration (the tuning registry's cost model; see _relative_cost)."""
+        return _relative_cost(params, dtype)
+
     def cost_family(self) -> str:
-        return "CoatedConductor" + _medium(self._params).replace(", ", "/")
+        return "CoatedConductor" + (_medium(self._params) + _method_text(self._params)).replace(", ", "/")
 
     def describe(self) -> str:
         p = self._params
         name = next((n for n, (eta, k) in METALS.items()
                      if np.allclose(p["conductor_eta"], eta) and np.allclose(p["conductor_k"], k)), None)
         name = name or f"η={fmt_value(p['conductor_eta'])}"
-        return f"CoatedConductor {name}, α={p['conductor_alpha_x']:.2g}/{p['interface_alpha_x']:.2g}{_medium(p)}"
+        return (f"CoatedConductor {name}, α={p['conductor_alpha_x']:.2g}/{p['interface_alpha_x']:.2g}{_medium(p)}"
+                f"{_method_text(p)}")
 
 
 def _named_alphas(alpha, ax, ay, name):

@@ -13,6 +13,7 @@
 #include "measured.h"
 #include "merl.h"
 #include "layered.h"
+#include "layered_analytic.h"
 #include "plastic.h"
 #include "hair.h"
 #include "normalized_fresnel.h"
@@ -38,6 +39,8 @@ using AllModels = ModelList<DiffuseBxDF,
                             PlasticBxDF,
                             CoatedDiffuseBxDF,         // stochastic (pbrt-v4 LayeredBxDF)
                             CoatedConductorBxDF,
+                            CoatedDiffuseAnalyticBxDF, // method="analytic" (Weidlich & Wilkie 2007)
+                            CoatedConductorAnalyticBxDF,
                             NormalizedFresnelBxDF,
                             HairBxDF,
                             HairFarFieldBxDF>;      // Hair with h=None: 16 HairBxDF nodes
