@@ -116,6 +116,86 @@ struct PyScene {
         if (!err.empty()) throw std::runtime_error(err);
     }
 
+    // Fibres: points (N, 4) control points x, y, z, radius of round Catmull-Rom curves; segments (M,)
+    // the first control point of each segment (it uses 4 consecutive points).
+    void add_curves(const py::array &points, const py::array &segments, int mat) {
+        check_open();
+        carray<float> v = points;
+        if (v.ndim() != 2 || v.shape(1) != 4) value_error("points: expected shape (N, 4) (x, y, z, radius)");
+        char kind = segments.dtype().kind();
+        if (kind != 'i' && kind != 'u') throw py::type_error("segments: expected an integer array");
+        carray<int64_t> ix = segments;
+        if (ix.ndim() != 1) value_error("segments: expected shape (M,)");
+        int64_t np = v.shape(0), ns = ix.shape(0);
+        if (np < 4 || ns == 0) value_error("curves: need at least 4 control points and one segment");
+        if (np > int64_t(UINT32_MAX)) value_error("points: too many control points");
+        const float *pv = v.data();
+        for (int64_t i = 0; i < np; ++i) {
+            for (int k = 0; k < 4; ++k)
+                if (!std::isfinite(pv[4 * i + k])) value_error("points: contains NaN or Inf (point " + std::to_string(i) + ")");
+            if (!(pv[4 * i + 3] > 0)) value_error("points: radius must be > 0 (point " + std::to_string(i) + ")");
+        }
+        std::vector<uint32_t> idx(static_cast<size_t>(ns));
+        const int64_t *pi = ix.data();
+        for (int64_t i = 0; i < ns; ++i) {
+            if (pi[i] < 0 || pi[i] + 3 >= np)
+                value_error("segments: first point " + std::to_string(pi[i]) + " out of range [0, " +
+                            std::to_string(np - 3) + ") in segment " + std::to_string(i));
+            idx[size_t(i)] = uint32_t(pi[i]);
+        }
+        check_material(mat, "material");
+        std::string err = scene->add_curves(pv, np, idx.data(), ns, mat);
+        if (!err.empty()) throw std::runtime_error(err);
+    }
+
+    // The first hit of the ray (origin, direction) and how the renderer shades it, for tests: None on
+    // a miss, else a dict with p, the frame (s, t, n: local x, y, z in world space), fibre, h (fibre
+    // offset), material, wo (local) and, for world directions wi (K, 3), wi_local (K, 3) and
+    // f_cos (K, 3) = f(wo, wi) |cos| of the material as shaded there (the integrator's code path).
+    py::object debug_hit(const V3 &origin, const V3 &direction, carray<double> wi) {
+        commit();
+        if (wi.ndim() != 2 || wi.shape(1) != 3) value_error("wi: expected shape (K, 3)");
+        Vec3f o = to_vec(origin, "origin"), d = to_vec(direction, "direction");
+        if (!(length_squared(d) > 0)) value_error("direction: must be non-zero");
+        d = normalize(d);
+        RTCRayHit rh;
+        make_rayhit(rh, o, d);
+        scene->intersect_n(&rh, 1, false);
+        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return py::none();
+        Hit h;
+        scene->hit_point(rh, &h);
+        Material scratch;
+        const Material &m = material_at(*scene, h, &scratch);
+        Frame fr(h.n, h.tangent);
+        Vec3f wo = fr.to_local(-d);
+        int64_t k = wi.shape(0);
+        py::array_t<double> wl({k, int64_t(3)}), fc({k, int64_t(3)});
+        const double *pw = wi.data();
+        double *pl = wl.mutable_data(), *pf = fc.mutable_data();
+        for (int64_t i = 0; i < k; ++i) {
+            Vec3f w = normalize(Vec3f(Float(pw[3 * i]), Float(pw[3 * i + 1]), Float(pw[3 * i + 2])));
+            Vec3f l = fr.to_local(w);
+            RGB f = material_f(m, wo, l) * std::abs(l.z);
+            for (int c = 0; c < 3; ++c) {
+                pl[3 * i + c] = c == 0 ? l.x : (c == 1 ? l.y : l.z);
+                pf[3 * i + c] = f[c];
+            }
+        }
+        auto v3 = [](const Vec3f &a) { return py::make_tuple(a.x, a.y, a.z); };
+        py::dict r;
+        r["p"] = v3(h.p);
+        r["s"] = v3(fr.s);
+        r["t"] = v3(fr.t);
+        r["n"] = v3(fr.n);
+        r["fibre"] = h.fibre;
+        r["h"] = h.h;
+        r["material"] = h.material;
+        r["wo"] = v3(wo);
+        r["wi_local"] = wl;
+        r["f_cos"] = fc;
+        return r;
+    }
+
     void set_environment_constant(const V3 &L) { scene->env = Environment::uniform(to_rgb(L, "environment")); }
 
     void set_environment_latlong(const py::array &img) {
@@ -235,6 +315,8 @@ void bind_render(py::module_ &m) {
         .def("add_material", &PyScene::add_material)
         .def("add_sphere", &PyScene::add_sphere)
         .def("add_mesh", &PyScene::add_mesh)
+        .def("add_curves", &PyScene::add_curves)
+        .def("debug_hit", &PyScene::debug_hit)
         .def("set_environment_constant", &PyScene::set_environment_constant)
         .def("set_environment_latlong", &PyScene::set_environment_latlong)
         .def("set_directional", &PyScene::set_directional)

@@ -23,11 +23,20 @@ Conventions
   grows along ``forward x up``. Pixels are box-filtered (uniform jitter inside the pixel).
 * ``max_depth`` counts scattering events (pbrt-v4): 0 shows the environment only, 1 is direct
   lighting. Mitsuba's ``max_depth`` counts path vertices: Mitsuba's value is ours + 1.
-* Objects: spheres, triangle meshes (numpy arrays, or OBJ/PLY/... files through Assimp) and a
-  ground plane, one bsdfkit model per object (the ground may alternate two in a checkerboard).
+* Objects: spheres, triangle meshes (numpy arrays, or OBJ/PLY/... files through Assimp), fibres
+  (round Embree curves through given points, e.g. a :func:`hair_swatch`) and a ground plane, one
+  bsdfkit model per object (the ground may alternate two in a checkerboard).
   The shading frame is the geometric normal (outward: triangles wind counter-clockwise seen
   from outside) and a tangent (a sphere's parallels around +y; a triangle's first edge), so an
   anisotropic ``alpha_x`` runs along that tangent. Dielectric ``eta`` is inside over outside.
+* Fibres (:meth:`Scene.add_curves`): at a hit the frame's x is the fibre tangent. For a hair model
+  (``Hair``, ``Hair(h=None)``) z is the part of wo normal to the fibre (the ribbon facing the ray,
+  as pbrt-v4) and the offset across the fibre is taken from the hit: h = ((p - c) . y) / r, the
+  signed distance between the ray and the fibre axis (c, radius r at the hit) along y = z x x, in
+  [-1, 1] (the Hair model's own ``h`` is ignored there). With this sign the R lobe
+  (phi_i - phi_o = -2 asin h, pbrt-v4) is the mirror reflection off the cylinder at the hit. For
+  other models z is the tube's outward normal. Rays leave a fibre from its axis, past its own
+  cylinder, so a fibre does not shadow itself at the scattering point.
 * Determinism: a sample's random numbers depend only on (seed, pixel, sample index), so an image
   is bit-identical for any thread count (``bk.set_num_threads``) and any split into passes.
 * Ctrl-C: the render stops within a fraction of a second and, by default
@@ -49,7 +58,8 @@ import numpy as np
 from . import _core
 
 __all__ = ["Camera", "Scene", "preview", "render", "default_environment", "procedural_environment", "default_scene",
-           "gallery_scene", "load_mesh", "parse_spec", "write_gallery", "ENVIRONMENTS"]
+           "gallery_scene", "hair_swatch", "hair_scene", "hair_row_scene", "load_mesh", "parse_spec", "write_gallery",
+           "write_hair", "ENVIRONMENTS", "HAIR_ROW"]
 
 #: Named environments: procedural ``"sky"`` (the default: sky gradient, ground and a sun-like
 #: hot spot), ``"studio"`` (dark room with three soft boxes) and ``"white"`` (uniform radiance 1,
@@ -250,6 +260,187 @@ def _fit_on_ground(v, radius=1.0, height=0.0):
     return out
 
 
+# ---------------------------------------------------------------- fibres
+
+def _fibre_list(points, name):
+    if isinstance(points, np.ndarray) and points.ndim == 3:
+        fibres = list(points)
+    elif isinstance(points, (list, tuple)):
+        fibres = list(points)
+    else:
+        a = np.asarray(points)
+        raise ValueError(f"{name}: expected an (F, P, 3) array or a list of (P, 3) arrays, got shape {a.shape}")
+    if not fibres:
+        raise ValueError(f"{name}: need at least one fibre")
+    out = []
+    for k, q in enumerate(fibres):
+        q = np.asarray(q)
+        if q.dtype.kind not in "fiu":
+            raise TypeError(f"{name}: fibre {k}: expected real numbers, got dtype {q.dtype}")
+        q = q.astype(np.float64)
+        if q.ndim != 2 or q.shape[1] != 3 or len(q) < 2:
+            raise ValueError(f"{name}: fibre {k}: expected shape (P, 3) with P >= 2, got {q.shape}")
+        if not np.all(np.isfinite(q)):
+            raise ValueError(f"{name}: fibre {k}: contains NaN or Inf")
+        out.append(q)
+    return out
+
+
+def _radius_list(radius, fibres):
+    if isinstance(radius, (bool, np.bool_)):
+        raise TypeError("radius: expected a number or per-point radii, got a bool")
+    if np.ndim(radius) == 0:
+        r = float(radius)
+        if not (math.isfinite(r) and r > 0):
+            raise ValueError(f"radius: must be finite and > 0, got {radius!r}")
+        return [np.full(len(q), r) for q in fibres]
+    rs = list(radius) if not (isinstance(radius, np.ndarray) and radius.ndim == 2) else list(radius)
+    if len(rs) != len(fibres):
+        raise ValueError(f"radius: expected one array per fibre ({len(fibres)}), got {len(rs)}")
+    out = []
+    for k, (r, q) in enumerate(zip(rs, fibres)):
+        r = np.asarray(r, dtype=np.float64)
+        if r.shape != (len(q),):
+            raise ValueError(f"radius: fibre {k}: expected shape ({len(q)},), got {r.shape}")
+        if not np.all(np.isfinite(r)) or np.any(r <= 0):
+            raise ValueError(f"radius: fibre {k}: must be finite and > 0")
+        out.append(r)
+    return out
+
+
+def hair_swatch(n_fibres=1500, length=2.0, radius=0.004, curl=0.3, seed=0, *, width=0.9, thickness=0.18,
+                wave=0.12, points_per_fibre=24, top=2.15):
+    """A procedural lock of hair: ``n_fibres`` fibres hanging from a short bar, for
+    :meth:`Scene.add_curves`. Returns ``(points, radius)``: float64 arrays (F, P, 3) and (F, P).
+
+    The roots lie on a ``width`` x ``thickness`` rectangle (x, z) at height ``top`` (world y-up);
+    each fibre falls about ``length`` toward -y, following the lock's common S-shaped ``wave``
+    (amplitude in world units, in z and a little in x) and its own helical ``curl`` (0: straight
+    fibres, 1: curls of radius ~0.05 length, a few turns per fibre) with a random phase, and the
+    lock narrows toward the tips. ``radius`` is the fibre radius at the root; fibres taper to 40 %
+    of it over the last fifth. ``seed`` makes it reproducible.
+    """
+    n = _check_int(n_fibres, "n_fibres", 1)
+    p = _check_int(points_per_fibre, "points_per_fibre", 2)
+    for name, v, lo in (("length", length, 0.0), ("radius", radius, 0.0), ("width", width, -1.0),
+                        ("thickness", thickness, -1.0)):
+        if not (isinstance(v, (int, float, np.integer, np.floating)) and math.isfinite(v) and v > lo):
+            raise ValueError(f"{name}: must be a finite number > {max(lo, 0):g}, got {v!r}")
+    for name, v in (("curl", curl), ("wave", wave), ("top", top)):
+        if not (isinstance(v, (int, float, np.integer, np.floating)) and math.isfinite(v)):
+            raise ValueError(f"{name}: must be a finite number, got {v!r}")
+    if curl < 0:
+        raise ValueError(f"curl: must be >= 0, got {curl!r}")
+    rng = np.random.default_rng(_check_int(seed, "seed", 0))
+    s = np.linspace(0.0, 1.0, p)                                  # arc parameter, root -> tip
+    x0 = (rng.random(n) - 0.5) * width
+    z0 = (rng.random(n) - 0.5) * thickness
+    ln = length * (0.85 + 0.15 * rng.random(n))                   # uneven tips
+    narrow = 1.0 - 0.45 * s ** 1.5                                # the lock gathers toward the tips
+    y = top - ln[:, None] * s[None, :]
+    x = x0[:, None] * narrow[None, :] + 0.25 * wave * np.sin(np.pi * s)[None, :]
+    z = z0[:, None] * narrow[None, :] + wave * np.sin(2 * np.pi * s)[None, :]
+    # per fibre helical curl and a little stray direction
+    turns = 2.5 + 1.5 * rng.random(n)
+    phase = 2 * np.pi * rng.random(n)
+    amp = curl * 0.05 * length * (0.6 + 0.8 * rng.random(n))
+    ang = phase[:, None] + 2 * np.pi * turns[:, None] * s[None, :]
+    ramp = np.minimum(1.0, 4 * s)[None, :]                        # straight at the root
+    x = x + amp[:, None] * ramp * np.cos(ang)
+    z = z + amp[:, None] * ramp * np.sin(ang)
+    stray = 0.02 * length * rng.standard_normal((n, 2))
+    x = x + stray[:, :1] * s[None, :] ** 2
+    z = z + stray[:, 1:] * s[None, :] ** 2
+    pts = np.stack([x, y, z], axis=-1)
+    r = radius * np.where(s > 0.8, 1.0 - 0.6 * (s - 0.8) / 0.2, 1.0)
+    return pts, np.broadcast_to(r, (n, p)).copy()
+
+
+def hair_scene(model, *, n_fibres=1500, curl=0.3, seed=0, envmap=None, aspect=1.0) -> Scene:
+    """A lock of hair (:func:`hair_swatch`) of ``model`` against the environment (default: the
+    ``"studio"`` soft boxes, which give hair its highlights), seen from the front at eye level
+    with a 30 degree field of view, framed for width / height = ``aspect``; no ground."""
+    pts, r = hair_swatch(n_fibres=n_fibres, curl=curl, seed=seed)
+    sc = Scene(environment="studio" if envmap is None else envmap)
+    sc.add_curves(model, pts, r)
+    fov = 30.0
+    half_h = 1.2                                                  # the lock spans y ~ 0 .. 2.2
+    half_w = max(0.75, half_h * aspect)
+    dist = half_w / math.tan(math.radians(fov / 2))
+    sc.camera = Camera(origin=(0.0, 1.15, dist), target=(0.0, 1.1, 0.0), up=(0.0, 1.0, 0.0), fov=fov)
+    return sc
+
+
+#: The demo's row of hair locks: (label, model spec), pbrt-v4's melanin concentrations
+#: (``Hair.from_concentration``; eumelanin 0.3 is blonde, 1.3 brown, 8 black).
+HAIR_ROW = (("blonde", "hair concentration=0.3"),
+            ("red", "hair concentration=0.15 pheomelanin=1.2"),
+            ("brown", "hair concentration=1.3"),
+            ("black", "hair concentration=8"))
+#: Size and quality of the demo's ``hair.png``.
+HAIR_SIZE = (800, 440)
+HAIR_SPP = 48
+
+
+def hair_row_scene(models, *, n_fibres=1200, spacing=1.25, envmap=None, aspect=HAIR_SIZE[0] / HAIR_SIZE[1],
+                   seed=0) -> Scene:
+    """One lock of hair (:func:`hair_swatch`, a different seed each) per model, side by side along
+    x, left to right, under ``envmap`` (default ``"studio"``), framed for width / height = ``aspect``."""
+    models = list(models)
+    if not models:
+        raise ValueError("models: need at least one model")
+    sc = Scene(environment="studio" if envmap is None else envmap)
+    k = len(models)
+    for i, m in enumerate(models):
+        pts, r = hair_swatch(n_fibres=n_fibres, seed=seed + i)
+        pts[..., 0] += (i - (k - 1) / 2) * spacing
+        sc.add_curves(m, pts, r)
+    fov = 30.0
+    half_w = max((k - 1) / 2 * spacing + 0.75, 1.2 * aspect)
+    dist = half_w / math.tan(math.radians(fov / 2))
+    sc.camera = Camera(origin=(0.0, 1.15, dist), target=(0.0, 1.1, 0.0), up=(0.0, 1.0, 0.0), fov=fov)
+    return sc
+
+
+def write_hair(outdir, rows=HAIR_ROW, *, size=HAIR_SIZE, spp=HAIR_SPP, progress=True, exposure=0.0):
+    """Renders :func:`hair_row_scene` of ``rows`` ((label, spec or model) pairs; default
+    :data:`HAIR_ROW`) and writes ``hair.exr`` (linear radiance) and ``hair.png`` (sRGB, each lock
+    labelled with its name and spec); returns the two paths."""
+    from matplotlib.figure import Figure
+
+    from .io import linear_to_srgb, write_image
+    rows = [(lab, parse_spec(m) if isinstance(m, str) else _model_check(m)) for lab, m in rows]
+    w, h = size
+    sc = hair_row_scene([m for _, m in rows], aspect=w / h)
+    img = render(sc, width=w, height=h, spp=spp, progress=progress)
+    paths = [os.path.join(outdir, "hair.exr"), os.path.join(outdir, "hair.png")]
+    write_image(paths[0], img)
+    # the PNG: the sRGB image with a caption strip under the locks
+    dpi, strip = 100, 46
+    fig = Figure(figsize=(w / dpi, (h + strip) / dpi), dpi=dpi)
+    ax = fig.add_axes((0, strip / (h + strip), 1, h / (h + strip)))
+    ax.imshow(np.clip(linear_to_srgb(np.clip(img * 2.0 ** exposure, 0, None)), 0, 1), interpolation="nearest")
+    ax.set_axis_off()
+    k = len(rows)
+    cam = sc.camera
+    half_w = math.tan(math.radians(cam.fov / 2)) * cam.origin[2]
+    for i, (lab, m) in enumerate(rows):
+        x = (i - (k - 1) / 2) * 1.25
+        fx = 0.5 + 0.5 * x / half_w
+        spec = lab if isinstance(m, str) else _spec_of(m)
+        fig.text(fx, (strip - 6) / (h + strip), f"{lab}\n{spec}", ha="center", va="top", fontsize=8.5,
+                 color="0.1", linespacing=1.3)
+    fig.text(0.005, 1 - 0.005, "bsdfkit Hair (Chiang 2016 / pbrt-v4) on fibres: h from the hit, studio lighting",
+             ha="left", va="top", fontsize=8, color="0.85")
+    fig.savefig(paths[1], dpi=dpi, facecolor="white")
+    return paths
+
+
+def _spec_of(model):
+    from .models.spec import to_spec
+    return to_spec(model)
+
+
 # ---------------------------------------------------------------- scene
 
 @dataclass
@@ -333,6 +524,30 @@ class Scene:
         self.objects.append(dict(kind="mesh", material=_model_check(material), vertices=v, indices=i))
         return self
 
+    def add_curves(self, material, points, radius=0.01) -> "Scene":
+        """Fibres of one material: smooth round curves (Embree round Catmull-Rom curves) through
+        the given points, e.g. the output of :func:`hair_swatch`.
+
+        ``points``: an (F, P, 3) array (F fibres of P >= 2 points each) or a list of (P_i, 3)
+        arrays. ``radius``: the fibre radius (world units, > 0), a number or one value per point
+        (an (F, P) array or a list of (P_i,) arrays), interpolated along the fibre. Each fibre
+        passes through its points (end tangents continue the first and last segment). See the
+        module notes for the shading frame and the offset h of hair models.
+        """
+        fibres = _fibre_list(points, "points")
+        radii = _radius_list(radius, fibres)
+        ctrl, segs, start = [], [], 0
+        for q, r in zip(fibres, radii):
+            # phantom end points: the Catmull-Rom segment i spans control points i+1 .. i+2
+            qe = np.concatenate([2 * q[:1] - q[1:2], q, 2 * q[-1:] - q[-2:-1]])
+            re = np.concatenate([r[:1], r, r[-1:]])
+            ctrl.append(np.concatenate([qe, re[:, None]], axis=1))
+            segs.append(start + np.arange(len(q) - 1))
+            start += len(qe)
+        self.objects.append(dict(kind="curves", material=_model_check(material),
+                                 points=np.concatenate(ctrl), segments=np.concatenate(segs).astype(np.int64)))
+        return self
+
     def add_ground(self, material=None, *, height=0.0, size=200.0, checker=None, checker_size=0.5) -> "Scene":
         """A horizontal square (normal +y) of side ``size`` at y = ``height``. With ``checker`` (a
         second model) the two materials alternate on squares of side ``checker_size``.
@@ -393,6 +608,8 @@ class Scene:
             cs = ob.get("checker_size", 0.0) if ob.get("checker") is not None else 0.0
             if ob["kind"] == "sphere":
                 s.add_sphere(ob["center"].tolist(), ob["radius"], a, b, cs)
+            elif ob["kind"] == "curves":
+                s.add_curves(np.ascontiguousarray(ob["points"], dtype=np.float32), ob["segments"], a)
             else:
                 s.add_mesh(np.ascontiguousarray(ob["vertices"], dtype=np.float32),
                            np.ascontiguousarray(ob["indices"], dtype=np.int64), a, b, cs)
@@ -410,7 +627,10 @@ class Scene:
 def default_scene(model, *, shape=None, envmap=None) -> Scene:
     """The preview scene: ``model`` on a unit sphere (or ``shape``: a mesh file path or a
     ``(vertices, indices)`` pair, fitted to the same place) standing on a grey checkerboard
-    ground, seen from the front, under ``envmap`` (default: the procedural sky)."""
+    ground, seen from the front, under ``envmap`` (default: the procedural sky).
+    ``shape="hair"``: the fibres of :func:`hair_scene` instead."""
+    if isinstance(shape, str) and shape == "hair":
+        return hair_scene(model, envmap=envmap)
     sc = Scene(environment="sky" if envmap is None else envmap)
     if shape is None or (isinstance(shape, str) and shape == "sphere"):
         sc.add_sphere(model, center=(0.0, 1.0, 0.0), radius=1.0)

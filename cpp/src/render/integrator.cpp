@@ -102,7 +102,7 @@ struct Tracer {
                 Float p_b = material_pdf(m, wo, wl);
                 w.shadows.push_back({pi, path.beta * f * le * (power_heuristic(p_l, p_b) / p_l)});
                 w.shadow_rays.emplace_back();
-                make_ray(w.shadow_rays.back(), offset_ray_origin(h.p, h.n, wi), wi, kInf);
+                make_spawn_ray(w.shadow_rays.back(), h, wi, kInf);
             }
         }
         if (scene.sun.enabled) {
@@ -111,7 +111,7 @@ struct Tracer {
             if (!f.is_black()) {
                 w.shadows.push_back({pi, path.beta * f * scene.sun.E});
                 w.shadow_rays.emplace_back();
-                make_ray(w.shadow_rays.back(), offset_ray_origin(h.p, h.n, scene.sun.dir), scene.sun.dir, kInf);
+                make_spawn_ray(w.shadow_rays.back(), h, scene.sun.dir, kInf);
             }
         }
     }
@@ -145,7 +145,8 @@ struct Tracer {
         if (path.depth++ == st.max_depth) return;
         Hit h;
         scene.hit_point(rh, &h);
-        const Material &m = scene.materials[size_t(h.material)];
+        Material scratch;
+        const Material &m = material_at(scene, h, &scratch);
         uint8_t flags = material_flags(m);
         if (flags == Unset) return;
         Frame fr(h.n, h.tangent);
@@ -172,7 +173,7 @@ struct Tracer {
             path.beta = path.beta / (Float(1) - q);
         }
         w.next_rays.emplace_back();
-        make_rayhit(w.next_rays.back(), offset_ray_origin(h.p, h.n, nd), nd);
+        make_spawn_rayhit(w.next_rays.back(), h, nd);
         w.next_path.push_back(pi);
     }
 

@@ -1,6 +1,8 @@
 // Embree 3 glue of the preview renderer's scene.
 #include "bsdfkit/render/scene.h"
 
+#include "bsdfkit/render/camera.h"
+
 #include <algorithm>
 #include <cstring>
 
@@ -33,6 +35,8 @@ Scene::Scene() {
 }
 
 Scene::~Scene() {
+    for (Object &o : objects)
+        if (o.geometry) rtcReleaseGeometry(o.geometry);
     if (scene_) rtcReleaseScene(scene_);
     if (device_) rtcReleaseDevice(device_);
 }
@@ -102,6 +106,33 @@ std::string Scene::add_mesh(const Float *vertices, int64_t nv, const uint32_t *i
     o.checker = checker;
     objects.push_back(std::move(o));
     return embree_status(device_, "mesh");
+}
+
+std::string Scene::add_curves(const Float *points, int64_t np, const uint32_t *segments, int64_t ns, int mat) {
+    if (!scene_) return "Embree: could not create a device";
+    if (committed_) return "scene already committed";
+    RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_ROUND_CATMULL_ROM_CURVE);
+    if (!g) return embree_status(device_, "rtcNewGeometry");
+    auto *v = static_cast<float *>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), size_t(np)));
+    auto *ix = static_cast<unsigned *>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, sizeof(unsigned), size_t(ns)));
+    if (!v || !ix) {
+        rtcReleaseGeometry(g);
+        return embree_status(device_, "curve buffers");
+    }
+    std::memcpy(v, points, size_t(np) * 4 * sizeof(float));
+    std::memcpy(ix, segments, size_t(ns) * sizeof(unsigned));
+    rtcCommitGeometry(g);
+    unsigned id = unsigned(objects.size());
+    rtcAttachGeometryByID(scene_, g, id);
+    Object o;
+    o.kind = Object::Kind::Curves;
+    o.geometry = g;  // keeps our reference for rtcInterpolate1
+    o.mat_a = mat;
+    o.mat_b = mat;
+    objects.push_back(std::move(o));
+    return embree_status(device_, "curves");
 }
 
 std::string Scene::commit() {
@@ -202,6 +233,10 @@ void Scene::occluded_n(RTCRay *rays, unsigned n, bool coherent) const {
 void Scene::hit_point(const RTCRayHit &rh, Hit *hit) const {
     const Object &ob = objects[rh.hit.geomID];
     Vec3f o(rh.ray.org_x, rh.ray.org_y, rh.ray.org_z), d(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
+    if (ob.kind == Object::Kind::Curves) {
+        curve_hit(ob, rh, hit);
+        return;
+    }
     if (ob.kind == Object::Kind::Sphere) {
         // Re-project the hit onto the sphere: o + t d carries the error of t.
         Vec3f p = o + d * rh.ray.tfar;
@@ -233,6 +268,49 @@ void Scene::hit_point(const RTCRayHit &rh, Hit *hit) const {
         mat = ((cx + cz) & 1) ? ob.mat_b : ob.mat_a;
     }
     hit->material = mat;
+    hit->fibre = false;
+}
+
+// Fibre hit (see scene.h): axis point, tangent and radius interpolated by Embree at u, the
+// frame and the offset h.
+void Scene::curve_hit(const Object &ob, const RTCRayHit &rh, Hit *hit) const {
+    Vec3f o(rh.ray.org_x, rh.ray.org_y, rh.ray.org_z), d(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
+    float P[4], dP[4];
+    rtcInterpolate1(ob.geometry, rh.hit.primID, rh.hit.u, rh.hit.v, RTC_BUFFER_TYPE_VERTEX, 0, P, dP, nullptr, 4);
+    Vec3f c(P[0], P[1], P[2]), T(dP[0], dP[1], dP[2]);
+    Float tl2 = length_squared(T);
+    T = tl2 > Float(0) ? T / std::sqrt(tl2) : Vec3f(1, 0, 0);
+    Float r = max_(P[3], Float(1e-30));
+    Vec3f p = o + d * rh.ray.tfar;
+    Vec3f wo = -normalize(d);
+    // z: wo's part normal to the fibre (the ribbon facing the ray); any normal if wo is along T
+    Vec3f z = wo - T * dot(wo, T);
+    Float zl2 = length_squared(z);
+    if (zl2 > Float(1e-12)) {
+        z = z / std::sqrt(zl2);
+    } else {
+        Vec3f b1, b2;
+        Frame::basis(T, &b1, &b2);
+        z = b1;
+    }
+    Vec3f y = cross(z, T);
+    hit->h = clamp(dot(p - c, y) / r, Float(-1), Float(1));
+    hit->p = p;
+    hit->fibre = true;
+    hit->axis = c;
+    hit->axis_dir = T;
+    hit->radius = r;
+    hit->tangent = T;
+    hit->material = ob.mat_a;
+    if (is_hair_material(materials[size_t(ob.mat_a)])) {
+        hit->n = z;
+    } else {
+        // the tube's outward normal at p (facing the ray when p is numerically on the axis)
+        Vec3f q = p - c;
+        q = q - T * dot(q, T);
+        Float ql2 = length_squared(q);
+        hit->n = ql2 > Float(1e-20) * r * r ? q / std::sqrt(ql2) : z;
+    }
 }
 
 } // namespace bsdfkit::render

@@ -7,6 +7,7 @@ import numpy as np
 
 from .. import _core
 from .base import BxDF, _rgb, _scalar
+from .registry import KnobDecl
 
 __all__ = ["Hair", "EUMELANIN_SIGMA_A", "PHEOMELANIN_SIGMA_A", "sigma_a_from_concentration",
            "sigma_a_from_reflectance"]
@@ -47,6 +48,14 @@ def _h(h):
     return _scalar(h, "h", lo=-1.0, hi=1.0)
 
 
+def _nodes(n):
+    if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)):
+        raise ValueError(f"nodes: expected an integer in [1, 64], got {n!r}")
+    if not 1 <= n <= 64:
+        raise ValueError(f"nodes: must be in [1, 64], got {n}")
+    return int(n)
+
+
 class Hair(BxDF):
     """A hair fibre: Chiang, Bitterli, Tappan & Burley 2016, "A Practical and Controllable Hair and
     Fur Model for Production Path Tracing", exactly as pbrt-v4's ``HairBxDF`` (lobes R, TT, TRT of
@@ -61,9 +70,11 @@ class Hair(BxDF):
     **degrees** in [-90, 90] (R shifts by -2 alpha, TT by alpha, TRT by 4 alpha). h: offset across
     the fibre in [-1, 1] at which the ray from wo hits it (pbrt-v4 takes h = -1 + 2 v of the curve
     uv), or **None: the far-field fibre**, f averaged over h in [-1, 1], (1/2) int f(h) dh,
-    integrated in gamma = asin h (smooth there; dh = cos gamma dgamma) by 16-point Gauss-Legendre
-    with the weights normalised to 1; sampled as the same mixture (exact pdf). 16 times the
-    cost of one h. For fibres thinner than a pixel.
+    integrated in gamma = asin h (smooth there; dh = cos gamma dgamma) by ``nodes``-point
+    Gauss-Legendre (default 16, at most 64) with the weights normalised to 1; sampled as the same
+    mixture (exact pdf). ``nodes`` times the cost of one h. For fibres thinner than a pixel.
+    ``nodes`` is an accuracy knob (``bk.tradeoff``): sharp azimuthal lobes (small beta_n) need
+    more nodes; it does nothing for a single h.
 
     **Frame** (pbrt-v4): local **x is the fibre axis** (tangent; sin theta = w.x, theta the
     longitudinal angle), **y and z span the normal plane** with azimuth phi = atan2(w.z, w.y);
@@ -91,7 +102,11 @@ class Hair(BxDF):
     transmission = False
     delta_only = False
     mitsuba = "hair"
-    knobs = ()           # pbrt-v4's HairBxDF has no accuracy setting (p_max = 3 is fixed)
+    # pbrt-v4's HairBxDF has no accuracy setting (p_max = 3 is fixed); the far-field fibre's
+    # quadrature order is one (bench/HAIR.md: its error against 64 nodes)
+    knobs = (KnobDecl("nodes", (64, 32, 16, 8, 4), "approximation",
+                      "Gauss-Legendre nodes of the far-field fibre's integral over h",
+                      moot=lambda p: None if p["h"] is None else "a single h (h is not None)"),)
 
     def cost_family(self) -> str:
         return "Hair/far-field" if self._params["h"] is None else "Hair"   # far field: 16 single-h kernels
@@ -107,7 +122,7 @@ class Hair(BxDF):
         from ..testing.hair_ref import mitsuba_dict
         return mitsuba_dict(self)
 
-    def __init__(self, sigma_a=None, eta=1.55, beta_m=0.3, beta_n=0.3, alpha=2.0, h=0.0):
+    def __init__(self, sigma_a=None, eta=1.55, beta_m=0.3, beta_n=0.3, alpha=2.0, h=0.0, nodes=16):
         if sigma_a is None:  # pbrt-v4's default: eumelanin 1.3
             sigma_a = sigma_a_from_concentration(1.3, 0.0)
         super().__init__(sigma_a=_rgb(sigma_a, "sigma_a", lo=0.0),
@@ -115,7 +130,7 @@ class Hair(BxDF):
                          beta_m=_scalar(beta_m, "beta_m", lo=0.01, hi=1.0),
                          beta_n=_scalar(beta_n, "beta_n", lo=0.01, hi=1.0),
                          alpha=_scalar(alpha, "alpha", lo=-90.0, hi=90.0),
-                         h=_h(h))
+                         h=_h(h), nodes=_nodes(nodes))
 
     @classmethod
     def from_concentration(cls, eumelanin=1.3, pheomelanin=0.0, **kw) -> "Hair":
@@ -135,12 +150,13 @@ class Hair(BxDF):
 
     def __repr__(self):
         p = self._params
+        nodes = "" if p["nodes"] == 16 else f", nodes={p['nodes']!r}"
         return (f"Hair(sigma_a=[{', '.join(repr(float(x)) for x in p['sigma_a'])}], eta={p['eta']!r}, "
-                f"beta_m={p['beta_m']!r}, beta_n={p['beta_n']!r}, alpha={p['alpha']!r}, h={p['h']!r})")
+                f"beta_m={p['beta_m']!r}, beta_n={p['beta_n']!r}, alpha={p['alpha']!r}, h={p['h']!r}{nodes})")
 
     def _make_core(self):
         p = self._params
         kw = dict(sigma_a=p["sigma_a"].tolist(), eta=p["eta"], beta_m=p["beta_m"], beta_n=p["beta_n"], alpha=p["alpha"])
         if p["h"] is None:
-            return _core.HairFarField(**kw)
+            return _core.HairFarField(nodes=p["nodes"], **kw)
         return _core.Hair(h=p["h"], **kw)

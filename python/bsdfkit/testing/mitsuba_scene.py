@@ -139,6 +139,8 @@ def to_mitsuba_scene(scene, *, width=256, height=256, spp=64, max_depth=8, envma
                             @ mi.ScalarTransform4f().rotate([1, 0, 0], -90)
                             @ mi.ScalarTransform4f().scale([size / 2, size / 2, 1])}
             continue
+        if ob["kind"] == "curves":
+            raise NotImplementedError("fibres (Scene.add_curves) have no Mitsuba counterpart here")
         bsdf = bsdf_fn(ob["material"])
         if ob["kind"] == "sphere":
             # pole on +y so that Mitsuba's dp/du (along the parallels) is our tangent (negated,

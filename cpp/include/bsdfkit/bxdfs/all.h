@@ -43,7 +43,7 @@ using AllModels = ModelList<DiffuseBxDF,
                             CoatedConductorAnalyticBxDF,
                             NormalizedFresnelBxDF,
                             HairBxDF,
-                            HairFarFieldBxDF>;      // Hair with h=None: 16 HairBxDF nodes
+                            HairFarFieldBxDF>;      // Hair with h=None: Gauss-Legendre over h (nodes: a knob)
 
 static_assert(AllModels::check(), "a model of AllModels does not follow core/bxdf.h");
 static_assert(AllModels::names_unique(), "two models of AllModels have the same Name");

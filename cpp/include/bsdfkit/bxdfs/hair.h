@@ -105,15 +105,42 @@ struct HairParams {
     }
 };
 
-// The far-field fibre has no offset h (it integrates over it).
+// The far-field fibre has no offset h (it integrates over it); `nodes` is the order of its
+// Gauss-Legendre rule in gamma = asin h (1 .. HairFarFieldBxDF::MaxNodes; an accuracy knob).
 struct HairFarFieldParams {
     double eta = 1.55, beta_m = 0.3, beta_n = 0.3, alpha = 2.0;
     std::array<double, 3> sigma_a{0.0, 0.0, 0.0};
+    int nodes = 16;
     template <class V> void fields(V &&v) {
         v("sigma_a", sigma_a); v("eta", eta); v("beta_m", beta_m); v("beta_n", beta_n);
-        v("alpha", alpha);
+        v("alpha", alpha); v("nodes", nodes);
     }
 };
+
+namespace hair {
+// Gauss-Legendre nodes x and weights w of order n on [-1, 1]: Newton's iteration on the Legendre
+// recurrence (n P_n = (2n - 1) x P_{n-1} - (n - 1) P_{n-2}) from Tricomi's initial guess
+// cos(pi (i + 3/4) / (n + 1/2)); w = 2 / ((1 - x^2) P_n'(x)^2) (Abramowitz & Stegun 25.4.29).
+inline void GaussLegendre(int n, double *x, double *w) {
+    for (int i = 0; i < n; ++i) {
+        double z = std::cos(3.14159265358979323846 * (i + 0.75) / (n + 0.5)), dp = 1;
+        for (int it = 0; it < 100; ++it) {
+            double p0 = 1, p1 = 0;
+            for (int j = 1; j <= n; ++j) {
+                double p2 = p1;
+                p1 = p0;
+                p0 = ((2 * j - 1) * z * p1 - (j - 1) * p2) / j;
+            }
+            dp = n * (z * p0 - p1) / (z * z - 1);
+            double dz = p0 / dp;
+            z -= dz;
+            if (std::abs(dz) < 1e-15) break;
+        }
+        x[i] = z;
+        w[i] = 2 / ((1 - z * z) * dp * dp);
+    }
+}
+} // namespace hair
 
 template <typename F> struct HairBxDF {
     using Params = HairParams;
@@ -130,11 +157,9 @@ template <typename F> struct HairBxDF {
 
     static HairBxDF make(const Params &p) {
         HairBxDF m;
-        m.h = F(p.h);
+        m.set_h(p.h);
         m.eta = F(p.eta);
         m.eta2 = F(p.eta * p.eta);
-        m.gamma_o = F(std::asin(clamp(p.h, -1.0, 1.0)));
-        m.cos_gamma_o = F(std::sqrt(std::max(0.0, 1.0 - p.h * p.h)));
         for (int c = 0; c < 3; ++c) m.two_sigma_a[c] = F(2 * p.sigma_a[c]);
         // Longitudinal variance (Chiang 2016 eq. 7; pbrt-v4): v0, v0 / 4, 4 v0, 4 v0
         double b = p.beta_m;
@@ -168,6 +193,15 @@ template <typename F> struct HairBxDF {
             m.cos_tilt[i] = F(ct[i]);
         }
         return m;
+    }
+
+    // The same fibre seen at offset h (the preview renderer sets h per curve hit): h, gamma_o = asin h
+    // and cos gamma_o are the only members that depend on it.
+    void set_h(double hh) {
+        hh = clamp(hh, -1.0, 1.0);
+        h = F(hh);
+        gamma_o = F(std::asin(hh));
+        cos_gamma_o = F(std::sqrt(std::max(0.0, 1.0 - hh * hh)));
     }
 
     uint8_t flags() const { return GlossyReflection; }
@@ -312,72 +346,82 @@ template <typename F> struct HairBxDF {
 
 // The far-field fibre: HairBxDF averaged over the offset h in [-1, 1] (a fibre seen whole, thinner
 // than a pixel). (1/2) int f(h) dh is integrated in gamma = asin h, where the integrand is smooth:
-// h = sin gamma, dh = cos gamma dgamma, by Gauss-Legendre with `Nodes` points on (-pi/2, pi/2)
+// h = sin gamma, dh = cos gamma dgamma, by Gauss-Legendre with `nodes` points on (-pi/2, pi/2)
 // (weights normalised to sum 1). Sampling picks node k with its weight, then samples HairBxDF(h_k);
-// pdf is the same mixture, so sample_f, f and pdf agree exactly. Cost: Nodes times HairBxDF.
+// pdf is the same mixture, so sample_f, f and pdf agree exactly. Cost: `nodes` times HairBxDF. The
+// nodes share every member of HairBxDF but h, gamma_o and cos gamma_o (HairBxDF::set_h).
 template <typename F> struct HairFarFieldBxDF {
-    static constexpr int Nodes = 16;
+    static constexpr int MaxNodes = 64;
     static constexpr const char *Name = "HairFarField";
     using Params = HairFarFieldParams;
-    HairBxDF<F> lobe[Nodes];
-    F weight[Nodes], cdf[Nodes];
+    HairBxDF<F> base;
+    int n = 16;
+    F node_h[MaxNodes], node_gamma[MaxNodes], node_cos_gamma[MaxNodes], weight[MaxNodes], cdf[MaxNodes];
 
     static HairFarFieldBxDF make(const Params &p) {
-        // 16-point Gauss-Legendre nodes / weights on [-1, 1] (Abramowitz & Stegun table 25.4)
-        static const double x8[8] = {0.0950125098376374, 0.2816035507792589, 0.4580167776572274,
-                                     0.6178762444026438, 0.7554044083550030, 0.8656312023878318,
-                                     0.9445750230732326, 0.9894009349916499};
-        static const double w8[8] = {0.1894506104550685, 0.1826034150449236, 0.1691565193950025,
-                                     0.1495959888165767, 0.1246289712555339, 0.0951585116824928,
-                                     0.0622535239386479, 0.0271524594117541};
         HairFarFieldBxDF m;
-        double wsum = 0, wk[Nodes];
-        for (int k = 0; k < Nodes; ++k) {
-            int i = k < 8 ? 7 - k : k - 8;
-            double x = k < 8 ? -x8[i] : x8[i];
-            double gamma = x * 1.5707963267948966;
-            HairParams q;
-            q.sigma_a = p.sigma_a;
-            q.eta = p.eta;
-            q.beta_m = p.beta_m;
-            q.beta_n = p.beta_n;
-            q.alpha = p.alpha;
-            q.h = std::sin(gamma);
-            m.lobe[k] = HairBxDF<F>::make(q);
-            wk[k] = w8[i] * std::cos(gamma);
+        m.n = clamp(p.nodes, 1, MaxNodes);
+        HairParams q;
+        q.sigma_a = p.sigma_a;
+        q.eta = p.eta;
+        q.beta_m = p.beta_m;
+        q.beta_n = p.beta_n;
+        q.alpha = p.alpha;
+        q.h = 0.0;
+        m.base = HairBxDF<F>::make(q);
+        double x[MaxNodes], w[MaxNodes], wk[MaxNodes], wsum = 0;
+        hair::GaussLegendre(m.n, x, w);
+        for (int k = 0; k < m.n; ++k) {
+            double gamma = x[k] * 1.5707963267948966;
+            HairBxDF<F> b = m.base;
+            b.set_h(std::sin(gamma));
+            m.node_h[k] = b.h;
+            m.node_gamma[k] = b.gamma_o;
+            m.node_cos_gamma[k] = b.cos_gamma_o;
+            wk[k] = w[k] * std::cos(gamma);
             wsum += wk[k];
         }
         double c = 0;
-        for (int k = 0; k < Nodes; ++k) {
+        for (int k = 0; k < m.n; ++k) {
             m.weight[k] = F(wk[k] / wsum);
             c += wk[k] / wsum;
             m.cdf[k] = F(c);
         }
-        m.cdf[Nodes - 1] = F(1);
+        m.cdf[m.n - 1] = F(1);
+        for (int k = m.n; k < MaxNodes; ++k) m.node_h[k] = m.node_gamma[k] = m.node_cos_gamma[k] = m.weight[k] = m.cdf[k] = F(0);
         return m;
+    }
+
+    // The single-h fibre of node k.
+    HairBxDF<F> lobe(int k) const {
+        HairBxDF<F> b = base;
+        b.h = node_h[k];
+        b.gamma_o = node_gamma[k];
+        b.cos_gamma_o = node_cos_gamma[k];
+        return b;
     }
 
     uint8_t flags() const { return GlossyReflection; }
 
     Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode) const {
         Spectrum<F> sum(F(0));
-        for (int k = 0; k < Nodes; ++k) sum = sum + lobe[k].f(wo, wi, mode) * weight[k];
+        for (int k = 0; k < n; ++k) sum = sum + lobe(k).f(wo, wi, mode) * weight[k];
         return sum;
     }
 
     F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode, uint8_t sample_flags) const {
         F sum = F(0);
-        for (int k = 0; k < Nodes; ++k) sum += lobe[k].pdf(wo, wi, mode, sample_flags) * weight[k];
+        for (int k = 0; k < n; ++k) sum += lobe(k).pdf(wo, wi, mode, sample_flags) * weight[k];
         return sum;
     }
 
     BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode, uint8_t sample_flags) const {
         // node k with probability weight[k]; uc remapped for the lobe choice inside node k
         int k = 0;
-        for (int j = 0; j < Nodes - 1; ++j) k += int(uc >= cdf[j]);
+        for (int j = 0; j < n - 1; ++j) k += int(uc >= cdf[j]);
         F start = k == 0 ? F(0) : cdf[k - 1];
         F ur = clamp((uc - start) / weight[k], F(0), F(1) - std::numeric_limits<F>::epsilon() / 2);
-        BSDFSample<F> s = lobe[k].sample_f(wo, ur, u, mode, sample_flags);
+        BSDFSample<F> s = lobe(k).sample_f(wo, ur, u, mode, sample_flags);
         s.f = f(wo, s.wi, mode);
         s.pdf = pdf(wo, s.wi, mode, sample_flags);
         s.valid = s.valid & (s.pdf > F(0));

@@ -1,5 +1,18 @@
-// Scene of the preview renderer: spheres and triangle meshes in an Embree 3 BVH, one material
-// (or a checkerboard of two) per object, distant lighting and ray queries.
+// Scene of the preview renderer: spheres, triangle meshes and fibres (round Catmull-Rom curves) in an
+// Embree 3 BVH, one material (or a checkerboard of two) per object, distant lighting and ray queries.
+//
+// Fibres. A curve hit at parameter u of a segment has the axis point c(u), the unit tangent T(u) and
+// the radius r(u) (Embree's own interpolation of the control points, rtcInterpolate1). Its frame:
+// x = T; for a hair material (Hair, HairFarField) z = the part of wo = -d normal to T, normalised
+// (the ribbon facing the ray, as pbrt-v4's curves), y = z x x; for any other material z = the tube's
+// outward normal at the hit. The offset across the fibre is the signed distance between the ray and
+// the axis, along y, in units of r: h = ((p - c) . y) / r, clamped to [-1, 1] (exact for a straight
+// fibre: (p - c) . y does not depend on where along the ray p is, since d . y = 0). With that sign,
+// the R lobe's azimuth phi_i - phi_o = -2 asin h (pbrt-v4 Phi(0)) is the mirror reflection of the ray
+// off the cylinder at p. A Hair(h=...) material on a fibre takes h from the hit (its own h is ignored).
+// Rays leave a fibre from its axis point c with tnear = the distance at which they exit its
+// cylinder, 1.05 r / |d x T| (capped at 50 r): a fibre never shadows or re-hits itself at the
+// scattering point, whatever its width in floats.
 #pragma once
 #include <embree3/rtcore.h>
 
@@ -12,19 +25,25 @@
 namespace bsdfkit::render {
 
 struct Object {
-    enum class Kind : uint8_t { Sphere, Mesh } kind = Kind::Mesh;
+    enum class Kind : uint8_t { Sphere, Mesh, Curves } kind = Kind::Mesh;
     int mat_a = 0, mat_b = 0;
     Float checker = 0;               // > 0: mat_a / mat_b alternate on squares of this size in world x, z
     Vec3f center{0, 0, 0};           // sphere
     Float radius = 1;                // sphere
     std::vector<Float> vertices;     // mesh: x, y, z per vertex
     std::vector<uint32_t> indices;   // mesh: 3 per triangle, counter-clockwise seen from outside
+    RTCGeometry geometry = nullptr;  // curves: retained for rtcInterpolate1 (released by ~Scene)
 };
 
-// Surface point: position, outward geometric normal, a tangent and the material index.
+// Surface point: position, outward geometric normal (for fibres: the frame's z, see above), a
+// tangent and the material index. Fibre hits also carry the axis point, the unit fibre tangent,
+// the radius and the offset h across the fibre.
 struct Hit {
     Vec3f p, n, tangent;
     int material = 0;
+    bool fibre = false;
+    Vec3f axis{0, 0, 0}, axis_dir{1, 0, 0};
+    Float radius = 0, h = 0;
 };
 
 class Scene {
@@ -39,6 +58,10 @@ public:
     std::string add_sphere(const Vec3f &center, Float radius, int mat_a, int mat_b, Float checker);
     std::string add_mesh(const Float *vertices, int64_t n_vertices, const uint32_t *indices, int64_t n_triangles,
                          int mat_a, int mat_b, Float checker);
+    // Round Catmull-Rom curves (RTC_GEOMETRY_TYPE_ROUND_CATMULL_ROM_CURVE): control points x, y, z,
+    // radius; segment k uses points [segments[k], segments[k] + 3].
+    std::string add_curves(const Float *points, int64_t n_points, const uint32_t *segments, int64_t n_segments,
+                           int mat);
     // Builds the BVH; returns "" or Embree's error.
     std::string commit();
     bool committed() const { return committed_; }
@@ -61,6 +84,7 @@ public:
     std::vector<Object> objects;
 
 private:
+    void curve_hit(const Object &ob, const RTCRayHit &rh, Hit *hit) const;
     RTCDevice device_ = nullptr;
     RTCScene scene_ = nullptr;
     bool committed_ = false;
@@ -86,12 +110,49 @@ inline void make_rayhit(RTCRayHit &rh, const Vec3f &o, const Vec3f &d) {
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
 }
 
+// The material to shade a hit with: the scene's, or for a Hair material on a fibre a copy in
+// *scratch with the hit's offset h.
+inline const Material &material_at(const Scene &scene, const Hit &hit, Material *scratch) {
+    const Material &m = scene.materials[size_t(hit.material)];
+    if (hit.fibre) {
+        if (const auto *hb = std::get_if<HairBxDF<Float>>(&m)) {
+            HairBxDF<Float> b = *hb;
+            b.set_h(double(hit.h));
+            *scratch = b;
+            return *scratch;
+        }
+    }
+    return m;
+}
+
+// Whether a material is shaded in the fibre frame of a hair model (see the header comment).
+inline bool is_hair_material(const Material &m) {
+    return std::holds_alternative<HairBxDF<Float>>(m) || std::holds_alternative<HairFarFieldBxDF<Float>>(m);
+}
+
 // Ray origin for leaving p toward d: p pushed off the surface along n to d's side, by an
 // amount relative to the coordinates' magnitude (float rounding of the hit point).
 inline Vec3f offset_ray_origin(const Vec3f &p, const Vec3f &n, const Vec3f &d) {
     Float m = max_(max_(std::abs(p.x), std::abs(p.y)), max_(std::abs(p.z), Float(1)));
     Float eps = Float(1e-4) * m;
     return p + n * (dot(n, d) < Float(0) ? -eps : eps);
+}
+
+// A ray leaving hit toward d (unit): from p pushed off the surface, or for a fibre from its axis
+// point with tnear past its own cylinder (see the header comment).
+inline void make_spawn_ray(RTCRay &r, const Hit &hit, const Vec3f &d, Float tfar) {
+    if (!hit.fibre) {
+        make_ray(r, offset_ray_origin(hit.p, hit.n, d), d, tfar);
+        return;
+    }
+    make_ray(r, hit.axis, d, tfar);
+    Float s = std::sqrt(length_squared(cross(d, hit.axis_dir)));
+    r.tnear = Float(1.05) * hit.radius / max_(s, Float(0.021));
+}
+inline void make_spawn_rayhit(RTCRayHit &rh, const Hit &hit, const Vec3f &d) {
+    make_spawn_ray(rh.ray, hit, d, std::numeric_limits<float>::infinity());
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
 }
 
 } // namespace bsdfkit::render
