@@ -178,8 +178,8 @@ def _albedo_table(configs, path, n_samples=TABLE_SAMPLES):
 
 
 def run_demo(outdir="bsdfkit-demo", *, verbose=True):
-    """Write ``lobes.png``, ``albedo.png``, ``albedo.md``, ``views.png``, ``gallery.exr`` and
-    ``gallery.png`` into ``outdir`` (created if missing); returns the list of written paths."""
+    """Write ``lobes.png``, ``albedo.png``, ``albedo.md``, ``views.png``, ``gallery.exr``,
+    ``gallery.png``, ``hair.exr`` and ``hair.png`` into ``outdir`` (created if missing); returns the list of written paths."""
     t0 = time.perf_counter()
     os.makedirs(outdir, exist_ok=True)
     configs = configurations()
@@ -190,6 +190,8 @@ def run_demo(outdir="bsdfkit-demo", *, verbose=True):
     _views_figure(configs, paths[3])
     from .render import write_gallery  # gallery.exr / gallery.png: one path-traced sphere per configuration
     paths += write_gallery(outdir, configs, verbose=verbose, progress=verbose)
+    from .render import write_hair  # hair.exr / hair.png: locks of Hair on fibres, labelled
+    paths += write_hair(outdir, progress=verbose)
     if verbose:
         for p in paths:
             print(os.path.abspath(p))
