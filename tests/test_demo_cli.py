@@ -74,7 +74,7 @@ def test_run_demo_returns_paths(tmp_path):
     # run_demo itself (the CLI path is covered by the demo_dir fixture)
     paths = run_demo(str(tmp_path / "d"), verbose=False)
     assert [os.path.basename(p) for p in paths] == ["lobes.png", "albedo.png", "albedo.md", "views.png",
-                                                    "gallery.exr", "gallery.png", "gallery_labelled.png"]
+                                                    "gallery.exr", "gallery.png", "gallery_labelled.png", "hair.exr", "hair.png"]
     assert all(os.path.getsize(p) > 0 for p in paths)
 
 
@@ -251,3 +251,25 @@ def test_albedo_list_rgb_and_reference():
     for m, v in zip(models, d["value"]):
         np.testing.assert_allclose(v, m.albedo(wo, n_samples=4096, seed=0), rtol=1e-12)
     assert len(ax.get_legend().get_texts()) >= 6   # 2 models x RGB + furnace line
+
+
+def test_demo_hair_image(demo_dir):
+    # hair.exr: the four locks of render.HAIR_ROW on fibres; hair.png: the same with a caption strip
+    from bsdfkit import render as R
+    from bsdfkit.io import read_image
+    img = read_image(str(demo_dir / "hair.exr"))
+    h, w = R.HAIR_SIZE[1], R.HAIR_SIZE[0]
+    assert img.shape == (h, w, 3) and np.all(np.isfinite(img))
+    png = mimage.imread(str(demo_dir / "hair.png"))
+    assert png.shape[1] == w and png.shape[0] > h          # the label strip under the image
+    # where each lock is (projected lock centre), its colour: blonde and red warmer than black
+    sc = R.hair_row_scene([bk.Hair()] * len(R.HAIR_ROW), aspect=w / h)
+    half_w = math.tan(math.radians(sc.camera.fov / 2)) * sc.camera.origin[2]
+    cols = []
+    for i in range(len(R.HAIR_ROW)):
+        x = (i - (len(R.HAIR_ROW) - 1) / 2) * R.HAIR_SPACING
+        c = int(round((0.5 + 0.5 * x / half_w) * w))
+        cols.append(img[int(0.55 * h):int(0.85 * h), c - 8:c + 8].reshape(-1, 3).mean(axis=0))
+    blonde, red, brown, black = cols
+    assert blonde @ LUM > brown @ LUM > black @ LUM
+    assert red[0] / red[2] > black[0] / black[2]

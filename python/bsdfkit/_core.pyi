@@ -575,9 +575,9 @@ class Hair:
         ...
 class HairFarField:
     """
-    bsdfkit model HairFarField (bxdfs/all.h); keyword arguments: sigma_a, eta, beta_m, beta_n, alpha (a missing one keeps its C++ Params default).
+    bsdfkit model HairFarField (bxdfs/all.h); keyword arguments: sigma_a, eta, beta_m, beta_n, alpha, nodes (a missing one keeps its C++ Params default).
     """
-    fields: typing.ClassVar[tuple] = ('sigma_a', 'eta', 'beta_m', 'beta_n', 'alpha')
+    fields: typing.ClassVar[tuple] = ('sigma_a', 'eta', 'beta_m', 'beta_n', 'alpha', 'nodes')
     def __init__(self, *args, **kwargs) -> None:
         ...
     def albedo(self, arg0: numpy.ndarray, arg1: typing.SupportsInt | typing.SupportsIndex, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> int:
@@ -597,6 +597,8 @@ class HairFarField:
 class RenderScene:
     def __init__(self) -> None:
         ...
+    def add_curves(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
     def add_material(self, arg0: typing.Any) -> int:
         ...
     def add_mesh(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: typing.SupportsFloat | typing.SupportsIndex) -> None:
@@ -604,6 +606,8 @@ class RenderScene:
     def add_sphere(self, arg0: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], arg1: typing.SupportsFloat | typing.SupportsIndex, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     def commit(self) -> None:
+        ...
+    def debug_hit(self, arg0: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], arg1: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], arg2: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> typing.Any:
         ...
     def env_eval_pdf(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float32]) -> tuple:
         ...

@@ -181,8 +181,9 @@ def _albedo_table(configs, path, n_samples=TABLE_SAMPLES):
 
 def run_demo(outdir="bsdfkit-demo", *, verbose=True):
     """Write ``lobes.png``, ``albedo.png``, ``albedo.md``, ``views.png``, ``gallery.exr``,
-    ``gallery.png`` and ``gallery_labelled.png`` (the render with each sphere numbered and a key
-    of the specs) into ``outdir`` (created if missing); returns the list of written paths."""
+    ``gallery.png``, ``gallery_labelled.png`` (the render with each sphere numbered and a key
+    of the specs), ``hair.exr`` and ``hair.png`` into ``outdir`` (created if missing); returns the list
+    of written paths."""
     t0 = time.perf_counter()
     os.makedirs(outdir, exist_ok=True)
     configs = configurations()
@@ -193,6 +194,8 @@ def run_demo(outdir="bsdfkit-demo", *, verbose=True):
     _views_figure(configs, paths[3])
     from .render import write_gallery  # gallery.exr / gallery.png: one path-traced sphere per configuration
     paths += write_gallery(outdir, configs, verbose=verbose, progress=verbose)
+    from .render import write_hair  # hair.exr / hair.png: locks of Hair on fibres, labelled
+    paths += write_hair(outdir, progress=verbose)
     if verbose:
         for p in paths:
             print(os.path.abspath(p))

@@ -378,25 +378,28 @@ HAIR_ROW = (("blonde", "hair concentration=0.3"),
             ("brown", "hair concentration=1.3"),
             ("black", "hair concentration=8"))
 #: Size and quality of the demo's ``hair.png``.
-HAIR_SIZE = (800, 440)
-HAIR_SPP = 48
+HAIR_SIZE = (512, 288)
+HAIR_SPP = 32
+#: Spacing of the locks of :func:`hair_row_scene` (world units; a lock is ~0.6 wide).
+HAIR_SPACING = 1.0
 
 
-def hair_row_scene(models, *, n_fibres=1200, spacing=1.25, envmap=None, aspect=HAIR_SIZE[0] / HAIR_SIZE[1],
-                   seed=0) -> Scene:
-    """One lock of hair (:func:`hair_swatch`, a different seed each) per model, side by side along
-    x, left to right, under ``envmap`` (default ``"studio"``), framed for width / height = ``aspect``."""
+def hair_row_scene(models, *, n_fibres=2500, spacing=HAIR_SPACING, envmap=None,
+                   aspect=HAIR_SIZE[0] / HAIR_SIZE[1], seed=0) -> Scene:
+    """One lock of hair (:func:`hair_swatch` with width 0.55, thickness 0.12, wave 0.18, curl 0.12,
+    a different seed each) per model, side by side along x, left to right, under ``envmap``
+    (default: the ``"sky"``, whose sun gives the highlights), framed for width / height = ``aspect``."""
     models = list(models)
     if not models:
         raise ValueError("models: need at least one model")
-    sc = Scene(environment="studio" if envmap is None else envmap)
+    sc = Scene(environment="sky" if envmap is None else envmap)
     k = len(models)
     for i, m in enumerate(models):
-        pts, r = hair_swatch(n_fibres=n_fibres, seed=seed + i)
+        pts, r = hair_swatch(n_fibres=n_fibres, seed=seed + i, width=0.55, thickness=0.12, wave=0.18, curl=0.12)
         pts[..., 0] += (i - (k - 1) / 2) * spacing
         sc.add_curves(m, pts, r)
     fov = 30.0
-    half_w = max((k - 1) / 2 * spacing + 0.75, 1.2 * aspect)
+    half_w = max((k - 1) / 2 * spacing + 0.6, 1.2 * aspect)
     dist = half_w / math.tan(math.radians(fov / 2))
     sc.camera = Camera(origin=(0.0, 1.15, dist), target=(0.0, 1.1, 0.0), up=(0.0, 1.0, 0.0), fov=fov)
     return sc
@@ -409,14 +412,15 @@ def write_hair(outdir, rows=HAIR_ROW, *, size=HAIR_SIZE, spp=HAIR_SPP, progress=
     from matplotlib.figure import Figure
 
     from .io import linear_to_srgb, write_image
-    rows = [(lab, parse_spec(m) if isinstance(m, str) else _model_check(m)) for lab, m in rows]
+    specs = [m if isinstance(m, str) else _spec_of(_model_check(m)) for _, m in rows]
+    rows = [(lab, parse_spec(m) if isinstance(m, str) else m) for lab, m in rows]
     w, h = size
     sc = hair_row_scene([m for _, m in rows], aspect=w / h)
     img = render(sc, width=w, height=h, spp=spp, progress=progress)
     paths = [os.path.join(outdir, "hair.exr"), os.path.join(outdir, "hair.png")]
     write_image(paths[0], img)
     # the PNG: the sRGB image with a caption strip under the locks
-    dpi, strip = 100, 46
+    dpi, strip = 100, 44
     fig = Figure(figsize=(w / dpi, (h + strip) / dpi), dpi=dpi)
     ax = fig.add_axes((0, strip / (h + strip), 1, h / (h + strip)))
     ax.imshow(np.clip(linear_to_srgb(np.clip(img * 2.0 ** exposure, 0, None)), 0, 1), interpolation="nearest")
@@ -424,14 +428,14 @@ def write_hair(outdir, rows=HAIR_ROW, *, size=HAIR_SIZE, spp=HAIR_SPP, progress=
     k = len(rows)
     cam = sc.camera
     half_w = math.tan(math.radians(cam.fov / 2)) * cam.origin[2]
-    for i, (lab, m) in enumerate(rows):
-        x = (i - (k - 1) / 2) * 1.25
+    for i, ((lab, _), spec) in enumerate(zip(rows, specs)):
+        x = (i - (k - 1) / 2) * HAIR_SPACING
         fx = 0.5 + 0.5 * x / half_w
-        spec = lab if isinstance(m, str) else _spec_of(m)
-        fig.text(fx, (strip - 6) / (h + strip), f"{lab}\n{spec}", ha="center", va="top", fontsize=8.5,
-                 color="0.1", linespacing=1.3)
-    fig.text(0.005, 1 - 0.005, "bsdfkit Hair (Chiang 2016 / pbrt-v4) on fibres: h from the hit, studio lighting",
-             ha="left", va="top", fontsize=8, color="0.85")
+        words = spec.split()
+        fig.text(fx, (strip - 4) / (h + strip), "\n".join([f"{lab}: {words[0]}"] + words[1:]), ha="center",
+                 va="top", fontsize=7.5, color="0.1", linespacing=1.25)
+    fig.text(0.01, 1 - 0.01, f"Hair (Chiang 2016 / pbrt-v4) on {len(rows)} x 2500 fibres, h from each hit; "
+             f"sky + sun, {spp} spp", ha="left", va="top", fontsize=8, color="0.15")
     fig.savefig(paths[1], dpi=dpi, facecolor="white")
     return paths
 
