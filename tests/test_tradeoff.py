@@ -496,6 +496,13 @@ def test_simplify_every_example_stays_within_tol_of_the_input(spec):
     on an unseen direction set is <= tol; modelling choices never change; the report lists every
     parameter that differs; the cheapest configuration comes back unchanged."""
     model = parse_spec(spec)
+    if not all(c.model.exact_eval for c in configurations(model)):
+        # stochastic configurations (a random walk per eval): simplify measures the RMS error against
+        # the converged walk; within-tol on unseen directions is tested in tests/models/test_layered_tradeoff.py
+        cheap, _ = bk.simplify(model, math.inf, n=64, n_albedo=32)
+        again, rep = bk.simplify(cheap, 1e-3, n=64, n_albedo=32)
+        assert again == cheap and rep.unchanged, rep.summary()
+        return
     floor = max(independent_floor(model), 1e-30)   # a black material: absolute errors of zeros
     fresh = direction_set(model, N, seed=4242)
     modelling = [k.keyword for k in type(model).knobs if k.kind == "modelling"]

@@ -40,9 +40,12 @@ _LAYER_DOC = """
         (1/cos_o' + 1/cos_i')) along the refracted paths, the internal reflections summed as
         1 / (1 - rho_base Fdr_int t_d^2); plus the medium's single scattering, Hanrahan &
         Krueger 1993). It is cheap and noise-free but biased (no multiple scattering in the
-        medium, no blurring of the base by a rough coat, Fresnel at the macro normal); its
-        error against the converged stochastic model is in bench/LAYERED.md (relative RMS of
-        f |cos|: ANALYTIC_ERRORS). Its eval / pdf / sample are exact and consistent (sample()
+        medium, no blurring of the base by a rough coat, Fresnel at the macro normal). Its
+        error against the converged walk (relative RMS of f |cos| over uniform pairs,
+        bench/LAYERED.md): varnished wood 0.02, car paint 0.06 (+10 % in total), lacquer with a
+        scattering medium (albedo 0.8, thickness 0.2) 0.31 (-32 %: no multiple scattering),
+        smooth coat over a smooth metal 0.001 (exact series); 8-13x faster than one walk
+        (n_samples=1). Its eval / pdf / sample are exact and consistent (sample()
         equals eval() / pdf()), reciprocal, and ignore max_depth, n_samples, seed and mis.
         A knob of the trade-off registry (an approximation: ``bk.simplify`` may choose it).
 
@@ -126,7 +129,7 @@ class _ByMethod:
 #: roulette ends most walks early; bench/LAYERED.md, CoatedDiffuse and CoatedConductor rows).
 _DEPTH_COST = ((1, 0.5), (2, 0.68), (5, 1.0), (10, 1.0), (20, 1.05), (50, 1.1), (100, 1.1))
 #: Cost of the analytic method relative to one random walk (bench/LAYERED.md).
-ANALYTIC_COST = 0.1
+ANALYTIC_COST = 0.1   # measured 8-13x faster than n_samples=1 (bench/LAYERED.md)
 
 
 def _relative_cost(params, dtype=None) -> float:

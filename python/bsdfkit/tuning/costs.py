@@ -47,7 +47,13 @@ def _check_costs(costs) -> dict:
 
 
 def _costs_for(model, configs, costs):
-    table = costs.get("families", {}).get(family(model), {}).get("costs", {})
+    fam = costs.get("families", {}).get(family(model))
+    if fam is None and hasattr(model, "relative_cost"):
+        # a family without a measured table whose cost follows its knobs (the stochastic layered
+        # models: linear in n_samples): the model's own cost model, relative to configs[0]
+        c0 = model.relative_cost(configs[0].model._params, configs[0].dtype)
+        return [model.relative_cost(c.model._params, c.dtype) / c0 for c in configs]
+    table = (fam or {}).get("costs", {})
     return [table.get(c.key) for c in configs]
 
 

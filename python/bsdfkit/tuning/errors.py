@@ -11,7 +11,8 @@ from .._enums import BxDFFlags
 from ..models import BxDF
 from .configs import Config, _check_model, _reference_config, configurations
 
-__all__ = ["FLOOR_FRACTION", "ALBEDO_COS_THETA", "MIN_COS", "DirectionSet", "direction_set", "relative_error"]
+__all__ = ["FLOOR_FRACTION", "ALBEDO_COS_THETA", "MIN_COS", "DirectionSet", "direction_set", "relative_error",
+           "CONVERGED", "is_stochastic", "relative_rms"]
 
 
 #: floor = FLOOR_FRACTION * mean(albedo_ref) / pi (see the module docstring).
@@ -214,6 +215,44 @@ def _values(cfg: Config, prep: _Prepared):
     return v, alb
 
 
+#: The converged reference of a stochastic model: its parameters with these settings (issue 12).
+CONVERGED = {"n_samples": 256, "max_depth": 100}
+#: Pairs of the default direction set of a stochastic model (each eval is a random walk).
+STOCHASTIC_N = 512
+#: Seed offset of the converged reference's realization (distinct from every configuration's).
+_REF_SEED = 1_000_003
+
+
+def is_stochastic(model) -> bool:
+    """True when ``model.eval`` is a stochastic estimate (the instance's ``exact_eval`` is False)."""
+    return not getattr(model, "exact_eval", True)
+
+
+def relative_rms(v_ref, v) -> float:
+    """``sqrt(mean((v - v_ref)^2) / mean(v_ref^2))`` over every pair and channel (float64)."""
+    v_ref, v = np.asarray(v_ref, np.float64), np.asarray(v, np.float64)
+    if v_ref.size == 0:
+        return 0.0
+    den = float(np.mean(v_ref * v_ref))
+    return float(np.sqrt(np.mean((v - v_ref) ** 2) / den)) if den > 0 else 0.0
+
+
+def _converged(model):
+    """The converged reference of a stochastic model (CONVERGED settings, its own realization)."""
+    p = dict(model._params)
+    p.update(CONVERGED, method="stochastic") if "method" in p else p.update(CONVERGED)
+    p["seed"] = (p["seed"] + _REF_SEED) % (2 ** 31)
+    return type(model)._from_params(p)
+
+
+def _reseeded(model, k):
+    if not is_stochastic(model):
+        return model
+    p = dict(model._params)
+    p["seed"] = (p["seed"] + k) % (2 ** 31)
+    return type(model)._from_params(p)
+
+
 class _Evaluation:
     """Errors of every configuration of a model against a reference: its most accurate
     configuration (``reference="accurate"``, :func:`tradeoff`) or the input model itself, called
@@ -230,23 +269,55 @@ class _Evaluation:
         else:
             self.reference = self.configs[0]
             assert self.reference.is_reference
-        if directions is None:
+        # Stochastic models (or a deterministic input whose configurations include stochastic
+        # ones): compared against the converged reference, noise and bias separated.
+        self.stochastic = any(is_stochastic(c.model) for c in self.configs)
+        if directions is None and self.stochastic and not _all_delta(model):
+            # stratified pairs only: importance-sampled pairs would sit on a narrow coat highlight
+            # (deterministic and 1e3 x brighter), which would then dominate the relative RMS
+            ds = direction_set(model, 2 * n, seed, n_albedo=n_albedo)
+            self.directions = DirectionSet(ds.wo[:n], ds.wi[:n], np.empty((0, 3)), np.empty(0), np.empty((0, 2)),
+                                           ds.albedo_wo, ds.albedo_uc, ds.albedo_u, seed)
+        elif directions is None:
             self.directions = direction_set(model, n, seed, n_albedo=n_albedo)
         else:
             self.directions = _user_directions(model, directions, seed, n_albedo)
-        prep = _Prepared(self.reference.model, self.directions)
-        v_ref, a_ref = _values(self.reference, prep)
+        ref_model = self.reference.model
+        self.converged = _converged(ref_model) if is_stochastic(ref_model) else None
+        ref_cfg = self.reference if self.converged is None else Config(
+            self.reference.labels, self.reference.index, self.converged, np.float64, self.reference.key)
+        prep = _Prepared(ref_model, self.directions)
+        v_ref, a_ref = _values(ref_cfg, prep)
         self.reference_albedo = a_ref
         mean_alb = float(np.mean(np.abs(a_ref)))
         self.floor = FLOOR_FRACTION * mean_alb / math.pi if mean_alb > 0 else 1e-30
+        # the converged reference's own noise (two realizations), part of every rms_err
+        self.reference_noise = None
+        if self.converged is not None:
+            v_ref2 = _eval_cos(_reseeded(self.converged, 1), np.float64, self.directions.wo, self.directions.wi)
+            d = v_ref[:len(self.directions.wo)] - v_ref2
+            self.reference_noise = relative_rms(v_ref, v_ref + np.concatenate([d, 0 * v_ref[len(d):]]) / np.sqrt(2.0))
+        ref_noise = self.reference_noise or 0.0
         self.errors = []
         for c in self.configs:
-            v, a = (v_ref, a_ref) if c is self.reference else _values(c, prep)
+            v, a = (v_ref, a_ref) if (c is self.reference and self.converged is None) else _values(c, prep)
             e = relative_error(v_ref, v, self.floor)
-            self.errors.append({
-                "max_err": float(np.max(e)) if e.size else 0.0,
-                "p99_err": float(np.quantile(e, 0.99)) if e.size else 0.0,
-                "albedo_err": float(np.max(np.abs(a - a_ref))) if a.size else 0.0})
+            row = {"max_err": float(np.max(e)) if e.size else 0.0,
+                   "p99_err": float(np.quantile(e, 0.99)) if e.size else 0.0,
+                   "albedo_err": float(np.max(np.abs(a - a_ref))) if a.size else 0.0,
+                   "rms_err": relative_rms(v_ref, v), "noise": None, "bias": None}
+            if self.stochastic:
+                # noise: the RMS difference of two realizations (seeds) / sqrt 2; bias: the rest
+                if is_stochastic(c.model):
+                    c2 = Config(c.labels, c.index, _reseeded(c.model, 1), c.dtype, c.key)
+                    v2 = np.concatenate([_eval_cos(c2.model, c.dtype, self.directions.wo, self.directions.wi),
+                                         v[len(self.directions.wo):]])
+                    noise = relative_rms(v_ref, v_ref + (v - v2) / np.sqrt(2.0))
+                else:
+                    noise = 0.0
+                row["noise"] = noise
+                row["bias"] = float(np.sqrt(max(0.0, row["rms_err"] ** 2 - noise ** 2 - ref_noise ** 2)))
+            self.errors.append(row)
 
 
 def _check_comparable(model, reference) -> None:
