@@ -283,7 +283,7 @@ def mitsuba_eval_pdf(model, wo, wi):
 
 def far_field_f(model, wo, wi, n=64):
     """(1/2) int_{-1}^{1} f(h) dh by an n-point Gauss-Legendre rule in gamma = asin h (independent
-    of the kernel's 16 nodes; n = 64 converges to ~1e-6 for beta >= 0.2)."""
+    of the kernel's code; the kernel's default is also 64 nodes; n = 64 converges to ~1e-6 for beta >= 0.2)."""
     p = dict(_params({**model._params, "h": 0.0}))
     x, w = np.polynomial.legendre.leggauss(n)
     g = x * np.pi / 2
