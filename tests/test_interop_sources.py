@@ -16,15 +16,15 @@ from bsdfkit.interop.pbrt import PbrtSkipWarning
 SCENE = '''MakeNamedMaterial "gold" "string type" "conductor" "spectrum eta" "metal-Au-eta" "spectrum k" "metal-Au-k"
     "float roughness" 0.04
 Include "parts/glass.pbrt"
-Material "coateddiffuse"
+Material "interface"
 Material "diffuse" "rgb reflectance" [0.2 0.3 0.4]
 '''
 GLASS = '''# included
 MakeNamedMaterial "glass" "string type" "dielectric" "float eta" 1.33
-Import "../more/hair.pbrt"
+Import "../more/skin.pbrt"
 '''
-HAIR = '''
-MakeNamedMaterial "hair" "string type" "hair"
+SKIN = '''
+MakeNamedMaterial "skin" "string type" "subsurface"
 '''
 
 
@@ -34,7 +34,7 @@ def scene_dir(tmp_path):
     (tmp_path / "more").mkdir()
     (tmp_path / "scene.pbrt").write_text(SCENE)
     (tmp_path / "parts" / "glass.pbrt").write_text(GLASS)
-    (tmp_path / "more" / "hair.pbrt").write_text(HAIR)
+    (tmp_path / "more" / "skin.pbrt").write_text(SKIN)
     return tmp_path
 
 
@@ -76,13 +76,13 @@ def test_skip_unsupported_warns_per_material(scene_dir):
     with pytest.warns(PbrtSkipWarning) as rec:
         bk.from_pbrt(scene_dir / "scene.pbrt", skip_unsupported=True)
     ws = [w.message for w in rec if isinstance(w.message, PbrtSkipWarning)]
-    assert [(w.material, w.line) for w in ws] == [("hair", 2), ("material#1 (line 4)", 4)]
-    assert ws[0].file.endswith(os.path.join("more", "hair.pbrt"))
-    assert "hair" in ws[0].reason and "coateddiffuse" in ws[1].reason
-    assert "'hair' (hair, line 2)" in str(ws[0]) and "hair.pbrt" in str(ws[0])
+    assert [(w.material, w.line) for w in ws] == [("skin", 2), ("material#1 (line 4)", 4)]
+    assert ws[0].file.endswith(os.path.join("more", "skin.pbrt"))
+    assert "subsurface" in ws[0].reason and "interface" in ws[1].reason
+    assert "'skin' (subsurface, line 2)" in str(ws[0]) and "skin.pbrt" in str(ws[0])
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        with pytest.raises(ValueError, match="hair"):
+        with pytest.raises(ValueError, match="skin"):
             bk.from_pbrt(scene_dir / "scene.pbrt")  # no skipping: the first failure raises
 
 
@@ -91,8 +91,8 @@ def test_cli_lists_skipped_materials(scene_dir):
                         "-n", "64"], capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr
     assert "skipped 2 unsupported material(s)" in r.stdout
-    assert "'hair' (" in r.stdout and "hair.pbrt: line 2" in r.stdout
-    assert "'material#1 (line 4)' (line 4)" in r.stdout and "coateddiffuse" in r.stdout
+    assert "'skin' (" in r.stdout and "skin.pbrt: line 2" in r.stdout
+    assert "'material#1 (line 4)' (line 4)" in r.stdout and "interface" in r.stdout
 
 
 # ------------------------------------------------------------------ from_mitsuba: loaded BSDFs
