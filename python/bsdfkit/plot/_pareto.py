@@ -13,22 +13,31 @@ def pareto(table: Table, ax=None, metric: str = "p99", front_list="auto"):
     Pareto front highlighted and labelled. x: the error ``metric`` (log scale; error-0 rows, the
     most accurate configuration among them, are drawn at the left edge), y: live speedup over
     the most accurate configuration (expected speedup when the table was not measured).
-    front_list: where the numbered list of front configurations goes: ``"right"`` of the axes,
-    ``"none"`` (only the numbers at the points; the list is ``ax.bsdfkit_data["front_list"]``),
-    or ``"auto"``: right when this call makes the figure, none when drawing into a given ``ax``
-    (a grid of panels, where a list beside each would squash the plots).
+    front_list: where the numbered list of front configurations goes: ``"below"`` the axes (in a
+    panel of its own when this call makes the figure, so the plot keeps the full width),
+    ``"right"`` of the axes, ``"none"`` (only the numbers at the points; the list is
+    ``ax.bsdfkit_data["front_list"]``), or ``"auto"``: below when this call makes the figure,
+    none when drawing into a given ``ax`` (a grid of panels, where a list would squash the plots).
     Returns the Axes, with the numbers in ``ax.bsdfkit_data`` (error, speedup, front, labels,
     front_list)."""
     if not isinstance(table, Table):
         raise TypeError(f"table: expected a bsdfkit.tradeoff.Table, got {type(table).__name__}")
     col = _check_metric(metric)
-    if front_list not in ("auto", "right", "none"):
-        raise ValueError(f"front_list: must be 'auto', 'right' or 'none', got {front_list!r}")
+    if front_list not in ("auto", "below", "right", "none"):
+        raise ValueError(f"front_list: must be 'auto', 'below', 'right' or 'none', got {front_list!r}")
     if front_list == "auto":
-        front_list = "right" if ax is None else "none"
+        front_list = "below" if ax is None else "none"
+    list_ax = None
+    n_front = len(table.pareto_front(metric))
     if ax is None:
         import matplotlib.pyplot as plt  # lazy
-        ax = plt.figure(figsize=(11.5, 5.0), layout="constrained").add_subplot()
+        if front_list == "below":   # the list in its own panel under the plot: the plot keeps its width
+            h_list = 0.35 + 0.16 * (n_front + 1)
+            fig = plt.figure(figsize=(11.5, 5.0 + h_list), layout="constrained")
+            ax, list_ax = fig.subplots(2, 1, height_ratios=[5.0, h_list])
+            list_ax.set_axis_off()
+        else:
+            ax = plt.figure(figsize=(11.5, 5.0), layout="constrained").add_subplot()
     rows = table.to_records()
     err = np.array([r[col] for r in rows], float)
     live = table.measured
@@ -46,10 +55,17 @@ def pareto(table: Table, ax=None, metric: str = "p99", front_list="auto"):
     # close together (same error, similar speed) and long labels would overlap.
     lines = []
     for k, i in enumerate(front, 1):
-        ax.annotate(str(k), (x[i], thr[i]), textcoords="offset points", xytext=(4, 3 + 7 * ((k - 1) % 2)),
+        # neighbours alternate left / right and step up: clustered front points stay legible
+        ax.annotate(str(k), (x[i], thr[i]), textcoords="offset points",
+                    xytext=(4 if k % 2 else -4, 3 + 7 * ((k - 1) // 2 % 2)), ha="left" if k % 2 else "right",
                     fontsize=8, color="tab:red", weight="bold")
         e = "0" if err[i] == 0 else f"{err[i]:.1e}"
         lines.append(f"{k}. {rows[i]['config']}  ({thr[i]:.2f}x, {metric} {e})")
+    if front_list == "below":
+        host = list_ax if list_ax is not None else ax
+        y0 = 1.0 if list_ax is not None else -0.16
+        host.text(0.0, y0, "Pareto front: number at the point, configuration  (speedup, error)\n" + "\n".join(lines),
+                  transform=host.transAxes, va="top", ha="left", fontsize=7.5, family="monospace", color="tab:red")
     if front_list == "right":
         ax.text(1.02, 1.0, "Pareto front\n" + "\n".join(lines), transform=ax.transAxes, va="top", ha="left",
                 fontsize=7.5, family="monospace", color="tab:red")
