@@ -5,7 +5,7 @@
     python bench/tradeoff.py --quick    # N = 2^15, one round: a smoke run (does not overwrite the costs)
 
 Writes bench/TRADEOFF.md (per model: the full table, the Pareto front and the headline speedups of
-bsdfkit.simplify at tol = 1e-2, 1e-3, 1e-4) and python/bsdfkit/_knob_costs.json (the cost table
+bsdfkit.simplify at tol = 1e-2, 1e-3, 1e-4) and python/bsdfkit/tuning/_knob_costs.json (the cost table
 bsdfkit.simplify ranks by; --costs-out to write it elsewhere, --quick writes none unless given).
 
 Method
@@ -138,7 +138,7 @@ def main():
     ap.add_argument("--rounds", type=int, default=None, help="interleaved rounds (default 2; quick 1)")
     ap.add_argument("--out", default=str(HERE / "TRADEOFF.md"))
     ap.add_argument("--costs-out", default=None,
-                    help="cost table path (default python/bsdfkit/_knob_costs.json; none with --quick)")
+                    help="cost table path (default python/bsdfkit/tuning/_knob_costs.json; none with --quick)")
     ap.add_argument("--families", default=None, help="comma-separated subset of family names")
     ap.add_argument("--check", action="store_true",
                     help="only re-time every family and compare with the shipped cost table: exit status 1 if an "
@@ -149,7 +149,7 @@ def main():
     n = args.n or (2**15 if args.quick else 2**18)
     rounds = args.rounds or (1 if args.quick else 3)
     n_err = 4096 if args.quick else 8192
-    costs_out = args.costs_out or (None if args.quick else str(HERE.parent / "python" / "bsdfkit" / "_knob_costs.json"))
+    costs_out = args.costs_out or (None if args.quick else str(HERE.parent / "python" / "bsdfkit" / "tuning" / "_knob_costs.json"))
     t_start = time.perf_counter()
     info = machine_info()
     bk.set_num_threads(args.threads)
