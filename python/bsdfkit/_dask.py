@@ -12,7 +12,7 @@ table-backed measured model by its file path and content digest, so every worker
 same file at the same path, or build it in memory with ``Measured.from_bytes``, which pickles
 by value). A model that cannot be pickled (a ``bk.Custom`` whose functions are not picklable)
 raises TypeError when the array is built; a worker that cannot rebuild the model (its table
-file missing or changed) raises OSError naming the file when the array is computed.
+file missing or changed) raises OSError / ValueError naming the file when the array is computed.
 
 Dask is imported only when a Dask array is passed (``pip install 'bsdfkit[dask]'``).
 """
@@ -57,9 +57,9 @@ def _model_from(payload: bytes):
     if m is None:
         try:
             m = pickle.loads(payload)
-        except OSError as e:
-            raise OSError(f"model: a Dask worker could not rebuild the model: {e} (table-backed models need the same "
-                          "file at the same path on every worker; or use Measured.from_bytes)") from None
+        except (OSError, ValueError) as e:  # a missing, unreadable or changed table file
+            raise type(e)(f"model: a Dask worker could not rebuild the model: {e} (table-backed models need the "
+                          "same file at the same path on every worker; or use Measured.from_bytes)") from None
         with _MODELS_LOCK:
             if len(_MODELS) >= 8:
                 _MODELS.pop(next(iter(_MODELS)))
