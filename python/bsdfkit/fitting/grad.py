@@ -22,6 +22,14 @@ Where the derivative is one-sided or zero (see core/dual.h): the smooth/rough sw
 where a bound is active, e.g. Filament's roughness clamp at its minimum, f90 = saturate(...) at
 1, the alpha floor 1e-4), and Filament's DFG table (the derivative of the bilinear
 interpolant along roughness).
+
+Per family: FilamentCloth's roughness is clamped to [min perceptual roughness, 1] (0 beyond,
+one-sided at the ends); the analytic coated models (CoatedDiffuse / CoatedConductor with
+method="analytic") floor the thickness at FLT_MIN and clamp g to [-0.99, 0.99] (0 beyond), and
+their internal-reflection sum M is differentiated through its 64-node quadratures (the derivative
+of the model as computed, not of the exact integral); beyond the coat's critical angle (eta < 1)
+the refracted cosine is 0, the absorption term and its derivative are 0. The stochastic coated
+models have no gradient kernel (each eval is a random walk).
 """
 from __future__ import annotations
 
