@@ -176,6 +176,19 @@ def _bounds(family, names):
     return np.array(lo, float), np.array(hi, float)
 
 
+def _one_blas_thread():
+    """BLAS limited to one thread for the optimizer's small dense algebra (an SVD of a (3N, P)
+    Jacobian, P <= 16): a threaded BLAS spinning on a busy machine made fits 4-7x slower
+    (bench/FIT.md); results do not depend on it. Needs threadpoolctl (installed with the test
+    and dask extras); without it, BLAS keeps its own setting."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:
+        import contextlib
+        return contextlib.nullcontext()
+    return threadpool_limits(limits=1, user_api="blas")
+
+
 def _residuals(loss, y_t, floor, w):
     """(r(y_m), dr/dy_m(y_m)) for the loss, elementwise on (N, 3)."""
     if loss == "l2":
@@ -273,8 +286,9 @@ def fit(target, family, params=None, init=None, fixed=None, directions=None, los
     x_starts = [x0] + [lo + (finite_hi - lo) * rng.random(len(x0)) for _ in range(starts - 1)]
     best, nfev, njev, costs = None, 0, 0, []
     for xs in x_starts:
-        r = least_squares(fun, xs, jac=jac, bounds=(lo, hi), method="trf", x_scale="jac", max_nfev=max_nfev,
-                          xtol=tol, ftol=tol, gtol=tol)
+        with _one_blas_thread():
+            r = least_squares(fun, xs, jac=jac, bounds=(lo, hi), method="trf", x_scale="jac", max_nfev=max_nfev,
+                              xtol=tol, ftol=tol, gtol=tol)
         nfev += int(r.nfev)
         njev += int(r.njev or 0)
         costs.append(float(r.cost))
