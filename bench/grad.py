@@ -32,6 +32,17 @@ CASES = {
                                                                        "reflectance")),
     "FilamentStandard / all (13)": (lambda: bk.FilamentStandard((0.8, 0.5, 0.3), roughness=0.5, clear_coat=0.5,
                                                                  sheen_color=0.3), None),
+    "FilamentCloth / base, sheen, roughness (7)":
+        (lambda: bk.FilamentCloth((0.35, 0.1, 0.1), sheen_color=(0.8, 0.5, 0.5), roughness=0.5),
+         ("base_color", "sheen_color", "roughness")),
+    "CoatedDiffuse analytic / reflectance, eta, alpha, thickness (6)":
+        (lambda: bk.CoatedDiffuse((0.6, 0.35, 0.15), alpha=0.05, method="analytic"),
+         ("reflectance", "eta", "alpha", "thickness")),
+    "CoatedDiffuse analytic, medium / all (11)":
+        (lambda: bk.CoatedDiffuse(0.2, albedo=0.8, thickness=0.2, g=0.3, alpha=0.1, method="analytic"), None),
+    "CoatedConductor analytic / metal eta, k, alphas (8)":
+        (lambda: bk.CoatedConductor.from_metal("Cu", conductor_alpha=0.3, interface_alpha=0.05, method="analytic"),
+         ("conductor_eta", "conductor_k", "conductor_alpha", "interface_alpha")),
 }
 
 

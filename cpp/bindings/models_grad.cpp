@@ -171,6 +171,9 @@ void bind_grad_models(py::module_ &m) {
     add_eval_grad<FilamentStandardCoatBxDF, 16>(m);
     add_eval_grad<FilamentStandardSheenBxDF, 16>(m);
     add_eval_grad<FilamentStandardCoatSheenBxDF, 16>(m);
+    add_eval_grad<FilamentClothBxDF, 16>(m);
+    add_eval_grad<CoatedDiffuseAnalyticBxDF, 16>(m);
+    add_eval_grad<CoatedConductorAnalyticBxDF, 16>(m);
 }
 
 } // namespace bsdfkit::py_bind

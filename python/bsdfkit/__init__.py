@@ -12,7 +12,7 @@ Subpackages, by concern:
 ``models``    the model classes and their registry (one module per family; ``bk.MODELS``)
 ``plot``      matplotlib views (polar, hemisphere, half/diff, albedo, samples, gallery, pareto, ...)
 ``tuning``    speed versus accuracy: knobs, errors, costs, ``tradeoff`` and ``simplify``
-``fitting``   parameter gradients (``eval_grad``) and least-squares fits (``fit``)
+``fitting``   parameter gradients (``eval_grad``), least-squares fits (``fit``; ``fit_many`` on Dask)
 ``interop``   scene materials in: Mitsuba 3 dictionaries, pbrt-v4 scene text
 ``render``    the path-traced preview renderer
 ``spectral``  spectra as values: named, sampled, RGB uplift; wavelength sampling, colour estimates
@@ -33,10 +33,10 @@ from . import measured  # noqa: E402  (writers and tabulation of measured materi
 from .spectral import Spectrum, sample_wavelengths, spectrum_to_rgb
 from .threads import get_num_threads, set_num_threads
 from .tuning import Table, knobs, simplify, tradeoff
-from .fitting import FitReport, fit
+from .fitting import FitReport, fit, fit_many
 
 __all__ = models.__all__ + [
     "BxDFFlags", "ReflTrans", "TransportMode", "direction", "get_num_threads", "hemisphere_grid", "set_num_threads",
     "Custom", "filament", "models", "plot", "tuning", "render", "io", "tradeoff", "simplify", "knobs", "Table", "from_mitsuba",
     "from_pbrt", "parse_pbrt_materials", "interop", "spectral", "Spectrum", "sample_wavelengths", "spectrum_to_rgb",
-    "__version__", "measured", "fitting", "fit", "FitReport"]
+    "__version__", "measured", "fitting", "fit", "fit_many", "FitReport"]

@@ -52,13 +52,21 @@ def broadcast_batch(names, *shapes) -> tuple:
         raise ValueError(f"{' and '.join(names)}: batch shapes cannot be broadcast together ({desc})") from None
 
 
+def _canonical(a: np.ndarray, dtype) -> np.ndarray:
+    """`a` viewed with numpy's canonical descriptor of `dtype`: an unpickled array (e.g. a Dask
+    block) carries an equal but distinct descriptor object, which the bindings' dtype check
+    (identity, bind_model.h is_dtype) would refuse."""
+    dtype = np.dtype(dtype)
+    return a if a.dtype is dtype else a.view(dtype)
+
+
 def flatten_to(a: np.ndarray, batch: tuple, tail: tuple, dtype) -> np.ndarray:
     """Rows of `a` for the kernel: 1 row if `a` is a single item, else one per batch element."""
     if a.shape[: a.ndim - len(tail)] == batch:
-        return np.ascontiguousarray(a, dtype=dtype).reshape((-1,) + tail)
+        return _canonical(np.ascontiguousarray(a, dtype=dtype), dtype).reshape((-1,) + tail)
     if math.prod(a.shape[: a.ndim - len(tail)]) == 1:
-        return np.ascontiguousarray(a, dtype=dtype).reshape((1,) + tail)
-    return np.ascontiguousarray(np.broadcast_to(a, batch + tail), dtype=dtype).reshape((-1,) + tail)
+        return _canonical(np.ascontiguousarray(a, dtype=dtype), dtype).reshape((1,) + tail)
+    return _canonical(np.ascontiguousarray(np.broadcast_to(a, batch + tail), dtype=dtype), dtype).reshape((-1,) + tail)
 
 
 def check_out(out, shape: tuple, dtype) -> np.ndarray:

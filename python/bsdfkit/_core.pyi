@@ -432,6 +432,8 @@ class FilamentCloth:
     bsdfkit model FilamentCloth (bxdfs/all.h); keyword arguments: base_color, sheen_color, subsurface_color, has_subsurface, roughness, diffuse, min_perceptual_roughness, dfg (a missing one keeps its C++ Params default).
     """
     fields: typing.ClassVar[tuple] = ('base_color', 'sheen_color', 'subsurface_color', 'has_subsurface', 'roughness', 'diffuse', 'min_perceptual_roughness', 'dfg')
+    grad_fields: typing.ClassVar[tuple] = (('base_color', 3), ('sheen_color', 3), ('subsurface_color', 3), ('roughness', 1))
+    grad_max_columns: typing.ClassVar[int] = 16
     def __init__(self, *args, **kwargs) -> None:
         ...
     def albedo(self, arg0: numpy.ndarray, arg1: typing.SupportsInt | typing.SupportsIndex, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> int:
@@ -441,6 +443,8 @@ class FilamentCloth:
     def eval(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: numpy.ndarray) -> tuple:
         ...
     def eval_fast(self, arg0: typing.Any, arg1: typing.Any, arg2: typing.Any, arg3: typing.Any) -> typing.Any:
+        ...
+    def eval_grad(self, wo: numpy.ndarray, wi: numpy.ndarray, mode: typing.SupportsInt | typing.SupportsIndex, columns: collections.abc.Sequence[collections.abc.Sequence[tuple[str, typing.SupportsInt | typing.SupportsIndex]]], out_f: numpy.ndarray, out_grad: numpy.ndarray) -> tuple[int, int]:
         ...
     def pdf(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> tuple:
         ...
@@ -638,6 +642,8 @@ class CoatedDiffuseAnalytic:
     bsdfkit model CoatedDiffuseAnalytic (bxdfs/all.h); keyword arguments: reflectance, eta, alpha_x, alpha_y, masking, thickness, albedo, g, max_depth, n_samples, seed, consistent_mis (a missing one keeps its C++ Params default).
     """
     fields: typing.ClassVar[tuple] = ('reflectance', 'eta', 'alpha_x', 'alpha_y', 'masking', 'thickness', 'albedo', 'g', 'max_depth', 'n_samples', 'seed', 'consistent_mis')
+    grad_fields: typing.ClassVar[tuple] = (('reflectance', 3), ('eta', 1), ('alpha_x', 1), ('alpha_y', 1), ('thickness', 1), ('albedo', 3), ('g', 1))
+    grad_max_columns: typing.ClassVar[int] = 16
     def __init__(self, *args, **kwargs) -> None:
         ...
     def albedo(self, arg0: numpy.ndarray, arg1: typing.SupportsInt | typing.SupportsIndex, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> int:
@@ -647,6 +653,8 @@ class CoatedDiffuseAnalytic:
     def eval(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: numpy.ndarray) -> tuple:
         ...
     def eval_fast(self, arg0: typing.Any, arg1: typing.Any, arg2: typing.Any, arg3: typing.Any) -> typing.Any:
+        ...
+    def eval_grad(self, wo: numpy.ndarray, wi: numpy.ndarray, mode: typing.SupportsInt | typing.SupportsIndex, columns: collections.abc.Sequence[collections.abc.Sequence[tuple[str, typing.SupportsInt | typing.SupportsIndex]]], out_f: numpy.ndarray, out_grad: numpy.ndarray) -> tuple[int, int]:
         ...
     def pdf(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> tuple:
         ...
@@ -667,6 +675,8 @@ class CoatedConductorAnalytic:
     bsdfkit model CoatedConductorAnalytic (bxdfs/all.h); keyword arguments: conductor_eta, conductor_k, conductor_alpha_x, conductor_alpha_y, interface_eta, interface_alpha_x, interface_alpha_y, masking, thickness, albedo, g, max_depth, n_samples, seed, consistent_mis (a missing one keeps its C++ Params default).
     """
     fields: typing.ClassVar[tuple] = ('conductor_eta', 'conductor_k', 'conductor_alpha_x', 'conductor_alpha_y', 'interface_eta', 'interface_alpha_x', 'interface_alpha_y', 'masking', 'thickness', 'albedo', 'g', 'max_depth', 'n_samples', 'seed', 'consistent_mis')
+    grad_fields: typing.ClassVar[tuple] = (('conductor_eta', 3), ('conductor_k', 3), ('conductor_alpha_x', 1), ('conductor_alpha_y', 1), ('interface_eta', 1), ('interface_alpha_x', 1), ('interface_alpha_y', 1), ('thickness', 1), ('albedo', 3), ('g', 1))
+    grad_max_columns: typing.ClassVar[int] = 16
     def __init__(self, *args, **kwargs) -> None:
         ...
     def albedo(self, arg0: numpy.ndarray, arg1: typing.SupportsInt | typing.SupportsIndex, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> int:
@@ -676,6 +686,8 @@ class CoatedConductorAnalytic:
     def eval(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: numpy.ndarray) -> tuple:
         ...
     def eval_fast(self, arg0: typing.Any, arg1: typing.Any, arg2: typing.Any, arg3: typing.Any) -> typing.Any:
+        ...
+    def eval_grad(self, wo: numpy.ndarray, wi: numpy.ndarray, mode: typing.SupportsInt | typing.SupportsIndex, columns: collections.abc.Sequence[collections.abc.Sequence[tuple[str, typing.SupportsInt | typing.SupportsIndex]]], out_f: numpy.ndarray, out_grad: numpy.ndarray) -> tuple[int, int]:
         ...
     def pdf(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> tuple:
         ...

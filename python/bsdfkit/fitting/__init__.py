@@ -5,10 +5,13 @@ instantiated with forward-mode dual numbers (``cpp/include/bsdfkit/core/dual.h``
 ``fit``: a model family fitted to a model or to raw samples with scipy's ``least_squares`` and
 that analytic Jacobian; ``FitReport`` says what it reached. ``simplify_families`` (also
 ``bk.simplify(model, tol, families=...)``): the cheapest family that fits a target within tol.
+``fit_many`` (also ``bk.fit_many``): one ``fit`` per target on a Dask distributed cluster, errors
+captured per target (``bsdfkit.fitting.distributed``).
 """
+from .distributed import FitManyResult, FitOutcome, fit_many
 from .fit import FitReport, fit
 from .grad import differentiable_params, eval_grad, grad_columns
 from .simplify import FamilySimplifyReport, simplify_families
 
 __all__ = ["FitReport", "fit", "eval_grad", "grad_columns", "differentiable_params", "simplify_families",
-           "FamilySimplifyReport"]
+           "FamilySimplifyReport", "fit_many", "FitManyResult", "FitOutcome"]

@@ -128,12 +128,16 @@ def _start_model(family, init, fixed):
         if not isinstance(d, dict):
             raise TypeError(f"{name}: expected a dict of parameter values")
         for k, v in d.items():
-            if k == "alpha" and "alpha_x" in p:
-                p["alpha_x"] = p["alpha_y"] = v
+            if k.endswith("alpha") and k + "_x" in p and k + "_y" in p:
+                p[k + "_x"] = p[k + "_y"] = v
             elif k not in p:
                 raise ValueError(f"{name}: {family.__name__} has no parameter {k!r} ({', '.join(p)})")
             else:
                 p[k] = v
+    # a family with a differentiable method (the coated models' "analytic") fits with it unless told
+    given = set(fixed or ()) | set(init if isinstance(init, dict) else ())
+    if p.get("method") == "stochastic" and "method" not in given and not isinstance(init, family):
+        p["method"] = "analytic"
     try:
         return family._from_params(p)
     except (TypeError, ValueError) as e:
@@ -163,13 +167,26 @@ def _bounds(family, names):
     ranges = getattr(family, "param_ranges", {})
     lo, hi = [], []
     for nm in names:
-        base = "alpha_x" if nm == "alpha" else nm.partition(".")[0]
+        base = nm + "_x" if nm.endswith("alpha") and nm + "_x" in ranges else nm.partition(".")[0]
         if base not in ranges:
             raise ValueError(f"params: {family.__name__} declares no fitting range for {nm!r}")
         a, b = ranges[base]
         lo.append(a)
         hi.append(b)
     return np.array(lo, float), np.array(hi, float)
+
+
+def _one_blas_thread():
+    """BLAS limited to one thread for the optimizer's small dense algebra (an SVD of a (3N, P)
+    Jacobian, P <= 16): a threaded BLAS spinning on a busy machine made fits 4-7x slower
+    (bench/FIT.md); results do not depend on it. Needs threadpoolctl (installed with the test
+    and dask extras); without it, BLAS keeps its own setting."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:
+        import contextlib
+        return contextlib.nullcontext()
+    return threadpool_limits(limits=1, user_api="blas")
 
 
 def _residuals(loss, y_t, floor, w):
@@ -201,7 +218,9 @@ def fit(target, family, params=None, init=None, fixed=None, directions=None, los
     (differences over max(target, floor)) or "l2" (differences over the target's mean).
     weights: (N,) or (N, 3) residual weights. starts: number of starting points (the given one
     plus starts - 1 drawn uniformly within the bounds, seeded by ``seed``); the best is kept.
-    Bounds come from the family's validated parameter ranges (``param_ranges``).
+    Bounds come from the family's validated parameter ranges (``param_ranges``). A parameter whose
+    default is derived from others (FilamentCloth's sheen_color=None: sqrt(base_color)) starts
+    from that value and is then fitted (or held, if not in ``params``) on its own.
 
     Uses scipy.optimize.least_squares (trust-region reflective) with the analytic Jacobian.
     Returns ``(model, FitReport)``.
@@ -216,11 +235,12 @@ def fit(target, family, params=None, init=None, fixed=None, directions=None, los
     m0 = _start_model(family, init, fixed)
     if params is None:
         fixed_names = set(fixed or ())
-        params = [p for p in differentiable_params(m0) if p not in fixed_names and p != "alpha"
-                  and not (p in ("alpha_x", "alpha_y") and "alpha" in fixed_names)]
+        iso = [p for p in differentiable_params(m0) if p.endswith("alpha") and p + "_x" in m0._params]
+        params = [p for p in differentiable_params(m0) if p not in fixed_names and p not in iso
+                  and (m0._params.get(p, 0) is not None or hasattr(m0, "effective_" + p))
+                  and not any(p in (a + "_x", a + "_y") and a in fixed_names for a in iso)]
     names, cols = _columns(m0, params)
     lo, hi = _bounds(family, names)
-    x0 = np.clip(np.array([_get(m0, c) for c in cols]), lo, hi)
     cos_i = np.abs(wi[:, 2:3])
     floor = FLOOR_FRACTION * float(np.mean(y_t))
     if not floor > 0:
@@ -231,6 +251,17 @@ def fit(target, family, params=None, init=None, fixed=None, directions=None, los
         raise ValueError("weights: must be finite and >= 0")
     res_fn, dres_fn = _residuals(loss, y_t, floor, w)
     base = dict(m0._params)
+    # a parameter left to a default derived from others (None, e.g. FilamentCloth's sheen_color =
+    # sqrt(base_color)) takes its starting value: eval_grad differentiates each field on its own
+    for k, v in list(base.items()):
+        if v is None and hasattr(m0, "effective_" + k):
+            base[k] = np.asarray(getattr(m0, "effective_" + k), dtype=np.float64)
+    for col in cols:
+        for field_, _ in col:
+            if base[field_] is None:
+                raise ValueError(f"params: {field_} is None in the starting model; give it in init")
+    m0 = family._from_params(base)
+    x0 = np.clip(np.array([_get(m0, c) for c in cols]), lo, hi)
     cache = {}
 
     def evaluate(x):
@@ -255,8 +286,9 @@ def fit(target, family, params=None, init=None, fixed=None, directions=None, los
     x_starts = [x0] + [lo + (finite_hi - lo) * rng.random(len(x0)) for _ in range(starts - 1)]
     best, nfev, njev, costs = None, 0, 0, []
     for xs in x_starts:
-        r = least_squares(fun, xs, jac=jac, bounds=(lo, hi), method="trf", x_scale="jac", max_nfev=max_nfev,
-                          xtol=tol, ftol=tol, gtol=tol)
+        with _one_blas_thread():
+            r = least_squares(fun, xs, jac=jac, bounds=(lo, hi), method="trf", x_scale="jac", max_nfev=max_nfev,
+                              xtol=tol, ftol=tol, gtol=tol)
         nfev += int(r.nfev)
         njev += int(r.njev or 0)
         costs.append(float(r.cost))

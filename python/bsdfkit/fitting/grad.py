@@ -10,7 +10,11 @@ Gradient columns. ``params`` names the parameters to differentiate, in order; a 
 is one column, an RGB parameter three (``"eta"`` -> ``eta.r, eta.g, eta.b``), and one channel
 can be named alone (``"eta.g"``). Microfacet models with ``alpha_x`` / ``alpha_y`` also accept
 ``"alpha"``: the derivative along alpha_x = alpha_y (d/dt f(alpha_x + t, alpha_y + t)), which is
-the derivative with respect to the isotropic alpha. :func:`grad_columns` lists the columns.
+the derivative with respect to the isotropic alpha (likewise ``"conductor_alpha"`` and
+``"interface_alpha"`` of CoatedConductor). :func:`grad_columns` lists the columns.
+
+Each field is differentiated on its own: a parameter whose default is derived from another
+(FilamentCloth's sheen_color = sqrt(base_color) when None) is held at its value.
 
 Where the derivative is one-sided or zero (see core/dual.h): the smooth/rough switch
 (max(alpha) < 1e-3: the delta lobe evaluates to 0, and so does its derivative; at and above
@@ -18,6 +22,14 @@ Where the derivative is one-sided or zero (see core/dual.h): the smooth/rough sw
 where a bound is active, e.g. Filament's roughness clamp at its minimum, f90 = saturate(...) at
 1, the alpha floor 1e-4), and Filament's DFG table (the derivative of the bilinear
 interpolant along roughness).
+
+Per family: FilamentCloth's roughness is clamped to [min perceptual roughness, 1] (0 beyond,
+one-sided at the ends); the analytic coated models (CoatedDiffuse / CoatedConductor with
+method="analytic") floor the thickness at FLT_MIN and clamp g to [-0.99, 0.99] (0 beyond), and
+their internal-reflection sum M is differentiated through its 64-node quadratures (the derivative
+of the model as computed, not of the exact integral); beyond the coat's critical angle (eta < 1)
+the refracted cosine is 0, the absorption term and its derivative are 0. The stochastic coated
+models have no gradient kernel (each eval is a random walk).
 """
 from __future__ import annotations
 
@@ -49,9 +61,16 @@ def differentiable_params(model) -> tuple:
         return ()
     fields = _core_fields(model._core)
     names = list(fields)
-    if "alpha_x" in fields and "alpha_y" in fields:
-        names.insert(names.index("alpha_x"), "alpha")
+    for iso in _iso_alphas(fields):
+        names.insert(names.index(iso + "_x"), iso)
     return tuple(names)
+
+
+def _iso_alphas(fields) -> list:
+    """The isotropic alpha names of a model's fields: "alpha" for alpha_x / alpha_y, and
+    "<prefix>alpha" for <prefix>alpha_x / <prefix>alpha_y (e.g. CoatedConductor's
+    "conductor_alpha", "interface_alpha")."""
+    return [f[:-2] for f in fields if f.endswith("alpha_x") and f[:-2] + "_y" in fields]
 
 
 def _columns(model, params):
@@ -79,9 +98,9 @@ def _columns(model, params):
         if not isinstance(p, str):
             raise TypeError(f"params: expected parameter names (str), got {type(p).__name__}")
         base, _, ch = p.partition(".")
-        if p == "alpha" and "alpha_x" in fields and "alpha_y" in fields:
-            names.append("alpha")
-            cols.append([("alpha_x", -1), ("alpha_y", -1)])
+        if p in _iso_alphas(fields):
+            names.append(p)
+            cols.append([(p + "_x", -1), (p + "_y", -1)])
         elif base in fields and fields[base] == 3 and ch == "":
             for c, cn in enumerate(_CHANNELS):
                 names.append(f"{base}.{cn}")

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._arrays import as_dirs, as_uniform, broadcast_batch, check_int, check_out, flatten_to, kernel_dtype
+from .._dask import dask_eval, is_dask_array
 from .._enums import BxDFFlags, ReflTrans, TransportMode
 from . import registry as _registry
 
@@ -337,11 +338,14 @@ class BxDF:
         """BSDF value f(wo, wi), cosine excluded, per RGB channel: shape (..., 3).
 
         Specular (delta) lobes evaluate to 0 for every given pair, as in pbrt-v4; use
-        ``sample`` to reach them.
+        ``sample`` to reach them. Dask arrays of directions give a lazy Dask array (blockwise,
+        bit-identical values; ``bsdfkit._dask``); ``pdf`` likewise.
         """
         r = self._core.eval_fast(wo, wi, mode, out)
         if r is not None:
             return r
+        if is_dask_array(wo) or is_dask_array(wi):  # a lazy Dask array, blockwise (bsdfkit._dask)
+            return dask_eval(self, "eval", wo, wi, mode, out=out)
         wo, wi, batch, dtype = self._pair(wo, wi)
         out = check_out(out, batch + (3,), dtype)
         if out.size:
@@ -354,6 +358,8 @@ class BxDF:
         r = self._core.pdf_fast(wo, wi, mode, sample_flags, out)
         if r is not None:
             return r
+        if is_dask_array(wo) or is_dask_array(wi):
+            return dask_eval(self, "pdf", wo, wi, mode, sample_flags, out=out)
         wo, wi, batch, dtype = self._pair(wo, wi)
         out = check_out(out, batch, dtype)
         if out.size:

@@ -170,6 +170,9 @@ class CoatedDiffuse(BxDF):
                 "lacquer with a medium, analytic":
                     "coated_diffuse reflectance=0.2 albedo=0.8 thickness=0.2 g=0.3 method=analytic"}
     description = "diffuse base under a dielectric coat with an optional HG medium (pbrt-v4, stochastic)"
+    # bk.fit bounds (gradients: method="analytic" only)
+    param_ranges = {"reflectance": (0.0, 1.0), "eta": (1.001, 4.0), "alpha_x": (1e-3, 2.0), "alpha_y": (1e-3, 2.0),
+                    "thickness": (0.0, 10.0), "albedo": (0.0, 1.0), "g": (-0.99, 0.99)}
     # reciprocal = False: each eval is one random-walk realization seeded by (wo, wi), so
     # f(wo, wi) != f(wi, wo) call by call (and pbrt's MIS rule is not reciprocal in expectation)
     energy_conserving, two_sided, transmission, delta_only = True, True, False, False
@@ -239,6 +242,10 @@ class CoatedConductor(BxDF):
                                        "albedo=0.5,0.1,0.1 thickness=0.1 method=analytic",
                 "lacquered gold, smooth, analytic": "coated_conductor metal=Au thickness=0.05 method=analytic"}
     description = "metal under a dielectric coat with an optional HG medium (pbrt-v4, stochastic)"
+    # bk.fit bounds (gradients: method="analytic" only)
+    param_ranges = {"conductor_eta": (1e-3, 10.0), "conductor_k": (0.0, 20.0), "conductor_alpha_x": (1e-3, 2.0),
+                    "conductor_alpha_y": (1e-3, 2.0), "interface_eta": (1.001, 4.0), "interface_alpha_x": (1e-3, 2.0),
+                    "interface_alpha_y": (1e-3, 2.0), "thickness": (0.0, 10.0), "albedo": (0.0, 1.0), "g": (-0.99, 0.99)}
     energy_conserving, two_sided, transmission, delta_only = True, True, False, False
     exact_eval, reciprocal = _ByMethod(False, True), _ByMethod(False, True)   # per instance: see _ByMethod
     mitsuba = None

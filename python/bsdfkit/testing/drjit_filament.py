@@ -440,10 +440,10 @@ def cloth_f(model, wo, wi, lut=None):
     if wo.shape[0] == 0:
         return np.zeros(batch + (3,))
     min_pr = _min_pr(model.min_roughness)
-    r = min(max(float(model.roughness), min_pr), 1.0)
+    r = _mn(_mx(_num(model.roughness), min_pr), 1.0)   # parameters: numbers or Dr.Jit AD leaves (drjit_grad)
     a = r * r
-    base = np.asarray(model.base_color, dtype=np.float64)
-    sheen = np.sqrt(base) if model.sheen_color is None else np.asarray(model.sheen_color, dtype=np.float64)
+    base = _rgb3(model.base_color)
+    sheen = [b ** 0.5 for b in base] if model.sheen_color is None else _rgb3(model.sheen_color)
     o, i, h, ok = _geometry(wo, wi)
     NoV = _sel(o[2] > MIN_N_DOT_V, o[2], MIN_N_DOT_V)
     NoL = _clamp(i[2], 0.0, 1.0)
@@ -451,14 +451,14 @@ def cloth_f(model, wo, wi, lut=None):
     LoH = _clamp(i[0] * h[0] + i[1] * h[1] + i[2] * h[2], 0.0, 1.0)
     spec = _D_Charlie(a, NoH) * _V_Neubelt(NoV, NoL)
     fd = _Fd_Burley(a, NoV, NoL, LoH) if model.diffuse == "burley" else 1.0 / PI
-    ss = model.subsurface_color
+    ss = None if model.subsurface_color is None else _rgb3(model.subsurface_color)
     if ss is not None:
         fd = fd * _Fd_Wrap(NoL, 0.5) / _sel(NoL > 0, NoL, 1.0)
     cols = []
     for c in range(3):
         d = base[c] * fd
         if ss is not None:
-            d = d * _clamp(float(ss[c]) + NoL, 0.0, 1.0)
+            d = d * _clamp(ss[c] + NoL, 0.0, 1.0)
         cols.append(_sel(ok, d + sheen[c] * spec, 0.0))
     return _rgb_out(batch, cols)
 

@@ -17,7 +17,7 @@ import numpy as np
 from . import _drjit_backend
 from . import drjit_models as _dm
 
-__all__ = ["reference_grad", "standard_grad"]
+__all__ = ["reference_grad", "standard_grad", "cloth_grad", "coated_analytic_grad"]
 
 
 class _Tracer:
@@ -81,28 +81,23 @@ def reference_grad(fn, columns, *args, **kwargs):
     return vals, tr.grads[0]
 
 
-def standard_grad(model, wo, wi, lut, columns):
-    """(f, grad) of the Filament reference ``drjit_filament.standard_f`` with forward-mode AD on
-    the parameters of ``model`` (a ``FilamentStandard``): each column is a list of
-    ``(field, channel)`` pairs seeded together (channel -1 for a scalar field), as
-    ``eval_grad``'s columns (``bsdfkit.fitting.grad._columns``). The derived parameters
-    (f0, f90, roughness clamps, anisotropic alphas, the DFG rows' weights) are computed with
-    Dr.Jit from the seeded leaves, so the derivative goes through them. grad: (..., 3, P)."""
+def _namespace_grad(model, columns, call):
+    """(f, grad (..., 3, P)) of ``call(namespace)``, a reference reading its parameters from a
+    namespace of ``model``'s parameters, with every (field, channel) of ``columns`` a Dr.Jit AD
+    leaf (channel -1: a scalar field); derivatives propagate by forward-mode AD."""
     import types
 
     import drjit.llvm.ad as ad
-
-    from . import drjit_filament as djf
     dr, _ = _drjit_backend()
     if _dm._TRACE is not None:
-        raise RuntimeError("standard_grad: not re-entrant")
+        raise RuntimeError("reference grad: not re-entrant")
     columns = [[tuple(s) for s in c] for c in columns]
     ns = dict(model._params)
     leaves = {}
     for col in columns:
         for field, ch in col:
             if field not in ns:
-                raise ValueError(f"standard_grad: no parameter {field!r}")
+                raise ValueError(f"reference grad: no parameter {field!r}")
             if ch == -1:
                 if (field, -1) not in leaves:
                     v = ad.Float64(float(ns[field]))
@@ -118,7 +113,36 @@ def standard_grad(model, wo, wi, lut, columns):
     tr.vars = leaves
     _dm._TRACE = tr
     try:
-        f = djf.standard_f(types.SimpleNamespace(**ns), wo, wi, lut)
+        f = call(types.SimpleNamespace(**ns))
     finally:
         _dm._TRACE = None
     return f, tr.grads[0]
+
+
+def standard_grad(model, wo, wi, lut, columns):
+    """(f, grad) of the Filament reference ``drjit_filament.standard_f`` with forward-mode AD on
+    the parameters of ``model`` (a ``FilamentStandard``): each column is a list of
+    ``(field, channel)`` pairs seeded together (channel -1 for a scalar field), as
+    ``eval_grad``'s columns (``bsdfkit.fitting.grad._columns``). The derived parameters
+    (f0, f90, roughness clamps, anisotropic alphas, the DFG rows' weights) are computed with
+    Dr.Jit from the seeded leaves, so the derivative goes through them. grad: (..., 3, P)."""
+    from . import drjit_filament as djf
+    return _namespace_grad(model, columns, lambda ns: djf.standard_f(ns, wo, wi, lut))
+
+
+def cloth_grad(model, wo, wi, columns):
+    """(f, grad) of ``drjit_filament.cloth_f`` with forward-mode AD on the parameters of ``model``
+    (a ``FilamentCloth`` with an explicit sheen_color: the derivative of base_color does not
+    include the default sheen_color = sqrt(base_color)), columns as ``standard_grad``."""
+    from . import drjit_filament as djf
+    if model.sheen_color is None:
+        raise ValueError("cloth_grad: give the model an explicit sheen_color")
+    return _namespace_grad(model, columns, lambda ns: djf.cloth_f(ns, wo, wi))
+
+
+def coated_analytic_grad(model, wo, wi, columns):
+    """(f, grad) of ``layered_analytic_ref.coated_f`` (the analytic layered approximation restated
+    from its formulas) with forward-mode AD on the parameters of ``model`` (a ``CoatedDiffuse`` or
+    ``CoatedConductor`` with method="analytic"), columns as ``standard_grad``."""
+    from . import layered_analytic_ref as lar
+    return _namespace_grad(model, columns, lambda ns: lar.coated_f(ns, type(model).__name__, wo, wi))

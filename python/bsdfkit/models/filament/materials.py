@@ -311,6 +311,8 @@ class FilamentCloth(BxDF):
     energy_conserving, exact_eval, two_sided, transmission, delta_only = False, True, False, False, False
     reciprocal = False  # energy compensation and sheen scaling depend on wo only
     mitsuba = None
+    param_ranges = {"base_color": (0.0, 1.0), "sheen_color": (0.0, 1.0), "subsurface_color": (0.0, 1.0),  # bk.fit
+                    "roughness": (0.0, 1.0)}
     knobs = (
         KnobDecl("diffuse", ("burley", "lambert"), "modelling", "diffuse term: Fd_Burley or Fd_Lambert",
                  moot=lambda q: "black base colour" if float(np.max(q["base_color"])) == 0 else None),
