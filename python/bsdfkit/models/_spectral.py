@@ -4,8 +4,8 @@
 * Parameters: a model field may be a ``Spectrum`` (sampled, named, constant, uplifted RGB) or an
   RGB / scalar value. In spectral mode each becomes a ``_core.SpectralParam``: an RGB colour
   through the Jakob & Hanika 2019 uplift (the sigmoid coefficients, ``Spectrum.from_rgb``'s
-  polished fit; greys exactly constant), a sampled spectrum as a 1 nm table over [360, 830] nm,
-  a constant as itself. In RGB mode a spectrum is projected (:func:`rgb_of`, :func:`scalar_of`).
+  polished fit; greys exactly constant), a sampled spectrum as its piecewise-linear nodes over
+  [360, 830] nm (exact; a per-nm index finds the segment), a constant as itself. In RGB mode a spectrum is projected (:func:`rgb_of`, :func:`scalar_of`).
 * Calls: wavelengths (..., 4) in nm, finite and in [360, 830], broadcast with the directions'
   leading axes; ``f`` and ``albedo`` become (..., 4), ``pdf`` stays (...), ``sample`` adds
   ``terminated``. The kernels: ``cpp/include/bsdfkit/batch_spectral.h``.
@@ -24,7 +24,7 @@ from ..spectral.spectrum import Spectrum
 
 __all__ = ["LAMBDA_MIN", "LAMBDA_MAX", "DENSE_WAVELENGTHS", "check_wavelengths", "spectral_param", "rgb_of",
            "scalar_of", "spectrum_or_rgb", "spectrum_or_scalar", "fmt_param", "is_dispersive", "eval", "pdf",
-           "sample", "albedo", "terminate_secondary"]
+           "sample", "albedo"]
 
 LAMBDA_MIN, LAMBDA_MAX = 360.0, 830.0
 #: The 1 nm grid of the kernels' spectral tables (pbrt-v4 DenselySampledSpectrum's range).
@@ -118,7 +118,12 @@ def spectral_param(v, kind: str) -> "_core.SpectralParam":
             return SP.sigmoid(float(c[0]), float(c[1]), float(c[2]), float(scale))
         if v.is_constant:
             return SP.constant(float(v(np.float64(550.0))))
-        return SP.table(np.ascontiguousarray(v(DENSE_WAVELENGTHS)))
+        if v.kind == "sampled":   # its nodes inside (360, 830) plus its values at 360 and 830 nm
+            lam = v.wavelengths
+            inner = lam[(lam > LAMBDA_MIN) & (lam < LAMBDA_MAX)]
+            nodes = np.concatenate([[LAMBDA_MIN], inner, [LAMBDA_MAX]])
+            return SP.table(nodes, v(nodes))
+        return SP.table(DENSE_WAVELENGTHS, np.ascontiguousarray(v(DENSE_WAVELENGTHS)))  # blackbody, illuminant
     a = np.asarray(v, dtype=np.float64)
     if a.ndim == 0 or np.all(a == a.flat[0]):
         return SP.constant(float(a.flat[0]))       # a grey uplifts to exactly that constant
@@ -275,21 +280,3 @@ def albedo(model, wo, wavelengths, n_samples, seed, mode):
         _raise_counts(core.albedo(wof, flatten_to(lam, batch, (4,), dtype), n_samples, seed & 0xFFFFFFFFFFFFFFFF,
                                   md, out.reshape(-1, 4)), ("wo", "wavelengths"))
     return out
-
-
-def terminate_secondary(pdf, terminated):
-    """pbrt-v4's ``SampledWavelengths::TerminateSecondary`` applied where ``terminated``: the
-    wavelength pdfs (..., 4) with lambda1..3 set to 0 and lambda0's divided by 4 (a new array).
-    Use it on the wavelength pdf of a path whose sample refracted through a dispersive
-    dielectric (``SampleResult.terminated``) before ``bsdfkit.spectrum_to_rgb``."""
-    p = np.array(pdf, dtype=np.float64, copy=True)
-    t = np.asarray(terminated, dtype=bool)
-    if p.ndim == 0 or p.shape[-1] != 4:
-        raise ValueError(f"pdf: expected last axis of length 4, got shape {p.shape}")
-    try:
-        t = np.broadcast_to(t, p.shape[:-1])
-    except ValueError:
-        raise ValueError(f"terminated: shape {t.shape} does not broadcast with pdf {p.shape[:-1]}") from None
-    p[..., 0] = np.where(t, p[..., 0] / 4.0, p[..., 0])
-    p[..., 1:] = np.where(t[..., None], 0.0, p[..., 1:])
-    return p
