@@ -341,10 +341,11 @@ class BxDF:
     # argument error, and calls the core's row-array entry (whose bad-value counts _checked raises).
     def eval(self, wo, wi, mode=TransportMode.Radiance, out=None, *, wavelengths=None) -> np.ndarray:
         """BSDF value f(wo, wi), cosine excluded, per RGB channel: shape (..., 3).
+        ``wavelengths``: (..., 4) nm in [360, 830], broadcast with the directions: spectral mode,
+        f per wavelength, shape (..., 4) (docs/SPECTRAL.md).
 
         Specular (delta) lobes evaluate to 0 for every given pair, as in pbrt-v4; use
-        ``sample`` to reach them. ``wavelengths``: (..., 4) nm in [360, 830], broadcast with the
-        directions: spectral mode, f per wavelength, shape (..., 4) (docs/SPECTRAL.md).
+        ``sample`` to reach them.
         """
         if wavelengths is not None:
             return _spectral.eval(self, wo, wi, wavelengths, mode, out)
