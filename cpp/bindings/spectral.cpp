@@ -2,8 +2,8 @@
 // model family with a spectral adapter (batch_spectral.h). The Python layer (models/_spectral.py)
 // validates, broadcasts and flattens the arguments and calls the row-array entries below; as in
 // bind_model.h, the checks here are a second line of defence (a misuse raises, never reads out
-// of bounds). Wavelengths: rows of 4, nm, finite and in [360, 830]; the kernels count the bad
-// ones and the entries return the counts.
+// of bounds). Wavelengths: float64 rows of 4 (for both precisions), nm, finite and in [360, 830];
+// the kernels count the bad ones and the entries return the counts (the Python layer raises).
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
@@ -58,7 +58,7 @@ template <template <typename> class SM> struct PySpectral {
         int64_t n, so, si, sl;
         F *po = checked<F>(out, "out", {4}, &n, true);
         const F *pwo = rows<F>(wo, "wo", 3, n, &so), *pwi = rows<F>(wi, "wi", 3, n, &si);
-        const F *pl = rows<F>(lam, "wavelengths", 4, n, &sl);
+        const double *pl = rows<double>(lam, "wavelengths", 4, n, &sl);
         TransportMode md = to_mode(mode);
         SpectralBadCounts bad;
         {
@@ -75,7 +75,7 @@ template <template <typename> class SM> struct PySpectral {
         int64_t n, so, si, sl;
         F *po = checked<F>(out, "out", {}, &n, true);
         const F *pwo = rows<F>(wo, "wo", 3, n, &so), *pwi = rows<F>(wi, "wi", 3, n, &si);
-        const F *pl = rows<F>(lam, "wavelengths", 4, n, &sl);
+        const double *pl = rows<double>(lam, "wavelengths", 4, n, &sl);
         TransportMode md = to_mode(mode);
         uint8_t s = to_sflags(sf);
         SpectralBadCounts bad;
@@ -96,7 +96,7 @@ template <template <typename> class SM> struct PySpectral {
         const F *pu = checked<F>(u, "u", {2}, &nu);
         if (nu != n) value_error("uc and u must have the same length");
         const F *pwo = rows<F>(wo, "wo", 3, n, &so);
-        const F *pl = rows<F>(lam, "wavelengths", 4, n, &sl);
+        const double *pl = rows<double>(lam, "wavelengths", 4, n, &sl);
         SpectralSampleOut<F> o;
         o.wi = checked<F>(wi_out, "wi", {3}, &r, true); if (r != n) value_error("wi: wrong shape");
         o.f = checked<F>(f_out, "f", {4}, &r, true); if (r != n) value_error("f: wrong shape");
@@ -133,7 +133,7 @@ template <template <typename> class SM> struct PySpectral {
         F *po = checked<F>(out, "out", {4}, &n, true);
         const F *pwo = checked<F>(wo, "wo", {3}, &no);
         if (no != n) value_error("wo: wrong number of rows");
-        const F *pl = rows<F>(lam, "wavelengths", 4, n, &sl);
+        const double *pl = rows<double>(lam, "wavelengths", 4, n, &sl);
         if (n_samples <= 0) value_error("n_samples: must be positive");
         TransportMode md = to_mode(mode);
         SpectralBadCounts bad;
@@ -201,14 +201,14 @@ void bind_conductor(py::module_ &m, const char *name) {
 void bind_spectral(py::module_ &m) {
     py::class_<PySpectralParam>(m, "SpectralParam",
                                 "A model parameter as a function of wavelength (core/spectral.h): constant, "
-                                "sigmoid (uplifted RGB) or a 1 nm table over [360, 830] nm.")
+                                "sigmoid (an uplifted RGB) or a piecewise-linear table with nodes from 360 to 830 nm.")
         .def_static("constant", [](double v) {
             if (!std::isfinite(v)) value_error("value: must be finite");
             PySpectralParam r;
             r.p.kind = SpectralParam::Constant;
             r.p.c[0] = v;
             return r;
-        })
+        }, py::arg("value"))
         .def_static("sigmoid", [](double c0, double c1, double c2, double scale) {
             if (!std::isfinite(c0) || !std::isfinite(c1) || std::isnan(c2) || !std::isfinite(scale))
                 value_error("coefficients: c0, c1 and scale must be finite, c2 not NaN");
@@ -219,7 +219,7 @@ void bind_spectral(py::module_ &m) {
             r.p.c[2] = c2;
             r.p.scale = scale;
             return r;
-        })
+        }, py::arg("c0"), py::arg("c1"), py::arg("c2"), py::arg("scale"))
         .def_static("table", [](py::array_t<double, py::array::c_style | py::array::forcecast> x,
                                 py::array_t<double, py::array::c_style | py::array::forcecast> v) {
             if (x.ndim() != 1 || v.ndim() != 1 || x.shape(0) != v.shape(0) || x.shape(0) < 2)
@@ -249,7 +249,7 @@ void bind_spectral(py::module_ &m) {
             r.p.first = t->first.data();
             r.p.n = int32_t(n);
             return r;
-        })
+        }, py::arg("nodes"), py::arg("values"))
         .def_property_readonly("kind", [](const PySpectralParam &s) { return kind_name(s.p.kind); })
         .def("__call__", [](const PySpectralParam &s, py::array_t<double, py::array::c_style | py::array::forcecast> l) {
             py::array_t<double> out(l.request().shape);
@@ -257,7 +257,7 @@ void bind_spectral(py::module_ &m) {
             double *po = out.mutable_data();
             for (py::ssize_t i = 0; i < l.size(); ++i) po[i] = s.p(pl[i]);
             return out;
-        }, "Values at wavelengths (nm), float64, as the kernels evaluate them.");
+        }, py::arg("wavelengths"), "Values at wavelengths (nm), float64, as the kernels evaluate them.");
 
     bind_spectral_model<DiffuseSpectral>(m, "DiffuseSpectral")
         .def(py::init([](const PySpectralParam &r) {

@@ -40,13 +40,13 @@ namespace bsdfkit {
 // Families whose spectral model is the RGB model with 4 channels: Derived::at(lambda) builds it.
 template <typename Derived, typename F> struct PerElementModel {
     bool dispersive() const { return false; }
-    Spectrum4<F> f(const Vec3<F> &wo, const Vec3<F> &wi, const F *lam, TransportMode mode) const {
+    Spectrum4<F> f(const Vec3<F> &wo, const Vec3<F> &wi, const double *lam, TransportMode mode) const {
         return bsdf_f(self().at(lam), wo, wi, mode);
     }
-    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, const F *lam, TransportMode mode, uint8_t sf) const {
+    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, const double *lam, TransportMode mode, uint8_t sf) const {
         return bsdf_pdf(self().at(lam), wo, wi, mode, sf);
     }
-    BSDFSample<F, 4> sample(const Vec3<F> &wo, F uc, Point2<F> u, const F *lam, TransportMode mode, uint8_t sf,
+    BSDFSample<F, 4> sample(const Vec3<F> &wo, F uc, Point2<F> u, const double *lam, TransportMode mode, uint8_t sf,
                             bool *terminated) const {
         *terminated = false;
         return bsdf_sample(self().at(lam), wo, uc, u, mode, sf);
@@ -58,12 +58,12 @@ template <typename Derived, typename F> struct PerElementModel {
 
 template <typename F> struct DiffuseSpectral : PerElementModel<DiffuseSpectral<F>, F> {
     SpectralParam reflectance;
-    DiffuseBxDF<F, 4> at(const F *lam) const { return {reflectance.at<F>(lam)}; }
+    DiffuseBxDF<F, 4> at(const double *lam) const { return {reflectance.at<F>(lam)}; }
 };
 
 template <typename F> struct DiffuseTransmissionSpectral : PerElementModel<DiffuseTransmissionSpectral<F>, F> {
     SpectralParam reflectance, transmittance;
-    DiffuseTransmissionBxDF<F, 4> at(const F *lam) const {
+    DiffuseTransmissionBxDF<F, 4> at(const double *lam) const {
         return {reflectance.at<F>(lam), transmittance.at<F>(lam)};
     }
 };
@@ -72,7 +72,7 @@ template <typename F, ConductorFresnel FR>
 struct ConductorSpectralT : PerElementModel<ConductorSpectralT<F, FR>, F> {
     SpectralParam eta, k;
     TrowbridgeReitz<F> mfd;
-    ConductorBxDF<F, FR, 4> at(const F *lam) const { return ConductorBxDF<F, FR, 4>(mfd, eta.at<F>(lam), k.at<F>(lam)); }
+    ConductorBxDF<F, FR, 4> at(const double *lam) const { return ConductorBxDF<F, FR, 4>(mfd, eta.at<F>(lam), k.at<F>(lam)); }
 };
 template <typename F> using ConductorSpectral = ConductorSpectralT<F, ConductorFresnel::Exact>;
 template <typename F> using ConductorSchlickSpectral = ConductorSpectralT<F, ConductorFresnel::Schlick>;
@@ -95,21 +95,21 @@ template <typename F> struct DielectricSpectral {
     bool dispersive() const { return disp; }
     DielectricBxDF<F> at1(double e) const { return {F(e), mfd}; }
 
-    Spectrum4<F> f(const Vec3<F> &wo, const Vec3<F> &wi, const F *lam, TransportMode mode) const {
-        Spectrum4<F> r(bsdf_f(at1(eta(double(lam[0]))), wo, wi, mode)[0]);
+    Spectrum4<F> f(const Vec3<F> &wo, const Vec3<F> &wi, const double *lam, TransportMode mode) const {
+        Spectrum4<F> r(bsdf_f(at1(eta(lam[0])), wo, wi, mode)[0]);
         if (disp) {
             bool reflect = CosTheta(wi) * CosTheta(wo) > F(0);
             for (int i = 1; i < kSpectralN; ++i)
-                r[i] = reflect ? bsdf_f(at1(eta(double(lam[i]))), wo, wi, mode)[0] : F(0);
+                r[i] = reflect ? bsdf_f(at1(eta(lam[i])), wo, wi, mode)[0] : F(0);
         }
         return r;
     }
-    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, const F *lam, TransportMode mode, uint8_t sf) const {
-        return bsdf_pdf(at1(eta(double(lam[0]))), wo, wi, mode, sf);
+    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, const double *lam, TransportMode mode, uint8_t sf) const {
+        return bsdf_pdf(at1(eta(lam[0])), wo, wi, mode, sf);
     }
-    BSDFSample<F, 4> sample(const Vec3<F> &wo, F uc, Point2<F> u, const F *lam, TransportMode mode, uint8_t sf,
+    BSDFSample<F, 4> sample(const Vec3<F> &wo, F uc, Point2<F> u, const double *lam, TransportMode mode, uint8_t sf,
                             bool *terminated) const {
-        DielectricBxDF<F> m0 = at1(eta(double(lam[0])));
+        DielectricBxDF<F> m0 = at1(eta(lam[0]));
         BSDFSample<F> s = bsdf_sample(m0, wo, uc, u, mode, sf);
         BSDFSample<F, 4> r;
         r.f = Spectrum4<F>(s.f[0]);
@@ -126,7 +126,7 @@ template <typename F> struct DielectricSpectral {
                 *terminated = true;
             } else {
                 for (int i = 1; i < kSpectralN; ++i) {
-                    double e = eta(double(lam[i]));
+                    double e = eta(lam[i]);
                     F v;
                     if (m0.is_smooth()) // the delta mirror: Fresnel reflectance / |cos| (sample_smooth)
                         v = keep_or_zero(FrDielectric(CosTheta(wo), F(e)), e != 1.0) / DeltaAbsCos(s.wi);
@@ -151,15 +151,15 @@ template <typename F> struct ThinDielectricSpectral {
     bool dispersive() const { return false; }
     ThinDielectricBxDF<F> at1(double e) const { return {F(e)}; }
 
-    Spectrum4<F> f(const Vec3<F> &wo, const Vec3<F> &wi, const F *lam, TransportMode mode) const {
-        return Spectrum4<F>(bsdf_f(at1(eta(double(lam[0]))), wo, wi, mode)[0]); // 0: delta lobes
+    Spectrum4<F> f(const Vec3<F> &wo, const Vec3<F> &wi, const double *lam, TransportMode mode) const {
+        return Spectrum4<F>(bsdf_f(at1(eta(lam[0])), wo, wi, mode)[0]); // 0: delta lobes
     }
-    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, const F *lam, TransportMode mode, uint8_t sf) const {
-        return bsdf_pdf(at1(eta(double(lam[0]))), wo, wi, mode, sf);
+    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, const double *lam, TransportMode mode, uint8_t sf) const {
+        return bsdf_pdf(at1(eta(lam[0])), wo, wi, mode, sf);
     }
-    BSDFSample<F, 4> sample(const Vec3<F> &wo, F uc, Point2<F> u, const F *lam, TransportMode mode, uint8_t sf,
+    BSDFSample<F, 4> sample(const Vec3<F> &wo, F uc, Point2<F> u, const double *lam, TransportMode mode, uint8_t sf,
                             bool *terminated) const {
-        BSDFSample<F> s = bsdf_sample(at1(eta(double(lam[0]))), wo, uc, u, mode, sf);
+        BSDFSample<F> s = bsdf_sample(at1(eta(lam[0])), wo, uc, u, mode, sf);
         BSDFSample<F, 4> r;
         r.f = Spectrum4<F>(s.f[0]);
         r.wi = s.wi;
@@ -172,7 +172,7 @@ template <typename F> struct ThinDielectricSpectral {
             bool reflect = !(s.flags & Transmission);
             F inv_cos = F(1) / DeltaAbsCos(s.wi);
             for (int i = 1; i < kSpectralN; ++i) {
-                F Rs = ThinDielectricBxDF<F>::slab_reflectance(AbsCosTheta(wo), F(eta(double(lam[i]))));
+                F Rs = ThinDielectricBxDF<F>::slab_reflectance(AbsCosTheta(wo), F(eta(lam[i])));
                 r.f[i] = finite_or_zero((reflect ? Rs : F(1) - Rs) * inv_cos);
             }
         }
@@ -181,12 +181,13 @@ template <typename F> struct ThinDielectricSpectral {
 };
 
 // ---- Kernels. Strides: so / si / sl = 3 / 3 / 4 for full arrays, 0 for one broadcast row.
+// Wavelengths are float64 for both precisions (the parameters are evaluated in double).
 
 struct SpectralBadCounts : BadCounts {
     std::atomic<int64_t> lam{0};  // wavelengths not finite or outside [360, 830] nm
 };
 
-template <typename F> inline int64_t load_lambda(const F *p, int64_t i, int64_t sl, F (&l)[kSpectralN]) {
+inline int64_t load_lambda(const double *p, int64_t i, int64_t sl, double (&l)[kSpectralN]) {
     int64_t bad = 0;
     for (int c = 0; c < kSpectralN; ++c) {
         l[c] = p[i * sl + c];
@@ -196,14 +197,14 @@ template <typename F> inline int64_t load_lambda(const F *p, int64_t i, int64_t 
 }
 
 template <typename SM, typename F>
-void eval_spectral_batch(const SM &m, const F *wo, int64_t so, const F *wi, int64_t si, const F *lam, int64_t sl,
+void eval_spectral_batch(const SM &m, const F *wo, int64_t so, const F *wi, int64_t si, const double *lam, int64_t sl,
                          int64_t n, TransportMode mode, F *out, int nthreads, SpectralBadCounts &bad) {
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
         int64_t bo = 0, bi = 0, bl = 0;
         const SM mloc = m;
         for (int64_t i = b; i < e; ++i) {
             Vec3<F> o(wo[i * so], wo[i * so + 1], wo[i * so + 2]), w(wi[i * si], wi[i * si + 1], wi[i * si + 2]);
-            F l[kSpectralN];
+            double l[kSpectralN];
             bl += load_lambda(lam, i, sl, l);
             bo += not_unit(o);
             bi += not_unit(w);
@@ -217,14 +218,14 @@ void eval_spectral_batch(const SM &m, const F *wo, int64_t so, const F *wi, int6
 }
 
 template <typename SM, typename F>
-void pdf_spectral_batch(const SM &m, const F *wo, int64_t so, const F *wi, int64_t si, const F *lam, int64_t sl,
+void pdf_spectral_batch(const SM &m, const F *wo, int64_t so, const F *wi, int64_t si, const double *lam, int64_t sl,
                         int64_t n, TransportMode mode, uint8_t sf, F *out, int nthreads, SpectralBadCounts &bad) {
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
         int64_t bo = 0, bi = 0, bl = 0;
         const SM mloc = m;
         for (int64_t i = b; i < e; ++i) {
             Vec3<F> o(wo[i * so], wo[i * so + 1], wo[i * so + 2]), w(wi[i * si], wi[i * si + 1], wi[i * si + 2]);
-            F l[kSpectralN];
+            double l[kSpectralN];
             bl += load_lambda(lam, i, sl, l);
             bo += not_unit(o);
             bi += not_unit(w);
@@ -243,7 +244,7 @@ template <typename F> struct SpectralSampleOut {
 };
 
 template <typename SM, typename F>
-void sample_spectral_batch(const SM &m, const F *wo, int64_t so, const F *uc, const F *u, const F *lam, int64_t sl,
+void sample_spectral_batch(const SM &m, const F *wo, int64_t so, const F *uc, const F *u, const double *lam, int64_t sl,
                            int64_t n, TransportMode mode, uint8_t sf, const SpectralSampleOut<F> &out, int nthreads,
                            SpectralBadCounts &bad) {
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
@@ -252,7 +253,7 @@ void sample_spectral_batch(const SM &m, const F *wo, int64_t so, const F *uc, co
         const SM mloc = m;
         for (int64_t i = b; i < e; ++i) {
             Vec3<F> o(wo[i * so], wo[i * so + 1], wo[i * so + 2]);
-            F l[kSpectralN];
+            double l[kSpectralN];
             bl += load_lambda(lam, i, sl, l);
             bo += not_unit(o);
             bool term = false;
@@ -281,7 +282,7 @@ void sample_spectral_batch(const SM &m, const F *wo, int64_t so, const F *uc, co
 // wavelength as the hero (lambda0), so each rho_i includes its refracted light (a terminated
 // secondary would drop it).
 template <typename SM, typename F>
-void albedo_spectral_batch(const SM &m, const F *wo, int64_t n_wo, const F *lam, int64_t sl, int64_t n_samples,
+void albedo_spectral_batch(const SM &m, const F *wo, int64_t n_wo, const double *lam, int64_t sl, int64_t n_samples,
                            uint64_t seed, TransportMode mode, F *out, int nthreads, SpectralBadCounts &bad) {
     const int64_t block = 4096;
     int64_t nblocks = (n_samples + block - 1) / block;
@@ -290,7 +291,7 @@ void albedo_spectral_batch(const SM &m, const F *wo, int64_t n_wo, const F *lam,
     parallel_chunks(n_wo * nblocks, nthreads, 1, [&](int64_t item, int64_t) {
         int64_t j = item / nblocks, blk = item % nblocks;
         Vec3<F> o = load3<F, 3>(wo, j);
-        F l[kSpectralN];
+        double l[kSpectralN];
         int64_t bl = load_lambda(lam, j, sl, l);
         if (blk == 0) {
             bad.wo += not_unit(o);
@@ -299,7 +300,7 @@ void albedo_spectral_batch(const SM &m, const F *wo, int64_t n_wo, const F *lam,
         int64_t s0 = blk * block, s1 = std::min(n_samples, s0 + block);
         double acc[kSpectralN] = {0, 0, 0, 0};
         for (int hero = 0; hero < (disp ? kSpectralN : 1); ++hero) {
-            F lh[kSpectralN] = {l[hero], l[(hero + 1) % 4], l[(hero + 2) % 4], l[(hero + 3) % 4]};
+            double lh[kSpectralN] = {l[hero], l[(hero + 1) % 4], l[(hero + 2) % 4], l[(hero + 3) % 4]};
             for (int64_t k = s0; k < s1; ++k) {
                 uint64_t h = hash3(seed, uint64_t(j), uint64_t(k));
                 F uc = uniform_from_bits<F>(mix64(h ^ 1)), u0 = uniform_from_bits<F>(mix64(h ^ 2)),

@@ -159,7 +159,9 @@ def _spectral_core(model):
 # ------------------------------------------------------------------------------- arguments
 
 def check_wavelengths(x) -> np.ndarray:
-    """``wavelengths`` as a real array with last axis 4, finite and in [360, 830] nm."""
+    """``wavelengths`` as a real array with last axis 4 (nm). Their values (finite, in [360, 830])
+    are checked by the kernels, which count the bad ones in the same pass (no extra numpy pass over
+    the array); the count raises a ValueError naming ``wavelengths`` (_raise_counts)."""
     try:
         a = np.asarray(x)
     except Exception as e:
@@ -169,12 +171,6 @@ def check_wavelengths(x) -> np.ndarray:
     if a.ndim == 0 or a.shape[-1] != 4:
         raise ValueError(f"wavelengths: expected an array with last axis of length 4 (pbrt-v4's 4 wavelengths "
                          f"per sample, e.g. from bsdfkit.sample_wavelengths), got shape {a.shape}")
-    if a.size:
-        f = a.astype(np.float64, copy=False)
-        bad = ~((f >= LAMBDA_MIN) & (f <= LAMBDA_MAX))
-        if np.any(bad):
-            raise ValueError(f"wavelengths: {int(bad.sum())} value(s) are not finite or outside [360, 830] nm "
-                             f"(first: {f[bad].flat[0]!r})")
     return a
 
 
@@ -183,7 +179,7 @@ def _raise_counts(counts, names):
         if not c:
             continue
         if name == "wavelengths":
-            raise ValueError(f"wavelengths: {c} value(s) are not finite or outside [360, 830] nm")
+            raise ValueError(f"wavelengths: {c} row(s) of 4 hold values that are not finite or outside [360, 830] nm")
         from .base import _raise_bad
         _raise_bad(name, c)
 
@@ -202,7 +198,7 @@ def eval(model, wo, wi, wavelengths, mode, out):
     out = check_out(out, batch + (4,), dtype)
     if out.size:
         _raise_counts(core.eval(flatten_to(wo, batch, (3,), dtype), flatten_to(wi, batch, (3,), dtype),
-                                flatten_to(lam, batch, (4,), dtype), md, out.reshape(-1, 4)),
+                                flatten_to(lam, batch, (4,), np.float64), md, out.reshape(-1, 4)),
                       ("wo", "wi", "wavelengths"))
     return out
 
@@ -216,7 +212,7 @@ def pdf(model, wo, wi, wavelengths, mode, sample_flags, out):
     out = check_out(out, batch, dtype)
     if out.size:
         _raise_counts(core.pdf(flatten_to(wo, batch, (3,), dtype), flatten_to(wi, batch, (3,), dtype),
-                               flatten_to(lam, batch, (4,), dtype), md, sf, out.reshape(-1)),
+                               flatten_to(lam, batch, (4,), np.float64), md, sf, out.reshape(-1)),
                       ("wo", "wi", "wavelengths"))
     return out
 
@@ -257,7 +253,7 @@ def sample(model, wo, uc, u, n, seed, wavelengths, mode, sample_flags, out):
     if m:
         ucf = np.ascontiguousarray(np.broadcast_to(uc, batch), dtype=dtype).reshape(-1)
         uf = np.ascontiguousarray(np.broadcast_to(u, batch + (2,)), dtype=dtype).reshape(-1, 2)
-        _raise_counts(core.sample(flatten_to(wo, batch, (3,), dtype), ucf, uf, flatten_to(lam, batch, (4,), dtype),
+        _raise_counts(core.sample(flatten_to(wo, batch, (3,), dtype), ucf, uf, flatten_to(lam, batch, (4,), np.float64),
                                   md, sf, res.wi.reshape(-1, 3), res.f.reshape(-1, 4), res.pdf.reshape(-1),
                                   res.flags.reshape(-1), res.eta.reshape(-1), res.valid.reshape(-1),
                                   res.pdf_is_proportional.reshape(-1), res.terminated.reshape(-1)),
@@ -277,6 +273,6 @@ def albedo(model, wo, wavelengths, n_samples, seed, mode):
     out = np.empty(batch + (4,), dtype)
     if out.size:
         wof = np.ascontiguousarray(np.broadcast_to(wo, batch + (3,)), dtype=dtype).reshape(-1, 3)
-        _raise_counts(core.albedo(wof, flatten_to(lam, batch, (4,), dtype), n_samples, seed & 0xFFFFFFFFFFFFFFFF,
+        _raise_counts(core.albedo(wof, flatten_to(lam, batch, (4,), np.float64), n_samples, seed & 0xFFFFFFFFFFFFFFFF,
                                   md, out.reshape(-1, 4)), ("wo", "wavelengths"))
     return out

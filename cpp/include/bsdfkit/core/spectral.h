@@ -56,14 +56,14 @@ struct SpectralParam {
     }
 
     // The parameter at an element's wavelengths, at the model's precision.
-    template <typename F> Spectrum4<F> at(const F *lambda) const {
+    template <typename F> Spectrum4<F> at(const double *lambda) const {
         Spectrum4<F> s;
-        for (int i = 0; i < kSpectralN; ++i) s[i] = F((*this)(double(lambda[i])));
+        for (int i = 0; i < kSpectralN; ++i) s[i] = F((*this)(lambda[i]));
         return s;
     }
 };
 
 // Whether a wavelength is one the kernels accept: finite and in [360, 830] nm (NaN fails both).
-template <typename F> inline bool valid_wavelength(F l) { return (l >= F(kLambdaMin)) & (l <= F(kLambdaMax)); }
+inline bool valid_wavelength(double l) { return (l >= kLambdaMin) & (l <= kLambdaMax); }
 
 } // namespace bsdfkit
