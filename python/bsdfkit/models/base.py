@@ -10,6 +10,7 @@ import numpy as np
 from .._arrays import as_dirs, as_uniform, broadcast_batch, check_int, check_out, flatten_to, kernel_dtype
 from .._dask import dask_eval, is_dask_array
 from .._enums import BxDFFlags, ReflTrans, TransportMode
+from . import _spectral
 from . import registry as _registry
 
 __all__ = ["roughness_to_alpha", "SampleResult", "BxDF"]
@@ -139,6 +140,10 @@ class SampleResult:
     (1 for reflection); valid: (...) bool, False where no sample exists (then f = pdf = 0,
     wi = (0, 0, 1), the shading normal, and eta = 1: every wi is a valid ``eval`` / ``pdf`` input);
     pdf_is_proportional: (...) bool (layered models only).
+    Spectral mode (``sample(..., wavelengths=)``): f is (..., 4), one value per wavelength, and
+    terminated: (...) bool is True where a refraction through a dispersive dielectric kept the
+    first (hero) wavelength only (f of the others is 0; apply pbrt-v4's TerminateSecondary to the
+    wavelength pdfs, ``bsdfkit.spectral.terminate_secondary``); None in RGB mode.
     """
 
     wi: np.ndarray
@@ -148,6 +153,7 @@ class SampleResult:
     eta: np.ndarray
     valid: np.ndarray
     pdf_is_proportional: np.ndarray
+    terminated: np.ndarray = None
 
     @property
     def weight(self) -> np.ndarray:
@@ -334,13 +340,17 @@ class BxDF:
     # (cpp/bindings/bind_model.h: it takes the whole call when they are plain ndarrays and returns
     # None otherwise); the general path then converts, broadcasts and checks them, words every
     # argument error, and calls the core's row-array entry (whose bad-value counts _checked raises).
-    def eval(self, wo, wi, mode=TransportMode.Radiance, out=None) -> np.ndarray:
+    def eval(self, wo, wi, mode=TransportMode.Radiance, out=None, *, wavelengths=None) -> np.ndarray:
         """BSDF value f(wo, wi), cosine excluded, per RGB channel: shape (..., 3).
+        ``wavelengths``: (..., 4) nm in [360, 830], broadcast with the directions: spectral mode,
+        f per wavelength, shape (..., 4) (docs/SPECTRAL.md).
 
         Specular (delta) lobes evaluate to 0 for every given pair, as in pbrt-v4; use
         ``sample`` to reach them. Dask arrays of directions give a lazy Dask array (blockwise,
         bit-identical values; ``bsdfkit._dask``); ``pdf`` likewise.
         """
+        if wavelengths is not None:
+            return _spectral.eval(self, wo, wi, wavelengths, mode, out)
         r = self._core.eval_fast(wo, wi, mode, out)
         if r is not None:
             return r
@@ -353,8 +363,13 @@ class BxDF:
                                      _mode(mode), out.reshape(-1, 3)), ("wo", "wi"))
         return out
 
-    def pdf(self, wo, wi, mode=TransportMode.Radiance, sample_flags=ReflTrans.All, out=None) -> np.ndarray:
-        """Solid-angle density of ``sample`` producing wi from wo: shape (...). 0 for delta lobes."""
+    def pdf(self, wo, wi, mode=TransportMode.Radiance, sample_flags=ReflTrans.All, out=None, *,
+            wavelengths=None) -> np.ndarray:
+        """Solid-angle density of ``sample`` producing wi from wo: shape (...). 0 for delta lobes.
+        ``wavelengths`` (..., 4): the density of ``sample`` with those wavelengths (the first one's
+        for a dispersive dielectric)."""
+        if wavelengths is not None:
+            return _spectral.pdf(self, wo, wi, wavelengths, mode, sample_flags, out)
         r = self._core.pdf_fast(wo, wi, mode, sample_flags, out)
         if r is not None:
             return r
@@ -373,7 +388,7 @@ class BxDF:
         return wo, wi, broadcast_batch(("wo", "wi"), wo.shape[:-1], wi.shape[:-1]), kernel_dtype(wo, wi)
 
     def sample(self, wo, uc=None, u=None, *, n=None, seed=None, mode=TransportMode.Radiance,
-               sample_flags=ReflTrans.All, out=None) -> SampleResult:
+               sample_flags=ReflTrans.All, out=None, wavelengths=None) -> SampleResult:
         """Importance-sample wi given wo.
 
         Either pass the uniforms ``uc`` (...) (lobe choice) and ``u`` (..., 2) (direction), in
@@ -381,7 +396,10 @@ class BxDF:
         come from ``numpy.random.default_rng(seed)`` and the batch shape is broadcast(wo, (n,)).
         ``out``: a SampleResult of this call's shapes and dtypes (e.g. an earlier result) to
         write into instead of allocating; it is returned.
+        ``wavelengths`` (..., 4): spectral mode (f per wavelength, ``terminated``; see SampleResult).
         """
+        if wavelengths is not None:
+            return _spectral.sample(self, wo, uc, u, n, seed, wavelengths, mode, sample_flags, out)
         if n is None and out is None:
             r = self._core.sample_fast(wo, uc, u, mode, sample_flags)
             if r is not None:
@@ -417,13 +435,17 @@ class BxDF:
                                          for k in _SAMPLE_FIELDS)), ("wo", "uc", "u"))
         return res
 
-    def albedo(self, wo, n_samples: int = 65536, seed: int = 0, mode=TransportMode.Radiance) -> np.ndarray:
+    def albedo(self, wo, n_samples: int = 65536, seed: int = 0, mode=TransportMode.Radiance, *,
+               wavelengths=None) -> np.ndarray:
         """Directional albedo rho(wo) = integral of f |cos wi| dwi, per channel: shape (..., 3).
 
         Monte Carlo with ``n_samples`` importance samples per direction (pbrt-v4 ``rho``);
         deterministic for a given seed and independent of the thread count. The standard error
-        falls as 1/sqrt(n_samples).
+        falls as 1/sqrt(n_samples). ``wavelengths`` (..., 4), broadcast with wo: per wavelength,
+        shape (..., 4) (a dispersive dielectric: each wavelength sampled as the hero).
         """
+        if wavelengths is not None:
+            return _spectral.albedo(self, wo, wavelengths, n_samples, seed, mode)
         r = self._core.albedo_fast(wo, n_samples, seed, mode)
         if r is not None:
             return r

@@ -4,11 +4,14 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _core
+from . import _spectral as _sp
 from .base import (MIN_ALPHA, BxDF, _MASKING, _alphas, _masking, _pick_alpha, _rgb, alpha_text, fmt_value,
                    is_smooth, masking_knob, rgb_dict)
 from .registry import KnobDecl
 
-__all__ = ["METALS", "Conductor", "conductor_fresnel"]
+__all__ = ["METALS", "Conductor", "conductor_fresnel", "spectral_metals"]
+
+from ..spectral.spectrum import Spectrum  # noqa: E402
 
 
 # Conductor Fresnel knob -> (_core class, conductor_fresnel code), most accurate first.
@@ -37,7 +40,11 @@ class Conductor(BxDF):
     """Metal: perfect mirror or anisotropic Trowbridge-Reitz (GGX) microfacet reflection with a
     conductor Fresnel term (pbrt-v4 ``ConductorBxDF``; the complex Fresnel term by default).
 
-    eta, k: real and imaginary IOR per RGB channel (eta > 0, k >= 0).
+    eta, k: real and imaginary IOR per RGB channel (eta > 0, k >= 0), or each a
+    ``bsdfkit.Spectrum`` (e.g. ``Spectrum.named("metal-Au-eta")``; ``from_metal(name, spectral=True)``).
+    Spectral mode (``wavelengths=``): RGB eta / k are uplifted as unbounded spectra (pbrt-v4
+    ``RGBUnboundedSpectrum``); RGB mode: spectra are projected without an illuminant, as Mitsuba 3
+    projects its IOR presets (``METALS`` is that projection of the Mitsuba spectra).
     alpha: GGX roughness (alpha, not pbrt's remapped "roughness"), isotropic; or alpha_x and
     alpha_y together, per tangent axis (local x / y) -- one of them alone, or alpha with them, is
     a ValueError. max(alpha_x, alpha_y) < 1e-3 makes the lobe a delta mirror
@@ -93,7 +100,8 @@ class Conductor(BxDF):
 
     def __init__(self, eta, k, alpha=None, alpha_x=None, alpha_y=None, masking="correlated", fresnel="exact"):
         ax, ay = _alphas(alpha, alpha_x, alpha_y)
-        super().__init__(eta=_rgb(eta, "eta", lo=0.0, lo_open=True), k=_rgb(k, "k", lo=0.0),
+        super().__init__(eta=_sp.spectrum_or_rgb(eta, "eta", lo=0.0, lo_open=True),
+                         k=_sp.spectrum_or_rgb(k, "k", lo=0.0),
                          alpha_x=ax, alpha_y=ay, masking=_masking(masking), fresnel=_fresnel(fresnel))
 
     @classmethod
@@ -103,12 +111,24 @@ class Conductor(BxDF):
 
     @classmethod
     def from_metal(cls, name: str, roughness=None, *, alpha=None, alpha_x=None, alpha_y=None,
-                   masking="correlated", fresnel="exact") -> "Conductor":
+                   masking="correlated", fresnel="exact", spectral: bool = False) -> "Conductor":
         """A measured metal by name (see ``bsdfkit.METALS``: Cu, Au, Ag, Al, Cr).
 
         Roughness as pbrt-v4's ``roughness`` (alpha = sqrt(roughness)) or directly as ``alpha``.
-        ``fresnel`` as in ``Conductor``.
+        ``fresnel`` as in ``Conductor``. ``spectral=True``: eta and k are the measured spectra
+        (``bsdfkit.Spectrum``): Mitsuba 3's IOR data (``mitsuba-<name>-eta/k``, the data ``METALS``
+        projects) where Mitsuba has the metal, else pbrt-v4's (``metal-<name>-eta/k``: also
+        CuZn, MgO, TiO2); ``spectral_metals()`` lists the names. Its RGB mode equals ``METALS``
+        within 1e-6.
         """
+        if spectral:
+            names = spectral_metals()
+            if name not in names:
+                raise ValueError(f"name: unknown metal {name!r} for spectral=True; known: {', '.join(names)}")
+            src = "mitsuba" if f"mitsuba-{name}-eta" in Spectrum.names() else "metal"
+            eta, k = Spectrum.named(f"{src}-{name}-eta"), Spectrum.named(f"{src}-{name}-k")
+            return cls(eta, k, alpha=_pick_alpha(roughness, alpha), alpha_x=alpha_x, alpha_y=alpha_y,
+                       masking=masking, fresnel=fresnel)
         if name not in METALS:
             raise ValueError(f"name: unknown metal {name!r}; known metals: {', '.join(sorted(METALS))}")
         eta, k = METALS[name]
@@ -117,10 +137,23 @@ class Conductor(BxDF):
 
     @classmethod
     def from_reflectance(cls, reflectance, roughness=None, *, alpha=None, alpha_x=None, alpha_y=None,
-                         masking="correlated", fresnel="exact") -> "Conductor":
+                         masking="correlated", fresnel="exact", spectral: bool = False) -> "Conductor":
         """pbrt-v4's artist form: eta = 1 and k = 2 sqrt(r) / sqrt(1 - r), so that the Fresnel
         reflectance at normal incidence equals r. r in [0, 1], clamped to 0.9999 (pbrt-v4 does
-        the same: r = 1 would need k = inf). ``fresnel`` as in ``Conductor``."""
+        the same: r = 1 would need k = inf). ``fresnel`` as in ``Conductor``.
+
+        Per wavelength, as pbrt-v4 (``spectral=True``, or ``reflectance`` a ``bsdfkit.Spectrum``):
+        r(lambda) is the spectrum (an RGB r uplifted as a bounded reflectance) and k(lambda) =
+        2 sqrt(r) / sqrt(1 - r) at every nm of [360, 830] (a sampled spectrum, linear in between).
+        Otherwise k is computed per RGB channel (and uplifted as unbounded in spectral mode)."""
+        if spectral or isinstance(reflectance, Spectrum):
+            rs = reflectance if isinstance(reflectance, Spectrum) else Spectrum.from_rgb(
+                _rgb(reflectance, "reflectance", lo=0.0, hi=1.0), "reflectance")
+            _sp.spectrum_or_rgb(rs, "reflectance", lo=0.0, hi=1.0)
+            r = np.minimum(rs(_sp.DENSE_WAVELENGTHS), 0.9999)
+            k = Spectrum(_sp.DENSE_WAVELENGTHS, 2 * np.sqrt(r) / np.sqrt(1 - r))
+            return cls(Spectrum.constant(1.0), k, alpha=_pick_alpha(roughness, alpha), alpha_x=alpha_x,
+                       alpha_y=alpha_y, masking=masking, fresnel=fresnel)
         r = np.minimum(_rgb(reflectance, "reflectance", lo=0.0, hi=1.0), 0.9999)
         k = 2 * np.sqrt(r) / np.sqrt(1 - r)
         return cls(1.0, k, alpha=_pick_alpha(roughness, alpha), alpha_x=alpha_x, alpha_y=alpha_y, masking=masking,
@@ -129,14 +162,27 @@ class Conductor(BxDF):
     def _make_core(self):
         p = self._params
         core_cls = getattr(_core, _FRESNEL[p["fresnel"]][0])
-        return core_cls(eta=p["eta"].tolist(), k=p["k"].tolist(), alpha_x=p["alpha_x"], alpha_y=p["alpha_y"],
-                        masking=_MASKING[p["masking"]])
+        return core_cls(eta=_sp.rgb_of(p["eta"], "unbounded").tolist(), k=_sp.rgb_of(p["k"], "unbounded").tolist(),
+                        alpha_x=p["alpha_x"], alpha_y=p["alpha_y"], masking=_MASKING[p["masking"]])
+
+    def _make_spectral_core(self):
+        p = self._params
+        core_cls = getattr(_core, _FRESNEL[p["fresnel"]][0] + "Spectral")
+        return core_cls(_sp.spectral_param(p["eta"], "unbounded"), _sp.spectral_param(p["k"], "unbounded"),
+                        p["alpha_x"], p["alpha_y"], _MASKING[p["masking"]])
 
     def cost_family(self) -> str:
         return "Conductor" + ("/smooth" if is_smooth(self._params) else "/rough")
 
     def describe(self) -> str:
         p = self._params
+        if isinstance(p["eta"], Spectrum) or isinstance(p["k"], Spectrum):
+            en = p["eta"].name if isinstance(p["eta"], Spectrum) else None
+            if en is not None and en.endswith("-eta") and getattr(p["k"], "name", None) == en[:-4] + "-k":
+                name = en.split("-")[1] + " (spectral)"
+            else:
+                name = f"η={_sp.fmt_param(p['eta'])}, k={_sp.fmt_param(p['k'])}"
+            return f"Conductor {name}{alpha_text(p)}"
         name = next((n for n, (eta, k) in METALS.items()
                      if np.allclose(p["eta"], eta) and np.allclose(p["k"], k)), None)
         if name is None:
@@ -154,14 +200,26 @@ class Conductor(BxDF):
                 f"fresnel={self.fresnel!r}; use bsdfkit.testing.drjit_models.conductor_f(..., "
                 f"fresnel={self.fresnel!r}) as the reference")
         p = self._params
+        eta, k = _sp.rgb_of(self.eta, "unbounded"), _sp.rgb_of(self.k, "unbounded")
         if is_smooth(p):
-            inner = {"type": "conductor", "eta": rgb_dict(self.eta), "k": rgb_dict(self.k)}
+            inner = {"type": "conductor", "eta": rgb_dict(eta), "k": rgb_dict(k)}
         else:
             inner = {"type": "roughconductor", "distribution": "ggx", "alpha_u": max(p["alpha_x"], MIN_ALPHA),
                      "alpha_v": max(p["alpha_y"], MIN_ALPHA), "sample_visible": True,
-                     "eta": rgb_dict(self.eta), "k": rgb_dict(self.k)}
+                     "eta": rgb_dict(eta), "k": rgb_dict(k)}
         return {"type": "twosided", "bsdf": inner}
 
+
+
+def spectral_metals() -> tuple:
+    """The names ``Conductor.from_metal(name, spectral=True)`` accepts (Mitsuba 3's and pbrt-v4's
+    measured metals, ``bsdfkit.Spectrum.names()``)."""
+    out = []
+    for n in Spectrum.names():
+        parts = n.split("-")
+        if len(parts) == 3 and parts[0] in ("mitsuba", "metal") and parts[2] == "eta" and parts[1] not in out:
+            out.append(parts[1])
+    return tuple(sorted(out))
 
 
 #: The values of ``Conductor.from_metal``'s first argument (listed by the spec parser's usage text).

@@ -2,7 +2,8 @@
 from __future__ import annotations
 
 from .. import _core
-from .base import MIN_ALPHA, BxDF, _MASKING, _alphas, _masking, _scalar, alpha_text, is_smooth, masking_knob
+from . import _spectral as _sp
+from .base import MIN_ALPHA, BxDF, _MASKING, _alphas, _masking, alpha_text, is_smooth, masking_knob
 
 __all__ = ["Dielectric", "ThinDielectric"]
 
@@ -22,6 +23,12 @@ class Dielectric(BxDF):
     eta: relative IOR, inside over outside (> 0; < 1 when the outside is denser; 1 passes light
     straight through). wo may be on either side. alpha / alpha_x / alpha_y / masking as in
     ``Conductor``. In Radiance mode transmitted values are divided by eta'^2.
+
+    eta may be a ``bsdfkit.Spectrum`` (``Spectrum.named("glass-BK7")``): a non-constant one
+    disperses in spectral mode (``wavelengths=``): ``sample`` lets the first (hero) wavelength
+    choose lobe and direction; a reflection keeps all 4 wavelengths (f per wavelength), a
+    refraction keeps the hero only (``terminated``); ``eval`` of a transmission pair is the hero's
+    alone; ``pdf`` is the hero's. In RGB mode such an eta is its value at 550 nm.
     """
 
     __slots__ = ()
@@ -42,7 +49,7 @@ class Dielectric(BxDF):
 
     def __init__(self, eta=1.5, alpha=None, alpha_x=None, alpha_y=None, masking="correlated"):
         ax, ay = _alphas(alpha, alpha_x, alpha_y)
-        super().__init__(eta=_scalar(eta, "eta", lo=0.0, lo_open=True), alpha_x=ax, alpha_y=ay,
+        super().__init__(eta=_sp.spectrum_or_scalar(eta, "eta", lo=0.0, lo_open=True), alpha_x=ax, alpha_y=ay,
                          masking=_masking(masking))
 
     @classmethod
@@ -51,19 +58,25 @@ class Dielectric(BxDF):
 
     def _make_core(self):
         p = self._params
-        return _core.Dielectric(eta=p["eta"], alpha_x=p["alpha_x"], alpha_y=p["alpha_y"], masking=_MASKING[p["masking"]])
+        return _core.Dielectric(eta=_sp.scalar_of(p["eta"]), alpha_x=p["alpha_x"], alpha_y=p["alpha_y"],
+                                masking=_MASKING[p["masking"]])
+
+    def _make_spectral_core(self):
+        p = self._params
+        return _core.DielectricSpectral(_sp.spectral_param(p["eta"], "unbounded"), p["alpha_x"], p["alpha_y"],
+                                        _MASKING[p["masking"]], _sp.is_dispersive(p["eta"]))
 
     def cost_family(self) -> str:
         p = self._params
         return "Dielectric" + ("/smooth" if is_smooth(p) or p["eta"] == 1.0 else "/rough")
 
     def describe(self) -> str:
-        return f"Dielectric η={self._params['eta']:.3g}{alpha_text(self._params)}"
+        return f"Dielectric η={_sp.fmt_param(self._params['eta'])}{alpha_text(self._params)}"
 
     def to_mitsuba(self) -> dict:
         """``dielectric`` / ``roughdielectric`` (ggx) with int_ior = eta, ext_ior = 1 (eta < 1 is
         passed as is: Mitsuba accepts int_ior < ext_ior); eta == 1 -> ``null`` (pbrt's pass-through)."""
-        eta, p = float(self.eta), self._params
+        eta, p = _sp.scalar_of(self.eta), self._params
         if eta == 1.0:
             # pbrt: eta == 1 is always the smooth branch, a straight pass-through with R = 0,
             # f = 1/|cos|, pdf = 1; Mitsuba's 'null' samples wo = -wi with weight 1 and pdf 1.
@@ -79,7 +92,11 @@ class ThinDielectric(BxDF):
     """Thin slab of dielectric (a window pane): specular reflection and straight-through
     transmission, with the inter-reflections inside the slab summed (pbrt-v4 ``ThinDielectricBxDF``).
 
-    eta: IOR of the slab (> 0). Both lobes are deltas; ``eval`` and ``pdf`` are 0.
+    eta: IOR of the slab (> 0), or a ``bsdfkit.Spectrum`` (its value at 550 nm in RGB mode). In
+    spectral mode a dispersive slab never terminates wavelengths: both lobes keep their direction
+    (mirror, straight through), the first wavelength chooses the lobe and f is that lobe's value
+    per wavelength (pbrt-v4 terminates the secondaries for any non-constant eta).
+    Both lobes are deltas; ``eval`` and ``pdf`` are 0.
     """
 
     __slots__ = ()
@@ -93,19 +110,23 @@ class ThinDielectric(BxDF):
     mitsuba = "thindielectric"
 
     def __init__(self, eta=1.5):
-        super().__init__(eta=_scalar(eta, "eta", lo=0.0, lo_open=True))
+        super().__init__(eta=_sp.spectrum_or_scalar(eta, "eta", lo=0.0, lo_open=True))
 
     @classmethod
     def _from_params(cls, p):
         return cls(p["eta"])
 
     def _make_core(self):
-        return _core.ThinDielectric(eta=self._params["eta"])
+        return _core.ThinDielectric(eta=_sp.scalar_of(self._params["eta"]))
+
+    def _make_spectral_core(self):
+        p = self._params
+        return _core.ThinDielectricSpectral(_sp.spectral_param(p["eta"], "unbounded"), _sp.is_dispersive(p["eta"]))
 
     def describe(self) -> str:
-        return f"ThinDielectric η={self._params['eta']:.3g}"
+        return f"ThinDielectric η={_sp.fmt_param(self._params['eta'])}"
 
     def to_mitsuba(self) -> dict:
-        eta = float(self.eta)
+        eta = _sp.scalar_of(self.eta)
         return {"type": "null"} if eta == 1.0 else {"type": "thindielectric", "int_ior": eta, "ext_ior": 1.0}
 

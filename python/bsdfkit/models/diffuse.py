@@ -2,7 +2,8 @@
 from __future__ import annotations
 
 from .. import _core
-from .base import BxDF, _rgb, fmt_value, rgb_dict
+from . import _spectral as _sp
+from .base import BxDF, rgb_dict
 
 __all__ = ["Diffuse", "DiffuseTransmission"]
 
@@ -10,7 +11,9 @@ __all__ = ["Diffuse", "DiffuseTransmission"]
 class Diffuse(BxDF):
     """Lambertian reflection, f = reflectance / pi on wo's side (pbrt-v4 ``DiffuseBxDF``).
 
-    reflectance: scalar or RGB in [0, 1]. Two-sided.
+    reflectance: scalar or RGB in [0, 1], or a ``bsdfkit.Spectrum`` with values in [0, 1]. Two-sided.
+    Spectral mode (``wavelengths=``): an RGB reflectance is uplifted (Jakob & Hanika 2019, bounded);
+    RGB mode: a spectrum is projected to linear sRGB under D65.
     """
 
     __slots__ = ()
@@ -24,28 +27,33 @@ class Diffuse(BxDF):
     param_ranges = {"reflectance": (0.0, 1.0)}  # fitting bounds (bk.fit)
 
     def __init__(self, reflectance=0.5):
-        super().__init__(reflectance=_rgb(reflectance, "reflectance", lo=0.0, hi=1.0))
+        super().__init__(reflectance=_sp.spectrum_or_rgb(reflectance, "reflectance", lo=0.0, hi=1.0))
 
     @classmethod
     def _from_params(cls, p):
         return cls(p["reflectance"])
 
     def _make_core(self):
-        return _core.Diffuse(reflectance=self._params["reflectance"].tolist())
+        return _core.Diffuse(reflectance=_sp.rgb_of(self._params["reflectance"], "reflectance").tolist())
+
+    def _make_spectral_core(self):
+        return _core.DiffuseSpectral(_sp.spectral_param(self._params["reflectance"], "reflectance"))
 
     def describe(self) -> str:
-        return f"Diffuse R={fmt_value(self._params['reflectance'])}"
+        return f"Diffuse R={_sp.fmt_param(self._params['reflectance'])}"
 
     def to_mitsuba(self) -> dict:
-        return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": rgb_dict(self.reflectance)}}
+        r = _sp.rgb_of(self.reflectance, "reflectance")
+        return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": rgb_dict(r)}}
 
 
 
 class DiffuseTransmission(BxDF):
     """Lambertian reflection plus Lambertian transmission (pbrt-v4 ``DiffuseTransmissionBxDF``).
 
-    f = reflectance / pi on wo's side, transmittance / pi across the surface. Each RGB in [0, 1].
-    Lobes are sampled in proportion to their largest channel.
+    f = reflectance / pi on wo's side, transmittance / pi across the surface. Each RGB in [0, 1]
+    or a ``bsdfkit.Spectrum`` in [0, 1]. Lobes are sampled in proportion to their largest channel
+    (in spectral mode: their largest value over the 4 wavelengths, as pbrt-v4).
     """
 
     __slots__ = ()
@@ -60,20 +68,26 @@ class DiffuseTransmission(BxDF):
     param_ranges = {"reflectance": (0.0, 1.0), "transmittance": (0.0, 1.0)}  # fitting bounds (bk.fit)
 
     def __init__(self, reflectance=0.25, transmittance=0.25):
-        super().__init__(reflectance=_rgb(reflectance, "reflectance", lo=0.0, hi=1.0),
-                         transmittance=_rgb(transmittance, "transmittance", lo=0.0, hi=1.0))
+        super().__init__(reflectance=_sp.spectrum_or_rgb(reflectance, "reflectance", lo=0.0, hi=1.0),
+                         transmittance=_sp.spectrum_or_rgb(transmittance, "transmittance", lo=0.0, hi=1.0))
 
     @classmethod
     def _from_params(cls, p):
         return cls(p["reflectance"], p["transmittance"])
 
     def _make_core(self):
-        return _core.DiffuseTransmission(reflectance=self._params["reflectance"].tolist(),
-                                         transmittance=self._params["transmittance"].tolist())
+        p = self._params
+        return _core.DiffuseTransmission(reflectance=_sp.rgb_of(p["reflectance"], "reflectance").tolist(),
+                                         transmittance=_sp.rgb_of(p["transmittance"], "reflectance").tolist())
+
+    def _make_spectral_core(self):
+        p = self._params
+        return _core.DiffuseTransmissionSpectral(_sp.spectral_param(p["reflectance"], "reflectance"),
+                                                 _sp.spectral_param(p["transmittance"], "reflectance"))
 
     def describe(self) -> str:
         p = self._params
-        return f"DiffuseTransmission R={fmt_value(p['reflectance'])}, T={fmt_value(p['transmittance'])}"
+        return f"DiffuseTransmission R={_sp.fmt_param(p['reflectance'])}, T={_sp.fmt_param(p['transmittance'])}"
 
     def to_mitsuba(self) -> dict:
         raise NotImplementedError(

@@ -8,9 +8,11 @@
 * :mod:`.uplift`: RGB -> spectrum (Jakob & Hanika 2019), the sRGB coefficient table (fitted at
   first use, cached).
 * :mod:`.sampling`: :func:`sample_wavelengths` (pbrt-v4's ``SampledWavelengths``) and
-  :func:`spectrum_to_rgb` (Monte Carlo colour estimates).
+  :func:`spectrum_to_rgb` (Monte Carlo colour estimates), :func:`terminate_secondary` (pbrt-v4's
+  TerminateSecondary on wavelength pdfs, after a refraction through a dispersive dielectric).
 """
-from .sampling import N_SPECTRUM_SAMPLES, sample_wavelengths, spectrum_to_rgb, visible_pdf
+from .sampling import N_SPECTRUM_SAMPLES, sample_wavelengths, spectrum_to_rgb, terminate_secondary, visible_pdf
 from .spectrum import Spectrum
 
-__all__ = ["Spectrum", "sample_wavelengths", "spectrum_to_rgb", "visible_pdf", "N_SPECTRUM_SAMPLES"]
+__all__ = ["Spectrum", "sample_wavelengths", "spectrum_to_rgb", "terminate_secondary", "visible_pdf",
+           "N_SPECTRUM_SAMPLES"]

@@ -5,7 +5,7 @@ import numpy as np
 
 from . import colorimetry
 
-__all__ = ["N_SPECTRUM_SAMPLES", "sample_wavelengths", "visible_pdf", "spectrum_to_rgb"]
+__all__ = ["N_SPECTRUM_SAMPLES", "sample_wavelengths", "visible_pdf", "spectrum_to_rgb", "terminate_secondary"]
 
 #: Wavelengths per sample (pbrt-v4 ``NSpectrumSamples``).
 N_SPECTRUM_SAMPLES = 4
@@ -105,3 +105,20 @@ def spectrum_to_rgb(values, wavelengths, pdf, *, space: str = "srgb", illuminant
     xyz = np.einsum("...k,...kc->...c", w, colorimetry.cmfs(lam)) / (val.shape[-1] * colorimetry.cie_y_integral())
     return colorimetry.xyz_to_srgb(xyz) if space == "srgb" else xyz
 
+
+def terminate_secondary(pdf, terminated):
+    """pbrt-v4's ``SampledWavelengths::TerminateSecondary`` applied where ``terminated``: the
+    wavelength pdfs (..., 4) with lambda1..3 set to 0 and lambda0's divided by 4 (a new array).
+    Use it on the wavelength pdf of a path whose sample refracted through a dispersive
+    dielectric (``SampleResult.terminated``) before ``bsdfkit.spectrum_to_rgb``."""
+    p = np.array(pdf, dtype=np.float64, copy=True)
+    t = np.asarray(terminated, dtype=bool)
+    if p.ndim == 0 or p.shape[-1] != 4:
+        raise ValueError(f"pdf: expected last axis of length 4, got shape {p.shape}")
+    try:
+        t = np.broadcast_to(t, p.shape[:-1])
+    except ValueError:
+        raise ValueError(f"terminated: shape {t.shape} does not broadcast with pdf {p.shape[:-1]}") from None
+    p[..., 0] = np.where(t, p[..., 0] / 4.0, p[..., 0])
+    p[..., 1:] = np.where(t[..., None], 0.0, p[..., 1:])
+    return p

@@ -36,24 +36,28 @@ template <typename S = double> struct ConductorParamsT {
 };
 using ConductorParams = ConductorParamsT<>;
 
-template <typename F, ConductorFresnel FR = ConductorFresnel::Exact> struct ConductorBxDF {
+// NC: channels (3 RGB; 4 in spectral mode: eta and k at the element's wavelengths, core/spectral.h).
+template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3> struct ConductorBxDF {
     using Params = ConductorParamsT<param_t<F>>;
     static constexpr const char *Name = FR == ConductorFresnel::Schlick ? "ConductorSchlick"
                                         : FR == ConductorFresnel::F82   ? "ConductorF82"
                                                                         : "Conductor";
     TrowbridgeReitz<F> mfd;
-    Spectrum<F> eta, k;
+    Spectrum<F, NC> eta, k;
     // Per-channel Schlick F0 and F82-tint a, computed in double at construction (unused by Exact);
     // for a Dual model in the Dual (param_t), so their derivatives reach eta and k.
-    Spectrum<F> f0{F(0)}, f82_a{F(0)};
+    Spectrum<F, NC> f0{F(0)}, f82_a{F(0)};
 
     ConductorBxDF() = default;
-    ConductorBxDF(const TrowbridgeReitz<F> &mfd_, const Spectrum<F> &eta_, const Spectrum<F> &k_)
+    ConductorBxDF(const TrowbridgeReitz<F> &mfd_, const Spectrum<F, NC> &eta_, const Spectrum<F, NC> &k_)
         : mfd(mfd_), eta(eta_), k(k_) {
-        for (int i = 0; i < Spectrum<F>::Size; ++i) {
-            f0[i] = F(ConductorF0(param_t<F>(eta[i]), param_t<F>(k[i])));
-            f82_a[i] = F(ConductorF82A(param_t<F>(eta[i]), param_t<F>(k[i])));
-        }
+        // Only the approximations read them (spectral mode builds a model per element: skip the
+        // exact term's unused complex Fresnel at 1/7).
+        if constexpr (FR != ConductorFresnel::Exact)
+            for (int i = 0; i < NC; ++i) {
+                f0[i] = F(ConductorF0(param_t<F>(eta[i]), param_t<F>(k[i])));
+                f82_a[i] = F(ConductorF82A(param_t<F>(eta[i]), param_t<F>(k[i])));
+            }
     }
 
     static ConductorBxDF make(const Params &p) {
@@ -68,7 +72,7 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact> struct Cond
     static constexpr bool Vectorized = true;
 
     // The Fresnel reflectance at |wo.wm| = cos_i, per channel (the FR knob).
-    template <typename V> Spectrum<V> fresnel(V cos_i) const {
+    template <typename V> Spectrum<V, NC> fresnel(V cos_i) const {
         if constexpr (FR == ConductorFresnel::Schlick) return FrSchlick(cos_i, f0);
         else if constexpr (FR == ConductorFresnel::F82) return FrF82Tint(cos_i, f0, f82_a);
         else return FrComplex(cos_i, eta, k);
@@ -76,10 +80,10 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact> struct Cond
 
     // Fresnel / denom per channel with the fewest divisions: the exact term's own denominator
     // joins denom (one division per channel); the polynomial knobs share one reciprocal.
-    template <typename V> Spectrum<V> fresnel_over(V cos_i, V denom) const {
-        Spectrum<V> r;
+    template <typename V> Spectrum<V, NC> fresnel_over(V cos_i, V denom) const {
+        Spectrum<V, NC> r;
         if constexpr (FR == ConductorFresnel::Exact) {
-            for (int c = 0; c < Spectrum<F>::Size; ++c) {
+            for (int c = 0; c < NC; ++c) {
                 V num, den;
                 FrComplexRatio(cos_i, eta[c], k[c], &num, &den);
                 r[c] = num / (den * denom);
@@ -93,27 +97,27 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact> struct Cond
     // Torrance-Sparrow: f = D(wm) F(wo.wm) G(wo, wi) / (4 cos_o cos_i), wm = normalize(wo + wi),
     // as F / (D_denom G_denom) (core/microfacet.h): Exact 4 divisions and 9 square roots per
     // element (1 + 3 and 3 + 6), Schlick / F82 2 and 3.
-    template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
+    template <typename V> Spectrum<V, NC> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
         V cos_o = AbsCosTheta(wo), cos_i = AbsCosTheta(wi);
         Mask<V> active = SameHemisphere(wo, wi) & Mask<V>(!mfd.effectively_smooth());
         Vec3<V> wm = reflection_half_vector(wi, wo, active);
         V denom = mfd.D_denom(wm, active) *
                   mfd.G_denom(cos_o, cos_i, mfd.smith_root(wo), mfd.smith_root(wi));
-        Spectrum<V> fr = fresnel_over(abs(dot(wo, wm)), denom);
-        return select(active, fr, Spectrum<V>(V(0)));
+        Spectrum<V, NC> fr = fresnel_over(abs(dot(wo, wm)), denom);
+        return select(active, fr, Spectrum<V, NC>(V(0)));
     }
 
     bool is_smooth() const { return mfd.effectively_smooth(); }
 
     template <typename V>
-    BSDFSample<V> sample_f(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode mode, uint8_t sample_flags) const {
+    BSDFSample<V, NC> sample_f(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode mode, uint8_t sample_flags) const {
         return is_smooth() ? sample_smooth(wo, uc, mode, sample_flags) : sample_rough(wo, uc, u, mode, sample_flags);
     }
 
     // Delta mirror: f = Fr / |cos_i|, discrete probability 1.
     template <typename V>
-    BSDFSample<V> sample_smooth(const Vec3<V> &wo, V /*uc*/, TransportMode, uint8_t sample_flags) const {
-        BSDFSample<V> s;
+    BSDFSample<V, NC> sample_smooth(const Vec3<V> &wo, V /*uc*/, TransportMode, uint8_t sample_flags) const {
+        BSDFSample<V, NC> s;
         bool allowed = (sample_flags & RT_Reflection) != 0;
         s.wi = Vec3<V>(-wo.x, -wo.y, wo.z);
         V cos_i = DeltaAbsCos(s.wi);
@@ -127,8 +131,8 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact> struct Cond
     // Sample a visible normal on wo's side and mirror wo about it. pdf = 1 / (D_denom P) with
     // P = 2 (cos_o + R_o), f = F / (D_denom G_denom) (core/microfacet.h).
     template <typename V>
-    BSDFSample<V> sample_rough(const Vec3<V> &wo, V /*uc*/, Point2<V> u, TransportMode, uint8_t sample_flags) const {
-        BSDFSample<V> s;
+    BSDFSample<V, NC> sample_rough(const Vec3<V> &wo, V /*uc*/, Point2<V> u, TransportMode, uint8_t sample_flags) const {
+        BSDFSample<V, NC> s;
         Vec3<V> wm = mfd.Sample_wm(wo, u);
         Vec3<V> wi = Reflect(wo, wm);
         V cos_o = AbsCosTheta(wo), cos_i = AbsCosTheta(wi);

@@ -15,10 +15,12 @@ template <typename S = double> struct DiffuseParamsT {
 };
 using DiffuseParams = DiffuseParamsT<>;
 
-template <typename F> struct DiffuseBxDF {
+// NC: channels (3 RGB; 4 in spectral mode, one per wavelength, built per element from the
+// parameters evaluated at that element's wavelengths: core/spectral.h, batch_spectral.h).
+template <typename F, int NC = 3> struct DiffuseBxDF {
     using Params = DiffuseParamsT<param_t<F>>;
     static constexpr const char *Name = "Diffuse";
-    Spectrum<F> R;
+    Spectrum<F, NC> R;
 
     static DiffuseBxDF make(const Params &p) { return {to_spectrum<F>(p.reflectance)}; }
 
@@ -28,21 +30,21 @@ template <typename F> struct DiffuseBxDF {
     // roots in f and pdf; sample: 1 division (the concentric map's ratio) and 1 square root.
     static constexpr bool Vectorized = true;
 
-    template <typename V> Spectrum<V> R_over_pi() const {
-        Spectrum<V> r;
-        for (int c = 0; c < Spectrum<F>::Size; ++c) r[c] = V(R[c] * InvPi<F>);
+    template <typename V> Spectrum<V, NC> R_over_pi() const {
+        Spectrum<V, NC> r;
+        for (int c = 0; c < NC; ++c) r[c] = V(R[c] * InvPi<F>);
         return r;
     }
 
     // f = R / pi on the side of wo, 0 across the surface.
-    template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
-        return select(SameHemisphere(wo, wi), R_over_pi<V>(), Spectrum<V>(V(0)));
+    template <typename V> Spectrum<V, NC> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
+        return select(SameHemisphere(wo, wi), R_over_pi<V>(), Spectrum<V, NC>(V(0)));
     }
 
     template <typename V>
-    BSDFSample<V> sample_f(const Vec3<V> &wo, V /*uc*/, Point2<V> u, TransportMode /*mode*/,
-                           uint8_t sample_flags) const {
-        BSDFSample<V> s;
+    BSDFSample<V, NC> sample_f(const Vec3<V> &wo, V /*uc*/, Point2<V> u, TransportMode /*mode*/,
+                               uint8_t sample_flags) const {
+        BSDFSample<V, NC> s;
         Vec3<V> wi = SampleCosineHemisphere(u);
         wi.z = select(wo.z < V(0), -wi.z, wi.z); // two-sided: sample wo's side
         s.wi = wi;

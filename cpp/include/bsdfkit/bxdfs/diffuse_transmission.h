@@ -19,10 +19,12 @@ template <typename S = double> struct DiffuseTransmissionParamsT {
 };
 using DiffuseTransmissionParams = DiffuseTransmissionParamsT<>;
 
-template <typename F> struct DiffuseTransmissionBxDF {
+// NC: channels (3 RGB; 4 in spectral mode, see DiffuseBxDF). The lobe choice uses the largest
+// channel, as pbrt-v4's MaxComponentValue over the sampled wavelengths.
+template <typename F, int NC = 3> struct DiffuseTransmissionBxDF {
     using Params = DiffuseTransmissionParamsT<param_t<F>>;
     static constexpr const char *Name = "DiffuseTransmission";
-    Spectrum<F> R, T;
+    Spectrum<F, NC> R, T;
 
     static DiffuseTransmissionBxDF make(const Params &p) {
         return {to_spectrum<F>(p.reflectance), to_spectrum<F>(p.transmittance)};
@@ -32,7 +34,7 @@ template <typename F> struct DiffuseTransmissionBxDF {
         return uint8_t((R.is_black() ? Unset : DiffuseReflection) | (T.is_black() ? Unset : DiffuseTransmission));
     }
 
-    Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode) const {
+    Spectrum<F, NC> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode) const {
         return select(SameHemisphere(wo, wi), R * InvPi<F>, T * InvPi<F>);
     }
 
@@ -41,11 +43,11 @@ template <typename F> struct DiffuseTransmissionBxDF {
         restrict_lobes(R.max_component(), T.max_component(), sample_flags, pr, pt);
     }
 
-    BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode,
-                           uint8_t sample_flags) const {
+    BSDFSample<F, NC> sample_f(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode,
+                               uint8_t sample_flags) const {
         F pr, pt;
         lobe_probs(sample_flags, &pr, &pt);
-        BSDFSample<F> s;
+        BSDFSample<F, NC> s;
         F sum = pr + pt;
         bool reflect = ChooseFirstLobe(uc, pr, pt);
         Vec3<F> wi = SampleCosineHemisphere(u);

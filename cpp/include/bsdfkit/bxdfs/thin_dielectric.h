@@ -26,12 +26,18 @@ template <typename F> struct ThinDielectricBxDF {
 
     Spectrum<F> f(const Vec3<F> &, const Vec3<F> &, TransportMode) const { return Spectrum<F>(F(0)); }
 
+    // The slab's reflectance at |cos| = cos_o: the geometric series of inter-reflections,
+    // R' = R + T^2 R / (1 - R^2) (pbrt-v4 ThinDielectricBxDF). Also used per wavelength in
+    // spectral mode (batch_spectral.h).
+    static F slab_reflectance(F cos_o, F eta) {
+        F R = FrDielectric(cos_o, eta);
+        F T = F(1) - R;
+        return R < F(1) ? R + sqr(T) * R / (F(1) - sqr(R)) : R;
+    }
+
     BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F>, TransportMode, uint8_t sample_flags) const {
         BSDFSample<F> s;
-        F R = FrDielectric(AbsCosTheta(wo), eta);
-        // Geometric series of inter-reflections: R' = R + T^2 R / (1 - R^2)
-        F T = F(1) - R;
-        F Rs = R < F(1) ? R + sqr(T) * R / (F(1) - sqr(R)) : R;
+        F Rs = slab_reflectance(AbsCosTheta(wo), eta);
         F pr, pt;
         restrict_lobes(Rs, F(1) - Rs, sample_flags, &pr, &pt);
         bool reflect = ChooseFirstLobe(uc, pr, pt);

@@ -18,26 +18,26 @@ template <typename F> inline F finite_or_zero(F v) {
     return select(v <= F(std::numeric_limits<scalar_t<F>>::max()), v, F(0));
 }
 template <typename F, int N> inline Spectrum<F, N> finite_or_zero(const Spectrum<F, N> &s) {
-    Spectrum<F> r;
-    for (int i = 0; i < Spectrum<F>::Size; ++i) r[i] = finite_or_zero(s[i]);
+    Spectrum<F, N> r;
+    for (int i = 0; i < N; ++i) r[i] = finite_or_zero(s[i]);
     return r;
 }
 // Mask forms (bitwise &/|, no short-circuit), so the checks vectorize in the sample kernels.
-template <typename F> inline Mask<F> nonzero_mask(const Spectrum<F> &s) {
+template <typename F, int N> inline Mask<F> nonzero_mask(const Spectrum<F, N> &s) {
     Mask<F> b = s[0] != F(0);
-    for (int i = 1; i < Spectrum<F>::Size; ++i) b = b | (s[i] != F(0));
+    for (int i = 1; i < N; ++i) b = b | (s[i] != F(0));
     return b;
 }
-template <typename F> inline Mask<F> finite_nonneg_mask(const Spectrum<F> &s) {
+template <typename F, int N> inline Mask<F> finite_nonneg_mask(const Spectrum<F, N> &s) {
     const F big(std::numeric_limits<scalar_t<F>>::max());
     Mask<F> ok = (s[0] >= F(0)) & (s[0] <= big);
-    for (int i = 1; i < Spectrum<F>::Size; ++i) ok = ok & (s[i] >= F(0)) & (s[i] <= big);
+    for (int i = 1; i < N; ++i) ok = ok & (s[i] >= F(0)) & (s[i] <= big);
     return ok;
 }
 
 // Whether a raw BxDF sample survives pbrt-v4's BSDF-level rules (the lobe-flag test against
 // sample_flags aside, which the batch kernel hoists out of its loop).
-template <typename F> inline Mask<F> sample_accepted(const BSDFSample<F> &s, const Vec3<F> &wo) {
+template <typename F, int N> inline Mask<F> sample_accepted(const BSDFSample<F, N> &s, const Vec3<F> &wo) {
     return s.valid & (wo.z != F(0)) & nonzero_mask(s.f) & (s.pdf > F(0)) & (s.wi.z != F(0)) &
            finite_nonneg_mask(s.f) & (s.pdf <= F(std::numeric_limits<scalar_t<F>>::max()));
 }
@@ -46,9 +46,9 @@ template <typename F> inline Mask<F> sample_accepted(const BSDFSample<F> &s, con
 template <typename F> inline Vec3<F> kInvalidSampleWi() { return Vec3<F>(0, 0, 1); }
 
 template <typename Model, typename F>
-inline Spectrum<F> bsdf_f(const Model &m, const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode) {
-    Spectrum<F> v = finite_or_zero(m.f(wo, wi, mode));
-    return select(wo.z != F(0), v, Spectrum<F>(F(0)));
+inline auto bsdf_f(const Model &m, const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode) {
+    auto v = finite_or_zero(m.f(wo, wi, mode));  // Spectrum<F, N>: N = 3 (RGB) or 4 (spectral)
+    return select(wo.z != F(0), v, decltype(v)(F(0)));
 }
 
 template <typename Model, typename F>
@@ -58,15 +58,14 @@ inline F bsdf_pdf(const Model &m, const Vec3<F> &wo, const Vec3<F> &wi, Transpor
 }
 
 template <typename Model, typename F>
-inline BSDFSample<F> bsdf_sample(const Model &m, const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode,
-                                 uint8_t sf) {
+inline auto bsdf_sample(const Model &m, const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode, uint8_t sf) {
     // Uniforms are documented on [0, 1] and used on [0, 1) (pbrt-v4's OneMinusEpsilon).
-    BSDFSample<F> s = m.sample_f(wo, clamp_uniform(uc), clamp_uniform(u), mode, sf);
+    auto s = m.sample_f(wo, clamp_uniform(uc), clamp_uniform(u), mode, sf);  // BSDFSample<F, N>
     bool ok = sample_accepted(s, wo) & ((m.flags() & sf) != 0);
     // Every output of a rejected sample is a defined value, never a NaN from a dead branch; its
     // direction is the normal (0, 0, 1), so that eval / pdf accept every sampled wi.
-    BSDFSample<F> r;
-    r.f = select(ok, s.f, Spectrum<F>(F(0)));
+    decltype(s) r;
+    r.f = select(ok, s.f, decltype(s.f)(F(0)));
     r.wi = select(ok, s.wi, kInvalidSampleWi<F>());
     r.pdf = ok ? s.pdf : F(0);
     r.flags = ok ? s.flags : uint8_t(Unset);

@@ -7,10 +7,10 @@
 namespace bsdfkit {
 
 // For a packet F, `flags` holds each lane's BxDFFlags as a float (see lobe_flag) and the bools
-// are lane masks.
-template <typename F> struct BSDFSample {
+// are lane masks. N: channels of f (3 RGB; 4 in spectral mode, one per wavelength, core/spectral.h).
+template <typename F, int N = 3> struct BSDFSample {
     using Flags = std::conditional_t<is_packet_v<F>, F, uint8_t>;
-    Spectrum<F> f{F(0)};
+    Spectrum<F, N> f{F(0)};
     Vec3<F> wi{F(0), F(0), F(0)};
     F pdf = F(0);
     Flags flags = Flags(Unset);

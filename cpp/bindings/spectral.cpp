@@ -1,0 +1,304 @@
+// Spectral mode bindings (issue 15): _core.SpectralParam and one _core.<Model>Spectral class per
+// model family with a spectral adapter (batch_spectral.h). The Python layer (models/_spectral.py)
+// validates, broadcasts and flattens the arguments and calls the row-array entries below; as in
+// bind_model.h, the checks here are a second line of defence (a misuse raises, never reads out
+// of bounds). Wavelengths: float64 rows of 4 (for both precisions), nm, finite and in [360, 830];
+// the kernels count the bad ones and the entries return the counts (the Python layer raises).
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "bind_model.h"
+#include "bsdfkit/batch_spectral.h"
+
+namespace bsdfkit::py_bind {
+
+namespace {
+
+// A table's storage: nodes, values and the per-nm segment index (core/spectral.h).
+struct TableData {
+    std::vector<double> x, v;
+    std::vector<int32_t> first;
+};
+
+// A SpectralParam plus the table it points into (shared: copies keep it alive).
+struct PySpectralParam {
+    SpectralParam p;
+    std::shared_ptr<TableData> table;
+};
+
+std::string kind_name(SpectralParam::Kind k) {
+    return k == SpectralParam::Constant ? "constant" : k == SpectralParam::Sigmoid ? "sigmoid" : "table";
+}
+
+template <template <typename> class SM> struct PySpectral {
+    SM<float> m32;
+    SM<double> m64;
+    std::vector<PySpectralParam> keep;  // owners of the tables the adapters point into
+
+    template <typename F> const SM<F> &get() const {
+        if constexpr (std::is_same_v<F, float>) return m32; else return m64;
+    }
+
+    // Rows of `a` (n, or 1 = broadcast) with trailing shape `tail`; its stride in elements.
+    template <typename T>
+    static const T *rows(const py::array &a, const char *name, int64_t tail, int64_t n, int64_t *stride) {
+        int64_t r;
+        const T *p = checked<T>(a, name, {tail}, &r);
+        if (r != n && r != 1) value_error(std::string(name) + ": wrong number of rows");
+        *stride = r == n && n != 1 ? tail : (r == 1 ? 0 : tail);
+        return p;
+    }
+
+    template <typename F>
+    py::tuple eval_t(const py::array &wo, const py::array &wi, const py::array &lam, int mode, py::array &out) const {
+        int64_t n, so, si, sl;
+        F *po = checked<F>(out, "out", {4}, &n, true);
+        const F *pwo = rows<F>(wo, "wo", 3, n, &so), *pwi = rows<F>(wi, "wi", 3, n, &si);
+        const double *pl = rows<double>(lam, "wavelengths", 4, n, &sl);
+        TransportMode md = to_mode(mode);
+        SpectralBadCounts bad;
+        {
+            py::gil_scoped_release release;
+            eval_spectral_batch(get<F>(), pwo, so, pwi, si, pl, sl, n, md, po, num_threads(), bad);
+        }
+        raise_if_interrupted();
+        return py::make_tuple(bad.wo.load(), bad.wi.load(), bad.lam.load());
+    }
+
+    template <typename F>
+    py::tuple pdf_t(const py::array &wo, const py::array &wi, const py::array &lam, int mode, int sf,
+                    py::array &out) const {
+        int64_t n, so, si, sl;
+        F *po = checked<F>(out, "out", {}, &n, true);
+        const F *pwo = rows<F>(wo, "wo", 3, n, &so), *pwi = rows<F>(wi, "wi", 3, n, &si);
+        const double *pl = rows<double>(lam, "wavelengths", 4, n, &sl);
+        TransportMode md = to_mode(mode);
+        uint8_t s = to_sflags(sf);
+        SpectralBadCounts bad;
+        {
+            py::gil_scoped_release release;
+            pdf_spectral_batch(get<F>(), pwo, so, pwi, si, pl, sl, n, md, s, po, num_threads(), bad);
+        }
+        raise_if_interrupted();
+        return py::make_tuple(bad.wo.load(), bad.wi.load(), bad.lam.load());
+    }
+
+    template <typename F>
+    py::tuple sample_t(const py::array &wo, const py::array &uc, const py::array &u, const py::array &lam, int mode,
+                       int sf, py::array &wi_out, py::array &f_out, py::array &pdf_out, py::array &flags_out,
+                       py::array &eta_out, py::array &valid_out, py::array &prop_out, py::array &term_out) const {
+        int64_t n, nu, r, so, sl;
+        const F *puc = checked<F>(uc, "uc", {}, &n);
+        const F *pu = checked<F>(u, "u", {2}, &nu);
+        if (nu != n) value_error("uc and u must have the same length");
+        const F *pwo = rows<F>(wo, "wo", 3, n, &so);
+        const double *pl = rows<double>(lam, "wavelengths", 4, n, &sl);
+        SpectralSampleOut<F> o;
+        o.wi = checked<F>(wi_out, "wi", {3}, &r, true); if (r != n) value_error("wi: wrong shape");
+        o.f = checked<F>(f_out, "f", {4}, &r, true); if (r != n) value_error("f: wrong shape");
+        o.pdf = checked<F>(pdf_out, "pdf", {}, &r, true); if (r != n) value_error("pdf: wrong shape");
+        o.flags = checked<uint8_t>(flags_out, "flags", {}, &r, true); if (r != n) value_error("flags: wrong shape");
+        o.eta = checked<F>(eta_out, "eta", {}, &r, true); if (r != n) value_error("eta: wrong shape");
+        o.valid = checked<bool>(valid_out, "valid", {}, &r, true); if (r != n) value_error("valid: wrong shape");
+        o.proportional = checked<bool>(prop_out, "pdf_is_proportional", {}, &r, true);
+        if (r != n) value_error("pdf_is_proportional: wrong shape");
+        o.terminated = checked<bool>(term_out, "terminated", {}, &r, true);
+        if (r != n) value_error("terminated: wrong shape");
+        {
+            const py::array *arrs[] = {&wo, &uc, &u, &lam, &wi_out, &f_out, &pdf_out, &flags_out,
+                                       &eta_out, &valid_out, &prop_out, &term_out};
+            for (int a = 4; a < 12; ++a)
+                for (int c = 0; c < a; ++c)
+                    if (overlaps(*arrs[a], *arrs[c])) value_error("sample: output arrays must not overlap the inputs or each other");
+        }
+        TransportMode md = to_mode(mode);
+        uint8_t s = to_sflags(sf);
+        SpectralBadCounts bad;
+        {
+            py::gil_scoped_release release;
+            sample_spectral_batch(get<F>(), pwo, so, puc, pu, pl, sl, n, md, s, o, num_threads(), bad);
+        }
+        raise_if_interrupted();
+        return py::make_tuple(bad.wo.load(), bad.uc.load(), bad.u.load(), bad.lam.load());
+    }
+
+    template <typename F>
+    py::tuple albedo_t(const py::array &wo, const py::array &lam, int64_t n_samples, uint64_t seed, int mode,
+                       py::array &out) const {
+        int64_t n, no, sl;
+        F *po = checked<F>(out, "out", {4}, &n, true);
+        const F *pwo = checked<F>(wo, "wo", {3}, &no);
+        if (no != n) value_error("wo: wrong number of rows");
+        const double *pl = rows<double>(lam, "wavelengths", 4, n, &sl);
+        if (n_samples <= 0) value_error("n_samples: must be positive");
+        TransportMode md = to_mode(mode);
+        SpectralBadCounts bad;
+        {
+            py::gil_scoped_release release;
+            albedo_spectral_batch(get<F>(), pwo, n, pl, sl, n_samples, seed, md, po, num_threads(), bad);
+        }
+        raise_if_interrupted();
+        return py::make_tuple(bad.wo.load(), bad.lam.load());
+    }
+};
+
+template <template <typename> class SM> py::class_<PySpectral<SM>> bind_spectral_model(py::module_ &m, const char *name) {
+    using P = PySpectral<SM>;
+    py::class_<P> c(m, name);
+    c.def("eval", [](const P &self, py::array wo, py::array wi, py::array lam, int mode, py::array out) {
+         return is_dtype<float>(out) ? self.template eval_t<float>(wo, wi, lam, mode, out)
+                                     : self.template eval_t<double>(wo, wi, lam, mode, out);
+     })
+        .def("pdf", [](const P &self, py::array wo, py::array wi, py::array lam, int mode, int sf, py::array out) {
+            return is_dtype<float>(out) ? self.template pdf_t<float>(wo, wi, lam, mode, sf, out)
+                                        : self.template pdf_t<double>(wo, wi, lam, mode, sf, out);
+        })
+        .def("sample", [](const P &self, py::array wo, py::array uc, py::array u, py::array lam, int mode, int sf,
+                          py::array wi, py::array f, py::array pdf, py::array flags, py::array eta, py::array valid,
+                          py::array prop, py::array term) {
+            return is_dtype<float>(f)
+                       ? self.template sample_t<float>(wo, uc, u, lam, mode, sf, wi, f, pdf, flags, eta, valid, prop, term)
+                       : self.template sample_t<double>(wo, uc, u, lam, mode, sf, wi, f, pdf, flags, eta, valid, prop, term);
+        })
+        .def("albedo", [](const P &self, py::array wo, py::array lam, int64_t n, uint64_t seed, int mode, py::array out) {
+            return is_dtype<float>(out) ? self.template albedo_t<float>(wo, lam, n, seed, mode, out)
+                                        : self.template albedo_t<double>(wo, lam, n, seed, mode, out);
+        })
+        .def_property_readonly("dispersive", [](const P &self) { return self.m64.dispersive(); });
+    return c;
+}
+
+Masking to_masking(int v) {
+    if (v != 0 && v != 1) value_error("masking: must be 0 (correlated) or 1 (separable)");
+    return Masking(v);
+}
+
+template <typename F> TrowbridgeReitz<F> make_mfd(double ax, double ay, int masking) {
+    return TrowbridgeReitz<F>(F(ax), F(ay), to_masking(masking));
+}
+
+template <ConductorFresnel FR, template <typename> class SM>
+void bind_conductor(py::module_ &m, const char *name) {
+    bind_spectral_model<SM>(m, name).def(
+        py::init([](const PySpectralParam &eta, const PySpectralParam &k, double ax, double ay, int masking) {
+            PySpectral<SM> r;
+            r.m32.eta = r.m64.eta = eta.p;
+            r.m32.k = r.m64.k = k.p;
+            r.m32.mfd = make_mfd<float>(ax, ay, masking);
+            r.m64.mfd = make_mfd<double>(ax, ay, masking);
+            r.keep = {eta, k};
+            return r;
+        }),
+        py::arg("eta"), py::arg("k"), py::arg("alpha_x"), py::arg("alpha_y"), py::arg("masking"));
+}
+
+} // namespace
+
+void bind_spectral(py::module_ &m) {
+    py::class_<PySpectralParam>(m, "SpectralParam",
+                                "A model parameter as a function of wavelength (core/spectral.h): constant, "
+                                "sigmoid (an uplifted RGB) or a piecewise-linear table with nodes from 360 to 830 nm.")
+        .def_static("constant", [](double v) {
+            if (!std::isfinite(v)) value_error("value: must be finite");
+            PySpectralParam r;
+            r.p.kind = SpectralParam::Constant;
+            r.p.c[0] = v;
+            return r;
+        }, py::arg("value"))
+        .def_static("sigmoid", [](double c0, double c1, double c2, double scale) {
+            if (!std::isfinite(c0) || !std::isfinite(c1) || std::isnan(c2) || !std::isfinite(scale))
+                value_error("coefficients: c0, c1 and scale must be finite, c2 not NaN");
+            PySpectralParam r;
+            r.p.kind = SpectralParam::Sigmoid;
+            r.p.c[0] = c0;
+            r.p.c[1] = c1;
+            r.p.c[2] = c2;
+            r.p.scale = scale;
+            return r;
+        }, py::arg("c0"), py::arg("c1"), py::arg("c2"), py::arg("scale"))
+        .def_static("table", [](py::array_t<double, py::array::c_style | py::array::forcecast> x,
+                                py::array_t<double, py::array::c_style | py::array::forcecast> v) {
+            if (x.ndim() != 1 || v.ndim() != 1 || x.shape(0) != v.shape(0) || x.shape(0) < 2)
+                value_error("table: expected two 1-D arrays of the same length >= 2 (nodes in nm, values)");
+            int64_t n = x.shape(0);
+            auto t = std::make_shared<TableData>();
+            t->x.assign(x.data(), x.data() + n);
+            t->v.assign(v.data(), v.data() + n);
+            if (t->x.front() != kLambdaMin || t->x.back() != kLambdaMax)
+                value_error("table: the nodes must start at 360 and end at 830 nm");
+            for (int64_t i = 0; i < n; ++i) {
+                if (!std::isfinite(t->v[size_t(i)])) value_error("table: values must be finite");
+                if (i && !(t->x[size_t(i)] > t->x[size_t(i - 1)])) value_error("table: nodes must increase");
+            }
+            t->first.resize(kDenseN);
+            int32_t j = 0;
+            for (int k = 0; k < kDenseN; ++k) {  // the last node <= 360 + k, at most n - 2
+                double l = kLambdaMin + k;
+                while (j + 2 < n && t->x[size_t(j + 1)] <= l) ++j;
+                t->first[size_t(k)] = j;
+            }
+            PySpectralParam r;
+            r.table = t;
+            r.p.kind = SpectralParam::Table;
+            r.p.x = t->x.data();
+            r.p.v = t->v.data();
+            r.p.first = t->first.data();
+            r.p.n = int32_t(n);
+            return r;
+        }, py::arg("nodes"), py::arg("values"))
+        .def_property_readonly("kind", [](const PySpectralParam &s) { return kind_name(s.p.kind); })
+        .def("__call__", [](const PySpectralParam &s, py::array_t<double, py::array::c_style | py::array::forcecast> l) {
+            py::array_t<double> out(l.request().shape);
+            const double *pl = l.data();
+            double *po = out.mutable_data();
+            for (py::ssize_t i = 0; i < l.size(); ++i) po[i] = s.p(pl[i]);
+            return out;
+        }, py::arg("wavelengths"), "Values at wavelengths (nm), float64, as the kernels evaluate them.");
+
+    bind_spectral_model<DiffuseSpectral>(m, "DiffuseSpectral")
+        .def(py::init([](const PySpectralParam &r) {
+                 PySpectral<DiffuseSpectral> o;
+                 o.m32.reflectance = o.m64.reflectance = r.p;
+                 o.keep = {r};
+                 return o;
+             }),
+             py::arg("reflectance"));
+    bind_spectral_model<DiffuseTransmissionSpectral>(m, "DiffuseTransmissionSpectral")
+        .def(py::init([](const PySpectralParam &r, const PySpectralParam &t) {
+                 PySpectral<DiffuseTransmissionSpectral> o;
+                 o.m32.reflectance = o.m64.reflectance = r.p;
+                 o.m32.transmittance = o.m64.transmittance = t.p;
+                 o.keep = {r, t};
+                 return o;
+             }),
+             py::arg("reflectance"), py::arg("transmittance"));
+    bind_conductor<ConductorFresnel::Exact, ConductorSpectral>(m, "ConductorSpectral");
+    bind_conductor<ConductorFresnel::Schlick, ConductorSchlickSpectral>(m, "ConductorSchlickSpectral");
+    bind_conductor<ConductorFresnel::F82, ConductorF82Spectral>(m, "ConductorF82Spectral");
+    bind_spectral_model<DielectricSpectral>(m, "DielectricSpectral")
+        .def(py::init([](const PySpectralParam &eta, double ax, double ay, int masking, bool dispersive) {
+                 PySpectral<DielectricSpectral> o;
+                 o.m32.eta = o.m64.eta = eta.p;
+                 o.m32.mfd = make_mfd<float>(ax, ay, masking);
+                 o.m64.mfd = make_mfd<double>(ax, ay, masking);
+                 o.m32.disp = o.m64.disp = dispersive;
+                 o.keep = {eta};
+                 return o;
+             }),
+             py::arg("eta"), py::arg("alpha_x"), py::arg("alpha_y"), py::arg("masking"), py::arg("dispersive"));
+    bind_spectral_model<ThinDielectricSpectral>(m, "ThinDielectricSpectral")
+        .def(py::init([](const PySpectralParam &eta, bool dispersive) {
+                 PySpectral<ThinDielectricSpectral> o;
+                 o.m32.eta = o.m64.eta = eta.p;
+                 o.m32.disp = o.m64.disp = dispersive;
+                 o.keep = {eta};
+                 return o;
+             }),
+             py::arg("eta"), py::arg("dispersive"));
+}
+
+} // namespace bsdfkit::py_bind

@@ -1,0 +1,69 @@
+// Spectral mode (issue 15; docs/SPECTRAL.md): parameters as functions of wavelength, evaluated
+// per element at the element's 4 wavelengths (pbrt-v4 SampledWavelengths, NSpectrumSamples = 4).
+// The wavelengths are an input of every spectral kernel (batch_spectral.h), never sampled inside,
+// so results depend on nothing but the element's own inputs.
+#pragma once
+#include <cmath>
+#include <cstdint>
+
+#include "spectrum.h"
+
+namespace bsdfkit {
+
+inline constexpr int kSpectralN = 4;            // wavelengths per element (pbrt-v4 NSpectrumSamples)
+inline constexpr double kLambdaMin = 360.0;     // nm (pbrt-v4 Lambda_min / Lambda_max)
+inline constexpr double kLambdaMax = 830.0;
+inline constexpr int kDenseN = 471;             // whole nm in [360, 830] (the Table's index)
+
+template <typename F> using Spectrum4 = Spectrum<F, kSpectralN>;
+
+// Jakob & Hanika 2019 eq. 3: s(x) = 1/2 + x / (2 sqrt(1 + x^2)), s(+-inf) = 1, 0.
+inline double SigmoidJH(double x) {
+    double ax = std::abs(x);
+    double r = ax > 1e150 ? 1.0 : ax / std::sqrt(1.0 + x * x); // no overflow of x^2, inf -> 1
+    return 0.5 + 0.5 * std::copysign(r, x);
+}
+
+// One spectral parameter (trivially copyable; a table is owned by the binding that made it):
+//   Constant  c[0] at every wavelength
+//   Sigmoid   scale * s(c0 lambda^2 + c1 lambda + c2), lambda in nm (an uplifted RGB: Jakob &
+//             Hanika 2019, pbrt-v4 RGBAlbedoSpectrum / RGBUnboundedSpectrum); c2 may be +-inf
+//   Table     a piecewise-linear spectrum: n nodes x[0] = 360 < ... < x[n-1] = 830 nm with values
+//             v (sampled and named spectra, their end values carried to 360 / 830 nm), and
+//             first[k] = the segment holding 360 + k nm (k = 0..470), so a lookup is one gather
+//             plus a step past the nodes inside that nm (usually none): the exact piecewise-linear
+//             value, as Mitsuba's IrregularSpectrum (pbrt-v4's DenselySampledSpectrum instead
+//             rounds to the nearest nm: up to 2.5e-3 relative on the Cu eta data).
+// Evaluated in double: one sqrt (Sigmoid) or one gather and lerp (Table) per wavelength.
+struct SpectralParam {
+    enum Kind : uint8_t { Constant = 0, Sigmoid = 1, Table = 2 };
+    Kind kind = Constant;
+    double c[3] = {0.0, 0.0, 0.0};
+    double scale = 1.0;
+    const double *x = nullptr, *v = nullptr;
+    const int32_t *first = nullptr;
+    int32_t n = 0;
+
+    double operator()(double lambda) const {
+        if (kind == Constant) return c[0];
+        if (kind == Sigmoid) return scale * SigmoidJH((c[0] * lambda + c[1]) * lambda + c[2]);
+        double l = lambda >= kLambdaMin ? lambda : kLambdaMin;  // also maps a NaN to 360
+        l = l <= kLambdaMax ? l : kLambdaMax;
+        int32_t j = first[int(l - kLambdaMin)];
+        while ((j + 2 < n) & (x[j + 1] < l)) ++j;               // nodes within this nm
+        double t = (l - x[j]) / (x[j + 1] - x[j]);
+        return v[j] + t * (v[j + 1] - v[j]);
+    }
+
+    // The parameter at an element's wavelengths, at the model's precision.
+    template <typename F> Spectrum4<F> at(const double *lambda) const {
+        Spectrum4<F> s;
+        for (int i = 0; i < kSpectralN; ++i) s[i] = F((*this)(lambda[i]));
+        return s;
+    }
+};
+
+// Whether a wavelength is one the kernels accept: finite and in [360, 830] nm (NaN fails both).
+inline bool valid_wavelength(double l) { return (l >= kLambdaMin) & (l <= kLambdaMax); }
+
+} // namespace bsdfkit

@@ -1,0 +1,278 @@
+"""Spectral mode of the array API (issue 15; docs/SPECTRAL.md): ``wavelengths=`` in ``eval``,
+``pdf``, ``sample`` and ``albedo``, and model parameters given as :class:`bsdfkit.Spectrum`.
+
+* Parameters: a model field may be a ``Spectrum`` (sampled, named, constant, uplifted RGB) or an
+  RGB / scalar value. In spectral mode each becomes a ``_core.SpectralParam``: an RGB colour
+  through the Jakob & Hanika 2019 uplift (the sigmoid coefficients, ``Spectrum.from_rgb``'s
+  polished fit; greys exactly constant), a sampled spectrum as its piecewise-linear nodes over
+  [360, 830] nm (exact; a per-nm index finds the segment), a constant as itself. In RGB mode a spectrum is projected (:func:`rgb_of`, :func:`scalar_of`).
+* Calls: wavelengths (..., 4) in nm, finite and in [360, 830], broadcast with the directions'
+  leading axes; ``f`` and ``albedo`` become (..., 4), ``pdf`` stays (...), ``sample`` adds
+  ``terminated``. The kernels: ``cpp/include/bsdfkit/batch_spectral.h``.
+"""
+from __future__ import annotations
+
+import math
+import numbers
+from collections import OrderedDict
+
+import numpy as np
+
+from .. import _core
+from .._arrays import as_dirs, as_uniform, broadcast_batch, check_int, check_out, flatten_to, kernel_dtype
+from ..spectral.spectrum import Spectrum
+
+__all__ = ["LAMBDA_MIN", "LAMBDA_MAX", "DENSE_WAVELENGTHS", "check_wavelengths", "spectral_param", "rgb_of",
+           "scalar_of", "spectrum_or_rgb", "spectrum_or_scalar", "fmt_param", "is_dispersive", "eval", "pdf",
+           "sample", "albedo"]
+
+LAMBDA_MIN, LAMBDA_MAX = 360.0, 830.0
+#: The 1 nm grid of the kernels' spectral tables (pbrt-v4 DenselySampledSpectrum's range).
+DENSE_WAVELENGTHS = np.arange(360.0, 831.0)
+DENSE_WAVELENGTHS.setflags(write=False)
+#: RGB-mode eta of a dispersive dielectric: its value here (pbrt-v4 RGB renders have no dispersion).
+RGB_ETA_WAVELENGTH = 550.0
+
+_SPECTRAL_MODELS = "Diffuse, DiffuseTransmission, Conductor, Dielectric, ThinDielectric"
+
+
+# ------------------------------------------------------------------------------- parameters
+
+def _check_spectrum(s: Spectrum, name: str, lo, hi, lo_open):
+    v = s(DENSE_WAVELENGTHS)
+    if s.kind == "sampled":
+        inside = (s.wavelengths >= LAMBDA_MIN) & (s.wavelengths <= LAMBDA_MAX)
+        v = np.concatenate([v, s.values[inside]])
+    if not np.all(np.isfinite(v)):
+        raise ValueError(f"{name}: the spectrum must be finite over [360, 830] nm")
+    if lo is not None and np.any(v <= lo if lo_open else v < lo):
+        raise ValueError(f"{name}: the spectrum must be {'>' if lo_open else '>='} {lo} over [360, 830] nm, "
+                         f"got min {v.min():.6g}")
+    if hi is not None and np.any(v > hi):
+        raise ValueError(f"{name}: the spectrum must be <= {hi} over [360, 830] nm, got max {v.max():.6g}")
+    return s
+
+
+def spectrum_or_rgb(x, name: str, *, lo=None, hi=None, lo_open=False):
+    """A validated Spectrum (bounds checked over [360, 830] nm) or RGB value (base._rgb)."""
+    if isinstance(x, Spectrum):
+        return _check_spectrum(x, name, lo, hi, lo_open)
+    from .base import _rgb
+    return _rgb(x, name, lo=lo, hi=hi, lo_open=lo_open)
+
+
+def spectrum_or_scalar(x, name: str, *, lo=None, hi=None, lo_open=False):
+    """A validated Spectrum or real number (base._scalar)."""
+    if isinstance(x, Spectrum):
+        return _check_spectrum(x, name, lo, hi, lo_open)
+    from .base import _scalar
+    return _scalar(x, name, lo=lo, hi=hi, lo_open=lo_open)
+
+
+def rgb_of(v, kind: str) -> np.ndarray:
+    """RGB-mode value of a parameter: an RGB array as is; a Spectrum projected to linear sRGB:
+    ``kind="reflectance"`` under D65 (Mitsuba's rule for spectra in scene dicts), ``"unbounded"``
+    (eta, k) without an illuminant (Mitsuba's projection of its IOR presets, how ``METALS`` was
+    made), floored at 1e-4 so that an eta stays positive."""
+    if not isinstance(v, Spectrum):
+        return v
+    if kind == "reflectance":
+        return v.to_rgb("reflectance", "D65")
+    return np.maximum(v.to_rgb("unbounded", None), 1e-4)
+
+
+def scalar_of(v) -> float:
+    """RGB-mode value of a scalar parameter (a dielectric's eta): the number, or the spectrum at
+    550 nm (pbrt-v4 RGB renders have no dispersion; ``interop.PBRT_GLASS_ETA`` is the same rule)."""
+    if isinstance(v, Spectrum):
+        return float(v(np.float64(RGB_ETA_WAVELENGTH)))
+    return float(v)
+
+
+def is_dispersive(v) -> bool:
+    """A non-constant spectrum of eta: the dielectric disperses light."""
+    return isinstance(v, Spectrum) and not v.is_constant
+
+
+def fmt_param(v) -> str:
+    """Short text of a parameter for ``describe``: a spectrum by its name or kind."""
+    if isinstance(v, Spectrum):
+        if v.name is not None:
+            return v.name
+        if v.kind == "constant":
+            return f"{float(v(np.float64(550.0))):.3g}"
+        return f"{v.kind} spectrum"
+    from .base import fmt_value
+    return fmt_value(v)
+
+
+def spectral_param(v, kind: str) -> "_core.SpectralParam":
+    """The kernel form of one parameter (see the module docstring). kind: the uplift of an RGB
+    value, "reflectance" (bounded, pbrt-v4 RGBAlbedoSpectrum) or "unbounded" (eta, k)."""
+    SP = _core.SpectralParam
+    if isinstance(v, Spectrum):
+        if v.kind == "constant":
+            return SP.constant(float(v(np.float64(550.0))))
+        if v.kind == "rgb" and v._data[1] != "illuminant":
+            c, scale = v._data[2], v._data[3]
+            return SP.sigmoid(float(c[0]), float(c[1]), float(c[2]), float(scale))
+        if v.is_constant:
+            return SP.constant(float(v(np.float64(550.0))))
+        if v.kind == "sampled":   # its nodes inside (360, 830) plus its values at 360 and 830 nm
+            lam = v.wavelengths
+            inner = lam[(lam > LAMBDA_MIN) & (lam < LAMBDA_MAX)]
+            nodes = np.concatenate([[LAMBDA_MIN], inner, [LAMBDA_MAX]])
+            return SP.table(nodes, v(nodes))
+        return SP.table(DENSE_WAVELENGTHS, np.ascontiguousarray(v(DENSE_WAVELENGTHS)))  # blackbody, illuminant
+    a = np.asarray(v, dtype=np.float64)
+    if a.ndim == 0 or np.all(a == a.flat[0]):
+        return SP.constant(float(a.flat[0]))       # a grey uplifts to exactly that constant
+    from ..spectral import uplift
+    c, scale = uplift.rgb_coefficients(a, kind, exact=True)
+    return SP.sigmoid(float(c[0]), float(c[1]), float(c[2]), float(scale))
+
+
+_CACHE: "OrderedDict" = OrderedDict()
+_CACHE_SIZE = 256
+
+
+def _spectral_core(model):
+    """The model's ``_core.<Model>Spectral`` (built once per distinct model: the RGB uplift
+    polishes each colour, ~1-15 ms). Models without a spectral kernel raise NotImplementedError."""
+    factory = getattr(type(model), "_make_spectral_core", None)
+    if factory is None:
+        raise NotImplementedError(
+            f"wavelengths: spectral mode is not implemented for {type(model).__name__} yet "
+            f"(models with wavelengths=: {_SPECTRAL_MODELS}); call without wavelengths= for RGB")
+    key = (type(model), model._key())
+    core = _CACHE.get(key)
+    if core is None:
+        core = factory(model)
+        _CACHE[key] = core
+        if len(_CACHE) > _CACHE_SIZE:
+            _CACHE.popitem(last=False)
+    else:
+        _CACHE.move_to_end(key)
+    return core
+
+
+# ------------------------------------------------------------------------------- arguments
+
+def check_wavelengths(x) -> np.ndarray:
+    """``wavelengths`` as a real array with last axis 4 (nm). Their values (finite, in [360, 830])
+    are checked by the kernels, which count the bad ones in the same pass (no extra numpy pass over
+    the array); the count raises a ValueError naming ``wavelengths`` (_raise_counts)."""
+    try:
+        a = np.asarray(x)
+    except Exception as e:
+        raise TypeError(f"wavelengths: cannot be converted to a numeric array ({e})") from None
+    if a.dtype.kind not in "fiu" or a.dtype == np.bool_:
+        raise TypeError(f"wavelengths: expected real numbers (nm), got dtype {a.dtype}")
+    if a.ndim == 0 or a.shape[-1] != 4:
+        raise ValueError(f"wavelengths: expected an array with last axis of length 4 (pbrt-v4's 4 wavelengths "
+                         f"per sample, e.g. from bsdfkit.sample_wavelengths), got shape {a.shape}")
+    return a
+
+
+def _raise_counts(counts, names):
+    for name, c in zip(names, counts):
+        if not c:
+            continue
+        if name == "wavelengths":
+            raise ValueError(f"wavelengths: {c} row(s) of 4 hold values that are not finite or outside [360, 830] nm")
+        from .base import _raise_bad
+        _raise_bad(name, c)
+
+
+def _mode_sf(mode, sample_flags=None):
+    from .base import _mode, _sflags
+    return _mode(mode), (None if sample_flags is None else _sflags(sample_flags))
+
+
+def eval(model, wo, wi, wavelengths, mode, out):
+    core = _spectral_core(model)
+    wo, wi, lam = as_dirs(wo, "wo"), as_dirs(wi, "wi"), check_wavelengths(wavelengths)
+    batch = broadcast_batch(("wo", "wi", "wavelengths"), wo.shape[:-1], wi.shape[:-1], lam.shape[:-1])
+    dtype = kernel_dtype(wo, wi)
+    md, _ = _mode_sf(mode)
+    out = check_out(out, batch + (4,), dtype)
+    if out.size:
+        _raise_counts(core.eval(flatten_to(wo, batch, (3,), dtype), flatten_to(wi, batch, (3,), dtype),
+                                flatten_to(lam, batch, (4,), np.float64), md, out.reshape(-1, 4)),
+                      ("wo", "wi", "wavelengths"))
+    return out
+
+
+def pdf(model, wo, wi, wavelengths, mode, sample_flags, out):
+    core = _spectral_core(model)
+    wo, wi, lam = as_dirs(wo, "wo"), as_dirs(wi, "wi"), check_wavelengths(wavelengths)
+    batch = broadcast_batch(("wo", "wi", "wavelengths"), wo.shape[:-1], wi.shape[:-1], lam.shape[:-1])
+    dtype = kernel_dtype(wo, wi)
+    md, sf = _mode_sf(mode, sample_flags)
+    out = check_out(out, batch, dtype)
+    if out.size:
+        _raise_counts(core.pdf(flatten_to(wo, batch, (3,), dtype), flatten_to(wi, batch, (3,), dtype),
+                               flatten_to(lam, batch, (4,), np.float64), md, sf, out.reshape(-1)),
+                      ("wo", "wi", "wavelengths"))
+    return out
+
+
+def sample(model, wo, uc, u, n, seed, wavelengths, mode, sample_flags, out):
+    from .base import SampleResult, _sample_result
+    core = _spectral_core(model)
+    wo, lam = as_dirs(wo, "wo"), check_wavelengths(wavelengths)
+    if n is not None:
+        if uc is not None or u is not None:
+            raise ValueError("n: give either n (and seed) or the uniforms uc and u, not both")
+        n = check_int(n, "n", 0)
+        batch = broadcast_batch(("wo", "wavelengths", "n"), wo.shape[:-1], lam.shape[:-1], (n,))
+        dtype = kernel_dtype(wo)
+        if isinstance(seed, numbers.Integral) and not isinstance(seed, bool) and seed < 0:
+            raise ValueError(f"seed: must be >= 0 (or None), got {seed}")
+        try:
+            rng = np.random.default_rng(seed)
+        except (TypeError, ValueError) as e:
+            raise type(e)(f"seed: {e}") from None
+        uc = rng.random(batch, dtype=dtype)
+        u = rng.random(batch + (2,), dtype=dtype)
+    else:
+        if uc is None or u is None:
+            raise ValueError("uc, u: pass both uniforms, or n= and seed=")
+        uc, u = as_uniform(uc, "uc", ()), as_uniform(u, "u", (2,))
+        dtype = kernel_dtype(wo, uc, u)
+        batch = broadcast_batch(("wo", "uc", "u", "wavelengths"), wo.shape[:-1], uc.shape, u.shape[:-1],
+                                lam.shape[:-1])
+    md, sf = _mode_sf(mode, sample_flags)
+    if out is not None:
+        raise ValueError("out: not supported with wavelengths= (spectral sample results are allocated)")
+    m = math.prod(batch)
+    res = _sample_result((np.empty(batch + (3,), dtype), np.empty(batch + (4,), dtype), np.empty(batch, dtype),
+                          np.empty(batch, np.uint8), np.empty(batch, dtype), np.empty(batch, bool),
+                          np.empty(batch, bool)))
+    res.__dict__["terminated"] = np.empty(batch, bool)
+    if m:
+        ucf = np.ascontiguousarray(np.broadcast_to(uc, batch), dtype=dtype).reshape(-1)
+        uf = np.ascontiguousarray(np.broadcast_to(u, batch + (2,)), dtype=dtype).reshape(-1, 2)
+        _raise_counts(core.sample(flatten_to(wo, batch, (3,), dtype), ucf, uf, flatten_to(lam, batch, (4,), np.float64),
+                                  md, sf, res.wi.reshape(-1, 3), res.f.reshape(-1, 4), res.pdf.reshape(-1),
+                                  res.flags.reshape(-1), res.eta.reshape(-1), res.valid.reshape(-1),
+                                  res.pdf_is_proportional.reshape(-1), res.terminated.reshape(-1)),
+                      ("wo", "uc", "u", "wavelengths"))
+    assert isinstance(res, SampleResult)
+    return res
+
+
+def albedo(model, wo, wavelengths, n_samples, seed, mode):
+    core = _spectral_core(model)
+    wo, lam = as_dirs(wo, "wo"), check_wavelengths(wavelengths)
+    n_samples = check_int(n_samples, "n_samples", 1)
+    seed = check_int(seed, "seed", 0)
+    batch = broadcast_batch(("wo", "wavelengths"), wo.shape[:-1], lam.shape[:-1])
+    dtype = kernel_dtype(wo)
+    md, _ = _mode_sf(mode)
+    out = np.empty(batch + (4,), dtype)
+    if out.size:
+        wof = np.ascontiguousarray(np.broadcast_to(wo, batch + (3,)), dtype=dtype).reshape(-1, 3)
+        _raise_counts(core.albedo(wof, flatten_to(lam, batch, (4,), np.float64), n_samples, seed & 0xFFFFFFFFFFFFFFFF,
+                                  md, out.reshape(-1, 4)), ("wo", "wavelengths"))
+    return out
