@@ -310,7 +310,7 @@ struct Tracer {
 
     // Pass A: an escaped ray adds the environment; a surface hit becomes a vertex (frame, wo,
     // environment sample, the uniforms of its BSDF sample).
-    __attribute__((noinline)) void setup(int pi, const RTCRayHit &rh, const EnvRay &er, Wave &w) const {
+    void setup(int pi, const RTCRayHit &rh, const EnvRay &er, Wave &w) const {
         Path &path = w.paths[size_t(pi)];
         Vec3f d(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
         if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
@@ -357,7 +357,7 @@ struct Tracer {
     }
 
     // Pass C: light-sample contributions (shadow rays) and the path's next ray.
-    __attribute__((noinline)) void finish(Vertex &v, Wave &w) const {
+    void finish(Vertex &v, Wave &w) const {
         const int pi = v.path;
         Path &path = w.paths[size_t(pi)];
         if (v.nonspecular) {
@@ -394,7 +394,7 @@ struct Tracer {
 
     // Pass B: the vertices grouped by material (counting sort, vertex order kept within a
     // group), each group shaded through its model's concrete type.
-    __attribute__((noinline)) void shade(Wave &w) const {
+    void shade(Wave &w) const {
         const int nm = int(scene.materials.size()), nv = int(w.verts.size());
         w.group_start.assign(size_t(nm + 1), 0);
         for (int m : w.vert_mat) ++w.group_start[size_t(m + 1)];
