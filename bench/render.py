@@ -4,9 +4,10 @@
     python bench/render.py            # 256 x 256, 64 spp, 1 and 2 threads, ~1-2 min
     python bench/render.py --quick    # 128 x 128, 16 spp
 
-Scene: the demo gallery (``python -m bsdfkit demo``: one sphere per demo configuration on the
-checkerboard ground under the procedural sky), rendered by both at the same resolution, spp and
-depth (ours max_depth 8 = Mitsuba max_depth 9). The Mitsuba scene comes from
+Scene: the demo gallery of the first measurement (``render.gallery_scene`` of the eight models in
+``MODELS``: one sphere each on the checkerboard ground under the procedural sky; the demo's own list
+has since grown models Mitsuba has no plugin for, so the bench keeps this fixed list), rendered by
+both at the same resolution, spp and depth (ours max_depth 8 = Mitsuba max_depth 9). The Mitsuba scene comes from
 ``bsdfkit.testing.mitsuba_scene`` (same camera, sphere placement, envmap resampled at
 Mitsuba's texel positions, checkerboard ground). DiffuseTransmission has no Mitsuba plugin:
 Mitsuba renders that sphere as a two-sided diffuse of the same reflectance + transmittance
@@ -40,12 +41,36 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 
 
+# The models of the demo gallery when the renderer was first measured against Mitsuba (all have
+# a Mitsuba plugin but DiffuseTransmission, see mitsuba_bsdf).
+MODELS = ['Diffuse(0.8)', 'DiffuseTransmission(0.5, 0.4)', 'Conductor.from_metal("Au", alpha=0.2)',
+          'Conductor.from_metal("Cu", alpha=0)', 'Conductor.from_metal("Al", alpha_x=0.4, alpha_y=0.1)',
+          'Dielectric(1.5, alpha=0.2)', 'Dielectric(1.5)', 'ThinDielectric(1.5)']
+
+
 def build_scene():
     import bsdfkit as bk
     from bsdfkit import render as R
-    from bsdfkit._demo import configurations
-    models = [m for _, m in configurations()]
-    return R.gallery_scene(models), [n for n, _ in configurations()]
+    models = [eval(m, {}, vars(bk)) for m in MODELS]
+    return R.gallery_scene(models), list(MODELS)
+
+
+def machine_info():
+    """CPU model, SIMD width of the build machine and of our packets, cores, Python."""
+    cpu, flags = platform.processor() or platform.machine(), set()
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name") and cpu in ("", platform.machine()):
+                    cpu = line.split(":", 1)[1].strip()
+                if line.startswith("flags"):
+                    flags = set(line.split(":", 1)[1].split())
+    except OSError:
+        pass
+    isa = "AVX-512" if "avx512f" in flags else "AVX2" if "avx2" in flags else "SSE"
+    bits = {"AVX-512": 512, "AVX2": 256, "SSE": 128}[isa]
+    return {"cpu": cpu, "isa": isa, "vector_bits": bits, "float_lanes_per_register": bits // 32,
+            "packet_lanes": 16, "cores": os.cpu_count(), "python": platform.python_version()}
 
 
 def mitsuba_bsdf(model):
@@ -93,8 +118,7 @@ def run(args):
     import bsdfkit as bk
     scene, names = build_scene()
     results = {"width": args.width, "height": args.height, "spp": args.spp, "max_depth": args.max_depth,
-               "machine": {"cpu": platform.processor() or platform.machine(), "cores": os.cpu_count(),
-                           "python": platform.python_version()},
+               "machine": machine_info(),
                "threads": {}}
     tmp = tempfile.mkdtemp(prefix="bsdfkit-bench-")
     paths = args.width * args.height * args.spp
@@ -104,6 +128,7 @@ def run(args):
         cmd = [sys.executable, __file__, "--worker", "--threads", str(threads), "--image", mi_img,
                "--rounds", str(args.rounds), "--width", str(args.width), "--height", str(args.height),
                "--spp", str(args.spp), "--max-depth", str(args.max_depth)]
+        load_start = os.getloadavg()[0]
         proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
         ours_t, ours_tti, mi_t = [], [], []
         st = img = None
@@ -118,6 +143,9 @@ def run(args):
         final = json.loads(proc.stdout.readline())
         proc.wait()
         mimg = np.load(mi_img)
+        load_end = os.getloadavg()[0]
+        # per round: Mitsuba's time / ours in the same round (the first Mitsuba round compiles)
+        ratios = [m / o for m, o in zip(mi_t[1:], ours_t[1:])] or [mi_t[0] / ours_t[0]]
         cold = final["load"] + final["times"][0]
         warm_render = min(final["times"][1:]) if len(final["times"]) > 1 else final["times"][0]
         warm = final["load"] + warm_render
@@ -134,6 +162,10 @@ def run(args):
             "speedup_time_to_image_cold": cold / min(ours_tti),
             "image_mean_ours": float(img.mean()), "image_mean_mitsuba": float(mimg.mean()),
             "image_mean_rel_diff": rel,
+            "round_ratios": ratios, "ratio_median": float(np.median(ratios)),
+            "ratio_min": float(min(ratios)), "ratio_max": float(max(ratios)),
+            "ours_render_all_s": ours_t, "mitsuba_render_all_s": mi_t,
+            "load_start": load_start, "load_end": load_end,
         }
         print(json.dumps({threads: results["threads"][threads]}, indent=1), flush=True)
         if threads == 2 and args.out_dir:
@@ -141,6 +173,7 @@ def run(args):
             write_image(os.path.join(args.out_dir, "render_ours.png"), img)
             write_image(os.path.join(args.out_dir, "render_mitsuba.png"), mimg)
     results["configs"] = names
+    results["rounds"] = args.rounds
     return results
 
 
@@ -186,17 +219,23 @@ def write_report(res, out_dir):
              f"Scene: the demo gallery ({len(res['configs'])} spheres, one per demo configuration, on the "
              f"checkerboard ground under the procedural sky), {w} x {h} pixels, {spp} spp, max_depth "
              f"{res['max_depth']} (Mitsuba {res['max_depth'] + 1}), box filter, independent sampler. "
-             f"Machine: {res['machine']['cores']} cores ({res['machine']['cpu']}), Python {res['machine']['python']}. "
-             "Best of the interleaved rounds (`python bench/render.py`).", "",
+             f"Machine: {res['machine']['cpu']}, {res['machine']['cores']} cores, {res['machine']['isa']} "
+             f"({res['machine']['vector_bits']}-bit vectors; our shading packets: {res['machine']['packet_lanes']} "
+             f"float lanes), Python {res['machine']['python']}. Best of {res.get('rounds', '?')} interleaved rounds "
+             "(`python bench/render.py`); the spread column is the per-round ratio (Mitsuba's time over ours in the "
+             "same round, its compiling first round left out): median [min, max].", "",
              "| threads | ours: render | ours: time-to-image | ours: Mrays/s | ours: Mpaths/s | Mitsuba: render (warm) "
-             "| Mitsuba: time-to-image cold / warm | Mitsuba: Mpaths/s | speed ratio (render) | ratio time-to-image warm / cold |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "| Mitsuba: time-to-image cold / warm | Mitsuba: Mpaths/s | speed ratio (render) | per-round ratio median [min, max] "
+             "| ratio time-to-image warm / cold | load (1 min) start / end |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for t, r in sorted(res["threads"].items()):
         lines.append(f"| {t} | {r['ours_render_s']:.3f} s | {r['ours_time_to_image_s']:.3f} s | "
                      f"{r['ours_rays_per_s'] / 1e6:.2f} | {r['ours_paths_per_s'] / 1e6:.2f} | {r['mitsuba_render_s']:.3f} s | "
                      f"{r['mitsuba_time_to_image_cold_s']:.2f} / {r['mitsuba_time_to_image_warm_s']:.3f} s | "
                      f"{r['mitsuba_paths_per_s'] / 1e6:.2f} | **{r['speedup_render']:.2f}x** | "
-                     f"{r['speedup_time_to_image_warm']:.2f}x / {r['speedup_time_to_image_cold']:.2f}x |")
+                     f"{r['ratio_median']:.2f}x [{r['ratio_min']:.2f}, {r['ratio_max']:.2f}] | "
+                     f"{r['speedup_time_to_image_warm']:.2f}x / {r['speedup_time_to_image_cold']:.2f}x | "
+                     f"{r['load_start']:.1f} / {r['load_end']:.1f} |")
     lines += ["", "Speed ratio = Mitsuba time / our time (> 1: we are faster). Image means (sanity check, the "
               "scenes differ only where noted): " + ", ".join(
                   f"{t} threads: ours {r['image_mean_ours']:.4f} vs Mitsuba {r['image_mean_mitsuba']:.4f} "

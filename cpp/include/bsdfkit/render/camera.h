@@ -32,6 +32,7 @@ struct Camera {
 struct Frame {
     Vec3f s, t, n;
 
+    Frame() = default;
     // Branchless orthonormal basis around n (Duff et al. 2017, "Building an orthonormal basis, revisited").
     static void basis(const Vec3f &n, Vec3f *b1, Vec3f *b2) {
         Float sign = std::copysign(Float(1), n.z);

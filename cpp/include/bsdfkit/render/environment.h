@@ -163,8 +163,30 @@ struct Environment {
 
     // Importance-samples a direction toward the environment from two uniforms (u0 is consumed
     // at double precision: the alias table splits it into a cell and a position); pdf = 0
-    // means no sample.
+    // means no sample. = sample_cell then sample_finish (the integrator runs the two stages in
+    // separate loops over a bounce, so that their cache misses overlap).
     RGB sample(double u0, Float u1, Vec3f *wi, Float *pdf) const {
+        Float uu, vv, prob;
+        sample_cell(u0, u1, &uu, &vv, &prob);
+        return sample_finish(u0, u1, uu, vv, prob, wi, pdf);
+    }
+    // Stage 1: the lat-long position (uu, vv) and the probability of its cell (alias table).
+    void sample_cell(double u0, Float u1, Float *uu, Float *vv, Float *cell_prob) const {
+        if (constant || cells.empty()) {
+            *uu = *vv = *cell_prob = 0;
+            return;
+        }
+        double rem;
+        float prob;
+        uint32_t c = cells.sample(u0, &rem, &prob);
+        int x = int(c % uint32_t(width)), y = int(c / uint32_t(width));
+        Float a = (Float(x) + Float(rem)) / Float(width), b = (Float(y) + u1) / Float(height);
+        *uu = a < Float(1) ? a : 0x1.fffffep-1f;
+        *vv = b < Float(1) ? b : 0x1.fffffep-1f;
+        *cell_prob = prob;
+    }
+    // Stage 2: direction, solid-angle pdf and radiance of the position of stage 1.
+    RGB sample_finish(double u0, Float u1, Float uu, Float vv, Float prob, Vec3f *wi, Float *pdf) const {
         if (constant) {
             *wi = SampleUniformSphere(Point2<Float>{Float(u0), u1});
             *pdf = UniformSpherePDF<Float>();
@@ -175,13 +197,6 @@ struct Environment {
             *wi = Vec3f(0, 1, 0);
             return RGB(Float(0));
         }
-        double rem;
-        float prob;
-        uint32_t c = cells.sample(u0, &rem, &prob);
-        int x = int(c % uint32_t(width)), y = int(c / uint32_t(width));
-        Float uu = (Float(x) + Float(rem)) / Float(width), vv = (Float(y) + u1) / Float(height);
-        uu = uu < Float(1) ? uu : 0x1.fffffep-1f;
-        vv = vv < Float(1) ? vv : 0x1.fffffep-1f;
         Float st;
         *wi = latlong_direction(uu, vv, &st);
         Float puv = prob * Float(width) * Float(height);
