@@ -154,3 +154,23 @@ def test_eval_out_on_the_fast_path(rng):
     ro.setflags(write=False)
     with pytest.raises(ValueError, match="out"):
         m.eval(wo, wi, out=ro)
+
+
+def test_arrays_through_pickle_are_accepted(rng):
+    """An array that came through pickle (a Dask block, a multiprocessing result) carries a dtype
+    descriptor equal to numpy's canonical one but not the same object: inputs and out= must still
+    be accepted, with the same values as plain arrays; a byte-swapped out= is refused by name."""
+    import pickle
+
+    m = bk.Conductor.from_metal("Au", alpha=0.25)
+    wo, wi = _dirs(rng, 32), _dirs(rng, 32)
+    wo_p, wi_p = pickle.loads(pickle.dumps(wo)), pickle.loads(pickle.dumps(wi))
+    out = pickle.loads(pickle.dumps(np.full((32, 3), np.nan)))
+    assert m.eval(wo_p, wi_p, out=out) is out
+    np.testing.assert_array_equal(out, m.eval(wo, wi))
+    pout = pickle.loads(pickle.dumps(np.full(32, np.nan, np.float32)))
+    assert m.pdf(wo_p.astype(np.float32), wi_p.astype(np.float32), out=pout) is pout
+    np.testing.assert_array_equal(pout, m.pdf(wo.astype(np.float32), wi.astype(np.float32)))
+    swapped = np.full((32, 3), np.nan, dtype=np.dtype(">f8") if np.little_endian else np.dtype("<f8"))
+    with pytest.raises((TypeError, ValueError), match="out"):
+        m.eval(wo, wi, out=swapped)

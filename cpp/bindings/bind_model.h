@@ -25,7 +25,13 @@ namespace bsdfkit::py_bind {
 
 int num_threads();
 
-template <typename F> inline bool is_dtype(const py::array &a) { return a.dtype().is(py::dtype::of<F>()); }
+// The identity test is the fast path; an equal descriptor that is another object (an array that
+// came through pickle, e.g. a Dask block) is accepted by numpy's own equivalence test.
+template <typename F> inline bool is_dtype(const py::array &a) {
+    py::dtype want = py::dtype::of<F>();
+    py::dtype got = a.dtype();
+    return got.is(want) || py::detail::npy_api::get().PyArray_EquivTypes_(got.ptr(), want.ptr());
+}
 
 // A batch stopped by the interrupt hook (module.cpp: Ctrl-C) left the Python error set.
 inline void raise_if_interrupted() {
