@@ -9,7 +9,7 @@ kernels at 1 thread per task), cluster start excluded; reported: wall time of ea
 t(1) / t(2), plus the in-process serial time of the same fits (the copy bound: what one worker
 would take without Dask's overhead). Times are from a shared machine: ratios within one run.
 
-    python bench/fit.py [--repeats 3] [--targets 8] [--json bench/fit.json]
+    python bench/fit.py [--repeats 3] [--targets 16] [--pairs 8192] [--skip-families] [--json bench/fit.json]
 """
 from __future__ import annotations
 
@@ -86,10 +86,10 @@ def _targets(k):
     return [bk.Conductor.from_metal(metals[i % 5], alpha=0.1 + 0.05 * i) for i in range(k)]
 
 
-def bench_fit_many(n_targets, repeats):
+def bench_fit_many(n_targets, repeats, n_pairs):
     from distributed import Client, LocalCluster
     targets = _targets(n_targets)
-    kw = dict(params=("eta", "k", "alpha"), n=2048, albedo=False, init={"alpha": 0.4})
+    kw = dict(params=("eta", "k", "alpha"), n=n_pairs, albedo=False, init={"alpha": 0.4})
     bk.set_num_threads(1)
     ts_serial = []
     for _ in range(repeats):
@@ -97,7 +97,7 @@ def bench_fit_many(n_targets, repeats):
         for t in targets:
             bk.fit(t, bk.Conductor, **kw)
         ts_serial.append(time.perf_counter() - t0)
-    out = {"targets": n_targets, "serial_in_process_s": statistics.median(ts_serial),
+    out = {"targets": n_targets, "n_pairs": n_pairs, "serial_in_process_s": statistics.median(ts_serial),
            "serial_spread": max(ts_serial) / min(ts_serial)}
     for nw in (1, 2):
         with LocalCluster(n_workers=nw, processes=True, threads_per_worker=1, dashboard_address=None) as cl, \
@@ -113,7 +113,7 @@ def bench_fit_many(n_targets, repeats):
         out[f"workers_{nw}_spread"] = max(ts) / min(ts)
     out["speedup_1_to_2"] = out["workers_1_s"] / out["workers_2_s"]
     out["overhead_1_worker_vs_serial"] = out["workers_1_s"] / out["serial_in_process_s"]
-    print(f"fit_many, {n_targets} Conductor targets (n=2048): serial in-process {out['serial_in_process_s']:.2f} s, "
+    print(f"fit_many, {n_targets} Conductor targets (n={n_pairs}): serial in-process {out['serial_in_process_s']:.2f} s, "
           f"1 worker {out['workers_1_s']:.2f} s, 2 workers {out['workers_2_s']:.2f} s, "
           f"speedup {out['speedup_1_to_2']:.2f}x (spreads {out['workers_1_spread']:.2f}, {out['workers_2_spread']:.2f})")
     return out
@@ -122,7 +122,8 @@ def bench_fit_many(n_targets, repeats):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--targets", type=int, default=8)
+    ap.add_argument("--targets", type=int, default=16)
+    ap.add_argument("--pairs", type=int, default=8192, help="direction pairs per fit_many target")
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--skip-families", action="store_true")
     ap.add_argument("--json", default=None)
@@ -132,7 +133,7 @@ def main(argv=None):
     out = {"cpu": _cpu(), "threads": a.threads, "load_start": os.getloadavg()}
     if not a.skip_families:
         out["families"] = bench_families(a.repeats)
-    out["fit_many"] = bench_fit_many(a.targets, a.repeats)
+    out["fit_many"] = bench_fit_many(a.targets, a.repeats, a.pairs)
     out["load_end"] = os.getloadavg()
     if a.json:
         with open(a.json, "w") as fh:
