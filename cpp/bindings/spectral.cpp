@@ -20,7 +20,7 @@ namespace {
 
 // A table's storage: nodes, values and the per-nm segment index (core/spectral.h).
 struct TableData {
-    std::vector<double> x, v;
+    std::vector<double> x, v, slope;
     std::vector<int32_t> first;
 };
 
@@ -234,6 +234,9 @@ void bind_spectral(py::module_ &m) {
                 if (!std::isfinite(t->v[size_t(i)])) value_error("table: values must be finite");
                 if (i && !(t->x[size_t(i)] > t->x[size_t(i - 1)])) value_error("table: nodes must increase");
             }
+            t->slope.resize(size_t(n - 1));
+            for (int64_t i = 0; i + 1 < n; ++i)
+                t->slope[size_t(i)] = (t->v[size_t(i + 1)] - t->v[size_t(i)]) / (t->x[size_t(i + 1)] - t->x[size_t(i)]);
             t->first.resize(kDenseN);
             int32_t j = 0;
             for (int k = 0; k < kDenseN; ++k) {  // the last node <= 360 + k, at most n - 2
@@ -246,6 +249,7 @@ void bind_spectral(py::module_ &m) {
             r.p.kind = SpectralParam::Table;
             r.p.x = t->x.data();
             r.p.v = t->v.data();
+            r.p.slope = t->slope.data();
             r.p.first = t->first.data();
             r.p.n = int32_t(n);
             return r;

@@ -34,13 +34,14 @@ inline double SigmoidJH(double x) {
 //             plus a step past the nodes inside that nm (usually none): the exact piecewise-linear
 //             value, as Mitsuba's IrregularSpectrum (pbrt-v4's DenselySampledSpectrum instead
 //             rounds to the nearest nm: up to 2.5e-3 relative on the Cu eta data).
-// Evaluated in double: one sqrt (Sigmoid) or one gather and lerp (Table) per wavelength.
+// Evaluated in double: one sqrt and one division (Sigmoid) or a gather and a multiply-add with
+// the segment's precomputed slope (Table) per wavelength.
 struct SpectralParam {
     enum Kind : uint8_t { Constant = 0, Sigmoid = 1, Table = 2 };
     Kind kind = Constant;
     double c[3] = {0.0, 0.0, 0.0};
     double scale = 1.0;
-    const double *x = nullptr, *v = nullptr;
+    const double *x = nullptr, *v = nullptr, *slope = nullptr;  // slope[j] = (v[j+1]-v[j]) / (x[j+1]-x[j])
     const int32_t *first = nullptr;
     int32_t n = 0;
 
@@ -51,8 +52,7 @@ struct SpectralParam {
         l = l <= kLambdaMax ? l : kLambdaMax;
         int32_t j = first[int(l - kLambdaMin)];
         while ((j + 2 < n) & (x[j + 1] < l)) ++j;               // nodes within this nm
-        double t = (l - x[j]) / (x[j + 1] - x[j]);
-        return v[j] + t * (v[j + 1] - v[j]);
+        return slope[j] * (l - x[j]) + v[j];                   // numpy.interp's form, no division
     }
 
     // The parameter at an element's wavelengths, at the model's precision.
