@@ -5,12 +5,11 @@ import math
 
 import numpy as np
 
-from .._enums import BxDFFlags, TransportMode
+from .._enums import TransportMode
 from ._common import (_QUANTITY, _as_labels, _as_models, _check_channel, _check_int, _finite, _fmt,
-                      _legend_proxies, _new_figure, _positive_max, _quantity, _select, _set_data, _transmits,
+                      _legend_proxies, _new_figure, _positive_max, _quantity, _set_data, _transmits,
                       _values, _wo_dir, luminance)
-from ..models.describe import describe
-from ._polar import _delta_lobes
+from ._polar import _model_entries
 
 __all__ = ["lobe3d"]
 
@@ -57,15 +56,8 @@ def lobe3d(model_or_list, theta_o=30.0, phi_o=0.0, log=False, cosine=False, chan
     wi = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1)
     xdir = np.array([math.cos(math.radians(phi_o)), math.sin(math.radians(phi_o)), 0.0])
 
-    entries = []
-    for m, lab in zip(models, labels):
-        val = _values(m, wo, wi, cosine, channel, mode)
-        delta = []
-        if m.flags & BxDFFlags.Specular:
-            for lobe in _delta_lobes(m, wo, xdir, n_delta, seed, mode):
-                lobe["value"] = _select(lobe["weight"], channel)
-                delta.append(lobe)
-        entries.append(dict(model=m, label=lab if lab is not None else describe(m), value=val, delta=delta))
+    entries = _model_entries(models, labels, lambda m: _values(m, wo, wi, cosine, channel, mode), wo, xdir,
+                             n_delta, seed, mode, channel)
     scal = [e["value"] if channel != "rgb" else luminance(e["value"]) for e in entries]
     dvals = [float(luminance(d["weight"]) if channel == "rgb" else d["value"]) for e in entries for d in e["delta"]]
     vmax = max(_positive_max(scal), max(dvals, default=0.0))

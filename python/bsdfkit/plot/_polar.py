@@ -35,6 +35,20 @@ def _delta_lobes(model: BxDF, wo: np.ndarray, xdir: np.ndarray, n: int, seed: in
     return lobes
 
 
+
+def _model_entries(models, labels, value, wo, xdir, n_delta: int, seed: int, mode, channel: str) -> list:
+    """Per model: its label, value(model) over the plotted directions, and its delta lobes
+    (specular models) with their values in `channel` — what the polar and 3D views draw."""
+    entries = []
+    for m, lab in zip(models, labels):
+        delta = []
+        if m.flags & BxDFFlags.Specular:
+            for lobe in _delta_lobes(m, wo, xdir, n_delta, seed, mode):
+                lobe["value"] = _select(lobe["weight"], channel)
+                delta.append(lobe)
+        entries.append(dict(model=m, label=lab if lab is not None else describe(m), value=value(m), delta=delta))
+    return entries
+
 def _weak_half(val, z, below):
     """(side, factor) when the weaker half of a curve peaks below ``below`` times the stronger one."""
     up = float(np.max(val[z > 0], initial=0.0))
@@ -103,16 +117,11 @@ def polar(model_or_list, theta_o=30.0, phi_plane=0.0, log=False, cosine=False, c
     cos_i = np.abs(wi[:, 2])
 
     # ---- compute everything first (log scaling needs the overall maximum)
-    entries = []
-    for m, lab in zip(models, labels):
+    def value(m):
         f = m.eval(wo, wi, mode=mode)
-        val = _select(f * cos_i[:, None] if cosine else f, channel)
-        delta = []
-        if m.flags & BxDFFlags.Specular:
-            for lobe in _delta_lobes(m, wo, xdir, n_delta, seed, mode):
-                lobe["value"] = _select(lobe["weight"], channel)
-                delta.append(lobe)
-        entries.append(dict(model=m, label=lab if lab is not None else describe(m), value=val, delta=delta))
+        return _select(f * cos_i[:, None] if cosine else f, channel)
+
+    entries = _model_entries(models, labels, value, wo, xdir, n_delta, seed, mode, channel)
 
     data = getattr(ax, "bsdfkit_data", None)
     first = not (isinstance(data, dict) and data.get("kind") == "polar")

@@ -189,4 +189,12 @@ template <template <typename> class... Models> struct ModelList {
     }
 };
 
+// ModelListCat<ModelList<A...>, ModelList<B...>, ...>::type = ModelList<A..., B..., ...>.
+template <class... Lists> struct ModelListCat;
+template <template <typename> class... A> struct ModelListCat<ModelList<A...>> { using type = ModelList<A...>; };
+template <template <typename> class... A, template <typename> class... B, class... Rest>
+struct ModelListCat<ModelList<A...>, ModelList<B...>, Rest...> {
+    using type = typename ModelListCat<ModelList<A..., B...>, Rest...>::type;
+};
+
 } // namespace bsdfkit

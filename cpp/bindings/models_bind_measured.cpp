@@ -1,0 +1,10 @@
+// Keyword bindings of the measured family (MERL (nearest, linear), Measured (RGL)): bind_all.h on MeasuredModels (bxdfs/all.h).
+// One translation unit per family so that the model kernels compile in parallel and a change to
+// one family's header instantiates only that family's kernels again.
+#include "bind_all.h"
+
+namespace bsdfkit::py_bind {
+
+void bind_family_measured(py::module_ &m, std::vector<std::string> &names) { bind_list<MeasuredModels>(m, names); }
+
+} // namespace bsdfkit::py_bind
