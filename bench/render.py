@@ -170,6 +170,7 @@ def run(args):
         print(json.dumps({threads: results["threads"][threads]}, indent=1), flush=True)
         if threads == 2 and args.out_dir:
             from bsdfkit.io import write_image
+            os.makedirs(args.out_dir, exist_ok=True)
             write_image(os.path.join(args.out_dir, "render_ours.png"), img)
             write_image(os.path.join(args.out_dir, "render_mitsuba.png"), mimg)
     results["configs"] = names
