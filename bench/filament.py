@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 import bsdfkit as bk
+from bsdfkit.directions import random_directions
 
 HERE = Path(__file__).resolve().parent
 SEED = 20240611
@@ -89,14 +90,7 @@ from throughput import best_time, wait_quiet  # noqa: E402  (same directory: sam
 
 def make_inputs(n):
     rng = np.random.default_rng(SEED)
-
-    def upper():
-        v = rng.standard_normal((n, 3))
-        v /= np.linalg.norm(v, axis=1, keepdims=True)
-        v[:, 2] = np.abs(v[:, 2])
-        return v
-
-    d = {"wo": upper(), "wi": upper(), "uc": rng.random(n), "u": rng.random((n, 2))}
+    d = {"wo": random_directions(n, rng, upper=True), "wi": random_directions(n, rng, upper=True), "uc": rng.random(n), "u": rng.random((n, 2))}
     return {"float64": d, "float32": {k: v.astype(np.float32) for k, v in d.items()}}
 
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["direction", "hemisphere_grid"]
+__all__ = ["direction", "hemisphere_grid", "random_directions"]
 
 
 def direction(theta, phi=0.0) -> np.ndarray:
@@ -26,3 +26,13 @@ def hemisphere_grid(n_theta: int, n_phi: int, *, sphere: bool = False) -> np.nda
     phi = (np.arange(n_phi) + 0.5) * 2 * np.pi / n_phi
     t, p = np.meshgrid(theta, phi, indexing="ij")
     return direction(t, p).reshape(-1, 3)
+
+
+def random_directions(n: int, rng: np.random.Generator, *, upper: bool = False) -> np.ndarray:
+    """``n`` directions uniform on the unit sphere (or, with ``upper``, the upper hemisphere:
+    z folded to z >= 0), float64 (n, 3), drawn from ``rng`` as normalised Gaussian triples."""
+    v = rng.standard_normal((n, 3))
+    v /= np.linalg.norm(v, axis=1, keepdims=True)
+    if upper:
+        v[:, 2] = np.abs(v[:, 2])
+    return v

@@ -2,10 +2,17 @@
 // PathIntegrator::Li (Pharr, Jakob, Humphreys, "Physically Based Rendering" 4th ed. sec. 13.4):
 //   L = sum over path vertices of beta * (MIS-weighted light sample + MIS-weighted escaped ray),
 //   beta *= f |cos| / pdf after each BSDF sample; power heuristic (Veach 1997 sec. 9.2.4).
-// It runs as a small wavefront: the paths of one sample index over a 16 x 16 tile advance
-// together, one bounce at a time, so that Embree traces each bounce's rays (and shadow rays)
-// as one stream. Every path owns its random stream and its radiance sum, so the result does not
-// depend on how paths are grouped.
+// It runs as a small wavefront: the paths of kWaveSamples sample indices over a 16 x 16 tile
+// advance together, one bounce at a time. Each bounce: Embree traces the rays as 16-wide
+// packets; the environment data of all rays is computed in tight loops of its own (alias-table
+// sample, texel lookups: memory-bound work whose misses then overlap); every surface hit becomes
+// a Vertex (frame, wo, environment sample, uniforms); the vertices are grouped by material and
+// each group is shaded through its model's concrete type, on 16-lane packets (f and pdf toward
+// the environment sample, f toward the directional light, the BSDF sample) for models with a
+// packet path, scalar otherwise (and for Hair on fibres, whose h is per hit); then each path
+// queues its shadow rays and its next ray. Every path owns its random stream (drawn in the same
+// order as a one-path-at-a-time tracer) and its radiance sum, and a packet lane's result depends
+// on its own inputs only, so the image does not depend on how paths are grouped or on threads.
 #include <omp.h>
 
 #include <algorithm>
@@ -66,7 +73,7 @@ struct Path {
     int depth;
     bool specular_bounce;
     SampleRng rng;
-    double env_u0;  // uniforms of this vertex's environment sample, drawn (and prefetched) early
+    double env_u0;  // uniforms of this vertex's environment sample, drawn first (prepare)
     Float env_u1;
 };
 

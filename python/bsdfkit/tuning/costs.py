@@ -8,6 +8,7 @@ import time
 
 import numpy as np
 
+from ..directions import random_directions
 from .errors import _all_delta, _is_transmissive
 from .configs import Config, family
 
@@ -138,14 +139,9 @@ def cost_deviations(shipped: dict, measured: dict, tol: float = 0.5) -> list:
 
 def _timing_inputs(model, n, seed):
     rng = np.random.default_rng([seed, 0x74696d65])
-
-    def unit(upper):
-        v = rng.standard_normal((n, 3))
-        v /= np.linalg.norm(v, axis=1, keepdims=True)
-        if upper:
-            v[:, 2] = np.abs(v[:, 2])
-        return v
-    d = {"wo": unit(True), "wi": unit(not _is_transmissive(model)), "uc": rng.random(n), "u": rng.random((n, 2))}
+    d = {"wo": random_directions(n, rng, upper=True),
+         "wi": random_directions(n, rng, upper=not _is_transmissive(model)), "uc": rng.random(n),
+         "u": rng.random((n, 2))}
     return {"float64": d, "float32": {k: v.astype(np.float32) for k, v in d.items()}}
 
 

@@ -110,25 +110,6 @@ struct Environment {
         return c;
     }
 
-    // Software prefetch of what eval(d) / pdf(d) (at lat-long (u, v)) and sample(u0, .) will
-    // read: the wavefront integrator issues these for a whole bounce before using them.
-    void prefetch_uv(Float u, Float v) const {
-        if (constant) return;
-        int x = clamp(int(u * Float(width) - Float(0.5)), 0, width - 1);
-        int y = clamp(int(v * Float(height) - Float(0.5)), 0, height - 1);
-        __builtin_prefetch(&rgb[(size_t(y) * (width + 1) + x) * 3]);
-        __builtin_prefetch(&rgb[(size_t(std::min(y + 1, height - 1)) * (width + 1) + x) * 3]);
-        if (!cells.empty()) {
-            int cx = clamp(int(u * Float(width)), 0, width - 1), cy = clamp(int(v * Float(height)), 0, height - 1);
-            __builtin_prefetch(&cells.entries[size_t(cy) * width + cx]);
-        }
-    }
-    void prefetch_sample(double u0) const {
-        if (constant || cells.empty()) return;
-        size_t n = cells.size(), i = size_t(u0 * double(n));
-        __builtin_prefetch(&cells.entries[i < n ? i : n - 1]);
-    }
-
     // eval(d) and pdf(d) with d's lat-long coordinates already computed (latlong_uv).
     RGB eval_uv(const Vec3f &, Float u, Float v) const { return constant ? constant_L : lookup(u, v); }
     Float pdf_uv_dir(const Vec3f &d, Float u, Float v) const {
