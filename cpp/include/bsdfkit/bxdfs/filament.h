@@ -501,12 +501,13 @@ template <typename F> using FilamentStandardCoatSheenBxDF = FilamentStandardT<F,
 
 // ====================================================================== cloth model
 
-struct FilamentClothParams {
-    std::array<double, 3> base_color{0.5, 0.5, 0.5};
-    std::array<double, 3> sheen_color{0.7071067811865476, 0.7071067811865476, 0.7071067811865476};
-    std::array<double, 3> subsurface_color{0, 0, 0};
+// S: the continuous parameters' scalar type (as FilamentStandardParamsT; a Dual for gradients).
+template <typename S = double> struct FilamentClothParamsT {
+    std::array<S, 3> base_color{0.5, 0.5, 0.5};
+    std::array<S, 3> sheen_color{0.7071067811865476, 0.7071067811865476, 0.7071067811865476};
+    std::array<S, 3> subsurface_color{0, 0, 0};
     bool has_subsurface = false;
-    double roughness = 0.5;
+    S roughness = 0.5;
     filament::DiffuseTerm diffuse = filament::DiffuseTerm::Lambert;
     double min_perceptual_roughness = filament::kMinPerceptualRoughnessDesktop;
     SharedTable<FilamentDFG> dfg;  // required (bsdfkit.filament's cached table)
@@ -522,6 +523,7 @@ struct FilamentClothParams {
         v("dfg", dfg);
     }
 };
+using FilamentClothParams = FilamentClothParamsT<>;
 
 // Cloth (surface_shading_model_cloth.fs): Fr = D_Charlie V_Neubelt sheenColor (no Fresnel, no
 // energy compensation); Fd = diffuse baseColor, or with a subsurface color
@@ -615,11 +617,14 @@ template <typename F> struct FilamentClothKernel {
 // whose parameters stay in registers) plus the shared DFG table it points into.
 template <typename F> struct FilamentClothBxDF : FilamentClothKernel<F> {
     using Kernel = FilamentClothKernel<F>;
-    using Params = FilamentClothParams;
+    using Params = FilamentClothParamsT<param_t<F>>;
     static constexpr const char *Name = "FilamentCloth";
     SharedTable<FilamentDFG> dfg;  // keeps the table alive
 
+    // Derived parameters in S = param_t<F> (a Dual for gradients: the roughness clamp is one-sided,
+    // core/dual.h; the DFG row only weights the sampler, not f).
     static FilamentClothBxDF make(const Params &p) {
+        using S = param_t<F>;
         const FilamentDFG *table = p.dfg.get();
         FilamentClothBxDF m;
         for (int c = 0; c < 3; ++c) {
@@ -628,12 +633,12 @@ template <typename F> struct FilamentClothBxDF : FilamentClothKernel<F> {
             m.subsurface_color[c] = F(p.subsurface_color[c]);
         }
         m.subsurface = p.has_subsurface ? F(1) : F(0);
-        double pr = clamp(p.roughness, p.min_perceptual_roughness, 1.0);  // getRoughnessPixelParams
+        S pr = clamp(p.roughness, S(p.min_perceptual_roughness), S(1));  // getRoughnessPixelParams
         m.alpha = F(pr * pr);
         m.base_max = m.base_color.max_component();
         m.sheen_max = m.sheen_color.max_component();
         m.burley = p.diffuse == filament::DiffuseTerm::Burley ? F(1) : F(0);
-        m.dfg_row = DFGRow<F>(table->template data<F>(), table->size, pr);
+        m.dfg_row = DFGRow<F>(table->template data<scalar_t<F>>(), table->size, pr);
         m.dfg = p.dfg;
         return m;
     }
