@@ -115,10 +115,12 @@ inline TransportMode flip_mode(TransportMode m) {
 
 // ---------------------------------------------------------------- parameters
 
-struct LayerParams {  // the medium and the estimator, shared by both models
-    double thickness = 0.01;
-    std::array<double, 3> albedo{0, 0, 0};
-    double g = 0;
+// S: the continuous parameters' scalar type, double (a Dual for the gradients of the analytic
+// method, layered_analytic.h; core/math.h param_t). The stochastic models use the double forms.
+template <typename S = double> struct LayerParamsT {  // the medium and the estimator, shared by both models
+    S thickness = 0.01;
+    std::array<S, 3> albedo{0, 0, 0};
+    S g = 0;
     int max_depth = 10;
     int n_samples = 1;
     int seed = 0;  // >= 0; an int field (core/bxdf.h), widened to 64 bits for hashing
@@ -139,12 +141,13 @@ struct LayerParams {  // the medium and the estimator, shared by both models
         v("consistent_mis", consistent_mis);
     }
 };
+using LayerParams = LayerParamsT<>;
 
-struct CoatedDiffuseParams {
-    std::array<double, 3> reflectance{0.5, 0.5, 0.5};
-    double eta = 1.5, alpha_x = 0, alpha_y = 0;
+template <typename S = double> struct CoatedDiffuseParamsT {
+    std::array<S, 3> reflectance{0.5, 0.5, 0.5};
+    S eta = 1.5, alpha_x = 0, alpha_y = 0;
     Masking masking = Masking::Correlated;
-    LayerParams layer;
+    LayerParamsT<S> layer;
 
     template <class V> void fields(V &&v) {
         v("reflectance", reflectance);
@@ -155,14 +158,15 @@ struct CoatedDiffuseParams {
         layer.fields(v);
     }
 };
+using CoatedDiffuseParams = CoatedDiffuseParamsT<>;
 
-struct CoatedConductorParams {
+template <typename S = double> struct CoatedConductorParamsT {
     // absolute (vacuum-relative) IOR of the metal; make() divides both by interface_eta
-    std::array<double, 3> conductor_eta{0.2, 0.92, 1.1}, conductor_k{3.9, 2.45, 2.14};
-    double conductor_alpha_x = 0, conductor_alpha_y = 0;
-    double interface_eta = 1.5, interface_alpha_x = 0, interface_alpha_y = 0;
+    std::array<S, 3> conductor_eta{0.2, 0.92, 1.1}, conductor_k{3.9, 2.45, 2.14};
+    S conductor_alpha_x = 0, conductor_alpha_y = 0;
+    S interface_eta = 1.5, interface_alpha_x = 0, interface_alpha_y = 0;
     Masking masking = Masking::Correlated;
-    LayerParams layer;
+    LayerParamsT<S> layer;
 
     template <class V> void fields(V &&v) {
         v("conductor_eta", conductor_eta);
@@ -176,6 +180,7 @@ struct CoatedConductorParams {
         layer.fields(v);
     }
 };
+using CoatedConductorParams = CoatedConductorParamsT<>;
 
 // ---------------------------------------------------------------- the layered estimator
 

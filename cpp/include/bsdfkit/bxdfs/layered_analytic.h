@@ -44,14 +44,15 @@
 namespace bsdfkit {
 
 // 2 int_0^1 g(mu) mu dmu by Gauss-Legendre on [a, 1] (g = 1 on [0, a], the total internal
-// reflection range of a Fresnel reflectance).
-template <class G> inline double CosineWeightedMean(G g, double a = 0.0, int n = 64) {
+// reflection range of a Fresnel reflectance). T: double, or a Dual (make() of a gradient model),
+// whose derivative is that of the quadrature.
+template <typename T, class G> inline T CosineWeightedMean(G g, T a = T(0), int n = 64) {
     double x[128], w[128];
     GaussLegendre(n, x, w);
-    double s = a * a;  // 2 int_0^a mu dmu
+    T s = a * a;  // 2 int_0^a mu dmu
     for (int i = 0; i < n; ++i) {
-        double mu = a + (1 - a) * 0.5 * (x[i] + 1);
-        s += 2 * g(mu) * mu * 0.5 * (1 - a) * w[i];
+        T mu = a + (T(1) - a) * T(0.5) * T(x[i] + 1);
+        s += T(2) * g(mu) * mu * T(0.5) * (T(1) - a) * T(w[i]);
     }
     return s;
 }
@@ -59,14 +60,14 @@ template <class G> inline double CosineWeightedMean(G g, double a = 0.0, int n =
 // Hemispherical (diffuse) reflectance of a smooth dielectric interface for light arriving
 // from the side where the relative IOR is e (e < 1: total internal reflection below
 // mu_c = sqrt(1 - e^2)).
-inline double DiffuseFresnel(double e) {
-    double a = e < 1 ? std::sqrt(1 - e * e) : 0.0;
-    return CosineWeightedMean([e](double mu) { return FrDielectric(mu, e); }, a);
+template <typename T> inline T DiffuseFresnel(T e) {
+    T a = e < T(1) ? sqrt(T(1) - e * e) : T(0);
+    return CosineWeightedMean<T>([e](T mu) { return FrDielectric(mu, e); }, a);
 }
 
 // The slab's diffuse transmittance 2 int exp(-d / mu) mu dmu (= 2 E_3(d)).
-inline double DiffuseSlabTransmittance(double d) {
-    return CosineWeightedMean([d](double mu) { return std::exp(-d / mu); });
+template <typename T> inline T DiffuseSlabTransmittance(T d) {
+    return CosineWeightedMean<T>([d](T mu) { return exp(-d / mu); });
 }
 
 template <typename F, typename Bottom> struct AnalyticLayeredBxDF {
@@ -80,23 +81,24 @@ template <typename F, typename Bottom> struct AnalyticLayeredBxDF {
     F q_cos = 1;               // probability of a cosine-weighted direction within the base branch
     bool has_albedo = false, base_diffuse = true, base_smooth = false;
 
-    // rho_b: the base's cosine-weighted hemispherical albedo (per channel).
-    void set_layer(const LayerParams &p, const Spectrum<double> &rho_b) {
+    // rho_b: the base's cosine-weighted hemispherical albedo (per channel). S = param_t<F>
+    // (double, or the Dual of a gradient model: M's derivative flows through the quadratures).
+    template <typename S> void set_layer(const LayerParamsT<S> &p, const Spectrum<S> &rho_b) {
         thickness = max_(F(p.thickness), F(std::numeric_limits<float>::min()));
         for (int c = 0; c < 3; ++c) albedo[c] = F(p.albedo[c]);
         has_albedo = !albedo.is_black();
-        g = F(clamp(p.g, -0.99, 0.99));
-        double eta = double(top.eta), fdr_int = DiffuseFresnel(1 / eta);
-        double td = DiffuseSlabTransmittance(double(thickness)), t2 = std::exp(-2 * double(thickness));
-        double rb = 0, med = 0;
+        g = F(clamp(p.g, S(-0.99), S(0.99)));
+        S eta = S(top.eta), fdr_int = DiffuseFresnel(S(1) / eta);
+        S td = DiffuseSlabTransmittance(S(thickness)), t2 = exp(S(-2) * S(thickness));
+        S rb = 0, med = 0;
         for (int c = 0; c < 3; ++c) {
-            multi[c] = F(1 / (1 - rho_b[c] * fdr_int * td * td));
-            rb += rho_b[c] / 3;
-            med += p.albedo[c] / 3;
+            multi[c] = F(S(1) / (S(1) - rho_b[c] * fdr_int * td * td));
+            rb += rho_b[c] / S(3);
+            med += p.albedo[c] / S(3);
         }
-        double s = med * (1 - t2), b = rb * t2;
+        S s = med * (S(1) - t2), b = rb * t2;
         base_weight = F(b + s);
-        q_cos = base_diffuse ? F(1) : F(s + b > 0 ? s / (s + b) : 0.0);
+        q_cos = base_diffuse ? F(1) : F(s + b > S(0) ? s / (s + b) : S(0));
     }
 
     bool top_smooth() const { return top.is_smooth(); }
@@ -122,7 +124,7 @@ template <typename F, typename Bottom> struct AnalyticLayeredBxDF {
     // Beer-Lambert along both refracted paths (sigma_t = 1), 0 at a horizon inner direction.
     F absorption(F co, F ci) const {
         F prod = co * ci;
-        return prod > F(0) ? std::exp(-thickness * (co + ci) / prod) : F(0);
+        return prod > F(0) ? exp(-thickness * (co + ci) / prod) : F(0);
     }
 
     // Fresnel-weighted probability of the coating lobe (p_c above).
@@ -252,15 +254,18 @@ template <typename F, typename Bottom> struct AnalyticLayeredBxDF {
     }
 };
 
+// Params on S = param_t<F> (a Dual for gradients, bindings/models_grad.cpp): every derived
+// parameter (relative metal IOR, the base albedo, M, the lobe weights) is computed in S.
 template <typename F> struct CoatedDiffuseAnalyticBxDF : AnalyticLayeredBxDF<F, DiffuseBxDF<F>> {
-    using Params = CoatedDiffuseParams;
+    using Params = CoatedDiffuseParamsT<param_t<F>>;
     static constexpr const char *Name = "CoatedDiffuseAnalytic";
 
     static CoatedDiffuseAnalyticBxDF make(const Params &p) {
+        using S = param_t<F>;
         CoatedDiffuseAnalyticBxDF m;
         m.top.eta = F(p.eta);
         m.top.mfd = TrowbridgeReitz<F>(F(p.alpha_x), F(p.alpha_y), p.masking);
-        Spectrum<double> rho;
+        Spectrum<S> rho;
         for (int c = 0; c < 3; ++c) {
             m.bottom.R[c] = F(p.reflectance[c]);
             rho[c] = p.reflectance[c];
@@ -273,22 +278,23 @@ template <typename F> struct CoatedDiffuseAnalyticBxDF : AnalyticLayeredBxDF<F, 
 };
 
 template <typename F> struct CoatedConductorAnalyticBxDF : AnalyticLayeredBxDF<F, ConductorBxDF<F>> {
-    using Params = CoatedConductorParams;
+    using Params = CoatedConductorParamsT<param_t<F>>;
     static constexpr const char *Name = "CoatedConductorAnalytic";
 
     static CoatedConductorAnalyticBxDF make(const Params &p) {
+        using S = param_t<F>;
         CoatedConductorAnalyticBxDF m;
         m.top.eta = F(p.interface_eta);
         m.top.mfd = TrowbridgeReitz<F>(F(p.interface_alpha_x), F(p.interface_alpha_y), p.masking);
         // the metal relative to the coating, as the stochastic model (pbrt-v4 PR #343)
         Spectrum<F> ce, ck;
-        Spectrum<double> rho;
+        Spectrum<S> rho;
         for (int c = 0; c < 3; ++c) {
-            double e = p.conductor_eta[c] / p.interface_eta, k = p.conductor_k[c] / p.interface_eta;
+            S e = p.conductor_eta[c] / p.interface_eta, k = p.conductor_k[c] / p.interface_eta;
             ce[c] = F(e);
             ck[c] = F(k);
             // the smooth metal's hemispherical albedo (roughness neglected)
-            rho[c] = CosineWeightedMean([e, k](double mu) { return FrComplex(mu, e, k); });
+            rho[c] = CosineWeightedMean<S>([e, k](S mu) { return FrComplex(mu, e, k); });
         }
         m.bottom = ConductorBxDF<F>(TrowbridgeReitz<F>(F(p.conductor_alpha_x), F(p.conductor_alpha_y), p.masking), ce, ck);
         m.base_diffuse = false;
