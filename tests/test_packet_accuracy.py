@@ -3,9 +3,14 @@ kernel on the same float32-representable direction pairs, for the models whose p
 restructured for packets and fewer divisions (Plastic, FilamentStandard, Hair, NormalizedFresnel). The
 float64 kernels themselves are checked against Mitsuba / the independent references in tests/models/.
 
-Well-conditioned pairs: both |cos| >= 0.1 and a value >= 1e-3 of the 99th percentile. Below that the
+Well-conditioned pairs: both |cos| >= 0.1 and a value >= 1e-3 of the median positive value. Below that the
 relative error measures conditioning, not arithmetic: values deep in an exponential tail (hair's Mp and
-logistic, GGX's D far from the peak) carry float32's rounding of their exponent's argument.
+logistic, GGX's D far from the peak) carry float32's rounding of their exponent's argument. Hair's Mp is
+exp(LogI0(a) - b + log_norm) with a, b ~ 1/v (its longitudinal variance; v0/4 for TT): the exponent's
+terms are O(1/v) and cancel to O(1), so rounding the cosines' products to float32 costs ~eps32 / v
+relative whatever the arithmetic (measured on the scalar libm kernel before the packet path: p99.9 9.5e-6
+at beta_m = 0.3, 1.3e-4 at beta_m = 0.1, the same as now). Hair's tolerance is therefore
+max(1e-5, 5 eps32 / v_min).
 """
 import numpy as np
 import pytest
@@ -37,6 +42,7 @@ def _pairs(m, n, seed):
     v = rng.normal(size=(2, n, 3))
     v /= np.linalg.norm(v, axis=-1, keepdims=True)
     wo, wi = v[0], v[1]
+    wo[:, 2] = np.abs(wo[:, 2])  # the Filament models are one-sided; the others are symmetric or need no more
     # half the wi sampled from the model, so the lobes' peaks are well covered
     s = m.sample(wo[: n // 2], rng.random(n // 2), rng.random((n // 2, 2)))
     take = s.valid & ((s.flags & bk.BxDFFlags.Specular) == 0)
@@ -44,8 +50,16 @@ def _pairs(m, n, seed):
     return wo.astype(np.float32), wi.astype(np.float32)
 
 
+def _tolerance(m):
+    if not isinstance(m, bk.Hair):
+        return 1e-5
+    b = m.beta_m
+    v_min = (0.726 * b + 0.812 * b * b + 3.7 * b ** 20) ** 2 / 4  # Chiang 2016 eq. 7; TT's v0 / 4
+    return max(1e-5, 5 * 2.0 ** -24 / v_min)
+
+
 def _p999(v32, v64, good):
-    good = good & (v64 >= 1e-3 * np.quantile(v64[v64 > 0], 0.99))
+    good = good & (v64 >= 1e-3 * np.median(v64[v64 > 0]))
     assert good.sum() > 20_000
     rel = np.abs(v32[good].astype(np.float64) - v64[good]) / v64[good]
     return np.quantile(rel, 0.999), rel.max()
@@ -57,11 +71,12 @@ def test_float32_matches_float64_when_well_conditioned(name):
     wo32, wi32 = _pairs(m, 100_000, 7)
     wo, wi = wo32.astype(np.float64), wi32.astype(np.float64)
     good = (np.abs(wo[:, 2]) >= 0.1) & (np.abs(wi[:, 2]) >= 0.1)
+    tol = _tolerance(m)
     f64, f32 = m.eval(wo, wi), m.eval(wo32, wi32)
     for c in range(3):
         p, mx = _p999(f32[:, c], f64[:, c], good)
         print(f"{name} f[{c}]: p99.9 {p:.2g}, max {mx:.2g}")
-        assert p <= 1e-5
+        assert p <= tol
     p, mx = _p999(m.pdf(wo32, wi32), m.pdf(wo, wi), good)
     print(f"{name} pdf: p99.9 {p:.2g}, max {mx:.2g}")
-    assert p <= 1e-5
+    assert p <= tol
