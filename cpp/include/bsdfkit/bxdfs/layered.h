@@ -184,6 +184,10 @@ using CoatedConductorParams = CoatedConductorParamsT<>;
 
 // ---------------------------------------------------------------- the layered estimator
 
+// Scalar only (no `Vectorized`; the batch kernels run it per element, issue 17): the random walk's
+// length is data-dependent (each path ends by absorption, escape, Russian roulette or max_depth), so
+// the lanes of a packet would diverge at every bounce and wait for the longest walk; per element,
+// each path costs only its own depth. The analytic counterpart (layered_analytic.h) runs on packets.
 template <typename F, typename Bottom> struct LayeredBxDF {
     DielectricBxDF<F> top;
     Bottom bottom;
