@@ -1,6 +1,7 @@
 """float32 accuracy of the models on the packet path (issue 17): the float32 kernel against the float64
 kernel on the same float32-representable direction pairs, for the models whose per-element code was
-restructured for packets and fewer divisions (Plastic, FilamentStandard, Hair, NormalizedFresnel). The
+restructured for packets and fewer divisions (Plastic, FilamentStandard, Hair, NormalizedFresnel, the
+analytic coated models). The
 float64 kernels themselves are checked against Mitsuba / the independent references in tests/models/.
 
 Well-conditioned pairs: both |cos| >= 0.1 and a value >= 1e-3 of the median positive value. Below that the
@@ -34,6 +35,11 @@ MODELS = {
     "Hair-narrow": lambda: bk.Hair((0.1, 0.8, 1.5), beta_m=0.1, beta_n=0.2, h=-0.7),
     "HairFarField": lambda: bk.Hair(h=None, nodes=16),
     "NormalizedFresnel": lambda: bk.NormalizedFresnel(1.33),
+    "CoatedDiffuseAnalytic": lambda: bk.CoatedDiffuse((0.6, 0.35, 0.15), alpha=0.2, albedo=0.8, thickness=0.2,
+                                                      g=0.3, method="analytic"),
+    "CoatedConductorAnalytic": lambda: bk.CoatedConductor.from_metal("Cu", conductor_alpha=0.3, interface_alpha=0.1,
+                                                                     albedo=(0.5, 0.1, 0.1), thickness=0.1,
+                                                                     method="analytic"),
 }
 
 

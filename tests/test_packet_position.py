@@ -39,6 +39,14 @@ PACKET_MODELS = {
     "HairFarField": lambda: bk.Hair(h=None, nodes=8),
     "NormalizedFresnel": lambda: bk.NormalizedFresnel(1.33),
     "NormalizedFresnel-inside": lambda: bk.NormalizedFresnel(0.8),
+    "CoatedDiffuseAnalytic-rough-medium": lambda: bk.CoatedDiffuse((0.6, 0.35, 0.15), alpha=0.2, albedo=0.8,
+                                                                   thickness=0.2, g=0.3, method="analytic"),
+    "CoatedDiffuseAnalytic-smooth": lambda: bk.CoatedDiffuse(0.5, eta=1.5, method="analytic"),
+    "CoatedConductorAnalytic-rough": lambda: bk.CoatedConductor.from_metal("Cu", conductor_roughness=None,
+                                                                           conductor_alpha=0.3, interface_alpha=0.1,
+                                                                           albedo=(0.5, 0.1, 0.1), thickness=0.1,
+                                                                           method="analytic"),
+    "CoatedConductorAnalytic-smooth": lambda: bk.CoatedConductor.from_metal("Au", method="analytic"),
 }
 
 
