@@ -83,6 +83,8 @@ CONFIGS = [
     ("filament", "FilamentStandard (plastic defaults)", False, None),
     ("filament_coat", "FilamentStandard clear coat", False, None),
     ("nfresnel", "NormalizedFresnel", False, None),
+    ("coated_analytic", "CoatedDiffuse analytic (coat a=0.2, medium)", False, None),
+    ("coated_cond_analytic", "CoatedConductor analytic (Cu a=0.3, coat a=0.1)", False, None),
 ]
 CONFIG = {c[0]: c for c in CONFIGS}
 OPS = ["eval", "pdf", "sample"]
@@ -107,6 +109,11 @@ def bk_model(key):
         "filament_coat": lambda: bk.FilamentStandard((0.05, 0.2, 0.7), metallic=0.7, roughness=0.5, clear_coat=1,
                                                      clear_coat_roughness=0.1),
         "nfresnel": lambda: bk.NormalizedFresnel(1.33),
+        "coated_analytic": lambda: bk.CoatedDiffuse((0.6, 0.35, 0.15), alpha=0.2, albedo=0.8, thickness=0.2, g=0.3,
+                                                    method="analytic"),
+        "coated_cond_analytic": lambda: bk.CoatedConductor.from_metal("Cu", conductor_alpha=0.3, interface_alpha=0.1,
+                                                                      albedo=(0.5, 0.1, 0.1), thickness=0.1,
+                                                                      method="analytic"),
     }[key]()
 
 
