@@ -68,6 +68,23 @@ CONFIGS = [
     ("diel_rough", "Dielectric rough a=0.3 (separable)", True,
      {"type": "roughdielectric", "distribution": "ggx", "alpha": 0.3, "int_ior": 1.5, "ext_ior": 1.0}),
     ("thin", "ThinDielectric", True, {"type": "thindielectric", "int_ior": 1.5, "ext_ior": 1.0}),
+    ("plastic", "Plastic smooth", False,
+     {"type": "twosided", "bsdf": {"type": "plastic", "diffuse_reflectance": {"type": "rgb", "value": [0.5, 0.6, 0.7]},
+                                   "int_ior": 1.49, "ext_ior": 1.0}}),
+    ("roughplastic", "Plastic rough a=0.3 (separable)", False,
+     {"type": "twosided", "bsdf": {"type": "roughplastic", "distribution": "ggx", "alpha": 0.3,
+                                   "diffuse_reflectance": {"type": "rgb", "value": [0.5, 0.6, 0.7]},
+                                   "int_ior": 1.49, "ext_ior": 1.0}}),
+    # Mitsuba's hair derives the offset h from wo (bsdfkit.testing.hair_ref.mitsuba_h): the inputs'
+    # random wo give it a spread of h, against bsdfkit's fixed h = 0.3 (the same per-element work).
+    ("hair", "Hair (eumelanin 1.3, h=0.3)", True,
+     {"type": "hair", "eumelanin": 1.3, "pheomelanin": 0.0, "int_ior": 1.55, "ext_ior": 1.0,
+      "longitudinal_roughness": 0.3, "azimuthal_roughness": 0.3, "scale_tilt": 2.0}),
+    ("filament", "FilamentStandard (plastic defaults)", False, None),
+    ("filament_coat", "FilamentStandard clear coat", False, None),
+    ("nfresnel", "NormalizedFresnel", False, None),
+    ("coated_analytic", "CoatedDiffuse analytic (coat a=0.2, medium)", False, None),
+    ("coated_cond_analytic", "CoatedConductor analytic (Cu a=0.3, coat a=0.1)", False, None),
 ]
 CONFIG = {c[0]: c for c in CONFIGS}
 OPS = ["eval", "pdf", "sample"]
@@ -85,6 +102,18 @@ def bk_model(key):
         "diel_smooth": lambda: bk.Dielectric(1.5, alpha=0.0),
         "diel_rough": lambda: bk.Dielectric(1.5, alpha=0.3, masking="separable"),
         "thin": lambda: bk.ThinDielectric(1.5),
+        "plastic": lambda: bk.Plastic([0.5, 0.6, 0.7], eta=1.49),
+        "roughplastic": lambda: bk.Plastic([0.5, 0.6, 0.7], eta=1.49, alpha=0.3, masking="separable"),
+        "hair": lambda: bk.Hair.from_concentration(1.3, 0.0, h=0.3),
+        "filament": lambda: bk.FilamentStandard((0.8, 0.5, 0.3)),
+        "filament_coat": lambda: bk.FilamentStandard((0.05, 0.2, 0.7), metallic=0.7, roughness=0.5, clear_coat=1,
+                                                     clear_coat_roughness=0.1),
+        "nfresnel": lambda: bk.NormalizedFresnel(1.33),
+        "coated_analytic": lambda: bk.CoatedDiffuse((0.6, 0.35, 0.15), alpha=0.2, albedo=0.8, thickness=0.2, g=0.3,
+                                                    method="analytic"),
+        "coated_cond_analytic": lambda: bk.CoatedConductor.from_metal("Cu", conductor_alpha=0.3, interface_alpha=0.1,
+                                                                      albedo=(0.5, 0.1, 0.1), thickness=0.1,
+                                                                      method="analytic"),
     }[key]()
 
 

@@ -46,9 +46,9 @@ def cpu_best(fn, repeats=5, min_cpu=0.05):
     return best
 
 
-def side_bk(n, keys, ops, dtypes):
+def side_bk(n, keys, ops, dtypes, threads=1):
     import bsdfkit as bk
-    bk.set_num_threads(1)
+    bk.set_num_threads(threads)
     inputs = T.make_inputs(n)
     res = {}
     for key in keys:
@@ -60,19 +60,22 @@ def side_bk(n, keys, ops, dtypes):
     return {"results": res, "bsdfkit": bk.__file__}
 
 
-def side_mi(n, keys, ops, llvm):
+def side_mi(n, keys, ops, llvm, threads=1):
     mi = T._MiLLVM(llvm)
     mi.set_inputs(n, T.checksum(T.make_inputs(n)))
-    mi.dr.set_thread_count(1)
+    mi.dr.set_thread_count(threads)
     res = {}
     for key in keys:
+        if T.CONFIG[key][3] is None:  # no Mitsuba counterpart
+            continue
         for op in ops:
             res[f"{key}/{op}/float32"] = cpu_best(mi.kernel_fn(n, key, op))
     return {"results": res, "info": mi.info()}
 
 
 def run_side(python, side, args):
-    cmd = [python, __file__, "--_side", side, "--n", str(args.n), "--models", ",".join(args.keys)]
+    cmd = [python, __file__, "--_side", side, "--n", str(args.n), "--models", ",".join(args.keys),
+           "--threads", str(args.threads)]
     if args.llvm:
         cmd += ["--llvm", args.llvm]
     out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
@@ -86,16 +89,17 @@ def main():
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--models", default=",".join(KEYS))
     ap.add_argument("--llvm", default=None)
+    ap.add_argument("--threads", type=int, default=1, help="threads of both sides (rates stay per CPU-second)")
     ap.add_argument("--_side", default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
     args.keys = args.models.split(",")
     ops, dtypes = T.OPS, T.DTYPES
     if args._side == "bk":
-        print(json.dumps(side_bk(args.n, args.keys, ops, dtypes)))
+        print(json.dumps(side_bk(args.n, args.keys, ops, dtypes, args.threads)))
         return
     if args._side == "mi":
         T._setup_drjit_env(args.llvm)
-        print(json.dumps(side_mi(args.n, args.keys, ops, args.llvm)))
+        print(json.dumps(side_mi(args.n, args.keys, ops, args.llvm, args.threads)))
         return
     pythons = args.python or [sys.executable]
     load0 = os.getloadavg()
@@ -113,30 +117,41 @@ def main():
     flags = open("/proc/cpuinfo").read()
     simd = ", ".join(f for f in ("avx2", "fma", "avx512f") if f" {f}" in flags)
     print(f"CPU: {cpu}; SIMD {simd}; {platform.platform()}; load average {load0[0]:.1f} at start, {load1[0]:.1f} at end")
-    print(f"N = {args.n:,}, 1 thread each, rates in M elements per CPU-second, median of {args.rounds} rounds "
-          f"[min-max]; ratio = bsdfkit / Mitsuba llvm_ad_rgb kernel (float32 Mitsuba kernel for both dtypes).")
+    print(f"N = {args.n:,}, {args.threads} thread(s) each, rates in M elements per CPU-second, median of "
+          f"{args.rounds} rounds [min-max]; ratio = bsdfkit / Mitsuba llvm_ad_rgb kernel (float32 Mitsuba kernel for "
+          f"both dtypes); last column: the last install / the first, same dtype (rows without Mitsuba: —).")
     for i, p in enumerate(pythons):
         print(f"- bk{i}: {files[p]}")
-    hdr = "| model | op | dtype | Mitsuba | " + " | ".join(f"bk{i} | bk{i}/Mi" for i in range(len(pythons))) + " |"
+    last = len(pythons) - 1
+    hdr = ("| model | op | dtype | Mitsuba | " + " | ".join(f"bk{i} | bk{i}/Mi" for i in range(len(pythons))) +
+           (f" | bk{last}/bk0" if last else "") + " |")
     print(hdr)
-    print("|" + "---|" * (3 + 1 + 2 * len(pythons)))
+    print("|" + "---|" * (3 + 1 + 2 * len(pythons) + (1 if last else 0)))
 
     def stats(vals):
         v = np.array(vals)
         return np.median(v), v.min(), v.max()
 
     for key in args.keys:
+        has_mi = T.CONFIG[key][3] is not None
         for op in ops:
             for dt in dtypes:
-                mi_rates = [args.n / r[f"{key}/{op}/float32"] / 1e6 for r in runs["mitsuba"]]
-                mm, _, _ = stats(mi_rates)
-                cells = [f"{T.CONFIG[key][1]}", op, dt, f"{mm:.0f}"]
+                mi_rates = [args.n / r[f"{key}/{op}/float32"] / 1e6 for r in runs["mitsuba"]] if has_mi else None
+                cells = [f"{T.CONFIG[key][1]}", op, dt, f"{stats(mi_rates)[0]:.0f}" if has_mi else "—"]
+                per = []
                 for p in pythons:
                     rates = [args.n / r[f"{key}/{op}/{dt}"] / 1e6 for r in runs[p]]
-                    ratios = [a / b for a, b in zip(rates, mi_rates)]
+                    per.append(rates)
                     bm, _, _ = stats(rates)
-                    rm, rlo, rhi = stats(ratios)
-                    cells += [f"{bm:.0f}", f"{rm:.2f}× [{rlo:.2f}–{rhi:.2f}]"]
+                    cells.append(f"{bm:.0f}")
+                    if has_mi:
+                        rm, rlo, rhi = stats([a / b for a, b in zip(rates, mi_rates)])
+                        cells.append(f"{rm:.2f}× [{rlo:.2f}–{rhi:.2f}]")
+                    else:
+                        cells.append("—")
+                if last:
+                    rm, rlo, rhi = stats([a / b for a, b in zip(per[last], per[0])])
+                    cells.append(f"{rm:.2f}× [{rlo:.2f}–{rhi:.2f}]")
                 print("| " + " | ".join(cells) + " |")
 
 

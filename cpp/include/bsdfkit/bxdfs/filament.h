@@ -95,7 +95,7 @@ template <typename F> inline F D_Charlie(F alpha, F NoH) { return D_Charlie_sin2
 // the sheen sampler (with cos(theta_h)) and the DFG z channel.
 template <typename F> inline F D_CharlieExact_sin2(F alpha, F sin2h) {
     F inv = F(1) / alpha;
-    return (F(2) + inv) * std::pow(max_(sin2h, F(0)), inv * F(0.5)) * (F(0.5) * InvPi<F>);
+    return (F(2) + inv) * pow(max_(sin2h, F(0)), inv * F(0.5)) * F(0.5 * InvPi<double>);
 }
 
 // D_Ashikhmin (Neubelt & Pettineo 2013 normalisation of Ashikhmin 2007 velvet; older brdf.fs):
@@ -152,7 +152,7 @@ template <typename F> inline F Fd_Lambert() { return InvPi<F>; }
 // Fd_Burley (Burley 2012, brdf.fs): F_Schlick(1, f90, NoL) F_Schlick(1, f90, NoV) / pi, f90 = 0.5 + 2 a LoH^2.
 template <typename F> inline F Fd_Burley(F alpha, F NoV, F NoL, F LoH) {
     F f90 = F(0.5) + F(2) * alpha * LoH * LoH;
-    return F_Schlick(F(1), f90, NoL) * F_Schlick(F(1), f90, NoV) * InvPi<F>;
+    return F_Schlick(F(1), f90, NoL) * F_Schlick(F(1), f90, NoV) * F(InvPi<scalar_t<F>>);
 }
 
 // Fd_Wrap (brdf.fs, energy-conserving wrap, no 1/pi): saturate((NoL + w) / (1 + w)^2).
@@ -168,9 +168,9 @@ template <typename T> inline T f0ClearCoatToSurface(T f0) {
 
 // Charlie NDF sampling (cmgen hemisphereImportanceSampleDCharlie): pdf_h = D_CharlieExact cos(theta_h).
 template <typename F> inline Vec3<F> SampleCharlie(F alpha, Point2<F> u) {
-    F sin_t = std::pow(u.x, alpha / (F(2) * alpha + F(1)));
+    F sin_t = pow(u.x, alpha / (F(2) * alpha + F(1)));
     F cos_t = safe_sqrt(F(1) - sin_t * sin_t);
-    F phi = F(2) * Pi<F> * u.y, sp, cp;
+    F phi = F(2 * Pi<double>) * u.y, sp, cp;
     sincos_(phi, &sp, &cp);
     return {sin_t * cp, sin_t * sp, cos_t};
 }
@@ -257,129 +257,171 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardKernel {
 
     uint8_t flags() const { return diffuse_max > F(0) ? uint8_t(GlossyReflection | Diffuse) : uint8_t(GlossyReflection); }
 
-    // Energy compensation 1 + f0 (1 / DFG.y - 1) at NoV (getEnergyCompensationPixelParams); 1 when off.
-    Spectrum<F> Ec(F NoV) const {
-        F k = (F(1) / dfg_base(NoV, 1) - F(1)) * energy_compensation;
-        return Spectrum<F>(F(1)) + f0 * k;
-    }
+    // The kernel runs on packets in the batch kernels (batch.h): every method is written once on the
+    // evaluation type V (F, a packet of F, or a Dual of the gradient path, core/dual.h; the knobs
+    // are uniform branches). Only IEEE-exact operations (+ - * / sqrt floor select) and libm's pow
+    // (pow_libm, per lane) enter f, so that a float64 packet gives the Dual path's value bit for bit.
+    static constexpr bool Vectorized = true;
+
     // Sheen scaling 1 - max(sheenColor) DFG.z(sheen roughness, NoV), floored at 0: the sheen albedo
     // z exceeds 1 at grazing NoV for sheen roughness below ~0.1 (up to ~10), where Filament's
     // factor turns negative; here the base is switched off instead of subtracted.
-    F sheen_scaling(F NoV) const {
-        if constexpr (Sheen) return max_(F(1) - sheen_max * dfg_sheen(NoV, 2), F(0)); else return F(1);
+    template <typename V> V sheen_scaling(V NoV) const {
+        if constexpr (Sheen) return max_(V(1) - V(sheen_max) * dfg_sheen.lookup(NoV, 2), V(0)); else return V(1);
     }
 
-    // The dispatch functions of brdf.fs, on the knobs (stored as 0/1 factors, rule V3 of core/math.h).
-    // visibility(): anisotropic lobes always use V_SmithGGXCorrelated_Anisotropic, as Filament.
-    F visibility(const Vec3<F> &wo, const Vec3<F> &wi, F NoV, F NoL) const {
-        using namespace filament;
-        F Va = V_SmithGGXCorrelated_Anisotropic(spec.alpha_x, spec.alpha_y, wo.x, wo.y, wi.x, wi.y, NoV, NoL);
-        F Vi = fast_v > F(0) ? V_SmithGGXCorrelated_Fast(spec.alpha_x, NoV, NoL)
-                             : V_SmithGGXCorrelated(spec.alpha_x, NoV, NoL);
-        return anisotropic > F(0) ? Va : Vi;
+    // visibility() of brdf.fs as its denominator: V = 0.5 / lambda. Anisotropic lobes always use
+    // V_SmithGGXCorrelated_Anisotropic (as Filament); else V_SmithGGXCorrelated or its _Fast form.
+    template <typename V> V visibility_denom(const Vec3<V> &wo, const Vec3<V> &wi, V NoV, V NoL) const {
+        if (anisotropic > F(0)) {
+            V at(spec.alpha_x), ab(spec.alpha_y);
+            return NoL * sqrt(sqr(at * wo.x) + sqr(ab * wo.y) + NoV * NoV) +
+                   NoV * sqrt(sqr(at * wi.x) + sqr(ab * wi.y) + NoL * NoL);
+        }
+        V a(spec.alpha_x);
+        if (fast_v > F(0)) return lerp(a, V(2) * NoL * NoV, NoL + NoV);
+        V a2 = a * a;
+        return NoL * sqrt((NoV - a2 * NoV) * NoV + a2) + NoV * sqrt((NoL - a2 * NoL) * NoL + a2);
     }
-    F diffuse(F NoV, F NoL, F LoH) const {
-        return burley > F(0) ? filament::Fd_Burley(alpha, NoV, NoL, LoH) : filament::Fd_Lambert<F>();
+    template <typename V> V diffuse(V NoV, V NoL, V LoH) const {
+        if (burley > F(0)) return filament::Fd_Burley(V(alpha), NoV, NoL, LoH);
+        return V(InvPi<scalar_t<V>>);
     }
 
     // f = ((Fd + Fr Ec [(1 - Fc)]) sheenScaling + Fsheen) (1 - Fc) + Frc   (surfaceShading, cosine excluded)
-    Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode) const {
+    // Divisions: the half vector 1, D V Ec / one product (D = 1 / D_denom, core/microfacet.h; V = 0.5 /
+    // lambda; Ec = (y + f0 (1 - y)) / y, y = DFG.y) 1, sheen 1, coat 1.
+    template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
         using namespace filament;
-        bool active = (wo.z > F(0)) & (wi.z > F(0));
-        Vec3<F> h = reflection_half_vector(wo, wi, active);
-        F NoV = max_(wo.z, F(kMinNoV));  // clampNoV
-        F NoL = saturate(wi.z);
-        F LoH = saturate(dot(wi, h));
-        // Base specular lobe: D V F (isotropicLobe / anisotropicLobe)
-        F D = D_GGX(spec, h);
-        F V = visibility(wo, wi, NoV, NoL);
+        Mask<V> active = (wo.z > V(0)) & (wi.z > V(0));
+        Vec3<V> h = reflection_half_vector(wo, wi, active);
+        V NoV = max_(wo.z, V(kMinNoV));  // clampNoV
+        V NoL = saturate(wi.z);
+        V LoH = saturate(dot(wi, h));
         // Clear coat Fresnel (clearCoatLobe): Fc = F_Schlick(0.04, 1, LoH) clearCoat
-        F Fc = Coat ? F_Schlick(F(kClearCoatF0), F(1), LoH) * clear_coat : F(0);
-        Spectrum<F> Fr = F_Schlick(f0, f90, LoH) * (D * V * (F(1) - doc_layering * Fc)) * Ec(NoV);
-        // Diffuse lobe (diffuseLobe)
-        Spectrum<F> color = diffuse_color * diffuse(NoV, NoL, LoH) + Fr;
-        // Sheen lobe (sheenLobe) after scaling the base
-        if constexpr (Sheen) {
-            F Ds = D_Charlie_sin2(sheen_alpha, h.x * h.x + h.y * h.y);
-            color = color * sheen_scaling(NoV) + sheen_color * (Ds * V_Neubelt(NoV, NoL));
+        V Fc = V(0);
+        if constexpr (Coat) Fc = F_Schlick(V(kClearCoatF0), V(1), LoH) * V(clear_coat);
+        // Base specular lobe D V F Ec (isotropicLobe / anisotropicLobe; getEnergyCompensationPixelParams)
+        Mask<V> d_ok = active;
+        V dd = spec.D_denom(h, d_ok);
+        V y = dfg_base.lookup(NoV, 1);
+        V dv = V(0.5) * (V(1) - V(doc_layering) * Fc) / (dd * visibility_denom(wo, wi, NoV, NoL) * y);
+        dv = select(d_ok, dv, V(0));
+        V fc5 = pow5(V(1) - LoH), ec = V(energy_compensation) * (V(1) - y);
+        Spectrum<V> color;
+        V fd = diffuse(NoV, NoL, LoH);
+        for (int c = 0; c < 3; ++c) {
+            V f0c(f0[c]);
+            V Fs = f0c + (V(f90) - f0c) * fc5;  // F_Schlick(f0, f90, LoH)
+            color[c] = V(diffuse_color[c]) * fd + Fs * ((y + f0c * ec) * dv);
         }
-        // Clear coat lobe D_GGX(alpha_c) V_Kelemen(LoH) Fc on top of the attenuated base
-        // (V Fc first: with clear_coat = 0 the product is 0 even where V is huge)
-        if constexpr (Coat) color = color * (F(1) - Fc) + Spectrum<F>(D_GGX(coat, h) * (V_Kelemen(LoH) * Fc));
-        return select(active, color, Spectrum<F>(F(0)));
+        // Sheen lobe (sheenLobe) after scaling the base: D_Charlie V_Neubelt
+        if constexpr (Sheen) {
+            V inv_a = V(F(1) / sheen_alpha);
+            V s2 = max_(h.x * h.x + h.y * h.y, V(kCharlieSin2Floor));
+            V ds = (V(2) + inv_a) * pow_libm(s2, inv_a * V(0.5)) * V(0.5 * InvPi<double>);
+            V sv = ds / (V(4) * (NoL + NoV - NoL * NoV));
+            V sc = sheen_scaling(NoV);
+            for (int c = 0; c < 3; ++c) color[c] = color[c] * sc + V(sheen_color[c]) * sv;
+        }
+        // Clear coat lobe D_GGX(alpha_c) V_Kelemen(LoH) Fc on top of the attenuated base:
+        // Fc 0.25 / (D_denom LoH^2) (LoH^2 floored at the smallest normal number)
+        if constexpr (Coat) {
+            Mask<V> c_ok = active;
+            V ddc = coat.D_denom(h, c_ok);
+            V frc = select(c_ok, Fc * V(0.25) / (ddc * max_(LoH * LoH, V(std::numeric_limits<scalar_t<V>>::min()))), V(0));
+            for (int c = 0; c < 3; ++c) color[c] = color[c] * (V(1) - Fc) + frc;
+        }
+        return select(active, color, Spectrum<V>(V(0)));
     }
 
     // Lobe selection probabilities at wo, in proportion to each lobe's estimated albedo:
-    // diffuse and the sheen's cosine half share the cosine sampler.
-    struct Lobes {
-        F diffuse, sheen_cos, ggx, coat, charlie;
+    // diffuse and the sheen's cosine half share the cosine sampler. All weights are scaled by
+    // DFG.y so that Ec's 1 / y cancels: one division.
+    template <typename V> struct Lobes {
+        V diffuse, sheen_cos, ggx, coat, charlie;
     };
-    Lobes lobes(F NoV) const {
+    template <typename V> Lobes<V> lobes(V NoV) const {
         using namespace filament;
-        F att = Coat ? F(1) - F_Schlick(F(kClearCoatF0), F(1), NoV) * clear_coat : F(1);
-        F x = dfg_base(NoV, 0), y = dfg_base(NoV, 1);
-        F scale = sheen_scaling(NoV);
-        // Schlick GGX albedo f0 (y - x) + f90 x (DFG reconstruction with f90)
-        Spectrum<F> es = (f0 * (y - x) + Spectrum<F>(f90 * x)) * Ec(NoV);
-        F w_spec = es.max_component() * scale * att * (F(1) - doc_layering * (F(1) - att));
-        F w_diff = diffuse_max * scale * att;
-        F w_coat = F(0), w_sheen = F(0);
-        if constexpr (Coat) {
-            F xc = dfg_coat(NoV, 0), yc = dfg_coat(NoV, 1);
-            w_coat = clear_coat * (F(kClearCoatF0) * (yc - xc) + xc);
+        V att = V(1);
+        if constexpr (Coat) att = V(1) - F_Schlick(V(kClearCoatF0), V(1), NoV) * V(clear_coat);
+        V x = dfg_base.lookup(NoV, 0), y = dfg_base.lookup(NoV, 1);
+        V scale = sheen_scaling(NoV);
+        V ec = V(energy_compensation) * (V(1) - y);
+        // Schlick GGX albedo (f0 (y - x) + f90 x) Ec, times y
+        V es = V(0);
+        for (int c = 0; c < 3; ++c) {
+            V f0c(f0[c]);
+            es = max_(es, (f0c * (y - x) + V(f90) * x) * (y + f0c * ec));
         }
-        if constexpr (Sheen) w_sheen = sheen_max * dfg_sheen(NoV, 2) * att;
-        F total = w_spec + w_diff + w_sheen + w_coat;
-        bool ok = total > F(0);
-        F inv = F(1) / (ok ? total : F(1));
-        Lobes l;
+        V w_spec = es * scale * att * (V(1) - V(doc_layering) * (V(1) - att));
+        V w_diff = V(diffuse_max) * scale * att * y;
+        V w_coat = V(0), w_sheen = V(0);
+        if constexpr (Coat) {
+            V xc = dfg_coat.lookup(NoV, 0), yc = dfg_coat.lookup(NoV, 1);
+            w_coat = V(clear_coat) * (V(kClearCoatF0) * (yc - xc) + xc) * y;
+        }
+        if constexpr (Sheen) w_sheen = V(sheen_max) * dfg_sheen.lookup(NoV, 2) * att * y;
+        V total = w_spec + w_diff + w_sheen + w_coat;
+        Mask<V> ok = total > V(0);
+        V inv = V(1) / select(ok, total, V(1));
+        Lobes<V> l;
         l.diffuse = w_diff * inv;
-        l.sheen_cos = F(0.5) * w_sheen * inv;
-        l.charlie = F(0.5) * w_sheen * inv;
+        l.sheen_cos = V(0.5) * w_sheen * inv;
+        l.charlie = l.sheen_cos;
         l.coat = w_coat * inv;
-        l.ggx = ok ? w_spec * inv : F(1);
+        l.ggx = select(ok, w_spec * inv, V(1));
         return l;
     }
 
-    BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode, uint8_t sample_flags) const {
+    template <typename V>
+    BSDFSample<V> sample_f(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode mode, uint8_t sample_flags) const {
         using namespace filament;
-        F NoV = max_(wo.z, F(kMinNoV));
-        Lobes l = lobes(NoV);
-        F c_diff = l.diffuse, c_cos = c_diff + l.sheen_cos, c_ggx = c_cos + l.ggx, c_coat = c_ggx + l.coat;
-        bool pick_cos = uc < c_cos;
-        bool pick_ggx = !pick_cos & (uc < c_ggx);
-        bool pick_coat = Coat & !pick_cos & !pick_ggx & (uc < c_coat) & (l.coat > F(0));
+        V NoV = max_(wo.z, V(kMinNoV));
+        Lobes<V> l = lobes(NoV);
+        V c_diff = l.diffuse, c_cos = c_diff + l.sheen_cos, c_ggx = c_cos + l.ggx, c_coat = c_ggx + l.coat;
+        Mask<V> pick_cos = uc < c_cos;
+        Mask<V> pick_ggx = !pick_cos & (uc < c_ggx);
+        Mask<V> pick_coat = Mask<V>(Coat) & !pick_cos & !pick_ggx & (uc < c_coat) & (l.coat > V(0));
         // One visible-normal sample for whichever GGX lobe was picked
-        TrowbridgeReitz<F> d;
-        d.alpha_x = pick_coat ? coat.alpha_x : spec.alpha_x;
-        d.alpha_y = pick_coat ? coat.alpha_y : spec.alpha_y;
-        Vec3<F> wi = Reflect(wo, d.Sample_wm(wo, u));
+        TrowbridgeReitz<V> d;
+        d.alpha_x = select(pick_coat, V(coat.alpha_x), V(spec.alpha_x));
+        d.alpha_y = select(pick_coat, V(coat.alpha_y), V(spec.alpha_y));
+        Vec3<V> wi = Reflect(wo, d.Sample_wm(wo, u));
         if constexpr (Sheen) {
-            bool pick_charlie = !pick_cos & !pick_ggx & !pick_coat & (l.charlie > F(0));
-            wi = select(pick_charlie, Reflect(wo, SampleCharlie(sheen_alpha, u)), wi);
+            Mask<V> pick_charlie = !pick_cos & !pick_ggx & !pick_coat & (l.charlie > V(0));
+            wi = select(pick_charlie, Reflect(wo, SampleCharlie(V(sheen_alpha), u)), wi);
         }
         wi = select(pick_cos, SampleCosineHemisphere(u), wi);
-        BSDFSample<F> s;
+        BSDFSample<V> s;
         s.wi = wi;
         s.f = f(wo, wi, mode);
         s.pdf = pdf(wo, wi, mode, sample_flags);
-        // Flags by arithmetic (rule V2, core/math.h).
-        s.flags = uint8_t(GlossyReflection - (Glossy - Diffuse) * int(pick_cos & (uc < c_diff)));
-        s.valid = ((sample_flags & RT_Reflection) != 0) & (wo.z > F(0)) & (wi.z > F(0));
+        s.flags = select_flag<V>(pick_cos & (uc < c_diff), DiffuseReflection, GlossyReflection);
+        s.valid = Mask<V>((sample_flags & RT_Reflection) != 0) & (wo.z > V(0)) & (wi.z > V(0));
         return s;
     }
 
-    // Full mixture density: sum of selection probability x lobe sampler density.
-    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
+    // Full mixture density: sum of selection probability x lobe sampler density. A GGX lobe's
+    // visible-normal density through the reflection Jacobian is 1 / (D_denom 2 (cos_o + root_o))
+    // (core/microfacet.h): one division per lobe.
+    template <typename V> V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
         using namespace filament;
-        bool active = (wo.z > F(0)) & (wi.z > F(0));
-        Vec3<F> h = reflection_half_vector(wo, wi, active);
-        Lobes l = lobes(max_(wo.z, F(kMinNoV)));
-        F jac = F(1) / (F(4) * absdot(wo, h));  // reflection Jacobian dwm/dwi
-        F p = (l.diffuse + l.sheen_cos) * CosineHemispherePDF(wi.z) + l.ggx * spec.PDF(wo, h) * jac;
-        if constexpr (Coat) p += l.coat * coat.PDF(wo, h) * jac;
-        if constexpr (Sheen) p += l.charlie * CharliePDF(sheen_alpha, h) * jac;
-        return keep_or_zero(active ? p : F(0), (sample_flags & RT_Reflection) != 0);
+        Mask<V> active = (wo.z > V(0)) & (wi.z > V(0)) & Mask<V>((sample_flags & RT_Reflection) != 0);
+        Vec3<V> h = reflection_half_vector(wo, wi, active);
+        Lobes<V> l = lobes(max_(wo.z, V(kMinNoV)));
+        V cos_o = wo.z;
+        Mask<V> s_ok = active;
+        V dds = spec.D_denom(h, s_ok);
+        V p = (l.diffuse + l.sheen_cos) * CosineHemispherePDF(wi.z) +
+              select(s_ok, l.ggx / (dds * spec.reflection_pdf_denom(cos_o, spec.smith_root(wo))), V(0));
+        if constexpr (Coat) {
+            Mask<V> c_ok = active;
+            V ddc = coat.D_denom(h, c_ok);
+            p += select(c_ok, l.coat / (ddc * coat.reflection_pdf_denom(cos_o, coat.smith_root(wo))), V(0));
+        }
+        if constexpr (Sheen) p += l.charlie * CharliePDF(V(sheen_alpha), h) / (V(4) * abs(dot(wo, h)));
+        return select(active, p, V(0));
     }
 
     void regularize() {

@@ -82,6 +82,19 @@ template <typename F> struct DFGRow {
         return lerp(ty, a, b);
     }
 
+    // The same lookup on an evaluation type V (F, a packet of F, or a Dual): the index arithmetic
+    // is exact in V and a packet gathers the four entries per lane; a NaN NoV reads column 0.
+    // Bit-identical to operator() for scalars.
+    template <typename V> V lookup(V NoV, int c) const {
+        V t = min_(max_(NoV * V(size - 1), V(0)), V(size - 1));
+        V i0 = min_(floor(t), V(size - 2));
+        V tx = t - i0;
+        V k0 = V(3) * i0 + V(3 * size * j0 + c), k1 = V(3) * i0 + V(3 * size * j1 + c);
+        V a = lerp(tx, gather_index(data, k0), gather_index(data + 3, k0));
+        V b = lerp(tx, gather_index(data, k1), gather_index(data + 3, k1));
+        return lerp(V(ty), a, b);
+    }
+
     // Table entry k, read through its bits: an integer load cannot alias the float output
     // arrays of the batch kernels, which lets the vectorizer gather from the table.
     F at(int k) const {

@@ -25,73 +25,89 @@ namespace hair {
 
 inline constexpr int PMax = 3;
 
-// Modified Bessel function of the first kind, order 0: sum_{i<10} x^{2i} / (4^i (i!)^2) (pbrt-v4 I0).
+// The helpers are written on the evaluation type F (a scalar or a packet, core/simd.h): exp, log,
+// asin and atan2 are unqualified, so scalars call libm (core/math.h) and packets Dr.Jit's vector
+// forms (drjit/math.h, Cephes-derived, about 1 ulp).
+
+// Modified Bessel function of the first kind, order 0: sum_{i<10} x^{2i} / (4^i (i!)^2) (pbrt-v4 I0),
+// each term's factor 1 / (4 (i+1)^2) a constant (no division per term).
 template <typename F> inline F I0(F x) {
     F x2 = x * x, val = F(0), term = F(1);
     for (int i = 0; i < 10; ++i) {
         val += term;
-        term *= x2 / F(4 * (i + 1) * (i + 1));
+        term *= x2 * F(1.0 / double(4 * (i + 1) * (i + 1)));
     }
     return val;
 }
 
 // log I0(x); for x > 12 the asymptotic x + (ln(1/x) - ln(2 pi) + 1/(8x)) / 2 (pbrt-v4 LogI0).
+// One log for both branches (its argument is selected).
 template <typename F> inline F LogI0(F x) {
+    using S = scalar_t<F>;
+    Mask<F> big = x > F(12);
     F xs = min_(x, F(12)), xl = max_(x, F(12));
-    F small = std::log(I0(xs));
-    F large = xl + F(0.5) * (-std::log(F(2) * Pi<F> * xl) + F(1) / (F(8) * xl));
-    return x > F(12) ? large : small;
+    F L = log(select(big, F(S(2) * Pi<S>) * xl, I0(xs)));
+    F large = xl + F(0.5) * (F(0.125) / xl - L);
+    return select(big, large, L);
 }
 
 // Longitudinal scattering of d'Eon et al. 2011, eq. 7, in log space (pbrt-v4 Mp):
 // Mp = exp(LogI0(cos_i cos_o / v) - sin_i sin_o / v + log_norm), with log_norm = -ln(2 v sinh(1/v))
 // for v > 0.1 and pbrt-v4's -1/v + 0.6931 + ln(1/(2v)) for v <= 0.1 (no overflow for small v).
-template <typename F> inline F Mp(F cos_i, F cos_o, F sin_i, F sin_o, F inv_v, F log_norm) {
-    F a = cos_i * cos_o * inv_v, b = sin_i * sin_o * inv_v;
-    return std::exp(LogI0(a) - b + log_norm);
+template <typename F, typename S> inline F Mp(F cos_i, F cos_o, F sin_i, F sin_o, S inv_v, S log_norm) {
+    F a = cos_i * cos_o * F(inv_v), b = sin_i * sin_o * F(inv_v);
+    return exp(LogI0(a) - b + F(log_norm));
 }
 
 // Attenuation of each lobe (Marschner 2003 sec. 4.3; pbrt-v4 Ap): A0 = f, A1 = (1-f)^2 T,
 // A2 = A1 T f, A3 = A2 f T / (1 - T f) (the geometric series of all p >= 3).
-template <typename F>
-inline void Ap(F cos_theta_o, F eta, F cos_gamma_o, const Spectrum<F> &T, Spectrum<F> ap[PMax + 1]) {
+template <typename F, typename E>
+inline void Ap(F cos_theta_o, E eta, F cos_gamma_o, const Spectrum<F> &T, Spectrum<F> ap[PMax + 1]) {
     F f = FrDielectric(cos_theta_o * cos_gamma_o, eta);
     ap[0] = Spectrum<F>(f);
     ap[1] = T * sqr(F(1) - f);
     ap[2] = ap[1] * T * f;
     for (int c = 0; c < Spectrum<F>::Size; ++c) {
         F den = F(1) - T[c] * f;
-        ap[3][c] = den > F(0) ? ap[2][c] * f * T[c] / den : F(0);
+        Mask<F> ok = den > F(0);
+        ap[3][c] = select(ok, ap[2][c] * f * T[c] / select(ok, den, F(1)), F(0));
     }
 }
 
-// Azimuth of the perfect (smooth) p-bounce path, Phi(p) = 2 p gamma_t - 2 gamma_o + p pi (pbrt-v4 Phi).
+// Azimuth of the perfect (smooth) p-bounce path, Phi(p) = 2 p gamma_t - 2 gamma_o + p pi (pbrt-v4 Phi);
+// p an integer, or per lane a float holding one.
 template <typename F> inline F Phi(int p, F gamma_o, F gamma_t) {
-    return F(2 * p) * gamma_t - F(2) * gamma_o + F(p) * Pi<F>;
+    return F(2 * p) * gamma_t - F(2) * gamma_o + F(p) * Pi<scalar_t<F>>;
+}
+template <typename F> inline F Phi(F p, F gamma_o, F gamma_t) {
+    return F(2) * p * gamma_t - F(2) * gamma_o + p * F(Pi<scalar_t<F>>);
 }
 
-// Logistic density of scale s (Chiang 2016 eq. 10), symmetric.
-template <typename F> inline F Logistic(F x, F s) {
-    F e = std::exp(-std::abs(x) / s);
-    return e / (s * sqr(F(1) + e));
+// Logistic density of scale s (Chiang 2016 eq. 10), symmetric; inv_s = 1 / s.
+template <typename F, typename S> inline F Logistic(F x, S inv_s) {
+    F e = exp(-abs(x) * F(inv_s));
+    return e * F(inv_s) / sqr(F(1) + e);
 }
-template <typename F> inline F LogisticCDF(F x, F s) { return F(1) / (F(1) + std::exp(-x / s)); }
+template <typename F> inline F LogisticCDF(F x, F s) { return F(1) / (F(1) + exp(-x / s)); }
 
 // Wrap an angle into [-pi, pi].
 template <typename F> inline F WrapPi(F x) {
-    return x - F(2) * Pi<F> * std::floor((x + Pi<F>) * Inv2Pi<F>);
+    using S = scalar_t<F>;
+    return x - F(S(2) * Pi<S>) * floor((x + F(Pi<S>)) * F(Inv2Pi<S>));
 }
 
 // Trimmed logistic on [-pi, pi] (Chiang 2016 eq. 11): Logistic / (CDF(pi) - CDF(-pi)).
-template <typename F> inline F Np(F dphi, int p, F s, F inv_trim, F gamma_o, F gamma_t) {
-    return Logistic(WrapPi(dphi - Phi(p, gamma_o, gamma_t)), s) * inv_trim;
+template <typename F, typename P, typename S> inline F Np(F dphi, P p, S inv_s, S inv_trim, F gamma_o, F gamma_t) {
+    return Logistic(WrapPi(dphi - Phi(p, gamma_o, gamma_t)), inv_s) * F(inv_trim);
 }
 
-// Inverse CDF of the trimmed logistic on [-pi, pi] (pbrt-v4 SampleTrimmedLogistic).
-template <typename F> inline F SampleTrimmedLogistic(F u, F s, F cdf_lo, F cdf_hi) {
-    u = lerp(u, cdf_lo, cdf_hi);
-    F x = -s * std::log(F(1) / u - F(1));
-    return clamp(x, -Pi<F>, Pi<F>);
+// Inverse CDF of the trimmed logistic on [-pi, pi] (pbrt-v4 SampleTrimmedLogistic):
+// -s ln(1/u - 1) = -s ln((1 - u) / u).
+template <typename F, typename S> inline F SampleTrimmedLogistic(F u, S s, S cdf_lo, S cdf_hi) {
+    using T = scalar_t<F>;
+    u = lerp(u, F(cdf_lo), F(cdf_hi));
+    F x = -F(s) * log((F(1) - u) / u);
+    return clamp(x, F(-Pi<T>), F(Pi<T>));
 }
 
 } // namespace hair
@@ -206,139 +222,168 @@ template <typename F> struct HairBxDF {
 
     uint8_t flags() const { return GlossyReflection; }
 
+    // The model runs on packets in the batch kernels (batch.h): every method is written once on
+    // the evaluation type V (F, or a packet of F; core/simd.h). The offset h and its angles are
+    // passed as an Offset<V>, so that the far-field fibre can give every lane its own node.
+    static constexpr bool Vectorized = true;
+
+    template <typename V> struct Offset {
+        V h, gamma_o, cos_gamma_o;
+    };
+    template <typename V> Offset<V> offset() const { return {V(h), V(gamma_o), V(cos_gamma_o)}; }
+
     // Refraction geometry of wo (pbrt-v4 HairBxDF::f): gamma_t and the transmittance of one pass.
-    void refracted(F sin_o, F cos_o, F *gamma_t, Spectrum<F> *T) const {
-        F sin_t = sin_o / eta;
-        F cos_t = safe_sqrt(F(1) - sin_t * sin_t);
-        // sin gamma_t = h / eta', eta' = sqrt(eta^2 - sin^2 theta_o) / cos theta_o (Bravais index)
-        F den = safe_sqrt(eta2 - sin_o * sin_o);
-        F sin_gt = den > F(0) ? clamp(h * cos_o / den, F(-1), F(1)) : F(0);
-        F cos_gt = safe_sqrt(F(1) - sin_gt * sin_gt);
-        *gamma_t = std::asin(sin_gt);
-        // T = exp(-sigma_a 2 cos gamma_t / cos theta_t); cos theta_t > 0 unless eta == 1 at grazing
-        F len = cos_gt / max_(cos_t, F(1e-30));
-        for (int c = 0; c < Spectrum<F>::Size; ++c) (*T)[c] = std::exp(-two_sigma_a[c] * len);
+    // sin gamma_t = h / eta', eta' = sqrt(eta^2 - sin^2 theta_o) / cos theta_o (Bravais index);
+    // T = exp(-sigma_a 2 cos gamma_t / cos theta_t) with cos theta_t = den / eta, den = sqrt(eta^2 -
+    // sin^2 theta_o) floored at eta 1e-30 (cos theta_t > 0 unless eta == 1 at grazing): 1 division.
+    template <typename V>
+    void refracted(const Offset<V> &g, V sin_o, V cos_o, V *gamma_t, Spectrum<V> *T) const {
+        V inv_den = V(1) / max_(safe_sqrt(V(eta2) - sin_o * sin_o), V(F(1e-30) * eta));
+        V sin_gt = clamp(g.h * cos_o * inv_den, V(-1), V(1));
+        V cos_gt = safe_sqrt(V(1) - sin_gt * sin_gt);
+        *gamma_t = asin(sin_gt);
+        V len = cos_gt * V(eta) * inv_den;
+        for (int c = 0; c < Spectrum<V>::Size; ++c) (*T)[c] = exp(-V(two_sigma_a[c]) * len);
     }
 
     // theta_o rotated by the lobe's cuticle tilt; cos is taken as |cos| (pbrt-v4).
-    void tilted(int p, F sin_o, F cos_o, F *sin_p, F *cos_p) const {
-        *sin_p = sin_o * cos_tilt[p] + cos_o * sin_tilt[p];
-        *cos_p = std::abs(cos_o * cos_tilt[p] - sin_o * sin_tilt[p]);
+    template <typename V, typename S> static void tilted(S st, S ct, V sin_o, V cos_o, V *sin_p, V *cos_p) {
+        *sin_p = sin_o * V(ct) + cos_o * V(st);
+        *cos_p = abs(cos_o * V(ct) - sin_o * V(st));
     }
 
     // Everything that depends on wo alone: theta_o, gamma_t, Ap and the lobe weights.
-    struct Outgoing {
-        F sin_o, cos_o, gamma_t;
-        Spectrum<F> ap[P + 1];
-        F w[P + 1];
+    template <typename V> struct Outgoing {
+        V sin_o, cos_o, gamma_t;
+        Spectrum<V> ap[P + 1];
+        V w[P + 1];
     };
-    Outgoing outgoing(const Vec3<F> &wo) const {
-        Outgoing o;
+    template <typename V> Outgoing<V> outgoing(const Offset<V> &g, const Vec3<V> &wo) const {
+        Outgoing<V> o;
         o.sin_o = wo.x;
-        o.cos_o = safe_sqrt(F(1) - o.sin_o * o.sin_o);
-        Spectrum<F> T;
-        refracted(o.sin_o, o.cos_o, &o.gamma_t, &T);
-        hair::Ap(o.cos_o, eta, cos_gamma_o, T, o.ap);
+        o.cos_o = safe_sqrt(V(1) - o.sin_o * o.sin_o);
+        Spectrum<V> T;
+        refracted(g, o.sin_o, o.cos_o, &o.gamma_t, &T);
+        hair::Ap(o.cos_o, eta, g.cos_gamma_o, T, o.ap);
         weights(o.ap, o.w);
         return o;
     }
 
     // Mp Np of every lobe for wi at azimuth difference dphi (the p >= 3 lobe: Mp / (2 pi)).
-    void lobes(const Outgoing &o, const Vec3<F> &wi, F dphi, F mn[P + 1]) const {
-        F sin_i = wi.x, cos_i = safe_sqrt(F(1) - sin_i * sin_i);
+    template <typename V>
+    void lobes(const Offset<V> &g, const Outgoing<V> &o, const Vec3<V> &wi, V dphi, V mn[P + 1]) const {
+        V sin_i = wi.x, cos_i = safe_sqrt(V(1) - sin_i * sin_i);
+        F inv_s = F(1) / s;
         for (int p = 0; p < P; ++p) {
-            F sp, cp;
-            tilted(p, o.sin_o, o.cos_o, &sp, &cp);
+            V sp, cp;
+            tilted(sin_tilt[p], cos_tilt[p], o.sin_o, o.cos_o, &sp, &cp);
             mn[p] = hair::Mp(cos_i, cp, sin_i, sp, inv_v[p], log_norm[p]) *
-                    hair::Np(dphi, p, s, inv_trim, gamma_o, o.gamma_t);
+                    hair::Np(dphi, p, inv_s, inv_trim, g.gamma_o, o.gamma_t);
         }
-        mn[P] = hair::Mp(cos_i, o.cos_o, sin_i, o.sin_o, inv_v[P], log_norm[P]) * Inv2Pi<F>;
+        mn[P] = hair::Mp(cos_i, o.cos_o, sin_i, o.sin_o, inv_v[P], log_norm[P]) * V(Inv2Pi<scalar_t<V>>);
     }
 
     // Lobe-selection probabilities: spectral averages of Ap, normalised (pbrt-v4 ApPDF).
-    static void weights(const Spectrum<F> ap[P + 1], F w[P + 1]) {
-        F sum = F(0);
+    template <typename V> static void weights(const Spectrum<V> ap[P + 1], V w[P + 1]) {
+        V sum = V(0);
         for (int p = 0; p <= P; ++p) sum += (w[p] = ap[p].average());
-        F inv = sum > F(0) ? F(1) / sum : F(0);
+        V inv = select(sum > V(0), V(1) / select(sum > V(0), sum, V(1)), V(0));
         for (int p = 0; p <= P; ++p) w[p] *= inv;
     }
 
     // phi_i - phi_o from the (y, z) components: one atan2, in [-pi, pi] (pbrt-v4 takes two
     // atan2 and subtracts; Np wraps, so the values agree).
-    static F delta_phi(const Vec3<F> &wo, const Vec3<F> &wi) {
-        return std::atan2(wo.y * wi.z - wo.z * wi.y, wo.y * wi.y + wo.z * wi.z);
+    template <typename V> static V delta_phi(const Vec3<V> &wo, const Vec3<V> &wi) {
+        return atan2(wo.y * wi.z - wo.z * wi.y, wo.y * wi.y + wo.z * wi.z);
     }
 
-    Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode) const {
-        Outgoing o = outgoing(wo);
-        F mn[P + 1];
-        lobes(o, wi, delta_phi(wo, wi), mn);
-        Spectrum<F> sum = o.ap[0] * mn[0];
-        for (int p = 1; p <= P; ++p) sum = sum + o.ap[p] * mn[p];
-        // divide by |cos theta_i| of the shading frame where it is not 0 (pbrt-v4)
-        F c = AbsCosTheta(wi);
-        return sum * (c > F(0) ? F(1) / c : F(1));
+    // sum_p Ap Mp Np / |cos theta_i| (divided where |cos| > 0, pbrt-v4) and sum_p w_p Mp Np.
+    template <typename V>
+    void f_pdf(const Offset<V> &g, const Vec3<V> &wo, const Vec3<V> &wi, V dphi, const Outgoing<V> &o,
+               Spectrum<V> *f, V *pdf) const {
+        V mn[P + 1];
+        lobes(g, o, wi, dphi, mn);
+        Spectrum<V> sum = o.ap[0] * mn[0];
+        V p = o.w[0] * mn[0];
+        for (int q = 1; q <= P; ++q) {
+            sum = sum + o.ap[q] * mn[q];
+            p += o.w[q] * mn[q];
+        }
+        V c = AbsCosTheta(wi);
+        if (f) *f = sum * (V(1) / select(c > V(0), c, V(1)));
+        if (pdf) *pdf = p;
     }
 
-    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
-        Outgoing o = outgoing(wo);
-        F mn[P + 1];
-        lobes(o, wi, delta_phi(wo, wi), mn);
-        F sum = F(0);
-        for (int p = 0; p <= P; ++p) sum += o.w[p] * mn[p];
+    template <typename V> Spectrum<V> f_at(const Offset<V> &g, const Vec3<V> &wo, const Vec3<V> &wi) const {
+        Spectrum<V> r;
+        f_pdf<V>(g, wo, wi, delta_phi(wo, wi), outgoing(g, wo), &r, nullptr);
+        return r;
+    }
+    template <typename V> V pdf_at(const Offset<V> &g, const Vec3<V> &wo, const Vec3<V> &wi) const {
+        V r;
+        f_pdf<V>(g, wo, wi, delta_phi(wo, wi), outgoing(g, wo), nullptr, &r);
+        return r;
+    }
+
+    template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
+        return f_at(offset<V>(), wo, wi);
+    }
+
+    template <typename V> V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
         // pbrt-v4's PDF ignores sample_flags; here it is 0 when reflection is excluded, as sample_f is.
-        return keep_or_zero(sum, (sample_flags & RT_Reflection) != 0);
+        return select(Mask<V>((sample_flags & RT_Reflection) != 0), pdf_at(offset<V>(), wo, wi), V(0));
     }
 
-    BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode, uint8_t sample_flags) const {
-        Outgoing o = outgoing(wo);
-        const F *w = o.w;
-        F sin_o = o.sin_o, cos_o = o.cos_o, gamma_t = o.gamma_t;
+    // Per-lane choice among four per-lobe constants (p a float holding 0..3).
+    template <typename V> static V pick(V p, const F a[P + 1]) {
+        return select(p == V(0), V(a[0]), select(p == V(1), V(a[1]), select(p == V(2), V(a[2]), V(a[3]))));
+    }
+
+    template <typename V>
+    BSDFSample<V> sample_at(const Offset<V> &g, const Vec3<V> &wo, V uc, Point2<V> u, uint8_t sample_flags) const {
+        using S = scalar_t<V>;
+        Outgoing<V> o = outgoing(g, wo);
+        const V *w = o.w;
         // Choose the lobe p with probability w[p] and remap uc (pbrt-v4 SampleDiscrete).
-        F c0 = w[0], c1 = c0 + w[1], c2 = c1 + w[2];
-        int p = int(uc >= c0) + int(uc >= c1) + int(uc >= c2);
-        F start = p == 0 ? F(0) : (p == 1 ? c0 : (p == 2 ? c1 : c2));
-        F wp = p == 0 ? w[0] : (p == 1 ? w[1] : (p == 2 ? w[2] : w[3]));
-        F ur = min_((uc - start) / max_(wp, std::numeric_limits<F>::min()), F(1) - std::numeric_limits<F>::epsilon() / 2);
-        ur = max_(ur, F(0));
-        F sp, cp;
-        tilted(p, sin_o, cos_o, &sp, &cp);
+        V c0 = w[0], c1 = c0 + w[1], c2 = c1 + w[2];
+        V p = mask_to_float<V>(uc >= c0) + mask_to_float<V>(uc >= c1) + mask_to_float<V>(uc >= c2);
+        V start = select(p == V(0), V(0), select(p == V(1), c0, select(p == V(2), c1, c2)));
+        V wp = select(p == V(0), w[0], select(p == V(1), w[1], select(p == V(2), w[2], w[3])));
+        V ur = min_((uc - start) / max_(wp, V(std::numeric_limits<S>::min())),
+                    V(S(1) - std::numeric_limits<S>::epsilon() / 2));
+        ur = max_(ur, V(0));
+        V sp, cp;
+        tilted(pick(p, sin_tilt), pick(p, cos_tilt), o.sin_o, o.cos_o, &sp, &cp);
         // Sample Mp (d'Eon 2011; pbrt-v4): cos = 1 + v ln(u0 + (1 - u0) e^{-2/v}), u0 >= 1e-5
-        F vp = v[p];
-        F cos_t = F(1) + vp * std::log(max_(u.x, F(1e-5)) + (F(1) - u.x) * exp_m2_over_v[p]);
-        F sin_t = safe_sqrt(F(1) - cos_t * cos_t);
-        F sphi, cphi;
-        sincos_(F(2) * Pi<F> * u.y, &sphi, &cphi);
-        F sin_i = -cos_t * sp + sin_t * cphi * cp;
-        F cos_i = safe_sqrt(F(1) - sin_i * sin_i);
+        V cos_t = V(1) + pick(p, v) * log(max_(u.x, V(1e-5)) + (V(1) - u.x) * pick(p, exp_m2_over_v));
+        V sin_t = safe_sqrt(V(1) - cos_t * cos_t);
+        V sphi, cphi;
+        sincos_(V(S(2) * Pi<S>) * u.y, &sphi, &cphi);
+        V sin_i = -cos_t * sp + sin_t * cphi * cp;
+        V cos_i = safe_sqrt(V(1) - sin_i * sin_i);
         // Sample Np: dphi = Phi(p) + trimmed logistic, or uniform for p >= 3
-        F dphi_lobe = hair::Phi(p, gamma_o, gamma_t) + hair::SampleTrimmedLogistic(ur, s, cdf_lo, cdf_hi);
-        F dphi = p < P ? dphi_lobe : F(2) * Pi<F> * ur;
-        F sd, cd;
+        V dphi_lobe = hair::Phi(p, g.gamma_o, o.gamma_t) + hair::SampleTrimmedLogistic(ur, s, cdf_lo, cdf_hi);
+        V dphi = select(p < V(P), dphi_lobe, V(S(2) * Pi<S>) * ur);
+        V sd, cd;
         sincos_(dphi, &sd, &cd);
         // rotate wo's azimuth (cos phi_o, sin phi_o) = (y, z) / r by dphi; phi_o = 0 on the axis
-        F r2 = wo.y * wo.y + wo.z * wo.z;
-        bool on_axis = !(r2 > F(0));
-        F inv_r = F(1) / std::sqrt(on_axis ? F(1) : r2);
-        F cpo = on_axis ? F(1) : wo.y * inv_r, spo = on_axis ? F(0) : wo.z * inv_r;
-        Vec3<F> wi(sin_i, cos_i * (cpo * cd - spo * sd), cos_i * (spo * cd + cpo * sd));
+        V r2 = wo.y * wo.y + wo.z * wo.z;
+        Mask<V> on_axis = !(r2 > V(0));
+        V inv_r = V(1) / sqrt(select(on_axis, V(1), r2));
+        V cpo = select(on_axis, V(1), wo.y * inv_r), spo = select(on_axis, V(0), wo.z * inv_r);
+        Vec3<V> wi(sin_i, cos_i * (cpo * cd - spo * sd), cos_i * (spo * cd + cpo * sd));
         // f and the full mixture density (pbrt-v4), so sample_f agrees with f and pdf.
-        F mn[P + 1];
-        lobes(o, wi, dphi, mn);
-        Spectrum<F> fsum = o.ap[0] * mn[0];
-        F pdf = w[0] * mn[0];
-        for (int q = 1; q <= P; ++q) {
-            fsum = fsum + o.ap[q] * mn[q];
-            pdf += w[q] * mn[q];
-        }
-        F c = AbsCosTheta(wi);
-        BSDFSample<F> out;
+        BSDFSample<V> out;
+        f_pdf(g, wo, wi, dphi, o, &out.f, &out.pdf);
         out.wi = wi;
-        out.f = fsum * (c > F(0) ? F(1) / c : F(1));
-        out.pdf = pdf;
-        out.flags = GlossyReflection;
-        out.valid = ((sample_flags & RT_Reflection) != 0) & (pdf > F(0));
+        out.flags = typename BSDFSample<V>::Flags(GlossyReflection);
+        out.valid = Mask<V>((sample_flags & RT_Reflection) != 0) & (out.pdf > V(0));
         return out;
+    }
+
+    template <typename V>
+    BSDFSample<V> sample_f(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode, uint8_t sample_flags) const {
+        return sample_at(offset<V>(), wo, uc, u, sample_flags);
     }
 
     void regularize() {}
@@ -403,28 +448,56 @@ template <typename F> struct HairFarFieldBxDF {
 
     uint8_t flags() const { return GlossyReflection; }
 
-    Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode) const {
-        Spectrum<F> sum(F(0));
-        for (int k = 0; k < n; ++k) sum = sum + lobe(k).f(wo, wi, mode) * weight[k];
-        return sum;
+    // On packets too (batch.h): the node loop is uniform; sampling gives each lane its own node.
+    static constexpr bool Vectorized = true;
+
+    template <typename V> typename HairBxDF<F>::template Offset<V> node(int k) const {
+        return {V(node_h[k]), V(node_gamma[k]), V(node_cos_gamma[k])};
     }
 
-    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode, uint8_t sample_flags) const {
-        F sum = F(0);
-        for (int k = 0; k < n; ++k) sum += lobe(k).pdf(wo, wi, mode, sample_flags) * weight[k];
-        return sum;
+    // sum_k weight_k (f_k, pdf_k): the azimuth difference is shared by the nodes.
+    template <typename V> void f_pdf(const Vec3<V> &wo, const Vec3<V> &wi, Spectrum<V> *f, V *pdf) const {
+        V dphi = HairBxDF<F>::delta_phi(wo, wi);
+        Spectrum<V> fs(V(0));
+        V ps = V(0);
+        for (int k = 0; k < n; ++k) {
+            auto g = node<V>(k);
+            Spectrum<V> fk;
+            V pk;
+            base.f_pdf(g, wo, wi, dphi, base.outgoing(g, wo), f ? &fk : nullptr, pdf ? &pk : nullptr);
+            if (f) fs = fs + fk * V(weight[k]);
+            if (pdf) ps += pk * V(weight[k]);
+        }
+        if (f) *f = fs;
+        if (pdf) *pdf = ps;
     }
 
-    BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode, uint8_t sample_flags) const {
+    template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
+        Spectrum<V> r;
+        f_pdf<V>(wo, wi, &r, nullptr);
+        return r;
+    }
+
+    template <typename V> V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
+        V r;
+        f_pdf<V>(wo, wi, nullptr, &r);
+        return select(Mask<V>((sample_flags & RT_Reflection) != 0), r, V(0));
+    }
+
+    template <typename V>
+    BSDFSample<V> sample_f(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode, uint8_t sample_flags) const {
+        using S = scalar_t<V>;
         // node k with probability weight[k]; uc remapped for the lobe choice inside node k
-        int k = 0;
-        for (int j = 0; j < n - 1; ++j) k += int(uc >= cdf[j]);
-        F start = k == 0 ? F(0) : cdf[k - 1];
-        F ur = clamp((uc - start) / weight[k], F(0), F(1) - std::numeric_limits<F>::epsilon() / 2);
-        BSDFSample<F> s = lobe(k).sample_f(wo, ur, u, mode, sample_flags);
-        s.f = f(wo, s.wi, mode);
-        s.pdf = pdf(wo, s.wi, mode, sample_flags);
-        s.valid = s.valid & (s.pdf > F(0));
+        V k = V(0);
+        for (int j = 0; j < n - 1; ++j) k += mask_to_float<V>(uc >= V(cdf[j]));
+        V start = select(k == V(0), V(0), gather_index(cdf, max_(k - V(1), V(0))));
+        V ur = clamp((uc - start) / gather_index(weight, k), V(0), V(S(1) - std::numeric_limits<S>::epsilon() / 2));
+        typename HairBxDF<F>::template Offset<V> g{gather_index(node_h, k), gather_index(node_gamma, k),
+                                                  gather_index(node_cos_gamma, k)};
+        BSDFSample<V> s = base.sample_at(g, wo, ur, u, sample_flags);
+        f_pdf<V>(wo, s.wi, &s.f, &s.pdf);
+        s.pdf = select(Mask<V>((sample_flags & RT_Reflection) != 0), s.pdf, V(0));
+        s.valid = s.valid & (s.pdf > V(0));
         return s;
     }
 

@@ -46,7 +46,7 @@ namespace bsdfkit {
 // from the scattering point, so g > 0 peaks at wi = -wo): (1 - g^2) / (4 pi (1 + g^2 + 2 g cos)^1.5).
 template <typename F> inline F HenyeyGreenstein(F cos_theta, F g) {
     F denom = F(1) + g * g + F(2) * g * cos_theta;
-    return F(0.25) * InvPi<F> * (F(1) - g * g) / (denom * safe_sqrt(denom));
+    return F(0.25 * InvPi<double>) * (F(1) - g * g) / (denom * safe_sqrt(denom));
 }
 
 // Orthonormal basis around a unit v (Duff et al. 2017, "Building an orthonormal basis, revisited").
@@ -184,6 +184,10 @@ using CoatedConductorParams = CoatedConductorParamsT<>;
 
 // ---------------------------------------------------------------- the layered estimator
 
+// Scalar only (no `Vectorized`; the batch kernels run it per element, issue 17): the random walk's
+// length is data-dependent (each path ends by absorption, escape, Russian roulette or max_depth), so
+// the lanes of a packet would diverge at every bounce and wait for the longest walk; per element,
+// each path costs only its own depth. The analytic counterpart (layered_analytic.h) runs on packets.
 template <typename F, typename Bottom> struct LayeredBxDF {
     DielectricBxDF<F> top;
     Bottom bottom;

@@ -114,136 +114,153 @@ template <typename F, typename Bottom> struct AnalyticLayeredBxDF {
         return f;
     }
 
+    // The model runs on packets in the batch kernels (batch.h): every method is written once on
+    // the evaluation type V (F, or a packet of F; core/simd.h); the model's switches (top_smooth,
+    // base_smooth, base_diffuse, has_albedo) are uniform branches, and sample_f computes each
+    // lobe's direction and selects per lane.
+    static constexpr bool Vectorized = true;
+
     // Snell at the macro normal: the inner direction of an outside direction w (w.z > 0),
     // pointing up into the slab's upper half (cos = 0 beyond the critical angle).
-    Vec3<F> refracted(const Vec3<F> &w) const {
-        F inv = F(1) / top.eta;
-        return Vec3<F>(w.x * inv, w.y * inv, safe_sqrt(F(1) - (F(1) - w.z * w.z) * inv * inv));
+    template <typename V> Vec3<V> refracted(const Vec3<V> &w) const {
+        V inv(F(1) / top.eta);
+        return Vec3<V>(w.x * inv, w.y * inv, safe_sqrt(V(1) - (V(1) - w.z * w.z) * inv * inv));
     }
 
     // Beer-Lambert along both refracted paths (sigma_t = 1), 0 at a horizon inner direction.
-    F absorption(F co, F ci) const {
-        F prod = co * ci;
-        return prod > F(0) ? exp(-thickness * (co + ci) / prod) : F(0);
+    template <typename V> V absorption(V co, V ci) const {
+        V prod = co * ci;
+        Mask<V> ok = prod > V(0);
+        // (libm's exp in float64, so that a gradient model's value equals eval bit for bit)
+        return select(ok, exp_f64libm(-V(thickness) * (co + ci) / select(ok, prod, V(1))), V(0));
     }
 
     // Fresnel-weighted probability of the coating lobe (p_c above).
-    F prob_coat(F Fo) const {
-        F sum = Fo + (F(1) - Fo) * base_weight;
-        return sum > F(0) ? Fo / sum : F(1);
+    template <typename V> V prob_coat(V Fo) const {
+        V sum = Fo + (V(1) - Fo) * V(base_weight);
+        Mask<V> ok = sum > V(0);
+        return select(ok, Fo / select(ok, sum, V(1)), V(1));
     }
 
-    // The non-delta part of f, both directions in the upper hemisphere.
-    Spectrum<F> f_upper(const Vec3<F> &o, const Vec3<F> &i, TransportMode mode) const {
+    // The non-delta part of f, both directions in the upper hemisphere. T(o) T(i) / eta^2 from
+    // the Fresnel transmittances' numerators over one product of denominators (core/fresnel.h).
+    template <typename V> Spectrum<V> f_upper(const Vec3<V> &o, const Vec3<V> &i, TransportMode mode) const {
         F eta = top.eta;
-        F To = F(1) - FrDielectric(o.z, eta), Ti = F(1) - FrDielectric(i.z, eta);
-        Vec3<F> op = refracted(o), ip = refracted(i);
-        F a = absorption(op.z, ip.z);
-        Spectrum<F> inner(F(0));
-        if (!base_smooth) inner = bottom.f(op, ip, mode) * multi * a;  // (2)
-        if (has_albedo) {                                              // (3)
-            F cs = op.z + ip.z;
-            F ss = cs > F(0) ? HenyeyGreenstein(dot(op, ip), g) * (F(1) - a) / cs : F(0);
-            inner = inner + albedo * ss;
+        V ro, to, den_o, ri, ti, den_i;
+        FrDielectricRatio(o.z, eta, &ro, &to, &den_o);
+        FrDielectricRatio(i.z, eta, &ri, &ti, &den_i);
+        Vec3<V> op = refracted(o), ip = refracted(i);
+        V a = absorption(op.z, ip.z);
+        Spectrum<V> inner(V(0));
+        if (!base_smooth) inner = bottom.f(op, ip, mode) * to_lanes<V>(multi) * a;  // (2)
+        if (has_albedo) {                                                            // (3)
+            V cs = op.z + ip.z;
+            Mask<V> ok = cs > V(0);
+            V ss = select(ok, HenyeyGreenstein(dot(op, ip), V(g)) * (V(1) - a) / select(ok, cs, V(1)), V(0));
+            inner = inner + to_lanes<V>(albedo) * ss;
         }
-        Spectrum<F> v = inner * (To * Ti / (eta * eta));
-        if (!top_smooth()) v = v + top.f(o, i, mode);                  // (1)
+        Spectrum<V> v = inner * (to * ti / (den_o * den_i * V(eta * eta)));
+        if (!top_smooth()) v = v + top.f(o, i, mode);                                // (1)
         return v;
     }
 
-    // Density of the coating's rough reflection lobe (visible normals, reflection Jacobian).
-    F pdf_coat(const Vec3<F> &o, const Vec3<F> &i) const {
-        Vec3<F> wm = normalize(o + i);
-        F c = absdot(o, wm);
-        return c > F(0) ? top.mfd.PDF(o, wm) / (F(4) * c) : F(0);
+    // Density of the coating's rough reflection lobe: visible normals through the reflection
+    // Jacobian, 1 / (D_denom 2 (cos_o + root_o)) (core/microfacet.h).
+    template <typename V> V pdf_coat(const Vec3<V> &o, const Vec3<V> &i) const {
+        Mask<V> ok = Mask<V>(true);
+        Vec3<V> wm = reflection_half_vector(o, i, ok);
+        V dd = top.mfd.D_denom(wm, ok);
+        return select(ok, V(1) / (dd * top.mfd.reflection_pdf_denom(o.z, top.mfd.smith_root(o))), V(0));
     }
 
     // Density of the non-delta lobes at i, both directions in the upper hemisphere.
-    F pdf_upper(const Vec3<F> &o, const Vec3<F> &i, TransportMode mode) const {
-        F pc = prob_coat(FrDielectric(o.z, top.eta));
-        F p = (F(1) - pc) * q_cos * CosineHemispherePDF(i.z);
+    template <typename V> V pdf_upper(const Vec3<V> &o, const Vec3<V> &i, TransportMode mode) const {
+        V pc = prob_coat(FrDielectric(o.z, top.eta));
+        V p = (V(1) - pc) * V(q_cos) * CosineHemispherePDF(i.z);
         if (!top_smooth()) p += pc * pdf_coat(o, i);
         if (!base_diffuse & !base_smooth) {
-            Vec3<F> op = refracted(o), ip = refracted(i);
-            F jac = ip.z > F(0) ? i.z / (top.eta * top.eta * ip.z) : F(0);
-            p += (F(1) - pc) * (F(1) - q_cos) * bottom.pdf(op, ip, mode, RT_Reflection) * jac;
+            Vec3<V> op = refracted(o), ip = refracted(i);
+            Mask<V> ok = ip.z > V(0);
+            V jac = select(ok, i.z / (V(top.eta * top.eta) * select(ok, ip.z, V(1))), V(0));
+            p += (V(1) - pc) * V(F(1) - q_cos) * bottom.pdf(op, ip, mode, RT_Reflection) * jac;
         }
         return p;
     }
 
     // Reflectance of the delta lobes (mirror direction) and their total discrete probability.
-    F delta_prob(F pc) const {
-        F p = top_smooth() ? pc : F(0);
-        if (base_smooth) p += (F(1) - pc) * (F(1) - q_cos);
+    template <typename V> V delta_prob(V pc) const {
+        V p = top_smooth() ? pc : V(0);
+        if (base_smooth) p += (V(1) - pc) * V(F(1) - q_cos);
         return p;
     }
-    Spectrum<F> delta_reflectance(const Vec3<F> &o) const {
-        F Fo = FrDielectric(o.z, top.eta);
-        Spectrum<F> r(top_smooth() ? Fo : F(0));
+    template <typename V> Spectrum<V> delta_reflectance(const Vec3<V> &o) const {
+        V Fo = FrDielectric(o.z, top.eta);
+        Spectrum<V> r(top_smooth() ? Fo : V(0));
         if constexpr (!std::is_same_v<Bottom, DiffuseBxDF<F>>) {
-            F cp = refracted(o).z;
-            F a = absorption(cp, cp);
-            Spectrum<F> fc = bottom.fresnel(cp) * a;
-            // exact sum of the inter-reflections between the smooth coat and the mirror
-            Spectrum<F> denom = Spectrum<F>(F(1)) - fc * Fo;
-            if (base_smooth) r = r + fc * sqr(F(1) - Fo) / denom;
+            if (base_smooth) {
+                // exact sum of the inter-reflections between the smooth coat and the mirror
+                V cp = refracted(o).z;
+                Spectrum<V> fc = bottom.fresnel(cp) * absorption(cp, cp);
+                Spectrum<V> denom = Spectrum<V>(V(1)) - fc * Fo;
+                r = r + fc * sqr(V(1) - Fo) / denom;
+            }
         }
         return r;
     }
 
-    Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode) const {
-        F s = wo.z < F(0) ? F(-1) : F(1);  // two-sided
-        Vec3<F> o = wo * s, i = wi * s;
-        bool active = (o.z > F(0)) & (i.z > F(0));
-        Spectrum<F> v = f_upper(o, i, mode);
-        return select(active, v, Spectrum<F>(F(0)));
+    template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode mode) const {
+        V s = select(wo.z < V(0), V(-1), V(1));  // two-sided
+        Vec3<V> o = wo * s, i = wi * s;
+        Mask<V> active = (o.z > V(0)) & (i.z > V(0));
+        return select(active, f_upper(o, i, mode), Spectrum<V>(V(0)));
     }
 
-    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode, uint8_t sample_flags) const {
-        F s = wo.z < F(0) ? F(-1) : F(1);
-        Vec3<F> o = wo * s, i = wi * s;
-        bool active = (o.z > F(0)) & (i.z > F(0)) & ((sample_flags & RT_Reflection) != 0);
-        F p = pdf_upper(o, i, mode);
-        return active ? p : F(0);
+    template <typename V> V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode mode, uint8_t sample_flags) const {
+        V s = select(wo.z < V(0), V(-1), V(1));
+        Vec3<V> o = wo * s, i = wi * s;
+        Mask<V> active = (o.z > V(0)) & (i.z > V(0)) & Mask<V>((sample_flags & RT_Reflection) != 0);
+        return select(active, pdf_upper(o, i, mode), V(0));
     }
 
-    BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode, uint8_t sample_flags) const {
-        BSDFSample<F> r;
-        F s = wo.z < F(0) ? F(-1) : F(1);
-        Vec3<F> o = wo * s;
-        F pc = prob_coat(FrDielectric(o.z, top.eta));
-        bool coat = uc < pc;
-        F ub = pc < F(1) ? (uc - pc) / (F(1) - pc) : F(0);
-        bool cosine = !coat & (ub < q_cos);
-        bool delta = coat ? top_smooth() : (!cosine & base_smooth);
-        Vec3<F> mirror(-o.x, -o.y, o.z), i;
-        if (delta) {
-            i = mirror;
-        } else if (coat) {
-            i = Reflect(o, top.mfd.Sample_wm(o, u));
-        } else if (cosine) {
-            i = SampleCosineHemisphere(u);
-        } else {
+    template <typename V>
+    BSDFSample<V> sample_f(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode mode, uint8_t sample_flags) const {
+        BSDFSample<V> r;
+        V s = select(wo.z < V(0), V(-1), V(1));
+        Vec3<V> o = wo * s;
+        V pc = prob_coat(FrDielectric(o.z, top.eta));
+        Mask<V> coat = uc < pc;
+        Mask<V> rest = pc < V(1);
+        V ub = select(rest, (uc - pc) / select(rest, V(1) - pc, V(1)), V(0));
+        Mask<V> cosine = !coat & (ub < V(q_cos));
+        Mask<V> delta = (coat & Mask<V>(top_smooth())) | (!coat & !cosine & Mask<V>(base_smooth));
+        Vec3<V> mirror(-o.x, -o.y, o.z);
+        // every lobe's direction, then one per lane
+        Vec3<V> i = SampleCosineHemisphere(u);
+        if (!base_diffuse & !base_smooth) {
             // the conductor's lobe at wo', refracted out through the macro normal
-            BSDFSample<F> b = bottom.sample_f(refracted(o), F(0), u, mode, RT_Reflection);
-            F sin2 = (F(1) - b.wi.z * b.wi.z) * top.eta * top.eta;
-            bool out = b.valid & (b.wi.z > F(0)) & (sin2 < F(1));
-            i = out ? Vec3<F>(b.wi.x * top.eta, b.wi.y * top.eta, std::sqrt(F(1) - sin2)) : Vec3<F>(0, 0, -1);
+            BSDFSample<V> b = bottom.sample_f(refracted(o), V(0), u, mode, RT_Reflection);
+            V e(top.eta);
+            V sin2 = (V(1) - b.wi.z * b.wi.z) * e * e;
+            Mask<V> out = b.valid & (b.wi.z > V(0)) & (sin2 < V(1));
+            Vec3<V> ib = select(out, Vec3<V>(b.wi.x * e, b.wi.y * e, safe_sqrt(V(1) - sin2)), Vec3<V>(V(0), V(0), V(-1)));
+            i = select(cosine, i, ib);
         }
-        if (delta) {
-            F cos_i = DeltaAbsCos(i);
-            r.f = delta_reflectance(o) / cos_i;
-            r.pdf = delta_prob(pc);
-            r.flags = SpecularReflection;
-        } else {
-            bool up = i.z > F(0);
-            r.f = up ? f_upper(o, i, mode) : Spectrum<F>(F(0));
-            r.pdf = up ? pdf_upper(o, i, mode) : F(0);
-            r.flags = cosine ? uint8_t(DiffuseReflection) : uint8_t(GlossyReflection);
-        }
+        if (!top_smooth()) i = select(coat, Reflect(o, top.mfd.Sample_wm(o, u)), i);
+        i = select(delta, mirror, i);
+        // delta lobes: f = R / cos, discrete probability
+        Spectrum<V> f_delta = delta_reflectance(o) * (V(1) / DeltaAbsCos(i));
+        V p_delta = delta_prob(pc);
+        Mask<V> up = i.z > V(0);
+        Spectrum<V> f_nd = select(up, f_upper(o, i, mode), Spectrum<V>(V(0)));
+        V p_nd = select(up, pdf_upper(o, i, mode), V(0));
+        r.f = select(delta, f_delta, f_nd);
+        r.pdf = select(delta, p_delta, p_nd);
+        r.flags = select_flag<V>(delta, SpecularReflection, GlossyReflection);
+        if constexpr (is_packet_v<V>) r.flags = select(cosine & !delta, V(scalar_t<V>(DiffuseReflection)), r.flags);
+        else r.flags = (cosine & !delta) ? uint8_t(DiffuseReflection) : r.flags;
         r.wi = i * s;
-        r.eta = F(1);
-        r.valid = (o.z > F(0)) & (i.z > F(0)) & (r.pdf > F(0)) & ((sample_flags & RT_Reflection) != 0);
+        r.eta = V(1);
+        r.valid = (o.z > V(0)) & (i.z > V(0)) & (r.pdf > V(0)) & Mask<V>((sample_flags & RT_Reflection) != 0);
         return r;
     }
 

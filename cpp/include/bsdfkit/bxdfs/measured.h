@@ -54,6 +54,9 @@ template <typename F> inline F mulsign_neg(F x, F s) { return std::signbit(s) ? 
 inline constexpr double kMinCos = 1e-2;
 } // namespace measured
 
+// Scalar only (no `Vectorized`, issue 17): sampling and pdf walk the Warp2D tables (a data-dependent
+// binary search per dimension over cumulative rows, core/warp2d.h) and eval reads per-element table
+// cells; a packet would turn every step into gathers with divergent search lengths.
 template <typename F> struct MeasuredKernel {
     Warp2D<F, 0> ndf, sigma;
     Warp2D<F, 2> vndf, luminance, rgb;

@@ -112,6 +112,9 @@ template <typename F> inline HalfDiff<F> half_diff(const Vec3<F> &wo, const Vec3
     return r;
 }
 
+// Scalar only (no `Vectorized`, issue 17): per element a lookup at a data-dependent index of the
+// 90 x 90 x 180 table (nearest or trilinear), plus acos/atan2 of the half/difference angles; its
+// sampler walks the tabulated marginals. Candidates for gathers later, not a divide-bound kernel.
 template <typename F, bool Linear> struct MERLKernel {
     const F *values = nullptr;
     const F *marg = nullptr, *cond = nullptr, *dens = nullptr;

@@ -44,28 +44,35 @@ template <typename F> struct NormalizedFresnelBxDF {
 
     uint8_t flags() const { return DiffuseReflection; }
 
-    Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode) const {
-        F v = (F(1) - FrDielectric(CosTheta(wi), eta)) * inv_c_pi;
-        v = mode == TransportMode::Radiance ? v * eta2 : v;
-        return Spectrum<F>(SameHemisphere(wo, wi) ? v : F(0));
+    // The model runs on packets in the batch kernels (batch.h): every method is written once on
+    // the evaluation type V (F, or a packet of F; core/simd.h).
+    static constexpr bool Vectorized = true;
+
+    // (1 - Fr) / (c pi) [eta^2] as the Fresnel transmittance's numerator over its denominator
+    // (core/fresnel.h FrDielectricRatio): 1 division.
+    template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode mode) const {
+        V r, t, den;
+        FrDielectricRatio(CosTheta(wi), eta, &r, &t, &den);
+        F scale = mode == TransportMode::Radiance ? inv_c_pi * eta2 : inv_c_pi;
+        return Spectrum<V>(select(SameHemisphere(wo, wi), t * V(scale) / den, V(0)));
     }
 
-    BSDFSample<F> sample_f(const Vec3<F> &wo, F /*uc*/, Point2<F> u, TransportMode mode,
-                           uint8_t sample_flags) const {
-        BSDFSample<F> s;
-        Vec3<F> wi = SampleCosineHemisphere(u);
-        wi.z = wo.z < F(0) ? -wi.z : wi.z;  // wo's side
+    template <typename V>
+    BSDFSample<V> sample_f(const Vec3<V> &wo, V /*uc*/, Point2<V> u, TransportMode mode, uint8_t sample_flags) const {
+        BSDFSample<V> s;
+        Vec3<V> wi = SampleCosineHemisphere(u);
+        wi.z = select(wo.z < V(0), -wi.z, wi.z);  // wo's side
         s.wi = wi;
-        s.pdf = SameHemisphere(wo, wi) ? CosineHemispherePDF(AbsCosTheta(wi)) : F(0);
+        s.pdf = select(SameHemisphere(wo, wi), CosineHemispherePDF(AbsCosTheta(wi)), V(0));
         s.f = f(wo, wi, mode);
-        s.flags = DiffuseReflection;
-        s.valid = ((sample_flags & RT_Reflection) != 0) & (s.pdf > F(0));
+        s.flags = typename BSDFSample<V>::Flags(DiffuseReflection);
+        s.valid = Mask<V>((sample_flags & RT_Reflection) != 0) & (s.pdf > V(0));
         return s;
     }
 
-    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
-        F p = SameHemisphere(wo, wi) ? CosineHemispherePDF(AbsCosTheta(wi)) : F(0);
-        return keep_or_zero(p, (sample_flags & RT_Reflection) != 0);
+    template <typename V> V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
+        Mask<V> ok = SameHemisphere(wo, wi) & Mask<V>((sample_flags & RT_Reflection) != 0);
+        return select(ok, CosineHemispherePDF(AbsCosTheta(wi)), V(0));
     }
 
     void regularize() {}

@@ -74,22 +74,24 @@ inline void GaussLegendre(int n, double *x, double *w) {
 // stretch wo, draw a slope of the alpha = 1 distribution seen from cos(theta) with the
 // concentric-disk projection (sample_visible_11), rotate, unstretch. The same density as
 // pbrt-v4's Sample_wm (Heitz 2018), a different map from u to wm. wo.z > 0.
-template <typename F> inline Vec3<F> SampleVisibleGGXMitsuba(F alpha, const Vec3<F> &wo, Point2<F> u) {
-    Vec3<F> wp = normalize(Vec3<F>(alpha * wo.x, alpha * wo.y, wo.z));
-    F sin2 = F(1) - wp.z * wp.z, inv_sin = F(1) / std::sqrt(sin2 > F(0) ? sin2 : F(1));
-    bool pole = std::abs(sin2) <= F(2) * std::numeric_limits<F>::epsilon();
-    F cos_phi = pole ? F(1) : clamp(wp.x * inv_sin, F(-1), F(1));
-    F sin_phi = pole ? F(0) : clamp(wp.y * inv_sin, F(-1), F(1));
-    F cos_t = wp.z, sin_t = safe_sqrt(F(1) - cos_t * cos_t);
+template <typename V, typename A> inline Vec3<V> SampleVisibleGGXMitsuba(A alpha_, const Vec3<V> &wo, Point2<V> u) {
+    using S = scalar_t<V>;
+    V alpha(alpha_);
+    Vec3<V> wp = normalize(Vec3<V>(alpha * wo.x, alpha * wo.y, wo.z));
+    V sin2 = V(1) - wp.z * wp.z, inv_sin = V(1) / sqrt(select(sin2 > V(0), sin2, V(1)));
+    Mask<V> pole = abs(sin2) <= V(S(2) * std::numeric_limits<S>::epsilon());
+    V cos_phi = select(pole, V(1), clamp(wp.x * inv_sin, V(-1), V(1)));
+    V sin_phi = select(pole, V(0), clamp(wp.y * inv_sin, V(-1), V(1)));
+    V cos_t = wp.z, sin_t = safe_sqrt(V(1) - cos_t * cos_t);
     // Heitz & d'Eon 2014 slope sampling, Mitsuba's "simpler and exact" disk variant
-    Point2<F> p = SampleUniformDiskConcentric(u);
-    F s = F(0.5) * (F(1) + cos_t);
-    p.y = lerp(s, safe_sqrt(F(1) - p.x * p.x), p.y);
-    F pz = safe_sqrt(F(1) - p.x * p.x - p.y * p.y);
-    F norm = F(1) / (sin_t * p.y + cos_t * pz);
-    F sx = (cos_t * p.y - sin_t * pz) * norm, sy = p.x * norm;
-    F mx = (cos_phi * sx - sin_phi * sy) * alpha, my = (sin_phi * sx + cos_phi * sy) * alpha;
-    return normalize(Vec3<F>(-mx, -my, F(1)));
+    Point2<V> p = SampleUniformDiskConcentric(u);
+    V s = V(0.5) * (V(1) + cos_t);
+    p.y = lerp(s, safe_sqrt(V(1) - p.x * p.x), p.y);
+    V pz = safe_sqrt(V(1) - p.x * p.x - p.y * p.y);
+    V norm = V(1) / (sin_t * p.y + cos_t * pz);
+    V sx = (cos_t * p.y - sin_t * pz) * norm, sy = p.x * norm;
+    V mx = (cos_phi * sx - sin_phi * sy) * alpha, my = (sin_phi * sx + cos_phi * sy) * alpha;
+    return normalize(Vec3<V>(-mx, -my, V(1)));
 }
 
 // Smith G1 of GGX with Mitsuba's back-facing rule (0 when v.m and v.z differ in sign).
@@ -219,88 +221,146 @@ template <typename F> struct PlasticBxDF {
         return has_diffuse ? uint8_t(spec | DiffuseReflection) : spec;
     }
 
-    // Mitsuba's lerp_gather: linear interpolation of the table at cos in [0, 1].
-    F transmittance(F cos) const {
-        F x = cos * F(kPlasticTableRes - 1);
-        F fi = min_(std::floor(x), F(kPlasticTableRes - 2));
-        int i = int(fi);
-        return lerp(x - fi, table[i], table[i + 1]);
-    }
-    // Coating transmittance T(cos) of the outside direction.
-    F coat_T(F cos) const { return smooth ? F(1) - FrDielectric(cos, eta) : transmittance(cos); }
+    // The model runs on packets in the batch kernels (batch.h): every method is written once on
+    // the evaluation type V (F, or a packet of F; core/simd.h). `smooth` is a per-model switch
+    // (a uniform branch, the same for every lane).
+    static constexpr bool Vectorized = true;
 
-    // Probability of picking the coating's lobe for wo (Mitsuba's prob_specular).
-    F prob_specular(F k) const {
-        F ps = k * spec_weight, pd = (F(1) - k) * (F(1) - spec_weight);
-        F sum = ps + pd;
-        return sum > F(0) ? ps / sum : F(0);
+    // Mitsuba's lerp_gather: linear interpolation of the table at cos in [0, 1] (the index is
+    // clamped to the table, so lanes the caller masks out, cos < 0 or NaN, read entry 0).
+    template <typename V> V transmittance(V cos) const {
+        V x = cos * V(kPlasticTableRes - 1);
+        V fi = min_(max_(floor(x), V(0)), V(kPlasticTableRes - 2));
+        return lerp(x - fi, gather_index(table, fi), gather_index(table + 1, fi));
     }
 
-    // Rough coating: Torrance-Sparrow reflection D F G / (4 cos_o cos_i) (o, i upper).
-    Spectrum<F> f_coat(const Vec3<F> &o, const Vec3<F> &i) const {
-        Vec3<F> wh = normalize(o + i);
-        F val = mfd.D(wh) * FrDielectric(dot(o, wh), eta) * mfd.G(o, i) / (F(4) * o.z * i.z);
-        return Ks * val;
+    // Lobe-choice weights of the coating (ps) and the base (pd) for the coating's reflectance
+    // k = r / (r + t) at wo (Mitsuba's prob_specular: p = ps / (ps + pd)); both ps = 0, pd = 1
+    // when both vanish (a black material), so that p = 0.
+    template <typename V> void lobe_weights(V r, V t, V *ps, V *pd) const {
+        V a = r * V(spec_weight), b = t * V(F(1) - spec_weight);
+        Mask<V> some = a + b > V(0);
+        *ps = select(some, a, V(0));
+        *pd = select(some, b, V(1));
     }
 
-    // Density of the mixture for o, i in the upper hemisphere (rough: both lobes).
-    F pdf_upper(const Vec3<F> &o, const Vec3<F> &i, F T_o) const {
-        F p_spec = prob_specular(F(1) - T_o);
-        F p = (F(1) - p_spec) * CosineHemispherePDF(i.z);
-        if (!smooth) {
-            Vec3<F> wh = normalize(o + i);
-            p += p_spec * mfd.PDF(o, wh) / (F(4) * dot(o, wh));
-        }
-        return p;
+    // Smooth coating, o and i upper: the base term diffuse T(cos_o) T(cos_i), T = 1 - F from the
+    // Fresnel numerators over one product of denominators (1 division).
+    template <typename V> Spectrum<V> f_smooth(V to, V den_o, const Vec3<V> &i) const {
+        V ri, ti, den_i;
+        FrDielectricRatio(i.z, eta, &ri, &ti, &den_i);
+        return to_lanes<V>(diffuse) * (to * ti / (den_o * den_i));
     }
 
-    Spectrum<F> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode) const {
-        F s = wo.z < F(0) ? F(-1) : F(1);  // two-sided: mirror both into wo's hemisphere
-        Vec3<F> o = wo * s, i = wi * s;
-        bool active = (o.z > F(0)) & (i.z > F(0));
-        F T_o = coat_T(o.z), T_i = coat_T(i.z);
-        Spectrum<F> v = diffuse * (T_o * T_i);
-        if (!smooth) v = v + f_coat(o, i);
-        return select(active, v, Spectrum<F>(F(0)));
+    // What the rough coating's f and pdf share at (o, i): the half vector, 1 / D and Smith's roots.
+    template <typename V> struct Coat {
+        Mask<V> ok;      // the coating lobe is non-zero here (D > 0, o + i != 0)
+        V cos_oh, dd, root_o, root_i;
+    };
+    template <typename V> Coat<V> coat(const Vec3<V> &o, const Vec3<V> &i) const {
+        Coat<V> c;
+        c.ok = Mask<V>(true);
+        Vec3<V> wm = reflection_half_vector(o, i, c.ok);
+        c.dd = mfd.D_denom(wm, c.ok);
+        c.cos_oh = dot(o, wm);
+        c.root_o = mfd.smith_root(o);
+        c.root_i = mfd.smith_root(i);
+        return c;
     }
 
-    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
-        F s = wo.z < F(0) ? F(-1) : F(1);
-        Vec3<F> o = wo * s, i = wi * s;
-        bool active = (o.z > F(0)) & (i.z > F(0)) & ((sample_flags & RT_Reflection) != 0);
-        F p = pdf_upper(o, i, coat_T(o.z));
-        return active ? p : F(0);
+    // Rough coating, o and i upper: diffuse T(cos_o) T(cos_i) (table) + Ks D F G / (4 cos_o cos_i)
+    // as Ks r / (den D_denom G_denom) (Fresnel numerator over its denominator; core/microfacet.h):
+    // 1 division.
+    template <typename V>
+    Spectrum<V> f_rough(const Vec3<V> &o, const Vec3<V> &i, V T_o, const Coat<V> &c) const {
+        V r, t, den;
+        FrDielectricRatio(c.cos_oh, eta, &r, &t, &den);
+        V coat_v = r / (den * c.dd * mfd.G_denom(o.z, i.z, c.root_o, c.root_i));
+        Spectrum<V> v = to_lanes<V>(diffuse) * (T_o * transmittance(i.z));
+        return v + to_lanes<V>(Ks) * select(c.ok, coat_v, V(0));
     }
 
-    BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode, uint8_t sample_flags) const {
-        BSDFSample<F> r;
-        F s = wo.z < F(0) ? F(-1) : F(1);
-        Vec3<F> o = wo * s;
-        F T_o = coat_T(o.z);
-        F p_spec = prob_specular(F(1) - T_o);
-        bool spec = uc < p_spec;
-        Vec3<F> wd = SampleCosineHemisphere(u);
-        Vec3<F> i;
+    // Rough coating, o and i upper: the mixture density (1 - p) cos_i / pi + p / (D_denom
+    // 2 (cos_o + root_o)) (visible normals through the reflection Jacobian), p = ps / (ps + pd),
+    // over one common denominator: 1 division.
+    template <typename V> V pdf_rough(const Vec3<V> &o, const Vec3<V> &i, V T_o, const Coat<V> &c) const {
+        V ps, pd;
+        lobe_weights(V(1) - T_o, T_o, &ps, &pd);
+        V x = select(c.ok, c.dd * mfd.reflection_pdf_denom(o.z, c.root_o), V(1));
+        ps = select(c.ok, ps, V(0));
+        return (pd * CosineHemispherePDF(i.z) * x + ps) / ((ps + pd) * x);
+    }
+
+    // Two-sided: o, i mirrored into wo's hemisphere (the sign s applies to wi as well).
+    template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
+        V s = select(wo.z < V(0), V(-1), V(1));
+        Vec3<V> o = wo * s, i = wi * s;
+        Mask<V> active = (o.z > V(0)) & (i.z > V(0));
+        Spectrum<V> v;
         if (smooth) {
-            // delta reflection: f = Ks F / cos, discrete probability p_spec
-            Vec3<F> ws(-o.x, -o.y, o.z);
-            i = spec ? ws : wd;
-            F cos_s = DeltaAbsCos(ws);
-            Spectrum<F> fs = Ks * ((F(1) - T_o) / cos_s);
-            Spectrum<F> fd = diffuse * (T_o * coat_T(wd.z));
-            r.f = select(spec, fs, fd);
-            r.pdf = spec ? p_spec : (F(1) - p_spec) * CosineHemispherePDF(wd.z);
-            r.flags = spec ? uint8_t(SpecularReflection) : uint8_t(DiffuseReflection);
+            V ro, to, den_o;
+            FrDielectricRatio(o.z, eta, &ro, &to, &den_o);
+            v = f_smooth(to, den_o, i);
         } else {
-            Vec3<F> ws = Reflect(o, SampleVisibleGGXMitsuba(mfd.alpha_x, o, u));
-            i = spec ? ws : wd;
-            r.f = f(o, i, mode);
-            r.pdf = pdf_upper(o, i, T_o);
-            r.flags = spec ? uint8_t(GlossyReflection) : uint8_t(DiffuseReflection);
+            v = f_rough(o, i, transmittance(o.z), coat(o, i));
+        }
+        return select(active, v, Spectrum<V>(V(0)));
+    }
+
+    template <typename V> V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
+        V s = select(wo.z < V(0), V(-1), V(1));
+        Vec3<V> o = wo * s, i = wi * s;
+        Mask<V> active = (o.z > V(0)) & (i.z > V(0)) & Mask<V>((sample_flags & RT_Reflection) != 0);
+        V p;
+        if (smooth) {
+            // the base's share pd / (ps + pd) of the cosine lobe (F's denominator cancels)
+            V ro, to, den_o, ps, pd;
+            FrDielectricRatio(o.z, eta, &ro, &to, &den_o);
+            lobe_weights(ro, to, &ps, &pd);
+            p = pd * (V(1) / (ps + pd)) * CosineHemispherePDF(i.z);
+        } else {
+            p = pdf_rough(o, i, transmittance(o.z), coat(o, i));
+        }
+        return select(active, p, V(0));
+    }
+
+    template <typename V>
+    BSDFSample<V> sample_f(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode, uint8_t sample_flags) const {
+        BSDFSample<V> r;
+        V s = select(wo.z < V(0), V(-1), V(1));
+        Vec3<V> o = wo * s;
+        Vec3<V> wd = SampleCosineHemisphere(u);
+        Vec3<V> i;
+        Mask<V> spec;
+        if (smooth) {
+            // delta reflection: f = Ks F / cos, discrete probability p; else the cosine lobe
+            V ro, to, den_o, ps, pd;
+            FrDielectricRatio(o.z, eta, &ro, &to, &den_o);
+            lobe_weights(ro, to, &ps, &pd);
+            V inv = V(1) / (ps + pd);
+            V p_spec = ps * inv;
+            spec = uc < p_spec;
+            Vec3<V> ws(-o.x, -o.y, o.z);
+            i = select(spec, ws, wd);
+            Spectrum<V> fs = to_lanes<V>(Ks) * (ro / (den_o * DeltaAbsCos(ws)));
+            r.f = select(spec, fs, f_smooth(to, den_o, wd));
+            // as pdf(): the base's share times the cosine density
+            r.pdf = select(spec, p_spec, pd * inv * CosineHemispherePDF(wd.z));
+            r.flags = select_flag<V>(spec, SpecularReflection, DiffuseReflection);
+        } else {
+            V T_o = transmittance(o.z), ps, pd;
+            lobe_weights(V(1) - T_o, T_o, &ps, &pd);
+            spec = uc < ps / (ps + pd);
+            Vec3<V> ws = Reflect(o, SampleVisibleGGXMitsuba(mfd.alpha_x, o, u));
+            i = select(spec, ws, wd);
+            Coat<V> c = coat(o, i);
+            r.f = f_rough(o, i, T_o, c);
+            r.pdf = pdf_rough(o, i, T_o, c);
+            r.flags = select_flag<V>(spec, GlossyReflection, DiffuseReflection);
         }
         r.wi = i * s;
-        r.eta = F(1);
-        r.valid = (o.z > F(0)) & (i.z > F(0)) & (r.pdf > F(0)) & ((sample_flags & RT_Reflection) != 0);
+        r.eta = V(1);
+        r.valid = (o.z > V(0)) & (i.z > V(0)) & (r.pdf > V(0)) & Mask<V>((sample_flags & RT_Reflection) != 0);
         return r;
     }
 

@@ -36,6 +36,20 @@ template <typename V> inline typename BSDFSample<V>::Flags lobe_flag(BxDFFlags r
     else return lobe_flag(reflection, transmit);
 }
 
+// The flag of a sample that took lobe `a` where m is set, else lobe `b` (per lane for packets).
+template <typename V>
+inline typename BSDFSample<V>::Flags select_flag(const Mask<V> &m, BxDFFlags a, BxDFFlags b) {
+    if constexpr (is_packet_v<V>) return select(m, V(scalar_t<V>(a)), V(scalar_t<V>(b)));
+    else return m ? uint8_t(a) : uint8_t(b);
+}
+
+// A model's per-channel parameter (Spectrum<F>) as a spectrum of the evaluation type V.
+template <typename V, typename F, int N> inline Spectrum<V, N> to_lanes(const Spectrum<F, N> &s) {
+    Spectrum<V, N> r;
+    for (int c = 0; c < N; ++c) r[c] = V(s[c]);
+    return r;
+}
+
 // Lobe weights restricted to the lobes sample_flags allows (pbrt-v4's `if (!(sampleFlags &
 // Reflection)) pr = 0;`), as bit masks (rule V3, core/math.h).
 template <typename F> inline void restrict_lobes(F r, F t, uint8_t sample_flags, F *pr, F *pt) {

@@ -10,8 +10,10 @@ namespace bsdfkit {
 // form (Born & Wolf: 1 - r^2 = 4 eta cos_i cos_t / (eta cos_i + cos_t)^2 per polarization), so
 // that T keeps full relative precision where R -> 1 (near the critical angle) instead of
 // losing it to the cancellation in 1 - R. One reciprocal of eta and one of the shared
-// denominator 2 a^2 b^2 serve both. eta is a scalar or V.
-template <typename F, typename E> inline void FrDielectricRT(F cos_i, E eta_, F *R, F *T) {
+// denominator 2 a^2 b^2 serve both. eta is a scalar or V. FrDielectricRatio gives the two
+// numerators over that denominator (R = r / den, T = t / den; den = 1 where R = 1, T = 0), for
+// callers that fold den into a division of their own.
+template <typename F, typename E> inline void FrDielectricRatio(F cos_i, E eta_, F *r_num, F *t_num, F *den) {
     cos_i = clamp(cos_i, F(-1), F(1));
     Mask<F> inside = cos_i < F(0);
     F eta(eta_), inv_eta = F(E(1) / eta_); // a scalar division for a scalar eta
@@ -25,12 +27,17 @@ template <typename F, typename E> inline void FrDielectricRT(F cos_i, E eta_, F 
     F a2 = sqr(a), b2 = sqr(b);
     // a = b = 0 only at cos_i = 0 with cos_t = 0 (grazing TIR): then R = 1, T = 0.
     Mask<F> ok = (a2 * b2 > F(0)) & !tir;
-    F inv = F(1) / select(ok, F(2) * a2 * b2, F(1));
     F pa = eta * cos_i - cos_t, pb = cos_i - eta * cos_t;
-    F r = (sqr(pa) * b2 + sqr(pb) * a2) * inv;
-    F t = F(4) * eta * cos_i * cos_t * (a2 + b2) * inv;
-    *R = select(ok, r, F(1));
-    *T = select(ok, t, F(0));
+    *den = select(ok, F(2) * a2 * b2, F(1));
+    *r_num = select(ok, sqr(pa) * b2 + sqr(pb) * a2, F(1));
+    *t_num = select(ok, F(4) * eta * cos_i * cos_t * (a2 + b2), F(0));
+}
+template <typename F, typename E> inline void FrDielectricRT(F cos_i, E eta, F *R, F *T) {
+    F r, t, den;
+    FrDielectricRatio(cos_i, eta, &r, &t, &den);
+    F inv = F(1) / den;
+    *R = r * inv;
+    *T = t * inv;
 }
 
 // The reflectance alone: FrDielectricRT's R.

@@ -56,6 +56,13 @@ template <typename F> using param_t = typename ParamOf<F>::type;
 template <typename T> constexpr T value_of(T x) { return x; }
 template <typename T> constexpr bool is_variable(T) { return false; }
 
+// t[x] per lane for an integer-valued float index x (caller keeps x in range): a gather for
+// packets, a load for scalars (and Dual evaluation types, through value_of).
+template <typename T, typename V> inline V gather_index(const T *t, const V &x) {
+    if constexpr (is_packet_v<V>) return drjit::gather<V>(t, drjit::int32_array_t<V>(x));
+    else return V(t[int(value_of(x))]);
+}
+
 template <typename Float> inline constexpr Float Pi = Float(3.14159265358979323846);
 template <typename Float> inline constexpr Float InvPi = Float(0.31830988618379067154);
 template <typename Float> inline constexpr Float Inv2Pi = Float(0.15915494309189533577);
@@ -72,6 +79,35 @@ template <typename T> inline T lerp(T t, T a, T b) { return (1 - t) * a + t * b;
 template <typename T> inline T safe_sqrt(T x) { return sqrt(select(x > T(0), x, T(0))); }
 template <typename T> inline T safe_div(T a, T b) { return select(b != T(0), a / b, T(0)); }
 template <typename T> inline T copysign1(T mag, T sgn) { return select(sgn < T(0), -mag, mag); }
+
+// x^y per lane by the scalar libm pow: for packet results that must equal a scalar double
+// evaluation bit for bit (the Dual gradient path, core/dual.h, computes std::pow on its value).
+template <typename V> inline V pow_libm(const V &x, const V &y) {
+    if constexpr (is_packet_v<V>) {
+        constexpr size_t W = drjit::size_v<V>;
+        alignas(64) scalar_t<V> a[W], b[W];
+        drjit::store_aligned(a, x);
+        drjit::store_aligned(b, y);
+        for (size_t j = 0; j < W; ++j) a[j] = std::pow(a[j], b[j]);
+        return drjit::load_aligned<V>(a);
+    } else {
+        return pow(x, y);
+    }
+}
+
+// e^x for results that a float64 evaluation must give bit for bit like the scalar double (and Dual)
+// path: float64 packets call libm per lane; float packets use Dr.Jit's vector exp (about 1 ulp).
+template <typename V> inline V exp_f64libm(const V &x) {
+    if constexpr (is_packet_v<V> && std::is_same_v<scalar_t<V>, double>) {
+        constexpr size_t W = drjit::size_v<V>;
+        alignas(64) double a[W];
+        drjit::store_aligned(a, x);
+        for (size_t j = 0; j < W; ++j) a[j] = std::exp(a[j]);
+        return drjit::load_aligned<V>(a);
+    } else {
+        return exp(x);
+    }
+}
 
 // sin and cos of x together, written to vectorize (libm's sin/cos have no vector variant
 // without -ffast-math). Cody-Waite reduction by pi/2 with a 3-part constant, then Cephes-style

@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <type_traits>
 
+#include <drjit/math.h>
 #include <drjit/packet.h>
 
 namespace bsdfkit {
