@@ -25,12 +25,21 @@ namespace bsdfkit::py_bind {
 
 int num_threads();
 
+// A numpy descriptor's byte-order character names this machine's order ('=' native, '|' not
+// applicable, or the explicit '<' / '>' that is native here).
+inline bool native_byte_order(char bo) {
+    constexpr char native = __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__ ? '<' : '>';
+    return bo == '=' || bo == '|' || bo == native;
+}
+
 // The identity test is the fast path; an equal descriptor that is another object (an array that
-// came through pickle, e.g. a Dask block) is accepted by numpy's own equivalence test.
+// came through pickle, e.g. a Dask block) is accepted by its type number and byte order
+// (numpy's PyArray_EquivTypes would also accept a byte-swapped array, which the kernels would
+// read as garbage).
 template <typename F> inline bool is_dtype(const py::array &a) {
     py::dtype want = py::dtype::of<F>();
     py::dtype got = a.dtype();
-    return got.is(want) || py::detail::npy_api::get().PyArray_EquivTypes_(got.ptr(), want.ptr());
+    return got.is(want) || (got.num() == want.num() && native_byte_order(got.byteorder()));
 }
 
 // A batch stopped by the interrupt hook (module.cpp: Ctrl-C) left the Python error set.
@@ -118,6 +127,7 @@ inline bool plain(py::handle h, int tail, py::ssize_t last, Plain &a) {
     if (!(p->flags & py::detail::npy_api::NPY_ARRAY_C_CONTIGUOUS_)) return false;
     a.type = py::detail::array_descriptor_proxy(p->descr)->type_num;
     if (a.type != py::detail::npy_api::NPY_FLOAT_ && a.type != py::detail::npy_api::NPY_DOUBLE_) return false;
+    if (!native_byte_order(py::detail::array_descriptor_proxy(p->descr)->byteorder)) return false;
     a.ndim = p->nd;
     if (a.ndim < tail || (tail && p->dimensions[a.ndim - 1] != last)) return false;
     a.obj = h.ptr();
