@@ -136,10 +136,12 @@ def main():
                     help="threads of the timed kernels (default 1: per-element cost, robust to other processes "
                          "on a shared machine; the relative costs of compute-bound kernels do not depend on it)")
     ap.add_argument("--rounds", type=int, default=None, help="interleaved rounds (default 2; quick 1)")
-    ap.add_argument("--out", default=str(HERE / "TRADEOFF.md"))
+    ap.add_argument("--out", default=None,
+                    help="report path (default bench/TRADEOFF.md; with --families no report unless given)")
     ap.add_argument("--costs-out", default=None,
                     help="cost table path (default python/bsdfkit/tuning/_knob_costs.json; none with --quick)")
-    ap.add_argument("--families", default=None, help="comma-separated subset of family names")
+    ap.add_argument("--families", default=None,
+                    help="comma-separated subset of family names (their cost-table entries are replaced, the others kept)")
     ap.add_argument("--check", action="store_true",
                     help="only re-time every family and compare with the shipped cost table: exit status 1 if an "
                          "entry is off by more than 50 %% (a kernel change made it stale); writes nothing")
@@ -195,10 +197,24 @@ def main():
                   "note": "cost = time of the configuration / time of the family's most accurate configuration, "
                           "timed back to back (op: eval with out=, or sample for delta-only models)",
                   "families": families}
+    if costs_out and args.families and Path(costs_out).exists():
+        # a subset re-timed: those families replace their entries, the others keep theirs
+        merged = json.loads(Path(costs_out).read_text())
+        for fam, entry in families.items():
+            entry["date"] = info["date"]
+        merged["families"].update(families)
+        merged.setdefault("partial_updates", []).append({"date": info["date"], "families": sorted(families),
+                                                         "machine": cost_table["machine"]})
+        cost_table = merged
     if costs_out:
         Path(costs_out).write_text(json.dumps(cost_table, indent=1, sort_keys=False) + "\n")
         print(f"[tradeoff] wrote {costs_out}", flush=True)
 
+    out = args.out or (None if args.families else str(HERE / "TRADEOFF.md"))
+    if out is None:
+        print(f"[tradeoff] --families: report not written (give --out for one) "
+              f"({time.perf_counter() - t_start:.0f} s)", flush=True)
+        return 0
     # headline: simplify ranked by this run's table; measured speedup of the chosen configuration
     headline = []
     live = {r["family"]: {c.key: row for c, row in zip(r["table"].configs, r["rows"])} for r in results}
@@ -212,8 +228,8 @@ def main():
                         "measured": None if meas is None else meas["speedup"]}
         headline.append(row)
     elapsed = time.perf_counter() - t_start
-    write_md(args.out, info, results, headline, n, rounds, args.repeats, n_err, elapsed, costs_out)
-    print(f"[tradeoff] wrote {args.out} ({elapsed:.0f} s)", flush=True)
+    write_md(out, info, results, headline, n, rounds, args.repeats, n_err, elapsed, costs_out)
+    print(f"[tradeoff] wrote {out} ({elapsed:.0f} s)", flush=True)
 
 
 def _short(rep):
