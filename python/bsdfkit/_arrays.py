@@ -90,3 +90,28 @@ def check_int(x, name: str, lo: int) -> int:
     if x < lo:
         raise ValueError(f"{name}: must be >= {lo}, got {x}")
     return int(x)
+
+
+def sample_uniforms(wo: np.ndarray, uc, u, n, seed, names: tuple = (), shapes: tuple = ()):
+    """The uniforms of a ``sample`` call: drawn from ``seed`` when ``n`` is given, else the user's
+    ``uc``, ``u`` (their ranges are counted by the kernel). ``names``/``shapes``: further batch
+    inputs besides ``wo`` (e.g. wavelengths). Returns (uc, u, dtype, batch)."""
+    if n is not None:
+        if uc is not None or u is not None:
+            raise ValueError("n: give either n (and seed) or the uniforms uc and u, not both")
+        n = check_int(n, "n", 0)
+        batch = broadcast_batch(("wo",) + names + ("n",), wo.shape[:-1], *shapes, (n,))
+        dtype = kernel_dtype(wo)
+        if isinstance(seed, numbers.Integral) and not isinstance(seed, bool) and seed < 0:
+            raise ValueError(f"seed: must be >= 0 (or None), got {seed}")
+        try:
+            rng = np.random.default_rng(seed)
+        except (TypeError, ValueError) as e:
+            raise type(e)(f"seed: {e}") from None
+        return rng.random(batch, dtype=dtype), rng.random(batch + (2,), dtype=dtype), dtype, batch
+    if uc is None or u is None:
+        raise ValueError("uc, u: pass both uniforms, or n= and seed=")
+    uc, u = as_uniform(uc, "uc", ()), as_uniform(u, "u", (2,))
+    dtype = kernel_dtype(wo, uc, u)
+    batch = broadcast_batch(("wo", "uc", "u") + names, wo.shape[:-1], uc.shape, u.shape[:-1], *shapes)
+    return uc, u, dtype, batch

@@ -13,13 +13,13 @@
 from __future__ import annotations
 
 import math
-import numbers
 from collections import OrderedDict
 
 import numpy as np
 
 from .. import _core
-from .._arrays import as_dirs, as_uniform, broadcast_batch, check_int, check_out, flatten_to, kernel_dtype
+from .._arrays import (as_dirs, broadcast_batch, check_int, check_out, flatten_to, kernel_dtype,
+                       sample_uniforms)
 from ..spectral.spectrum import Spectrum
 
 __all__ = ["LAMBDA_MIN", "LAMBDA_MAX", "DENSE_WAVELENGTHS", "check_wavelengths", "spectral_param", "rgb_of",
@@ -221,27 +221,7 @@ def sample(model, wo, uc, u, n, seed, wavelengths, mode, sample_flags, out):
     from .base import SampleResult, _sample_result
     core = _spectral_core(model)
     wo, lam = as_dirs(wo, "wo"), check_wavelengths(wavelengths)
-    if n is not None:
-        if uc is not None or u is not None:
-            raise ValueError("n: give either n (and seed) or the uniforms uc and u, not both")
-        n = check_int(n, "n", 0)
-        batch = broadcast_batch(("wo", "wavelengths", "n"), wo.shape[:-1], lam.shape[:-1], (n,))
-        dtype = kernel_dtype(wo)
-        if isinstance(seed, numbers.Integral) and not isinstance(seed, bool) and seed < 0:
-            raise ValueError(f"seed: must be >= 0 (or None), got {seed}")
-        try:
-            rng = np.random.default_rng(seed)
-        except (TypeError, ValueError) as e:
-            raise type(e)(f"seed: {e}") from None
-        uc = rng.random(batch, dtype=dtype)
-        u = rng.random(batch + (2,), dtype=dtype)
-    else:
-        if uc is None or u is None:
-            raise ValueError("uc, u: pass both uniforms, or n= and seed=")
-        uc, u = as_uniform(uc, "uc", ()), as_uniform(u, "u", (2,))
-        dtype = kernel_dtype(wo, uc, u)
-        batch = broadcast_batch(("wo", "uc", "u", "wavelengths"), wo.shape[:-1], uc.shape, u.shape[:-1],
-                                lam.shape[:-1])
+    uc, u, dtype, batch = sample_uniforms(wo, uc, u, n, seed, ("wavelengths",), (lam.shape[:-1],))
     md, sf = _mode_sf(mode, sample_flags)
     if out is not None:
         raise ValueError("out: not supported with wavelengths= (spectral sample results are allocated)")

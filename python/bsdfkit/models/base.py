@@ -7,7 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._arrays import as_dirs, as_uniform, broadcast_batch, check_int, check_out, flatten_to, kernel_dtype
+from .._arrays import (as_dirs, broadcast_batch, check_int, check_out, flatten_to, kernel_dtype,
+                       sample_uniforms)
 from .._dask import dask_eval, is_dask_array
 from .._enums import BxDFFlags, ReflTrans, TransportMode
 from . import _spectral
@@ -405,26 +406,7 @@ class BxDF:
             if r is not None:
                 return _sample_result(r)
         wo = as_dirs(wo, "wo")
-        if n is not None:
-            if uc is not None or u is not None:
-                raise ValueError("n: give either n (and seed) or the uniforms uc and u, not both")
-            n = check_int(n, "n", 0)
-            batch = broadcast_batch(("wo", "n"), wo.shape[:-1], (n,))
-            dtype = kernel_dtype(wo)
-            if isinstance(seed, numbers.Integral) and not isinstance(seed, bool) and seed < 0:
-                raise ValueError(f"seed: must be >= 0 (or None), got {seed}")
-            try:
-                rng = np.random.default_rng(seed)
-            except (TypeError, ValueError) as e:
-                raise type(e)(f"seed: {e}") from None
-            uc = rng.random(batch, dtype=dtype)
-            u = rng.random(batch + (2,), dtype=dtype)
-        else:
-            if uc is None or u is None:
-                raise ValueError("uc, u: pass both uniforms, or n= and seed=")
-            uc, u = as_uniform(uc, "uc", ()), as_uniform(u, "u", (2,))  # ranges: counted by the kernel
-            dtype = kernel_dtype(wo, uc, u)
-            batch = broadcast_batch(("wo", "uc", "u"), wo.shape[:-1], uc.shape, u.shape[:-1])
+        uc, u, dtype, batch = sample_uniforms(wo, uc, u, n, seed)
         md, sf = _mode(mode), _sflags(sample_flags)
         res = _new_sample_result(batch, dtype) if out is None else _check_sample_out(out, batch, dtype)
         if res.pdf.size:
