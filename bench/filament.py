@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 import bsdfkit as bk
+from _machine import cpu_model, load  # same directory
 from bsdfkit.directions import random_directions
 
 HERE = Path(__file__).resolve().parent
@@ -231,11 +232,7 @@ def main():
     t0 = time.perf_counter()
     info = {"date": _dt.datetime.now().astimezone().isoformat(timespec="seconds"), "nproc": os.cpu_count(),
             "threads": bk.get_num_threads(), "python": platform.python_version(), "numpy": np.__version__,
-            "bsdfkit": bk.__version__, "load_start": [round(x, 2) for x in os.getloadavg()], "cpu": "unknown"}
-    try:
-        info["cpu"] = next(l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
+            "bsdfkit": bk.__version__, "load_start": list(load()), "cpu": cpu_model()}
     bk.filament.dfg_lut(128)  # build the shared table before timing
     rows = configs()
     inputs = make_inputs(n)

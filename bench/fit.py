@@ -16,13 +16,13 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import statistics
 import time
 
 import numpy as np
 
 import bsdfkit as bk
+from _machine import cpu_model  # same directory
 
 FAMILIES = {
     "Diffuse": (lambda: bk.Diffuse((0.7, 0.4, 0.2)), {"reflectance": (0.5, 0.5, 0.5)}, None),
@@ -47,17 +47,6 @@ FAMILIES = {
                                    ("conductor_eta", "conductor_k", "conductor_alpha", "interface_alpha")),
 }
 SIZES = (512, 2048, 8192)
-
-
-def _cpu():
-    try:
-        with open("/proc/cpuinfo") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor()
 
 
 def bench_families(repeats):
@@ -129,8 +118,8 @@ def main(argv=None):
     ap.add_argument("--json", default=None)
     a = ap.parse_args(argv)
     bk.set_num_threads(a.threads)
-    print(f"bsdfkit {bk.__version__}; {_cpu()}; {os.cpu_count()} cpus, threads {a.threads}; load {os.getloadavg()}")
-    out = {"cpu": _cpu(), "threads": a.threads, "load_start": os.getloadavg()}
+    print(f"bsdfkit {bk.__version__}; {cpu_model()}; {os.cpu_count()} cpus, threads {a.threads}; load {os.getloadavg()}")
+    out = {"cpu": cpu_model(), "threads": a.threads, "load_start": os.getloadavg()}
     if not a.skip_families:
         out["families"] = bench_families(a.repeats)
     out["fit_many"] = bench_fit_many(a.targets, a.repeats, a.pairs)

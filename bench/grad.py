@@ -13,12 +13,12 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import statistics
 
 import numpy as np
 
 import bsdfkit as bk
+from _machine import cpu_model  # same directory
 from bsdfkit.tuning.costs import time_repeats
 
 CASES = {
@@ -46,17 +46,6 @@ CASES = {
 }
 
 
-def _cpu():
-    try:
-        with open("/proc/cpuinfo") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor()
-
-
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=65536)
@@ -72,7 +61,7 @@ def main(argv=None) -> dict:
     wi = rng.normal(size=(a.n, 3))
     wi[:, 2] = np.abs(wi[:, 2])
     wi /= np.linalg.norm(wi, axis=1, keepdims=True)
-    print(f"bsdfkit {bk.__version__}; {_cpu()}; {os.cpu_count()} cpus, threads {a.threads}; load {os.getloadavg()}")
+    print(f"bsdfkit {bk.__version__}; {cpu_model()}; {os.cpu_count()} cpus, threads {a.threads}; load {os.getloadavg()}")
     print(f"N = {a.n} pairs, float64; ratio = eval_grad time / eval time (median of {a.repeats}, spread max/min)")
     print(f"{'case':62s} {'P':>3s} {'ratio':>7s} {'/column':>8s} {'spread':>7s}")
     res = {}
@@ -88,7 +77,7 @@ def main(argv=None) -> dict:
         print(f"{name:62s} {P:3d} {ratio:7.1f} {ratio / P:8.2f} {spr:7.2f}")
     if a.json:
         with open(a.json, "w") as fh:
-            json.dump({"cpu": _cpu(), "n": a.n, "threads": a.threads, "results": res}, fh, indent=1)
+            json.dump({"cpu": cpu_model(), "n": a.n, "threads": a.threads, "results": res}, fh, indent=1)
     return res
 
 

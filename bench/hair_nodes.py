@@ -19,6 +19,7 @@ import time
 import numpy as np
 
 import bsdfkit as bk
+from _machine import cpu_model  # same directory
 from bsdfkit.tuning import direction_set
 
 NODES = (64, 32, 16, 8, 4)
@@ -36,7 +37,7 @@ def best(fn, repeats=5):
 
 def main():
     bk.set_num_threads(1)
-    cpu = next((ln.split(":", 1)[1].strip() for ln in open("/proc/cpuinfo") if ln.startswith("model name")), "?")
+    cpu = cpu_model()
     print(f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, {cpu}, {platform.machine()}, "
           f"load {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs\n")
     print("| beta_n | " + " | ".join(f"{n} nodes p99 / max / max of peak" for n in NODES[1:]) + " |")

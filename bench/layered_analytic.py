@@ -15,7 +15,6 @@ speed relative to the walk with n_samples = 1 (eval, same arrays, back to back, 
 from __future__ import annotations
 
 import os
-import platform
 import re
 from pathlib import Path
 
@@ -24,6 +23,7 @@ import numpy as np
 os.environ.setdefault("DRJIT_LIBLLVM_PATH", "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1")
 
 import bsdfkit as bk  # noqa: E402
+from _machine import cpu_model  # noqa: E402  (same directory)
 from bsdfkit.models import registry  # noqa: E402
 from bsdfkit.models.spec import parse_spec  # noqa: E402
 from bsdfkit.tuning.costs import best_time  # noqa: E402
@@ -89,11 +89,7 @@ def main():
             ratios.append(t1 / ta)
         rows.append((label, res, float(np.median(ratios)), float(max(ratios) / min(ratios))))
         print(label, res, ratios, flush=True)
-    cpu = platform.processor() or platform.machine()
-    try:
-        cpu = next(line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
+    cpu = cpu_model()
     lines = [BEGIN, "", "## Analytic method (method=\"analytic\") vs the converged walk", "",
              f"{N} uniform pairs (upper hemisphere); converged walk: n_samples = 256, max_depth = 100. "
              "Relative RMS of f|cos| (non-delta part: eval), the walk's residual noise (two realizations / sqrt 2), "

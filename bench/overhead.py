@@ -19,30 +19,19 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import statistics
 import time
 
 import numpy as np
 
 import bsdfkit as bk
+from _machine import cpu_model  # same directory
 from bsdfkit.tuning.costs import time_repeats
 
 
 def _per_call(fn, repeats: int, min_time: float = 0.05) -> list:
     """Per-call seconds of ``repeats`` repeats (the package's own timer, tuning.costs.time_repeats)."""
     return time_repeats(fn, repeats=repeats, min_time=min_time)
-
-
-def _cpu() -> str:
-    try:
-        with open("/proc/cpuinfo") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
 
 
 MODELS = {
@@ -103,7 +92,7 @@ def main(argv=None) -> dict:
     }
     res = {}
     print(f"bsdfkit {bk.__version__} ({bk.__file__}); model {m!r}; threads {bk.get_num_threads()}")
-    print(f"CPU {_cpu()}; load average {os.getloadavg()[0]:.1f} (shared machine: compare ratios)")
+    print(f"CPU {cpu_model()}; load average {os.getloadavg()[0]:.1f} (shared machine: compare ratios)")
     print(f"{'op':20s} {'median µs':>10s} {'min µs':>8s} {'spread':>7s}")
     for name, fn in ops.items():
         ts = _per_call(fn, a.repeats)

@@ -38,6 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
+from _machine import cpu_model, simd_isa  # same directory
+
 HERE = Path(__file__).resolve().parent
 
 
@@ -57,17 +59,7 @@ def build_scene():
 
 def machine_info():
     """CPU model, SIMD width of the build machine and of our packets, cores, Python."""
-    cpu, flags = platform.processor() or platform.machine(), set()
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name") and cpu in ("", platform.machine()):
-                    cpu = line.split(":", 1)[1].strip()
-                if line.startswith("flags"):
-                    flags = set(line.split(":", 1)[1].split())
-    except OSError:
-        pass
-    isa = "AVX-512" if "avx512f" in flags else "AVX2" if "avx2" in flags else "SSE"
+    cpu, isa = cpu_model(), simd_isa()
     bits = {"AVX-512": 512, "AVX2": 256, "SSE": 128}[isa]
     return {"cpu": cpu, "isa": isa, "vector_bits": bits, "float_lanes_per_register": bits // 32,
             "packet_lanes": 16, "cores": os.cpu_count(), "python": platform.python_version()}

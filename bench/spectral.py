@@ -11,7 +11,6 @@ bench/SPECTRAL.md (between the markers).
 import argparse
 import json
 import os
-import platform
 import re
 import time
 from pathlib import Path
@@ -19,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 import bsdfkit as bk
+from _machine import cpu_model, simd_isa  # same directory
 
 HERE = Path(__file__).resolve().parent
 
@@ -39,24 +39,6 @@ MODELS = {
     "ThinDielectric, dispersive": (lambda: bk.ThinDielectric(1.5),
                                    lambda: bk.ThinDielectric(bk.Spectrum.named("glass-BK7"))),
 }
-
-
-def cpu_model():
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
-
-
-def simd_flags():
-    try:
-        flags = next(l for l in open("/proc/cpuinfo") if l.startswith("flags")).split()
-    except (OSError, StopIteration):
-        return "unknown"
-    return "AVX-512" if "avx512f" in flags else "AVX2" if "avx2" in flags else "SSE"
 
 
 def timed(fn):
@@ -102,7 +84,7 @@ def main():
                              "ratio_max": float(ratios.max())})
                 print(f"{name:32s} {np.dtype(dtype).name:8s} {op:7s} spectral/RGB time {rows[-1]['ratio']:6.2f} "
                       f"({ratios.min():.2f}..{ratios.max():.2f})", flush=True)
-    meta = {"cpu": cpu_model(), "simd": simd_flags(), "packet_width": 16, "threads": args.threads, "n": n,
+    meta = {"cpu": cpu_model(), "simd": simd_isa(), "packet_width": 16, "threads": args.threads, "n": n,
             "repeats": args.repeats, "load_before": load_before, "load_after": os.getloadavg(),
             "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())}
     (HERE / "spectral.json").write_text(json.dumps({"meta": meta, "rows": rows}, indent=1))

@@ -47,6 +47,8 @@ from pathlib import Path
 
 import numpy as np
 
+from _machine import cpu_model, simd_flags  # same directory
+
 HERE = Path(__file__).resolve().parent
 SEED = 20240611
 
@@ -152,16 +154,7 @@ def best_time(fn, repeats=5, min_time=0.02, warmup=1):
 
 
 def machine_info():
-    cpu = "unknown"
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-        flags = next((l.split(":", 1)[1].split() for l in open("/proc/cpuinfo") if l.startswith("flags")), [])
-        simd = [f for f in ("avx2", "fma", "avx512f", "avx512vl") if f in flags]
-    except OSError:
-        simd = []
+    cpu, simd = cpu_model(), simd_flags()
     mem = None
     try:
         mem = next(l.split()[1] for l in open("/proc/meminfo") if l.startswith("MemTotal"))

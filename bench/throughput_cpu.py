@@ -26,6 +26,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 import throughput as T  # noqa: E402  (inputs, model configs, Mitsuba harness)
+from _machine import cpu_model, simd_flags  # noqa: E402
 
 KEYS = ["diffuse", "cond_rough", "diel_rough"]
 
@@ -113,9 +114,7 @@ def main():
             runs[p].append(out["results"])
         sys.stderr.write(f"[cpu-bench] round {r + 1}/{args.rounds} done\n")
     load1 = os.getloadavg()
-    cpu = next((ln.split(":", 1)[1].strip() for ln in open("/proc/cpuinfo") if ln.startswith("model name")), "?")
-    flags = open("/proc/cpuinfo").read()
-    simd = ", ".join(f for f in ("avx2", "fma", "avx512f") if f" {f}" in flags)
+    cpu, simd = cpu_model(), ", ".join(f for f in simd_flags() if f != "avx512vl")
     print(f"CPU: {cpu}; SIMD {simd}; {platform.platform()}; load average {load0[0]:.1f} at start, {load1[0]:.1f} at end")
     print(f"N = {args.n:,}, {args.threads} thread(s) each, rates in M elements per CPU-second, median of "
           f"{args.rounds} rounds [min-max]; ratio = bsdfkit / Mitsuba llvm_ad_rgb kernel (float32 Mitsuba kernel for "
