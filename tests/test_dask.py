@@ -12,13 +12,14 @@ import pytest
 from distributed import Client, LocalCluster
 
 import bsdfkit as bk
+from bsdfkit.fitting.distributed import QUIET_CLUSTER
 
 FIT_KW = dict(params=("eta", "k", "alpha"), n=512, max_nfev=40, albedo=False)
 
 
 @pytest.fixture(scope="module")
 def client():
-    cluster = LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=None)
+    cluster = LocalCluster(n_workers=2, processes=True, threads_per_worker=1, **QUIET_CLUSTER)
     c = Client(cluster, set_as_default=False)
     yield c
     c.close()

@@ -175,6 +175,11 @@ def _widget(total):
     return bar
 
 
+# No dashboard; the scheduler's HTTP server (metrics) on a free port: with dashboard_address=None
+# alone it still binds 8787 and warns "Port 8787 is already in use" when two clusters run at once.
+QUIET_CLUSTER = {"dashboard_address": None, "scheduler_kwargs": {"dashboard_address": ":0"}}
+
+
 def fit_many(targets, family, client=None, *, n_workers=None, progress=None, labels=None, kernel_threads=1,
              **fit_kwargs) -> FitManyResult:
     """Fit ``family`` to every target of ``targets`` (``bk.fit`` each), one Dask task per target.
@@ -228,7 +233,7 @@ def fit_many(targets, family, client=None, *, n_workers=None, progress=None, lab
     own_cluster = own_client = None
     if client is None:
         nw = n_workers or max(1, min(len(targets), os.cpu_count() or 1))
-        own_cluster = LocalCluster(n_workers=nw, processes=True, threads_per_worker=1, dashboard_address=None)
+        own_cluster = LocalCluster(n_workers=nw, processes=True, threads_per_worker=1, **QUIET_CLUSTER)
         client = own_client = Client(own_cluster)
     elif isinstance(client, str):
         client = own_client = Client(client)
