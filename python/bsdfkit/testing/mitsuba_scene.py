@@ -16,6 +16,11 @@ What maps to what
   between our rows. A constant environment becomes the ``constant`` emitter.
 * Directional light -> ``directional`` (Mitsuba's ``direction`` is the propagation direction,
   the opposite of ours).
+* Fibres (``Scene.add_curves``: Embree round Catmull-Rom curves) -> ``bsplinecurve``: each
+  Catmull-Rom segment is rewritten exactly as a 4-point cubic B-spline (same position and radius
+  polynomials), one curve per segment. Our rays leave a fibre from its axis, Mitsuba's from the
+  surface, so shadows differ at the scale of the fibre radius. Hair models map through
+  ``Hair.to_mitsuba`` (Mitsuba derives h from wo and the tube normal: the same h as ours).
 * Spheres -> ``sphere`` with its pole on +y (its tangent then runs along our parallels, so
   anisotropic materials line up); meshes -> a temporary PLY file loaded by the ``ply`` plugin.
 * Materials -> :func:`bsdfkit.testing.mitsuba.to_mitsuba` (or ``bsdf_fn``). A checkerboard
@@ -80,6 +85,27 @@ def _write_ply(path, v, i):
         fh.write(rec.tobytes())
 
 
+# Uniform Catmull-Rom and uniform cubic B-spline segments in the power basis [1, t, t^2, t^3]
+# (Catmull & Rom 1974; de Boor): C(t) = T M P for 4 control points P.
+_M_CATMULL_ROM = 0.5 * np.array([[0, 2, 0, 0], [-1, 0, 1, 0], [2, -5, 4, -1], [-1, 3, -3, 1]], dtype=np.float64)
+_M_BSPLINE = np.array([[1, 4, 1, 0], [-3, 0, 3, 0], [3, -6, 3, 0], [-1, 3, -3, 1]], dtype=np.float64) / 6
+# B = M_bspline^-1 M_catmull_rom: the B-spline control points of the same cubic (position and radius)
+_CATMULL_ROM_TO_BSPLINE = np.linalg.solve(_M_BSPLINE, _M_CATMULL_ROM)
+
+
+def _write_bspline_curves(path, points, segments):
+    """Mitsuba's ``bsplinecurve`` text file ("x y z radius" per control point, a blank line between
+    curves) holding the renderer's Catmull-Rom segments exactly: each segment (control points
+    i .. i+3 of ``points``, an (N, 4) array of x, y, z, r) becomes one 4-point B-spline curve with
+    the same cubic position and radius, so both renderers trace the same swept surface."""
+    idx = segments[:, None] + np.arange(4)
+    b = np.einsum("ij,sjk->sik", _CATMULL_ROM_TO_BSPLINE, points[idx])   # (S, 4, 4)
+    with open(path, "w") as fh:
+        for seg in b:
+            fh.write("\n".join(" ".join(repr(float(x)) for x in row) for row in seg))
+            fh.write("\n\n")
+
+
 def _rgb(v):
     a = np.broadcast_to(np.asarray(v, dtype=np.float64), (3,))
     return {"type": "rgb", "value": [float(x) for x in a]}
@@ -139,9 +165,14 @@ def to_mitsuba_scene(scene, *, width=256, height=256, spp=64, max_depth=8, envma
                             @ mi.ScalarTransform4f().rotate([1, 0, 0], -90)
                             @ mi.ScalarTransform4f().scale([size / 2, size / 2, 1])}
             continue
-        if ob["kind"] == "curves":
-            raise NotImplementedError("fibres (Scene.add_curves) have no Mitsuba counterpart here")
         bsdf = bsdf_fn(ob["material"])
+        if ob["kind"] == "curves":
+            if tmp is None:
+                tmp = tmpdir or tempfile.mkdtemp(prefix="bsdfkit-mi-")
+            path = os.path.join(tmp, f"curves{k}.txt")
+            _write_bspline_curves(path, ob["points"], ob["segments"])
+            d[f"obj{k}"] = {"type": "bsplinecurve", "filename": path, "bsdf": bsdf}
+            continue
         if ob["kind"] == "sphere":
             # pole on +y so that Mitsuba's dp/du (along the parallels) is our tangent (negated,
             # which rotates the frame by 180 degrees about n: same anisotropic GGX)
