@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "block_cache.h"
 #include "bsdfkit/batch.h"
 #include "bsdfkit/core/microfacet.h"
 
@@ -172,9 +173,10 @@ inline bool plain_out(py::handle h, int type, const std::vector<py::ssize_t> &sh
 }
 
 // One allocation for the seven sample outputs, the arrays views of it (in this order: wi, f,
-// pdf, eta as F, 64-byte aligned; flags, valid, pdf_is_proportional as bytes). numpy leaves a
-// large block untouched (and asks for huge pages), so the sample kernel's worker threads
-// first-touch it, each its own chunks.
+// pdf, eta as F, 64-byte aligned; flags, valid, pdf_is_proportional as bytes). A small block is
+// a numpy array; from 1 MiB on it comes from BlockCache (block_cache.h), which keeps the pages of
+// recently freed blocks instead of faulting fresh ones in on every call. A new block is left
+// untouched (huge pages requested), so the sample kernel's worker threads first-touch it.
 template <typename F> struct SampleBlock {
     py::tuple arrays;  // wi, f, pdf, flags, eta, valid, pdf_is_proportional (SampleResult order)
     SampleOut<F> out;
@@ -183,8 +185,16 @@ template <typename F> struct SampleBlock {
         const int64_t s = int64_t(sizeof(F));
         int64_t o_wi = 0, o_f = pad(o_wi + 3 * n * s), o_pdf = pad(o_f + 3 * n * s), o_eta = pad(o_pdf + n * s),
                 o_fl = pad(o_eta + n * s), o_va = o_fl + n, o_pr = o_va + n, total = o_pr + n + 64;
-        py::array_t<uint8_t> blk(total);
-        auto base = reinterpret_cast<uintptr_t>(blk.mutable_data());
+        py::object blk;
+        void *data = nullptr;
+        if (size_t(total) >= BlockCache::kMinBytes) {
+            blk = cached_block(size_t(total), &data);
+        } else {
+            py::array_t<uint8_t> a(total);
+            data = a.mutable_data();
+            blk = std::move(a);
+        }
+        auto base = reinterpret_cast<uintptr_t>(data);
         uintptr_t start = (base + 63) & ~uintptr_t(63);
         auto at = [&](int64_t off) { return reinterpret_cast<void *>(start + uintptr_t(off)); };
         std::vector<py::ssize_t> b3(batch);

@@ -7,6 +7,7 @@
 #include <string>
 #include <thread>
 
+#include "block_cache.h"
 #include "bsdfkit/io.h"
 #include "bsdfkit/pool.h"
 
@@ -45,6 +46,8 @@ PYBIND11_MODULE(_core, m) {
     });
     m.def("get_num_threads", [] { return py_bind::g_threads.load(); });
     m.def("hardware_concurrency", [] { return int(std::max(1u, std::thread::hardware_concurrency())); });
+    m.def("release_memory", [] { return py_bind::BlockCache::instance().clear(); });
+    m.def("cached_bytes", [] { return py_bind::BlockCache::instance().kept_bytes(); });
 
     py_bind::bind_filament_models(m);  // first: the models' Params refer to its FilamentDFG
     py_bind::bind_measured_models(m);  // likewise: MERLTable, MeasuredTable

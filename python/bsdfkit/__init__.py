@@ -31,12 +31,12 @@ from .models import *  # noqa: F401,F403  (every model class; a new family is re
 from .models.custom import Custom
 from . import measured  # noqa: E402  (writers and tabulation of measured materials: bk.measured)
 from .spectral import Spectrum, sample_wavelengths, spectrum_to_rgb
-from .threads import get_num_threads, set_num_threads
+from .threads import get_num_threads, release_memory, set_num_threads
 from .tuning import Table, knobs, simplify, tradeoff
 from .fitting import FitReport, fit, fit_many
 
 __all__ = models.__all__ + [
-    "BxDFFlags", "ReflTrans", "TransportMode", "direction", "get_num_threads", "hemisphere_grid", "set_num_threads",
+    "BxDFFlags", "ReflTrans", "TransportMode", "direction", "get_num_threads", "hemisphere_grid", "release_memory", "set_num_threads",
     "Custom", "filament", "models", "plot", "tuning", "render", "io", "tradeoff", "simplify", "knobs", "Table", "from_mitsuba",
     "from_pbrt", "parse_pbrt_materials", "interop", "spectral", "Spectrum", "sample_wavelengths", "spectrum_to_rgb",
     "__version__", "measured", "fitting", "fit", "fit_many", "FitReport"]

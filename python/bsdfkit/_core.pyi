@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['CoatedConductor', 'CoatedConductorAnalytic', 'CoatedDiffuse', 'CoatedDiffuseAnalytic', 'Conductor', 'ConductorF82', 'ConductorF82Spectral', 'ConductorSchlick', 'ConductorSchlickSpectral', 'ConductorSpectral', 'Dielectric', 'DielectricSpectral', 'Diffuse', 'DiffuseSpectral', 'DiffuseTransmission', 'DiffuseTransmissionSpectral', 'FilamentCloth', 'FilamentDFG', 'FilamentStandard', 'FilamentStandardCoat', 'FilamentStandardCoatSheen', 'FilamentStandardSheen', 'Hair', 'HairFarField', 'MERLLinear', 'MERLNearest', 'MERLTable', 'Measured', 'MeasuredTable', 'NormalizedFresnel', 'Plastic', 'RenderScene', 'SpectralParam', 'ThinDielectric', 'ThinDielectricSpectral', 'Warp2D', 'conductor_fresnel', 'embree_version', 'filament_dfg_rows', 'filament_term', 'fresnel_diffuse_reflectance', 'fresnel_moment1', 'get_num_threads', 'hardware_concurrency', 'load_mesh', 'model_names', 'openimageio_version', 'read_image', 'set_num_threads', 'write_image']
+__all__: list[str] = ['CoatedConductor', 'CoatedConductorAnalytic', 'CoatedDiffuse', 'CoatedDiffuseAnalytic', 'Conductor', 'ConductorF82', 'ConductorF82Spectral', 'ConductorSchlick', 'ConductorSchlickSpectral', 'ConductorSpectral', 'Dielectric', 'DielectricSpectral', 'Diffuse', 'DiffuseSpectral', 'DiffuseTransmission', 'DiffuseTransmissionSpectral', 'FilamentCloth', 'FilamentDFG', 'FilamentStandard', 'FilamentStandardCoat', 'FilamentStandardCoatSheen', 'FilamentStandardSheen', 'Hair', 'HairFarField', 'MERLLinear', 'MERLNearest', 'MERLTable', 'Measured', 'MeasuredTable', 'NormalizedFresnel', 'Plastic', 'RenderScene', 'SpectralParam', 'ThinDielectric', 'ThinDielectricSpectral', 'Warp2D', 'cached_bytes', 'conductor_fresnel', 'embree_version', 'filament_dfg_rows', 'filament_term', 'fresnel_diffuse_reflectance', 'fresnel_moment1', 'get_num_threads', 'hardware_concurrency', 'load_mesh', 'model_names', 'openimageio_version', 'read_image', 'release_memory', 'set_num_threads', 'write_image']
 class FilamentDFG:
     def __eq__(self, arg0: typing.Any) -> bool:
         ...
@@ -938,6 +938,8 @@ class ThinDielectricSpectral:
     @property
     def dispersive(self) -> bool:
         ...
+def cached_bytes() -> int:
+    ...
 def conductor_fresnel(arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], arg1: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], arg2: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], arg3: typing.SupportsInt | typing.SupportsIndex) -> numpy.typing.NDArray[numpy.float64]:
     ...
 def embree_version() -> str:
@@ -963,6 +965,8 @@ def model_names() -> list:
 def openimageio_version() -> str:
     ...
 def read_image(arg0: str) -> numpy.typing.NDArray[numpy.float32]:
+    ...
+def release_memory() -> int:
     ...
 def set_num_threads(arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
     ...

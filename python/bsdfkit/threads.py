@@ -1,11 +1,11 @@
-"""Worker threads of the array kernels."""
+"""Worker threads of the array kernels, and the memory they keep for reuse."""
 from __future__ import annotations
 
 import numpy as np
 
 from . import _core
 
-__all__ = ["set_num_threads", "get_num_threads"]
+__all__ = ["set_num_threads", "get_num_threads", "release_memory"]
 
 
 def set_num_threads(n: int) -> None:
@@ -19,3 +19,13 @@ def set_num_threads(n: int) -> None:
 def get_num_threads() -> int:
     """Current number of worker threads of the array kernels."""
     return _core.get_num_threads()
+
+
+def release_memory() -> int:
+    """Frees the output blocks bsdfkit keeps for reuse and returns how many bytes it released.
+
+    ``sample`` at large N puts its seven outputs in one block; when the result is freed, the block
+    (at most two of them, 512 MiB in all) is kept so that the next call finds its pages already
+    mapped instead of faulting tens of MB in again (at N = 1e6 that cost more than the kernel).
+    Call this to give that memory back, e.g. before a memory-hungry step in the same process."""
+    return int(_core.release_memory())
