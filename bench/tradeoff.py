@@ -84,21 +84,29 @@ def extra_models():
     ]
 
 
-def measure_family(model, n, repeats, rounds):
-    """Best times {config key: t}: every configuration timed right after the most accurate one,
-    in `rounds` interleaved rounds; the reference's entry is its best over all its timings."""
+def measure_family(model, n, repeats, rounds, only=None, ref_n=None):
+    """Best times per pair {config key: t / pairs}: every configuration timed right after the
+    most accurate one, in `rounds` interleaved rounds; the reference's entry is its best over all
+    its timings. only: time only the configurations whose key contains this text (and the
+    reference); ref_n: pairs of the reference's timing call (default n; fewer bound a slow
+    reference, e.g. the 64-sample random walk of a stochastic layered model)."""
     cfgs = configurations(model)
+    if only:
+        cfgs = [cfgs[0]] + [c for c in cfgs[1:] if only in c.key]
     op = _op(model)
+    ref_n = ref_n or n
     inputs = _timing_inputs(model, n, SEED)
     calls = [_timed_call(c, op, inputs) for c in cfgs]
+    if ref_n != n:
+        calls[0] = _timed_call(cfgs[0], op, _timing_inputs(model, ref_n, SEED))
     best = {c.key: math.inf for c in cfgs}
     for _ in range(rounds):
         for c, call in zip(cfgs, calls):
             wait_quiet(max_wait=2.0)
-            tr = _best_time(calls[0], repeats)
+            tr = _best_time(calls[0], repeats) / ref_n
             best[cfgs[0].key] = min(best[cfgs[0].key], tr)
             if call is not calls[0]:
-                best[c.key] = min(best[c.key], _best_time(call, repeats))
+                best[c.key] = min(best[c.key], _best_time(call, repeats) / n)
     return op, cfgs, best
 
 
@@ -112,7 +120,7 @@ def check(args) -> int:
         fam = family(model)
         if args.families and fam not in args.families.split(","):
             continue
-        _, cfgs, best = measure_family(model, n, args.repeats, args.rounds or 2)
+        _, cfgs, best = measure_family(model, n, args.repeats, args.rounds or 2, args.configs, args.ref_n)
         ref = best[cfgs[0].key]
         measured[fam] = {k: t / ref for k, t in best.items()}
     bad = cost_deviations(shipped, measured, tol=0.5)
@@ -142,6 +150,13 @@ def main():
                     help="cost table path (default python/bsdfkit/tuning/_knob_costs.json; none with --quick)")
     ap.add_argument("--families", default=None,
                     help="comma-separated subset of family names (their cost-table entries are replaced, the others kept)")
+    ap.add_argument("--configs", default=None,
+                    help="time only the configurations whose key contains this text (and the reference), e.g. "
+                         "method=analytic; the others keep no entry (bsdfkit.tuning falls back to the model's cost "
+                         "model for them, where it has one); skips the error tables (no report)")
+    ap.add_argument("--ref-n", type=int, default=None,
+                    help="pairs of the reference's timing calls (default --n): a slow reference (the 64-sample "
+                         "random walk of the stochastic layered models) timed on fewer pairs; costs are per pair")
     ap.add_argument("--check", action="store_true",
                     help="only re-time every family and compare with the shipped cost table: exit status 1 if an "
                          "entry is off by more than 50 %% (a kernel change made it stale); writes nothing")
@@ -169,16 +184,22 @@ def main():
     results, families = [], {}
     for label, m in reps:
         t0 = time.perf_counter()
-        table = tradeoff(m, n=n_err, seed=SEED, measure=False)   # errors (and DFG tables built)
-        op, cfgs, best = measure_family(m, n, args.repeats, rounds)
-        rows = table.to_records()
+        # errors (and DFG tables built); not with --configs (a subset: costs only, no report)
+        table = None if args.configs else tradeoff(m, n=n_err, seed=SEED, measure=False)
+        op, cfgs, best = measure_family(m, n, args.repeats, rounds, args.configs, args.ref_n)
         t_ref = best[cfgs[0].key]
-        for r, c in zip(rows, cfgs):
-            r["evals_per_s"] = n / best[c.key]
-            r["speedup"] = t_ref / best[c.key]
         cost = {c.key: best[c.key] / t_ref for c in cfgs}
         families[family(m)] = {"op": op, "representative": repr(m), "label": label, "costs": cost,
-                               "reference_rate_per_s": n / t_ref}
+                               "reference_rate_per_s": 1.0 / t_ref}
+        if args.configs:
+            families[family(m)]["timed"] = {"configs": args.configs, "n": n, "reference_n": args.ref_n or n}
+            print(f"[tradeoff] {family(m):28s} " + "  ".join(f"{k}: {v:.4g}" for k, v in cost.items()
+                                                          if k != cfgs[0].key), flush=True)
+            continue
+        rows = table.to_records()
+        for r, c in zip(rows, cfgs):
+            r["evals_per_s"] = 1.0 / best[c.key]
+            r["speedup"] = t_ref / best[c.key]
         results.append({"label": label, "model": m, "family": family(m), "table": table, "rows": rows, "op": op})
         print(f"[tradeoff] {family(m):28s} {len(cfgs):4d} configurations  {time.perf_counter() - t0:6.1f} s",
               flush=True)
@@ -211,6 +232,8 @@ def main():
         print(f"[tradeoff] wrote {costs_out}", flush=True)
 
     out = args.out or (None if args.families else str(HERE / "TRADEOFF.md"))
+    if args.configs:
+        out = None
     if out is None:
         print(f"[tradeoff] --families: report not written (give --out for one) "
               f"({time.perf_counter() - t_start:.0f} s)", flush=True)

@@ -87,6 +87,76 @@ def test_simplify_families_picks_a_coated_model_for_a_varnish(tmp_path):
     print("\n" + repr(rep), "\ntabulation floor", floor_err)
     for name in ("Diffuse", "Conductor", "FilamentCloth"):
         assert not by[name].ok, (name, by[name].error)
+    # ordered by the cost table, which times the analytic coated family too (not n/a, not last)
+    costs = [f.cost for f in rep.fits]
+    assert all(np.isfinite(costs)) and costs == sorted(costs), [(f.family, f.cost) for f in rep.fits]
+    assert by["Diffuse"].cost < by["CoatedDiffuse"].cost
     assert by["CoatedDiffuse"].ok and isinstance(m, bk.CoatedDiffuse) and m.method == "analytic"
     assert by["CoatedDiffuse"].error <= 1.1 * floor_err + 1e-3, (by["CoatedDiffuse"].error, floor_err)
     assert abs(m.alpha_x - 0.15) < 0.01
+
+
+def test_recover_plastic_rough():
+    """Rough Plastic, every parameter (R, eta, alpha, Ks per channel) from a perturbed start:
+    eval_grad differentiates the coat's tables in alpha and eta."""
+    truth_m = bk.Plastic((0.6, 0.3, 0.15), eta=1.6, alpha=0.15, specular_reflectance=(0.9, 0.8, 0.7))
+    init = {"reflectance": (0.5, 0.5, 0.5), "eta": 1.4, "alpha": 0.25, "specular_reflectance": (1.0, 1.0, 1.0)}
+    m, rep = bk.fit(truth_m, bk.Plastic, params=("reflectance", "eta", "alpha", "specular_reflectance"),
+                    init=init, n=1024, albedo=False)
+    print("\n" + repr(rep))
+    truth = {**_rgb_truth("reflectance", (0.6, 0.3, 0.15)), "eta": 1.6, "alpha": 0.15,
+             **_rgb_truth("specular_reflectance", (0.9, 0.8, 0.7))}
+    _check_recovered(rep, truth)
+    assert rep.success and np.all(rep.rel_p99 < 1e-6)
+
+
+def test_recover_plastic_smooth():
+    """Smooth Plastic (alpha fixed at 0): R and eta, nonlinear internal reflections. The coat's
+    delta lobe is 0 in eval, so Ks is not identifiable (its derivative is 0) and is held."""
+    truth_m = bk.Plastic((0.7, 0.4, 0.2), eta=1.7, nonlinear=True)
+    m, rep = bk.fit(truth_m, bk.Plastic, params=("reflectance", "eta"), init={"reflectance": 0.5, "eta": 1.3},
+                    fixed={"alpha": 0.0, "nonlinear": True}, n=1024, albedo=False)
+    assert m.alpha == 0.0
+    _check_recovered(rep, {**_rgb_truth("reflectance", (0.7, 0.4, 0.2)), "eta": 1.7})
+    assert rep.success and np.all(rep.rel_p99 < 1e-6)
+
+
+ANALYTIC_COATED = {
+    "CoatedDiffuse/analytic": lambda: bk.CoatedDiffuse((0.6, 0.35, 0.15), alpha=0.05, method="analytic"),
+    "CoatedDiffuse/medium/analytic": lambda: bk.CoatedDiffuse(0.2, albedo=0.8, thickness=0.2, g=0.3,
+                                                              method="analytic"),
+    "CoatedConductor/analytic": lambda: bk.CoatedConductor.from_metal("Au", thickness=0.05, method="analytic"),
+    "CoatedConductor/medium/analytic": lambda: bk.CoatedConductor.from_metal(
+        "Cu", conductor_alpha=0.3, interface_alpha=0.02, albedo=(0.5, 0.1, 0.1), thickness=0.1, method="analytic"),
+}
+
+
+@pytest.mark.parametrize("fam", sorted(ANALYTIC_COATED))
+def test_cost_table_times_the_analytic_coated_families(fam):
+    """The shipped cost table has the analytic coated families (bench/tradeoff.py --configs
+    method=analytic): simplify_families' cost of such a model is its own configuration's time (the
+    analytic method, a fraction of the reference 64-sample walk), and the knob simplifier ranks
+    the analytic configurations by the measured entries, the walks by the model's cost model."""
+    from bsdfkit.fitting.simplify import _cost, _own_key
+    from bsdfkit.tuning import configurations, family
+    from bsdfkit.tuning.costs import _costs_for, knob_costs
+    m = ANALYTIC_COATED[fam]()
+    assert family(m) == fam
+    table = knob_costs()
+    entry = table["families"][fam]
+    key = _own_key(m)
+    assert key.startswith("method=analytic;") and key.endswith("precision=float64") and key in entry["costs"]
+    own = entry["costs"][key]
+    # the analytic method vs 64 random walks of depth <= 100 (a smooth coat over a smooth metal is
+    # delta-only: the timed op is sample, one walk against one closed-form lobe choice)
+    assert 0 < own < (0.01 if entry["op"] == "eval" else 1.0), (entry["op"], own)
+    assert _cost(m, table) == pytest.approx(own / entry["reference_rate_per_s"], rel=1e-12)
+    cfgs = configurations(m)
+    assert cfgs[0].labels["method"] == "stochastic" and entry["costs"][cfgs[0].key] == 1.0   # the reference walk
+    got = _costs_for(m, cfgs, table)
+    for c, v in zip(cfgs, got):
+        if c.key in entry["costs"]:
+            assert v == entry["costs"][c.key]
+        else:   # the walks' entries come from the model's cost model (linear in n_samples)
+            assert c.labels["method"] == "stochastic" and v == m.relative_cost(c.model._params) / \
+                m.relative_cost(cfgs[0].model._params)

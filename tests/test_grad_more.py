@@ -35,41 +35,48 @@ def _rel_err(ours, ref):
     return np.abs(ours - ref) / np.maximum(a, 1e-6 * scale)
 
 
-def _fd_check(name, g, fd_h, f, tol=1e-5):
+def _fd_check(name, g, fd_h, f, tol=1e-5, noise_eps=64, min_clean=0.3):
     """Central differences against eval_grad. The differences carry a rounding error of about
     eps |f| / h, which swamps them where f is huge and its derivative small (a grazing coat peak,
     f ~ 1e6); so: (1) on the entries where that rounding is below 1e-6 of |fd| (the majority of
     the nonzero ones), the relative error (floored at 1e-6 of the column's p99 scale) must be
     < tol at p99; (2) on 99.8 % of the entries, |g - fd| <= tol max(|fd|, floor) + 64 eps |f| / h
-    (the rest: differences straddling a kink, e.g. the critical angle of the refraction)."""
+    (the rest: differences straddling a kink, e.g. the critical angle of the refraction).
+    noise_eps: the rounding of f in units of eps |f| (64; more where f sums a long quadrature);
+    min_clean: the fraction of nonzero entries that must be clean (criterion 1 applies to them)."""
     fd, h = fd_h
     a = np.abs(fd)
     flat = a.reshape(-1, a.shape[-1])
     scale = np.array([np.quantile(c[c > 0], 0.99) if np.any(c > 0) else 1.0 for c in flat.T])
     ref = np.maximum(a, 1e-6 * scale)
-    noise = 64 * np.finfo(np.float64).eps * np.abs(f)[..., None] / h
+    noise = noise_eps * np.finfo(np.float64).eps * np.abs(f)[..., None] / h
     rel = np.abs(g - fd) / ref
     nz = (g != 0) | (fd != 0)
     clean = nz & (noise < 1e-6 * ref)
-    _report(name, f"central differences ({clean.sum() / nz.sum():.1%} of nonzero entries above rounding)",
-            rel[clean])
-    assert clean.sum() > 0.3 * nz.sum()
-    assert np.quantile(rel[clean], 0.99) < tol, np.quantile(rel[clean], 0.99)
+    assert clean.sum() >= min_clean * nz.sum() and nz.sum() > 0, (clean.sum(), nz.sum())
+    if not clean.all():
+        _report(name, "central differences (all nonzero entries, rounding included)", rel[nz])
+    if clean.any():
+        _report(name, f"central differences ({clean.sum() / nz.sum():.1%} of nonzero entries above rounding)",
+                rel[clean])
+        assert np.quantile(rel[clean], 0.99) < tol, np.quantile(rel[clean], 0.99)
     ratio = np.abs(g - fd) / (tol * ref + noise)
     assert np.quantile(ratio, 0.998) <= 1, np.quantile(ratio, 0.998)
 
 
-def _fd(model, wo, wi, names):
+def _fd(model, wo, wi, names, rel_step=None):
     """(central differences of our eval along each gradient column, the steps h): h = 1e-6
-    max(|theta|, 1e-2) (small against a near-smooth alpha), one-sided at a range bound."""
-    _, cols = _columns(model, names)
+    max(|theta|, 1e-2) (small against a near-smooth alpha), one-sided at a range bound.
+    rel_step: {column name: factor replacing 1e-6} (a smaller step where the model has kinks
+    closer than 1e-6, e.g. Plastic's quadrature tables)."""
+    col_names, cols = _columns(model, names)
     ranges = type(model).param_ranges
     out, hs = [], []
     base = model.eval(wo, wi)
-    for col in cols:
+    for name, col in zip(col_names, cols):
         f0, c0 = col[0]
         x0 = np.asarray(model._params[f0], dtype=np.float64)
-        h = 1e-6 * max(abs(float(x0 if c0 == -1 else x0[c0])), 1e-2)
+        h = (rel_step or {}).get(name, 1e-6) * max(abs(float(x0 if c0 == -1 else x0[c0])), 1e-2)
         shifted = []
         for sign in (1, -1):
             p = dict(model._params)

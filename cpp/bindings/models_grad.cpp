@@ -174,6 +174,7 @@ void bind_grad_models(py::module_ &m) {
     add_eval_grad<FilamentClothBxDF, 16>(m);
     add_eval_grad<CoatedDiffuseAnalyticBxDF, 16>(m);
     add_eval_grad<CoatedConductorAnalyticBxDF, 16>(m);
+    add_eval_grad<PlasticBxDF, 8>(m);
 }
 
 } // namespace bsdfkit::py_bind

@@ -552,6 +552,8 @@ class Plastic:
     bsdfkit model Plastic (bxdfs/all.h); keyword arguments: reflectance, eta, alpha, nonlinear, masking, specular_reflectance (a missing one keeps its C++ Params default).
     """
     fields: typing.ClassVar[tuple] = ('reflectance', 'eta', 'alpha', 'nonlinear', 'masking', 'specular_reflectance')
+    grad_fields: typing.ClassVar[tuple] = (('reflectance', 3), ('eta', 1), ('alpha', 1), ('specular_reflectance', 3))
+    grad_max_columns: typing.ClassVar[int] = 8
     def __init__(self, *args, **kwargs) -> None:
         ...
     def albedo(self, arg0: numpy.ndarray, arg1: typing.SupportsInt | typing.SupportsIndex, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> int:
@@ -561,6 +563,8 @@ class Plastic:
     def eval(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: numpy.ndarray) -> tuple:
         ...
     def eval_fast(self, arg0: typing.Any, arg1: typing.Any, arg2: typing.Any, arg3: typing.Any) -> typing.Any:
+        ...
+    def eval_grad(self, wo: numpy.ndarray, wi: numpy.ndarray, mode: typing.SupportsInt | typing.SupportsIndex, columns: collections.abc.Sequence[collections.abc.Sequence[tuple[str, typing.SupportsInt | typing.SupportsIndex]]], out_f: numpy.ndarray, out_grad: numpy.ndarray) -> tuple[int, int]:
         ...
     def pdf(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> tuple:
         ...

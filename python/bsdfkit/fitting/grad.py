@@ -29,7 +29,18 @@ method="analytic") floor the thickness at FLT_MIN and clamp g to [-0.99, 0.99] (
 their internal-reflection sum M is differentiated through its 64-node quadratures (the derivative
 of the model as computed, not of the exact integral); beyond the coat's critical angle (eta < 1)
 the refracted cosine is 0, the absorption term and its derivative are 0. The stochastic coated
-models have no gradient kernel (each eval is a random walk).
+models have no gradient kernel (each eval is a random walk). Plastic: below alpha = 1e-3 the
+coat is smooth (its delta lobe evaluates to 0; f does not depend on alpha, whose derivative is
+0), from 1e-3 on the rough coat's derivative (f jumps at the switch: T = 1 - F and Mitsuba's
+fitted Fdr become the tabulated T and the quadrature's Fdr). The rough coat's transmittance
+table and Fdr are differentiated through their Gauss-Legendre rules (the derivative of the rule
+as computed, per node, in alpha and eta); T(cos) is the linear interpolant of the table, so
+d f / d theta interpolates the nodes' derivatives. The rule's integrands have kinks (the
+critical angle of the internal reflectance, whose derivative is a square-root singularity, and
+the horizon test), so the tables are continuous in alpha and eta but their derivatives vary
+sharply wherever a node crosses one: the derivative returned is exact between such crossings,
+and central differences agree with it only for steps below the node spacing (e.g. d Fdr /
+d alpha at alpha 0.2, eta 1.49: -0.6334 exact, -0.6333 for h = 1e-7, -0.654 for h = 1e-6).
 """
 from __future__ import annotations
 

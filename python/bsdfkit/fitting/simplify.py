@@ -18,8 +18,8 @@ _METRICS = ("p99", "max", "albedo")
 @dataclass(frozen=True, eq=False)
 class FamilyFit:
     """One family's fit: the fitted model, its FitReport, the error in the chosen metric and
-    its cost (seconds per float64 eval of its cost family, from the shipped cost table; inf
-    when the table has no entry)."""
+    its cost (seconds per float64 eval of the fitted model's configuration, from the shipped
+    cost table; inf when the table has no entry for its cost family)."""
 
     family: str
     model: object
@@ -59,12 +59,29 @@ class FamilySimplifyReport:
         return f"<table><caption>bsdfkit simplify: families</caption><tr>{th}</tr>{body}</table>"
 
 
+def _own_key(model) -> str:
+    """The cost-table key of ``model``'s own knob settings in float64 (as tuning.configurations
+    keys it: a moot knob takes its first setting's label)."""
+    from ..tuning.configs import _index_of, _specs
+    p = model._params
+    parts = []
+    for s in _specs(model):
+        i = 0 if s.param is None or s.moot(p) is not None else _index_of(s.settings, p[s.param])
+        parts.append(f"{s.name}={s.labels[i]}")
+    return ";".join(parts)
+
+
 def _cost(model, costs):
+    """Seconds per float64 eval of ``model``: its cost family's reference rate times the cost of
+    the model's own configuration (1 when the table has no entry for it; inf without a family)."""
     from ..tuning.configs import family
     from ..tuning.costs import knob_costs
     table = knob_costs() if costs is None else costs
-    rate = table.get("families", {}).get(family(model), {}).get("reference_rate_per_s")
-    return 1.0 / rate if rate else math.inf
+    fam = table.get("families", {}).get(family(model), {})
+    rate = fam.get("reference_rate_per_s")
+    if not rate:
+        return math.inf
+    return float(fam.get("costs", {}).get(_own_key(model), 1.0)) / rate
 
 
 def simplify_families(target, tol, families, metric="p99", directions=None, seed=0, costs=None, **fit_kwargs):
@@ -72,7 +89,8 @@ def simplify_families(target, tol, families, metric="p99", directions=None, seed
     ``(model, FamilySimplifyReport)``: the cheapest fitted model whose error meets ``tol``
     (None if none does). metric: ``"p99"`` / ``"max"`` (max over channels of the relative error
     of f |cos| on the fitted pairs) or ``"albedo"`` (absolute directional-albedo error). Cost:
-    the shipped cost table's float64 eval rate of the fitted model's cost family."""
+    the shipped cost table's float64 time per eval of the fitted model's configuration (its cost
+    family's reference rate and the configuration's relative cost)."""
     if metric not in _METRICS:
         raise ValueError(f"metric: must be one of {_METRICS}, got {metric!r}")
     if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not tol >= 0:

@@ -50,10 +50,15 @@ class Plastic(BxDF):
     transmittance, linearly interpolated, and Fdr = 2 * mean(R_int(mu) mu) of the internal
     directional reflectance over the same nodes; both are computed at construction exactly as
     Mitsuba computes them (a Gauss-Legendre product rule through Mitsuba's visible-normal warp),
-    in float64. Sampling: the coating lobe with probability w k / (w k + (1 - w)(1 - k)),
+    in float64, once per (alpha, eta) (a small cache shares them between the float, double and
+    gradient kernels). Sampling: the coating lobe with probability w k / (w k + (1 - w)(1 - k)),
     k = F(cos_o) or 1 - T(cos_o), w = mean(Ks) / (mean(R) + mean(Ks)); otherwise a cosine-
     weighted direction. The rough lobe is sampled with Mitsuba's visible-normal map, so samples
     equal Mitsuba's for the same uniforms.
+
+    Gradients: ``eval_grad`` differentiates reflectance, eta, alpha and specular_reflectance
+    through the same code, the rough coat's tables included (their derivatives in alpha and eta
+    are those of the quadrature as computed); one-sided points: ``bsdfkit.fitting.grad``.
 
     Two-sided: a ``wo`` below the surface sees the mirrored material (Mitsuba's plugins are
     one-sided and are compared inside ``twosided``). No transmission.
@@ -77,6 +82,9 @@ class Plastic(BxDF):
     description = "diffuse base under a smooth or rough dielectric coat (Mitsuba plastic / roughplastic)"
     energy_conserving, exact_eval, reciprocal, two_sided, transmission, delta_only = True, True, True, True, False, False
     mitsuba = "roughplastic"
+    # bk.fit bounds (eval_grad: every parameter; alpha from the rough coat's 1e-3 up, eta > 1)
+    param_ranges = {"reflectance": (0.0, 1.0), "eta": (1.001, 4.0), "alpha": (1e-3, 2.0),
+                    "specular_reflectance": (0.0, 1.0)}
     knobs = (masking_knob(lambda q: "smooth coating (alpha < 1e-3): a mirror has no masking"
                           if q["alpha"] < SMOOTH_ALPHA else None),
              KnobDecl("nonlinear", (False, True), "modelling",

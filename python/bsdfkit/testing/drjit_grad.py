@@ -17,7 +17,7 @@ import numpy as np
 from . import _drjit_backend
 from . import drjit_models as _dm
 
-__all__ = ["reference_grad", "standard_grad", "cloth_grad", "coated_analytic_grad"]
+__all__ = ["reference_grad", "standard_grad", "cloth_grad", "coated_analytic_grad", "plastic_grad"]
 
 
 class _Tracer:
@@ -146,3 +146,11 @@ def coated_analytic_grad(model, wo, wi, columns):
     ``CoatedConductor`` with method="analytic"), columns as ``standard_grad``."""
     from . import layered_analytic_ref as lar
     return _namespace_grad(model, columns, lambda ns: lar.coated_f(ns, type(model).__name__, wo, wi))
+
+
+def plastic_grad(model, wo, wi, columns):
+    """(f, grad) of ``plastic_ref.plastic_f`` (Plastic restated from its formulas, the rough
+    coat's tables computed from the seeded alpha and eta) with forward-mode AD on the parameters
+    of ``model`` (a ``Plastic``), columns as ``standard_grad``."""
+    from . import plastic_ref as pr
+    return _namespace_grad(model, columns, lambda ns: pr.plastic_f(ns, wo, wi))

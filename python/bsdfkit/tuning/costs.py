@@ -49,12 +49,15 @@ def _check_costs(costs) -> dict:
 
 def _costs_for(model, configs, costs):
     fam = costs.get("families", {}).get(family(model))
-    if fam is None and hasattr(model, "relative_cost"):
-        # a family without a measured table whose cost follows its knobs (the stochastic layered
-        # models: linear in n_samples): the model's own cost model, relative to configs[0]
-        c0 = model.relative_cost(configs[0].model._params, configs[0].dtype)
-        return [model.relative_cost(c.model._params, c.dtype) / c0 for c in configs]
     table = (fam or {}).get("costs", {})
+    if hasattr(model, "relative_cost") and any(c.key not in table for c in configs):
+        # a family whose cost follows its knobs (the stochastic layered models: linear in
+        # n_samples): the measured entry where the table has one (bench/tradeoff.py --configs
+        # times only some, e.g. the analytic method against the reference walk), else the
+        # model's own cost model, relative to configs[0]
+        c0 = model.relative_cost(configs[0].model._params, configs[0].dtype)
+        return [table[c.key] if c.key in table else model.relative_cost(c.model._params, c.dtype) / c0
+                for c in configs]
     return [table.get(c.key) for c in configs]
 
 

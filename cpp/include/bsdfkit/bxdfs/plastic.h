@@ -20,6 +20,9 @@
 //           coating's directional reflectance from inside. Both are integrated, as Mitsuba does,
 //           with a Gauss-Legendre product rule over the unit square pushed through Mitsuba's GGX
 //           visible-normal warp (32^2 nodes for eta > 1, 128^2 otherwise), cos floored at 1e-6.
+//           Built once per (alpha, eta) and cached (PlasticTablesCached): in double for the
+//           float/double models, on a 2-partial Dual for the gradient models (F = Dual, their
+//           Params hold Duals: every derived quantity, the tables included, carries d/d theta).
 // Lobe choice as Mitsuba: specular with probability p = w k / (w k + (1 - w)(1 - k)), where
 // k = F(cos_o) (smooth) or 1 - T(cos_o) (rough) and w = mean(Ks) / (mean(R) + mean(Ks)).
 // The rough specular lobe is sampled with Mitsuba's visible-normal warp (sample_visible_11,
@@ -27,8 +30,11 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <mutex>
+#include <vector>
 
 #include "../core/bsdf_sample.h"
+#include "../core/dual.h"
 #include "../core/fresnel.h"
 #include "../core/microfacet.h"
 
@@ -39,12 +45,13 @@ inline constexpr int kPlasticTableRes = 64;
 
 // Mitsuba's fresnel_diffuse_reflectance(eta): hemispherical average of F for light arriving
 // from the side of relative IOR eta. eta < 1: Egan & Hilgeman 1973 fit; otherwise the
-// polynomial in 1/eta of d'Eon & Irving 2011.
-inline double FresnelDiffuseReflectance(double eta) {
-    double ie = 1.0 / eta;
+// polynomial in 1/eta of d'Eon & Irving 2011. S: double or a Dual (gradients, core/dual.h).
+template <typename S> inline S FresnelDiffuseReflectanceT(const S &eta) {
+    S ie = 1.0 / eta;
     if (eta < 1.0) return 0.0636 * ie + eta * (eta * -1.4399 + 0.7099) + 0.6681;
     return 0.919317 + ie * (-3.4793 + ie * (6.75335 + ie * (-7.80989 + ie * (4.98554 + ie * -1.36881))));
 }
+inline double FresnelDiffuseReflectance(double eta) { return FresnelDiffuseReflectanceT(eta); }
 
 // Gauss-Legendre nodes and weights on [-1, 1]: roots of P_n by Newton's method from the
 // Chebyshev guess, w = 2 / ((1 - x^2) P_n'(x)^2) (Abramowitz & Stegun 25.4.29).
@@ -95,10 +102,10 @@ template <typename V, typename A> inline Vec3<V> SampleVisibleGGXMitsuba(A alpha
 }
 
 // Smith G1 of GGX with Mitsuba's back-facing rule (0 when v.m and v.z differ in sign).
-inline double SmithG1Mitsuba(double alpha, const Vec3<double> &v, const Vec3<double> &m) {
-    double xy = sqr(alpha * v.x) + sqr(alpha * v.y);
-    double g = xy == 0 ? 1.0 : 2.0 / (1.0 + std::sqrt(1.0 + xy / sqr(v.z)));
-    return dot(v, m) * v.z <= 0 ? 0.0 : g;
+template <typename S> inline S SmithG1Mitsuba(const S &alpha, const Vec3<S> &v, const Vec3<S> &m) {
+    S xy = sqr(alpha * v.x) + sqr(alpha * v.y);
+    S g = xy == 0.0 ? S(1.0) : 2.0 / (1.0 + sqrt(1.0 + xy / sqr(v.z)));
+    return dot(v, m) * v.z <= 0.0 ? S(0.0) : g;
 }
 
 // Gauss-Legendre rule of Mitsuba's eval_transmittance / eval_reflectance: 32 nodes for eta > 1,
@@ -112,55 +119,124 @@ struct GLRule {
 // Mitsuba's eval_transmittance / eval_reflectance: the directional transmittance (refract =
 // true) or reflectance of a GGX dielectric interface for light arriving along w (w.z > 0) at
 // relative IOR eta, by the Gauss-Legendre product rule over Mitsuba's visible-normal warp.
-inline double RoughInterfaceAlbedo(double alpha, double eta, const Vec3<double> &w, bool refract, const GLRule &q) {
-    double sum = 0;
+// S: double, or a Dual for the derivatives in alpha and eta of the rule as computed (its nodes
+// are constants; the integrand's kinks - the horizon test, total internal reflection - are
+// one-sided points of core/dual.h's list).
+template <typename S>
+inline S RoughInterfaceAlbedo(const S &alpha, const S &eta, const Vec3<double> &w_, bool refract, const GLRule &q) {
+    Vec3<S> w(S(w_.x), S(w_.y), S(w_.z));
+    S sum(0.0);
     for (int a = 0; a < q.n; ++a)
         for (int b = 0; b < q.n; ++b) {
-            Point2<double> u{0.5 * q.x[b] + 0.5, 0.5 * q.x[a] + 0.5};
-            Vec3<double> m = SampleVisibleGGXMitsuba(alpha, w, u);
-            double c = dot(w, m), Fr = FrDielectric(c, eta), v;
+            Point2<S> u{S(0.5 * q.x[b] + 0.5), S(0.5 * q.x[a] + 0.5)};
+            Vec3<S> m = SampleVisibleGGXMitsuba(alpha, w, u);
+            S c = dot(w, m), Fr = FrDielectric(c, eta), v;
             if (refract) {
                 // Snell: the refracted direction through m (c > 0 here: visible normals)
-                double cos_t = -safe_sqrt(1 - (1 - c * c) / sqr(eta));
-                Vec3<double> wt_dir = m * (c / eta + cos_t) - w / eta;
-                v = wt_dir.z * w.z >= 0 ? 0.0 : SmithG1Mitsuba(alpha, wt_dir, m) * (1 - Fr);
+                S cos_t = -safe_sqrt(1.0 - (1.0 - c * c) / sqr(eta));
+                Vec3<S> wt_dir = m * (c / eta + cos_t) - w / eta;
+                v = wt_dir.z * w.z >= 0.0 ? S(0.0) : SmithG1Mitsuba(alpha, wt_dir, m) * (1.0 - Fr);
             } else {
-                Vec3<double> wr = Reflect(w, m);
-                v = (wr.z <= 0 || w.z <= 0) ? 0.0 : SmithG1Mitsuba(alpha, wr, m) * Fr;
+                Vec3<S> wr = Reflect(w, m);
+                v = (wr.z <= 0.0 || w.z <= 0.0) ? S(0.0) : SmithG1Mitsuba(alpha, wr, m) * Fr;
             }
             sum += v * q.w[a] * q.w[b] * 0.25;
         }
     return sum;
 }
 
-// The rough coating's tables (Mitsuba roughplastic::parameters_changed), built once per
-// (alpha, eta) in double and shared by the float and double models.
-struct PlasticTables {
-    double T[kPlasticTableRes] = {};  // external transmittance at cos = max(1e-6, i / 63)
-    double fdr = 0;                   // internal diffuse reflectance
+// The rough coating's tables (Mitsuba roughplastic::parameters_changed) for the parameter type S
+// of a model's Params: double, or the Dual of a gradient model (then T and fdr carry their
+// derivatives in alpha and eta, chained to the Dual's partials).
+template <typename S = double> struct PlasticTablesT {
+    S T[kPlasticTableRes] = {};  // external transmittance at cos = max(1e-6, i / 63)
+    S fdr = S(0.0);              // internal diffuse reflectance
 
-    static PlasticTables build(double alpha, double eta) {
-        PlasticTables t;
-        GLRule qt(eta), qr(1 / eta);
-        double refl = 0;
+    // The rule itself, on any S (double, or a Dual whose partials are those of alpha and eta).
+    static PlasticTablesT integrate(const S &alpha, const S &eta) {
+        PlasticTablesT t;
+        double e = scalar_value(eta);
+        GLRule qt(e), qr(1 / e);
+        S refl(0.0);
         for (int i = 0; i < kPlasticTableRes; ++i) {
             double mu = std::max(1e-6, double(i) / (kPlasticTableRes - 1));
             Vec3<double> w(std::sqrt(1 - mu * mu), 0, mu);
             t.T[i] = RoughInterfaceAlbedo(alpha, eta, w, true, qt);
-            refl += RoughInterfaceAlbedo(alpha, 1 / eta, w, false, qr) * mu;
+            refl += RoughInterfaceAlbedo(alpha, 1.0 / eta, w, false, qr) * mu;
         }
-        t.fdr = 2 * refl / kPlasticTableRes;
+        t.fdr = 2.0 * refl / double(kPlasticTableRes);
         return t;
     }
-};
 
-struct PlasticParams {
-    std::array<double, 3> reflectance{0.5, 0.5, 0.5};
-    double eta = 1.49;
-    double alpha = 0;
+    // Kept in a small cache per (alpha, eta), so the float and double models of one Plastic (and
+    // a fit's models at one point) share one integration: S = double takes the double rule's
+    // values; a Dual S the rule on a 2-partial Dual (d/d alpha, d/d eta; its values are the
+    // double rule's, bit for bit), chained to S's own partials.
+    static PlasticTablesT build(const S &alpha, const S &eta);
+
+    static double scalar_value(const S &x) {
+        if constexpr (is_dual<S>::value) return x.v;
+        else return x;
+    }
+};
+using PlasticTablesD2 = PlasticTablesT<Dual<double, 2>>;
+
+// The tables of (alpha, eta), with their partials in (alpha, eta) if `partials` (else those are 0).
+inline PlasticTablesD2 PlasticTablesCached(double alpha, double eta, bool partials) {
+    using D2 = Dual<double, 2>;
+    struct Entry {
+        double alpha, eta;
+        bool partials;
+        PlasticTablesD2 t;
+    };
+    static std::mutex lock;
+    static std::vector<Entry> cache;  // the last few (alpha, eta), newest at the back
+    {
+        std::lock_guard<std::mutex> g(lock);
+        for (const Entry &e : cache)
+            if (e.alpha == alpha && e.eta == eta && (e.partials || !partials)) return e.t;
+    }
+    PlasticTablesD2 t;
+    if (partials) {
+        t = PlasticTablesD2::integrate(D2::variable(alpha, 0), D2::variable(eta, 1));
+    } else {
+        PlasticTablesT<double> v = PlasticTablesT<double>::integrate(alpha, eta);
+        for (int i = 0; i < kPlasticTableRes; ++i) t.T[i] = D2(v.T[i]);
+        t.fdr = D2(v.fdr);
+    }
+    std::lock_guard<std::mutex> g(lock);
+    if (cache.size() >= 8) cache.erase(cache.begin());
+    cache.push_back(Entry{alpha, eta, partials, t});
+    return t;
+}
+
+template <typename S> PlasticTablesT<S> PlasticTablesT<S>::build(const S &alpha, const S &eta) {
+    constexpr bool dual = is_dual<S>::value;
+    PlasticTablesD2 t2 = PlasticTablesCached(scalar_value(alpha), scalar_value(eta), dual);
+    auto take = [&](const Dual<double, 2> &x) {
+        if constexpr (dual) {
+            S r(x.v);
+            for (int k = 0; k < S::Size; ++k) r.d[k] = x.d[0] * alpha.d[k] + x.d[1] * eta.d[k];
+            return r;
+        } else {
+            return S(x.v);
+        }
+    };
+    PlasticTablesT t;
+    for (int i = 0; i < kPlasticTableRes; ++i) t.T[i] = take(t2.T[i]);
+    t.fdr = take(t2.fdr);
+    return t;
+}
+using PlasticTables = PlasticTablesT<>;
+
+// S: the parameters' scalar type, double (core/math.h param_t; a Dual for gradients, core/dual.h).
+template <typename S = double> struct PlasticParamsT {
+    std::array<S, 3> reflectance{S(0.5), S(0.5), S(0.5)};
+    S eta = S(1.49);
+    S alpha = S(0.0);
     bool nonlinear = false;
     Masking masking = Masking::Correlated;
-    std::array<double, 3> specular_reflectance{1, 1, 1};
+    std::array<S, 3> specular_reflectance{S(1.0), S(1.0), S(1.0)};
 
     template <class V> void fields(V &&v) {
         v("reflectance", reflectance);
@@ -171,9 +247,11 @@ struct PlasticParams {
         v("specular_reflectance", specular_reflectance);
     }
 };
+using PlasticParams = PlasticParamsT<>;
 
 template <typename F> struct PlasticBxDF {
-    using Params = PlasticParams;
+    using Params = PlasticParamsT<param_t<F>>;
+    using S = param_t<F>;
     static constexpr const char *Name = "Plastic";
 
     Spectrum<F> Ks{F(1)};
@@ -186,33 +264,36 @@ template <typename F> struct PlasticBxDF {
     F table[kPlasticTableRes] = {};  // rough: T(cos) at cos = i / 63 (cos floored at 1e-6)
 
     static bool is_rough(const Params &p) { return !(p.alpha < kSmoothAlpha); }
-    static double coat_alpha(const Params &p) { return is_rough(p) ? std::max(p.alpha, kMinAlpha) : 0.0; }
-    static PlasticTables tables(const Params &p) {
-        return is_rough(p) ? PlasticTables::build(coat_alpha(p), p.eta) : PlasticTables{};
+    // the alpha floor 1e-4 (a zero derivative below it; core/dual.h)
+    static S coat_alpha(const Params &p) { return is_rough(p) ? (p.alpha < kMinAlpha ? S(kMinAlpha) : p.alpha) : S(0.0); }
+    static PlasticTablesT<S> tables(const Params &p) {
+        return is_rough(p) ? PlasticTablesT<S>::build(coat_alpha(p), p.eta) : PlasticTablesT<S>{};
     }
     static PlasticBxDF make(const Params &p) { return make(p, tables(p)); }
 
-    static PlasticBxDF make(const Params &p, const PlasticTables &tab) {
+    // S = a Dual (the gradient models): every derived quantity below is computed in S, so the
+    // derivatives in R, Ks, eta and alpha flow through Fdr, the tables and the 1/(pi eta^2) factor.
+    static PlasticBxDF make(const Params &p, const PlasticTablesT<S> &tab) {
         PlasticBxDF m;
         m.eta = F(p.eta);
         m.smooth = !is_rough(p);
-        double a = coat_alpha(p);
+        S a = coat_alpha(p);
         m.mfd = TrowbridgeReitz<F>(F(a), F(a), p.masking);
         for (int i = 0; i < kPlasticTableRes; ++i) m.table[i] = F(tab.T[i]);
-        double fdr = m.smooth ? FresnelDiffuseReflectance(1 / p.eta) : tab.fdr;
-        double rmean = 0, smean = 0;
+        S fdr = m.smooth ? FresnelDiffuseReflectanceT(S(1.0 / p.eta)) : tab.fdr;
+        S rmean(0.0), smean(0.0);
         m.has_diffuse = false;
         for (int c = 0; c < 3; ++c) {
-            double R = p.reflectance[c];
-            double scale = R / (1 - (p.nonlinear ? R * fdr : fdr));
+            S R = p.reflectance[c];
+            S scale = R / (1.0 - (p.nonlinear ? S(R * fdr) : fdr));
             m.diffuse[c] = F(scale * InvPi<double> / (p.eta * p.eta));
             m.Ks[c] = F(p.specular_reflectance[c]);
-            rmean += R / 3;
-            smean += p.specular_reflectance[c] / 3;
-            m.has_diffuse = m.has_diffuse || R > 0;
+            rmean += R / 3.0;
+            smean += p.specular_reflectance[c] / 3.0;
+            m.has_diffuse = m.has_diffuse || R > 0.0;
         }
         // both means 0 is a black material; any split will do
-        m.spec_weight = F(rmean + smean > 0 ? smean / (rmean + smean) : 0.5);
+        m.spec_weight = F(rmean + smean > 0.0 ? S(smean / (rmean + smean)) : S(0.5));
         return m;
     }
 
