@@ -132,30 +132,80 @@ template <typename F> inline int64_t count_bad_uniforms(const F *p, int64_t b, i
     return c;
 }
 
-// f(wo, wi) for N pairs; SO / SI are 3 for a full array, 0 for one broadcast direction.
+// ---- Direction arrays as the packet path reads them. S (a template argument) is 3 for rows
+// (an (N, 3) C-order array: x y z interleaved, transposed to packets through load3_lanes), 0
+// for one broadcast direction, and kAnyLayout for a layout known only at run time (Dirs::layout;
+// one instantiation of the model code then serves every combination, the layout being a branch
+// per packet that every lane shares). Planes (structure of arrays, what Mitsuba's kernels read:
+// an (N, 3) Fortran-order array, i.e. the x, y and z components each contiguous, `plane`
+// elements apart) load as three packet loads, no transposition.
+enum class DirLayout : uint8_t { Rows, One, Planes };
+inline constexpr int kAnyLayout = -1;
+template <typename F> struct Dirs {
+    const F *p;
+    DirLayout layout;
+    int64_t plane = 0; // Planes: elements between the x, y and z planes (the array's N)
+};
+
+// Lanes [i, i + cnt) of three component planes; past cnt, the direction (0, 0, 1).
+template <typename F> inline Vec3<Packet<F>> load3_planes(const F *p, int64_t plane, int64_t i, int64_t cnt) {
+    return Vec3<Packet<F>>(load1_lanes(p, i, cnt, F(0)), load1_lanes(p + plane, i, cnt, F(0)),
+                           load1_lanes(p + 2 * plane, i, cnt, F(1)));
+}
+template <int S, typename F> inline Vec3<Packet<F>> load_dirs(const Dirs<F> &d, int64_t i, int64_t cnt) {
+    if constexpr (S != kAnyLayout) {
+        return load3_lanes<S>(d.p, i, cnt);
+    } else {
+        if (d.layout == DirLayout::Planes) return load3_planes(d.p, d.plane, i, cnt);
+        if (d.layout == DirLayout::One) return load3_lanes<0>(d.p, i, cnt);
+        return load3_lanes<3>(d.p, i, cnt);
+    }
+}
+template <int S, typename F> inline bool is_one(const Dirs<F> &d) {
+    if constexpr (S == kAnyLayout) return d.layout == DirLayout::One;
+    else return S == 0;
+}
+template <int S, typename F> inline Dirs<F> dirs_of(const F *p) {
+    return {p, S == 0 ? DirLayout::One : DirLayout::Rows, 0};
+}
+
 // A per-chunk local copy of the model's trivially copyable kernel (core/bxdf.h: the model, or
 // its `Kernel` base when it holds a shared table): its parameters then cannot alias the outputs,
 // so they stay in registers instead of being reloaded, and alias-checked, every iteration.
 template <typename Model> using LocalModel = const KernelOf_t<Model>;
 
+// The packet loop of eval and pdf: per chunk a local model, per packet the pair (wo, wi) loaded
+// and its non-unit directions counted, then store(model, wo, wi, i, cnt) computes and writes
+// lanes [i, i + cnt).
+template <int SO, int SI, typename Model, typename F, typename Store>
+void pair_packet_loop(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_t n, int nthreads, BadCounts &bad,
+                      const Store &store) {
+    parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
+        int64_t bo = 0, bi = 0;
+        LocalModel<Model> mloc = m;
+        for (int64_t i = b; i < e; i += kW<F>) {
+            int64_t cnt = std::min(kW<F>, e - i);
+            Vec3<Packet<F>> o = load_dirs<SO>(wo, i, cnt), w = load_dirs<SI>(wi, i, cnt);
+            bo += count_not_unit(o);
+            bi += count_not_unit(w);
+            store(mloc, o, w, i, cnt);
+        }
+        // A broadcast direction was counted once per packet lane: once per element is meant.
+        bad.wo += is_one<SO>(wo) ? (bo > 0 ? e - b : 0) : bo;
+        bad.wi += is_one<SI>(wi) ? (bi > 0 ? e - b : 0) : bi;
+    });
+}
+
+// f(wo, wi) for N pairs; SO / SI are 3 for a full array, 0 for one broadcast direction.
+
 template <int SO, int SI, typename Model, typename F>
 void eval_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMode mode, F *out, int nthreads,
                 BadCounts &bad) {
     if constexpr (is_vectorized<Model>::value) {
-        parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
-            int64_t bo = 0, bi = 0;
-            LocalModel<Model> mloc = m;
-            for (int64_t i = b; i < e; i += kW<F>) {
-                int64_t cnt = std::min(kW<F>, e - i);
-                Vec3<Packet<F>> o = load3_lanes<SO>(wo, i, cnt), w = load3_lanes<SI>(wi, i, cnt);
-                bo += count_not_unit(o);
-                bi += count_not_unit(w);
-                store3_lanes(out, i, cnt, bsdf_f(mloc, o, w, mode));
-            }
-            // A broadcast direction was counted once per packet lane: once per element is meant.
-            bad.wo += SO == 0 ? (bo > 0 ? e - b : 0) : bo;
-            bad.wi += SI == 0 ? (bi > 0 ? e - b : 0) : bi;
-        });
+        pair_packet_loop<SO, SI>(m, dirs_of<SO>(wo), dirs_of<SI>(wi), n, nthreads, bad,
+                                 [&](const auto &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
+                                     store3_lanes(out, i, cnt, bsdf_f(mm, o, w, mode));
+                                 });
         return;
     }
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
@@ -179,19 +229,10 @@ template <int SO, int SI, typename Model, typename F>
 void pdf_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMode mode, uint8_t sf, F *out,
                int nthreads, BadCounts &bad) {
     if constexpr (is_vectorized<Model>::value) {
-        parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
-            int64_t bo = 0, bi = 0;
-            LocalModel<Model> mloc = m;
-            for (int64_t i = b; i < e; i += kW<F>) {
-                int64_t cnt = std::min(kW<F>, e - i);
-                Vec3<Packet<F>> o = load3_lanes<SO>(wo, i, cnt), w = load3_lanes<SI>(wi, i, cnt);
-                bo += count_not_unit(o);
-                bi += count_not_unit(w);
-                store1_lanes(out, i, cnt, bsdf_pdf(mloc, o, w, mode, sf));
-            }
-            bad.wo += SO == 0 ? (bo > 0 ? e - b : 0) : bo;
-            bad.wi += SI == 0 ? (bi > 0 ? e - b : 0) : bi;
-        });
+        pair_packet_loop<SO, SI>(m, dirs_of<SO>(wo), dirs_of<SI>(wi), n, nthreads, bad,
+                                 [&](const auto &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
+                                     store1_lanes(out, i, cnt, bsdf_pdf(mm, o, w, mode, sf));
+                                 });
         return;
     }
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
@@ -206,6 +247,34 @@ void pdf_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMod
         bad.wo += bo;
         bad.wi += bi;
     });
+}
+
+// eval / pdf on the packet path with the layouts chosen at run time (Dirs), for inputs that are
+// not all rows: planes (SoA) read without transposition. eval writes f as rows (out_plane = 0)
+// or as three planes out_plane elements apart. The same model code and packets as
+// eval_batch / pdf_batch, so the values are bit-identical to theirs for any layout.
+template <typename Model, typename F>
+void eval_batch_dirs(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_t n, TransportMode mode, F *out,
+                     int64_t out_plane, int nthreads, BadCounts &bad) {
+    static_assert(is_vectorized<Model>::value, "eval_batch_dirs: a packet model (Vectorized = true)");
+    pair_packet_loop<kAnyLayout, kAnyLayout>(
+        m, wo, wi, n, nthreads, bad, [&](const auto &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
+            Spectrum<Packet<F>> v = bsdf_f(mm, o, w, mode);
+            if (out_plane == 0) {
+                store3_lanes(out, i, cnt, v);
+            } else {
+                for (int c = 0; c < 3; ++c) store1_lanes(out + c * out_plane, i, cnt, v[c]);
+            }
+        });
+}
+template <typename Model, typename F>
+void pdf_batch_dirs(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_t n, TransportMode mode, uint8_t sf,
+                    F *out, int nthreads, BadCounts &bad) {
+    static_assert(is_vectorized<Model>::value, "pdf_batch_dirs: a packet model (Vectorized = true)");
+    pair_packet_loop<kAnyLayout, kAnyLayout>(
+        m, wo, wi, n, nthreads, bad, [&](const auto &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
+            store1_lanes(out, i, cnt, bsdf_pdf(mm, o, w, mode, sf));
+        });
 }
 
 template <typename F> struct SampleOut {
