@@ -18,6 +18,11 @@ What is timed (every figure is the best of several repeats after a warm-up):
            kernel  inputs already Dr.Jit arrays (evaluated); just the call + dr.eval +
                    dr.sync_thread. Same float32 kernel for both dtype rows.
   Mitsuba scalar_rgb: a Python loop of per-direction calls (separate subprocess).
+  SoA rows (eval, pdf): the same calls with the directions as structure of arrays, already in
+           memory: bsdfkit gets Fortran-order (N, 3) arrays (`a.T` of a (3, N) array: three
+           component planes, read without transposition) and an F-order out= (kernel) or
+           allocates it (plain); Mitsuba's conversion-included figure takes the (3, N) arrays
+           (`mi.Vector3f(a)`, no axis flip) and returns (3, N) `.numpy()` arrays.
   copy bound: np.copyto of as many bytes as the kernel reads + writes (inputs + outputs),
            single-threaded and split over 2 Python threads; reported as elements/s.
 
@@ -187,19 +192,22 @@ def sample_buffers(n, dtype):
 
 
 def bk_calls(m, op, d, transmissive):
-    """(kernel_fn, plain_fn) for one model / op / dtype-input dict."""
+    """{variant: fn} for one model / op / dtype-input dict: "kernel" (preallocated outputs) and
+    "plain"; for eval and pdf also "soa_kernel" and "soa_plain" (the directions as Fortran-order
+    (N, 3) arrays, i.e. three component planes; eval's out= Fortran-order too)."""
     wo, wi = d["wo"], d["wi_sph" if transmissive else "wi_up"]
     n, dtype = len(wo), wo.dtype
-    if op == "eval":
-        out = np.empty((n, 3), dtype)
-        return (lambda: m.eval(wo, wi, out=out)), (lambda: m.eval(wo, wi))
-    if op == "pdf":
-        out = np.empty(n, dtype)
-        return (lambda: m.pdf(wo, wi, out=out)), (lambda: m.pdf(wo, wi))
+    if op in ("eval", "pdf"):
+        wo_f, wi_f = np.asfortranarray(wo), np.asfortranarray(wi)
+        fn = m.eval if op == "eval" else m.pdf
+        shape = (n, 3) if op == "eval" else (n,)
+        out, out_f = np.empty(shape, dtype), np.empty(shape, dtype, order="F")
+        return {"kernel": lambda: fn(wo, wi, out=out), "plain": lambda: fn(wo, wi),
+                "soa_kernel": lambda: fn(wo_f, wi_f, out=out_f), "soa_plain": lambda: fn(wo_f, wi_f)}
     bufs = sample_buffers(n, dtype)
     uc, u = d["uc"], d["u"]
     core = m._core  # the compiled kernel with preallocated outputs (what m.sample calls)
-    return (lambda: core.sample(wo, uc, u, 0, 3, *bufs)), (lambda: m.sample(wo, uc, u))
+    return {"kernel": lambda: core.sample(wo, uc, u, 0, 3, *bufs), "plain": lambda: m.sample(wo, uc, u)}
 
 
 def io_bytes(op, n, itemsize):
@@ -295,19 +303,26 @@ def measure_cells(inputs, n, keys, ops, dtypes, threads, repeats, rounds, mi=Non
             for _ in range(rounds):
                 busy.append(wait_quiet())
                 for dt in dtypes:
-                    kern, pl = calls[dt]
                     for nt in threads:
                         bk.set_num_threads(nt)
-                        settle()
-                        keep(dt, f"kernel_{nt}t", best_time(kern, repeats))
+                        for variant in ("kernel", "soa_kernel"):
+                            if variant in calls[dt]:
+                                settle()
+                                keep(dt, f"{variant}_{nt}t", best_time(calls[dt][variant], repeats))
                         if nt in plain_threads:
-                            settle()
-                            keep(dt, f"plain_{nt}t", best_time(pl, repeats))
+                            for variant in ("plain", "soa_plain"):
+                                if variant in calls[dt]:
+                                    settle()
+                                    keep(dt, f"{variant}_{nt}t", best_time(calls[dt][variant], repeats))
                 if mi is not None and mid is not None:
                     for dt in dtypes:
                         settle()
                         keep(dt, "mi_conv_2t", mi("time", n=n, key=key, op=op, mode="conv", dt=dt,
                                                   threads=os.cpu_count() or 1, repeats=repeats))
+                        if op in ("eval", "pdf"):
+                            settle()
+                            keep(dt, "mi_conv_soa_2t", mi("time", n=n, key=key, op=op, mode="conv_soa", dt=dt,
+                                                          threads=os.cpu_count() or 1, repeats=repeats))
                     for nt in mi_threads:
                         settle()
                         t = mi("time", n=n, key=key, op=op, mode="kernel", dt="float32", threads=nt,
@@ -398,12 +413,30 @@ class _MiLLVM:
             self.bsdfs[key] = self.mi.load_dict(CONFIG[key][3])
         return self.bsdfs[key]
 
-    def conv_fn(self, n, key, op, dt):
-        """numpy in -> numpy out."""
+    def conv_fn(self, n, key, op, dt, soa=False):
+        """numpy in -> numpy out. soa: the directions are (3, N) C-order arrays (prepared once,
+        outside the timing), converted without an axis flip; eval returns f as (3, N)."""
         dr, mi, ctx, bsdf, V3 = self.dr, self.mi, self.ctx, self.bsdf(key), self.V3
         d = self.inputs[n][dt]
         wo, wi = d["wo"], d["wi_sph" if CONFIG[key][2] else "wi_up"]
         uc, u = d["uc"], d["u"]
+        if soa and op in ("eval", "pdf"):
+            wo3, wi3 = np.ascontiguousarray(wo.T), np.ascontiguousarray(wi.T)
+            if op == "eval":
+                def conv():
+                    si = dr.zeros(mi.SurfaceInteraction3f, n)
+                    si.wi = mi.Vector3f(wo3)
+                    r = bsdf.eval(ctx, si, mi.Vector3f(wi3)).numpy()
+                    dr.sync_thread()
+                    return r
+            else:
+                def conv():
+                    si = dr.zeros(mi.SurfaceInteraction3f, n)
+                    si.wi = mi.Vector3f(wo3)
+                    r = bsdf.pdf(ctx, si, mi.Vector3f(wi3)).numpy()
+                    dr.sync_thread()
+                    return r
+            return conv
         if op == "eval":
             def conv():
                 si = dr.zeros(mi.SurfaceInteraction3f, n)
@@ -462,7 +495,10 @@ class _MiLLVM:
         return kern
 
     def time(self, n, key, op, mode, dt, threads, repeats):
-        fn = self.conv_fn(n, key, op, dt) if mode == "conv" else self.kernel_fn(n, key, op)
+        if mode in ("conv", "conv_soa"):
+            fn = self.conv_fn(n, key, op, dt, soa=mode == "conv_soa")
+        else:
+            fn = self.kernel_fn(n, key, op)
         self.dr.set_thread_count(threads)
         try:
             return best_time(fn, repeats)
@@ -664,6 +700,11 @@ def build_rows(n, cells, keys, ops, dtypes, repeats, with_copy=True):
                     "bk_kernel2t_over_mi_kernel2t": ratio(bkr.get("kernel_2t"), mir.get("kernel_2t")),
                     "bk_kernel1t_over_mi_kernel1t": ratio(bkr.get("kernel_1t"), mir.get("kernel_1t")),
                     "bk_2t_over_1t": ratio(bkr.get("kernel_2t"), bkr.get("kernel_1t")),
+                    # structure-of-arrays input (eval, pdf): planes against Mitsuba and against rows
+                    "bk_soa_kernel2t_over_mi_kernel2t": ratio(bkr.get("soa_kernel_2t"), mir.get("kernel_2t")),
+                    "bk_soa_kernel1t_over_mi_kernel1t": ratio(bkr.get("soa_kernel_1t"), mir.get("kernel_1t")),
+                    "bk_soa_plain2t_over_mi_conv_soa": ratio(bkr.get("soa_plain_2t"), mir.get("conv_soa_2t")),
+                    "bk_soa_over_rows_kernel2t": ratio(bkr.get("soa_kernel_2t"), bkr.get("kernel_2t")),
                 }
                 if with_copy:
                     best_copy = min(row["copy"]["time_1t"], row["copy"]["time_2t"])
@@ -745,6 +786,31 @@ def write_markdown(path, info, mi_info, main_rows, scaling_rows, scalar_runs, ag
               f"{fmt_rate(mr.get('kernel_1t'))}{dz} | {fmt_rate(cp)} | {fmt_ratio(rt['bk_plain2t_over_mi_conv'])} | "
               f"{fmt_ratio(rt['bk_kernel2t_over_mi_kernel2t'])} | {fmt_ratio(rt['bk_2t_over_1t'])} | "
               f"{rt['bk_time_over_copy_time']:.1f} |")
+        w("")
+
+    soa_rows = [r for r in main_rows if "soa_kernel_2t" in r["bk_rate"]]
+    if soa_rows:
+        w(f"## Structure-of-arrays input (eval, pdf), N = {n_main:,} (M elements/s)\n")
+        w("The directions already in memory as three component planes: bsdfkit reads Fortran-order (N, 3) "
+          "arrays (`d.T` of a (3, N) array) without transposing them (**SoA 1T / 2T**: with a Fortran-order "
+          "`out=`; **SoA plain**: allocating it); Mitsuba's end-to-end figure starts from the (3, N) arrays "
+          "(**Mi conv SoA**: `mi.Vector3f(d)`, no axis flip, (3, N) result). **rows 2T** repeats the main "
+          "table's C-order figure. Ratios: **SoA kern/Mi kern** = SoA 2T ÷ Mi kern 2T (1T ÷ 1T in brackets), "
+          "**SoA plain/Mi conv SoA** end to end, **SoA/rows** = SoA 2T ÷ rows 2T. The values are bit-identical "
+          "to the C-order call's (tests/test_packet_position.py).\n")
+        w("| model | op | dtype | SoA 1T | SoA 2T | SoA plain | rows 2T | Mi kern 2T | Mi conv SoA | "
+          "SoA kern/Mi kern | SoA plain/Mi conv SoA | SoA/rows |")
+        w("|---|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|")
+        for r in soa_rows:
+            br, mr, rt = r["bk_rate"], r["mi_rate"] or {}, r["ratios"]
+            dz = " ‡" if (r["delta_zero"] and r["mi_rate"]) else ""
+            k1 = rt["bk_soa_kernel1t_over_mi_kernel1t"]
+            w(f"| {r['label']} | {r['op']} | {r['dtype']} | {fmt_rate(br.get('soa_kernel_1t'))} | "
+              f"{fmt_rate(br.get('soa_kernel_2t'))} | {fmt_rate(br.get('soa_plain_2t'))} | "
+              f"{fmt_rate(br.get('kernel_2t'))} | {fmt_rate(mr.get('kernel_2t'))}{dz} | "
+              f"{fmt_rate(mr.get('conv_soa_2t'))} | {fmt_ratio(rt['bk_soa_kernel2t_over_mi_kernel2t'])}"
+              f"{' (' + fmt_ratio(k1) + ')' if k1 else ''} | {fmt_ratio(rt['bk_soa_plain2t_over_mi_conv_soa'])} | "
+              f"{fmt_ratio(rt['bk_soa_over_rows_kernel2t'])} |")
         w("")
 
     if scaling_rows:

@@ -1,7 +1,8 @@
 """float32 accuracy of the models on the packet path (issue 17): the float32 kernel against the float64
 kernel on the same float32-representable direction pairs, for the models whose per-element code was
 restructured for packets and fewer divisions (Plastic, FilamentStandard, Hair, NormalizedFresnel, the
-analytic coated models). The
+analytic coated models, DiffuseTransmission; ThinDielectric, whose only non-zero output is its sample,
+through sample against an independent numpy float64 slab). The
 float64 kernels themselves are checked against Mitsuba / the independent references in tests/models/.
 
 Well-conditioned pairs: both |cos| >= 0.1 and a value >= 1e-3 of the median positive value. Below that the
@@ -40,6 +41,7 @@ MODELS = {
     "CoatedConductorAnalytic": lambda: bk.CoatedConductor.from_metal("Cu", conductor_alpha=0.3, interface_alpha=0.1,
                                                                      albedo=(0.5, 0.1, 0.1), thickness=0.1,
                                                                      method="analytic"),
+    "DiffuseTransmission": lambda: bk.DiffuseTransmission((0.2, 0.6, 0.3), (0.7, 0.1, 0.5)),
 }
 
 
@@ -86,3 +88,70 @@ def test_float32_matches_float64_when_well_conditioned(name):
     p, mx = _p999(m.pdf(wo32, wi32), m.pdf(wo, wi), good)
     print(f"{name} pdf: p99.9 {p:.2g}, max {mx:.2g}")
     assert p <= tol
+
+
+def _slab_reference(cos_o, eta):
+    """pbrt-v4's thin slab in float64 numpy, written from the Fresnel equations: R' = R + T^2 R / (1 - R^2),
+    T' = 1 - R' (R of the unpolarized interface, 1 beyond total internal reflection)."""
+    cos_o = np.abs(cos_o)
+    sin2_t = (1 - cos_o ** 2) / eta ** 2
+    cos_t = np.sqrt(np.maximum(0, 1 - sin2_t))
+    r_par = (eta * cos_o - cos_t) / (eta * cos_o + cos_t)
+    r_perp = (cos_o - eta * cos_t) / (cos_o + eta * cos_t)
+    R = np.where(sin2_t >= 1, 1.0, (r_par ** 2 + r_perp ** 2) / 2)
+    T = 1 - R
+    Rs = np.where(R < 1, R + T * T * R / np.where(R < 1, 1 - R * R, 1), R)
+    return Rs, 1 - Rs
+
+
+@pytest.mark.parametrize("eta", [1.5, 1.2, 0.7, 3.0])
+def test_thin_dielectric_sample_matches_float64_reference(eta):
+    # ThinDielectric's f and pdf are 0 (delta lobes): its arithmetic is in sample. Lobe choice, f, pdf and
+    # weight against the slab formula in float64, for the float32 and float64 kernels, |cos| >= 0.1.
+    rng = np.random.default_rng(3)
+    n = 100_000
+    v = rng.normal(size=(n, 3))
+    wo = (v / np.linalg.norm(v, axis=1, keepdims=True)).astype(np.float32)
+    uc = rng.random(n).astype(np.float32)
+    u = rng.random((n, 2)).astype(np.float32)
+    wo64 = wo.astype(np.float64)
+    Rs, Ts = _slab_reference(wo64[:, 2], eta)
+    m = bk.ThinDielectric(eta)
+    good = np.abs(wo64[:, 2]) >= 0.1
+    for dtype, tol in ((np.float32, 1e-5), (np.float64, 1e-12)):
+        s = m.sample(wo.astype(dtype), uc.astype(dtype), u.astype(dtype))
+        refl = s.wi[:, 2] * wo64[:, 2] > 0
+        # the lobe choice is uc < R' (away from ties at the float32 rounding of R')
+        clear = good & s.valid & (np.abs(uc - Rs) > 1e-5)
+        np.testing.assert_array_equal(refl[clear], (uc < Rs)[clear])
+        np.testing.assert_array_equal(s.wi[:, :2], -wo[:, :2].astype(dtype))
+        p_ref = np.where(refl, Rs, Ts)
+        f_ref = p_ref / np.abs(wo64[:, 2])
+        ok = clear & (p_ref > 1e-3)
+        rel_f = np.abs(s.f[ok, 0] - f_ref[ok]) / f_ref[ok]
+        rel_p = np.abs(s.pdf[ok] - p_ref[ok]) / p_ref[ok]
+        print(f"ThinDielectric({eta}) {np.dtype(dtype).name}: f p99.9 {np.quantile(rel_f, 0.999):.2g}, "
+              f"pdf p99.9 {np.quantile(rel_p, 0.999):.2g}")
+        assert ok.sum() > 50_000
+        assert np.quantile(rel_f, 0.999) <= tol and np.quantile(rel_p, 0.999) <= tol
+        np.testing.assert_array_equal(s.f[:, 0], s.f[:, 1])
+        np.testing.assert_allclose(s.weight[ok, 0], 1.0, rtol=10 * tol)  # f |cos| / pdf: lossless slab
+
+
+def test_diffuse_transmission_sample_matches_float64():
+    m = MODELS["DiffuseTransmission"]()
+    rng = np.random.default_rng(5)
+    n = 100_000
+    v = rng.normal(size=(n, 3))
+    wo = (v / np.linalg.norm(v, axis=1, keepdims=True)).astype(np.float32)
+    uc, u = rng.random(n).astype(np.float32), rng.random((n, 2)).astype(np.float32)
+    s32 = m.sample(wo, uc, u)
+    s64 = m.sample(wo.astype(np.float64), uc.astype(np.float64), u.astype(np.float64))
+    same = s32.valid & s64.valid & (s32.flags == s64.flags) & (np.abs(s64.wi[:, 2]) >= 0.1)
+    assert same.mean() > 0.85
+    rel = np.abs(s32.pdf[same] - s64.pdf[same]) / s64.pdf[same]
+    assert np.quantile(rel, 0.999) <= 1e-5
+    np.testing.assert_allclose(s32.f[same], s64.f[same], rtol=1e-6)
+    # the pdf is the cosine lobe times the chosen lobe's probability (largest channels 0.6 and 0.7)
+    p = np.where(s64.flags == bk.BxDFFlags.DiffuseReflection, 0.6, 0.7) / 1.3 * np.abs(s64.wi[:, 2]) / np.pi
+    np.testing.assert_allclose(s64.pdf[s64.valid], p[s64.valid], rtol=1e-14)

@@ -47,6 +47,11 @@ PACKET_MODELS = {
                                                                            albedo=(0.5, 0.1, 0.1), thickness=0.1,
                                                                            method="analytic"),
     "CoatedConductorAnalytic-smooth": lambda: bk.CoatedConductor.from_metal("Au", method="analytic"),
+    "ThinDielectric": lambda: bk.ThinDielectric(1.5),
+    "ThinDielectric-inside": lambda: bk.ThinDielectric(0.7),  # total internal reflection beyond 44 deg
+    "ThinDielectric-index-matched": lambda: bk.ThinDielectric(1.0),
+    "DiffuseTransmission": lambda: bk.DiffuseTransmission((0.2, 0.6, 0.3), (0.7, 0.1, 0.5)),
+    "DiffuseTransmission-reflect-only": lambda: bk.DiffuseTransmission(0.5, 0.0),
 }
 
 
@@ -116,3 +121,65 @@ def test_broadcast_direction_matches_rows(name, rng):
     np.testing.assert_array_equal(m.pdf(wo, wi), m.pdf(rows, wi))
     uc, u = rng.random(37), rng.random((37, 2))
     np.testing.assert_array_equal(m.sample(wo, uc, u).f, m.sample(rows, uc, u).f)
+
+
+# Direction layouts: (N, 3) arrays in C order (rows, transposed to packets) and in Fortran order (three
+# component planes, read without transposition; bind_model.h / batch.h eval_batch_dirs), mixed with each
+# other and with one broadcast direction, and out= in either order: the same values bit for bit.
+LAYOUT_MODELS = sorted(PACKET_MODELS) + ["FilamentCloth"]  # + one without packets (the general path)
+
+
+def _layout_model(name):
+    if name == "FilamentCloth":
+        return bk.FilamentCloth((0.6, 0.3, 0.2), roughness=0.5)
+    return PACKET_MODELS[name]()
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+@pytest.mark.parametrize("name", LAYOUT_MODELS)
+def test_planes_layout_bit_identical(name, dtype, rng):
+    m = _layout_model(name)
+    n = 16 * 4 + 5  # full packets and a padded tail
+    wo, wi, _, _ = _inputs(rng, n, dtype)
+    f, p = m.eval(wo, wi), m.pdf(wo, wi)
+    wo_f, wi_f = np.asfortranarray(wo), np.asfortranarray(wi)
+    assert wo_f.flags.f_contiguous and not wo_f.flags.c_contiguous
+    for a, b, tag in ((wo_f, wi_f, "planes"), (wo_f, wi, "planes/rows"), (wo, wi_f, "rows/planes"),
+                      (np.ascontiguousarray(wi.T).T, wo_f, "(3, N).T")):
+        ref_f, ref_p = (f, p) if tag != "(3, N).T" else (m.eval(wi, wo), m.pdf(wi, wo))
+        fa, pa = m.eval(a, b), m.pdf(a, b)
+        np.testing.assert_array_equal(fa, ref_f, err_msg=f"{name} eval {tag}")
+        np.testing.assert_array_equal(pa, ref_p, err_msg=f"{name} pdf {tag}")
+        assert fa.dtype == dtype and pa.dtype == dtype
+        # numpy's order='K': planes out when every full-length direction input is planes
+        both = a.flags.f_contiguous and b.flags.f_contiguous
+        assert fa.flags.f_contiguous == both and fa.flags.c_contiguous == (not both), tag
+    # every position of the padded tail, through planes
+    for k in (1, 7, 15):
+        np.testing.assert_array_equal(m.eval(wo_f[k:], wi_f[k:]), f[k:], err_msg=f"{name} planes shifted by {k}")
+        np.testing.assert_array_equal(m.pdf(wo_f[k:], wi_f[k:]), p[k:], err_msg=f"{name} planes shifted by {k}")
+    # one broadcast direction against planes
+    np.testing.assert_array_equal(m.eval(wo[5], wi_f), m.eval(np.broadcast_to(wo[5], wi.shape).copy(), wi))
+    np.testing.assert_array_equal(m.pdf(wi_f, wo[5]), m.pdf(wi, np.broadcast_to(wo[5], wi.shape).copy()))
+    # out= in either order, with inputs in either order
+    for a, b in ((wo, wi), (wo_f, wi_f)):
+        for order in "CF":
+            out = np.full((n, 3), np.nan, dtype=dtype, order=order)
+            r = m.eval(a, b, out=out)
+            assert r is out
+            np.testing.assert_array_equal(out, f, err_msg=f"{name} out order {order}")
+            outp = np.full(n, np.nan, dtype=dtype)
+            assert m.pdf(a, b, out=outp) is outp
+            np.testing.assert_array_equal(outp, p)
+
+
+def test_planes_bad_directions_counted_once(rng):
+    # the planes path counts non-unit directions like the rows path (and raises naming the argument)
+    m = bk.Diffuse(0.5)
+    wo, wi = random_dirs(rng, 40), random_dirs(rng, 40)
+    wi[[3, 17, 39]] *= 2
+    for f in (m.eval, m.pdf):
+        with pytest.raises(ValueError, match=r"wi: 3 direction\(s\)"):
+            f(np.asfortranarray(wo), np.asfortranarray(wi))
+        with pytest.raises(ValueError, match=r"wo: 40 direction\(s\)"):
+            f(np.array([0, 0, 2.0]), np.asfortranarray(wi))

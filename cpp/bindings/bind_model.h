@@ -119,13 +119,21 @@ struct Plain {
     void *data = nullptr;
     int64_t rows = 1;  // product of the leading axes (all axes when tail == 0)
     bool writeable = false;
+    bool planes = false;  // an (N, last) Fortran-order array (not also C-contiguous): `last` planes of N
 };
 
-inline bool plain(py::handle h, int tail, py::ssize_t last, Plain &a) {
+// fortran: also accept a 2-D (N, last) Fortran-order array (planes; a.planes set). Directions
+// and eval's out: the component planes the packet kernels read without transposition (batch.h).
+inline bool plain(py::handle h, int tail, py::ssize_t last, Plain &a, bool fortran = false) {
     auto &api = py::detail::npy_api::get();
     if (Py_TYPE(h.ptr()) != api.PyArray_Type_) return false;
     auto *p = py::detail::array_proxy(h.ptr());
-    if (!(p->flags & py::detail::npy_api::NPY_ARRAY_C_CONTIGUOUS_)) return false;
+    a.planes = false;
+    if (!(p->flags & py::detail::npy_api::NPY_ARRAY_C_CONTIGUOUS_)) {
+        if (!fortran || tail != 1 || p->nd != 2 || !(p->flags & py::detail::npy_api::NPY_ARRAY_F_CONTIGUOUS_))
+            return false;
+        a.planes = true;
+    }
     a.type = py::detail::array_descriptor_proxy(p->descr)->type_num;
     if (a.type != py::detail::npy_api::NPY_FLOAT_ && a.type != py::detail::npy_api::NPY_DOUBLE_) return false;
     if (!native_byte_order(py::detail::array_descriptor_proxy(p->descr)->byteorder)) return false;
@@ -165,11 +173,23 @@ inline int small_int(py::handle h, int lo, int hi) {
     return (v < lo || v > hi) ? -1 : int(v);
 }
 
-// A plain output array of the given type and exact shape, writeable, or false.
-inline bool plain_out(py::handle h, int type, const std::vector<py::ssize_t> &shape) {
+// A plain output array of the given type and exact shape, writeable, or false. planes: set when
+// it is an (N, 3) Fortran-order array (accepted only when `planes` is given).
+inline bool plain_out(py::handle h, int type, const std::vector<py::ssize_t> &shape, bool *planes = nullptr) {
     Plain o;
-    if (!plain(h, 0, 0, o) || o.type != type || !o.writeable || o.ndim != int(shape.size())) return false;
+    bool fortran = planes != nullptr && shape.size() == 2;
+    if (!plain(h, fortran ? 1 : 0, fortran ? shape[1] : 0, o, fortran) || o.type != type || !o.writeable ||
+        o.ndim != int(shape.size()))
+        return false;
+    if (planes) *planes = o.planes;
     return std::equal(shape.begin(), shape.end(), o.shape);
+}
+
+// The packet kernels' view of a plain direction argument of a call over n pairs (batch.h Dirs).
+template <typename F> inline Dirs<F> dirs_of_plain(const Plain &a, int64_t n) {
+    const F *p = static_cast<const F *>(a.data);
+    if (a.rows != n) return {p, DirLayout::One, 0};
+    return {p, a.planes ? DirLayout::Planes : DirLayout::Rows, a.planes ? n : 0};
 }
 
 // One allocation for the seven sample outputs, the arrays views of it (in this order: wi, f,
@@ -229,14 +249,31 @@ template <template <typename> class Model> struct PyModel {
 
 
     // ---- fast entry points: the whole call on plain arguments (see Plain), None otherwise ----
-    template <typename F>
-    py::object eval_plain(const Plain &o, const Plain &i, const Plain &big, TransportMode md, py::handle out) const {
-        std::vector<py::ssize_t> shape = batch_shape(big, 1, {3});
-        py::array res;
-        if (out.is_none()) res = py::array_t<F>(shape);
-        else if (plain_out(out, o.type, shape)) res = py::reinterpret_borrow<py::array>(out);
-        else return py::none();
+    // eval_fast / pdf_fast on plain arguments: allocates or accepts the output, runs the kernel
+    // without the GIL, raises on bad directions. Direction or output planes (Fortran-order (N, 3)
+    // arrays) go to the packet kernels' run-time layout path (batch.h eval_batch_dirs), which
+    // gives bit-identical values; a model without packets leaves them to the general path (None).
+    // eval's result is Fortran-ordered when every full-length direction argument is (numpy's
+    // order='K' rule), else C-ordered.
+    template <typename F, bool Eval>
+    py::object pair_plain(const Plain &o, const Plain &i, const Plain &big, TransportMode md, uint8_t sf,
+                          py::handle out) const {
+        constexpr bool packets = is_vectorized<Model<F>>::value;
         int64_t n = big.rows;
+        std::vector<py::ssize_t> shape = batch_shape(big, 1, Eval ? std::initializer_list<py::ssize_t>{3}
+                                                                   : std::initializer_list<py::ssize_t>{});
+        bool any_planes = o.planes || i.planes, out_planes = false;
+        if (!packets && any_planes) return py::none();
+        py::array res;
+        if (out.is_none()) {
+            out_planes = Eval && any_planes && (o.rows != n || o.planes) && (i.rows != n || i.planes) && n > 1;
+            if (out_planes) res = py::array_t<F, py::array::f_style>(shape);
+            else res = py::array_t<F>(shape);
+        } else if (plain_out(out, o.type, shape, Eval && packets ? &out_planes : nullptr)) {
+            res = py::reinterpret_borrow<py::array>(out);
+        } else {
+            return py::none();
+        }
         if (n == 0) return std::move(res);
         const F *po = static_cast<const F *>(o.data), *pi = static_cast<const F *>(i.data);
         F *pout = static_cast<F *>(res.mutable_data());
@@ -245,10 +282,27 @@ template <template <typename> class Model> struct PyModel {
             py::gil_scoped_release release;
             const Model<F> &m = get<F>();
             int nt = num_threads();
-            if (o.rows == n && i.rows == n) eval_batch<3, 3>(m, po, pi, n, md, pout, nt, bad);
-            else if (o.rows == n) eval_batch<3, 0>(m, po, pi, n, md, pout, nt, bad);
-            else if (i.rows == n) eval_batch<0, 3>(m, po, pi, n, md, pout, nt, bad);
-            else eval_batch<0, 0>(m, po, pi, n, md, pout, nt, bad);
+            auto run = [&](auto so, auto si) {
+                constexpr int SO = decltype(so)::value, SI = decltype(si)::value;
+                if constexpr (Eval) eval_batch<SO, SI>(m, po, pi, n, md, pout, nt, bad);
+                else pdf_batch<SO, SI>(m, po, pi, n, md, sf, pout, nt, bad);
+            };
+            using Full = std::integral_constant<int, 3>;
+            using One = std::integral_constant<int, 0>;
+            bool done = false;
+            if constexpr (packets) {
+                if (any_planes || out_planes) {
+                    Dirs<F> dwo = dirs_of_plain<F>(o, n), dwi = dirs_of_plain<F>(i, n);
+                    if constexpr (Eval) eval_batch_dirs(m, dwo, dwi, n, md, pout, out_planes ? n : 0, nt, bad);
+                    else pdf_batch_dirs(m, dwo, dwi, n, md, sf, pout, nt, bad);
+                    done = true;
+                }
+            }
+            if (done) {
+            } else if (o.rows == n && i.rows == n) run(Full{}, Full{});
+            else if (o.rows == n) run(Full{}, One{});
+            else if (i.rows == n) run(One{}, Full{});
+            else run(One{}, One{});
         }
         raise_if_interrupted();
         raise_bad(bad, true, false);
@@ -259,49 +313,24 @@ template <template <typename> class Model> struct PyModel {
         Plain o, i;
         const Plain *big;
         int md = small_int(mode, 0, 1);
-        if (md < 0 || !plain(wo, 1, 3, o) || !plain(wi, 1, 3, i) || o.type != i.type || !simple_batch(o, 1, i, 1, big))
+        if (md < 0 || !plain(wo, 1, 3, o, true) || !plain(wi, 1, 3, i, true) || o.type != i.type ||
+            !simple_batch(o, 1, i, 1, big))
             return py::none();
-        return o.type == py::detail::npy_api::NPY_FLOAT_ ? eval_plain<float>(o, i, *big, TransportMode(md), out)
-                                                         : eval_plain<double>(o, i, *big, TransportMode(md), out);
-    }
-
-    template <typename F>
-    py::object pdf_plain(const Plain &o, const Plain &i, const Plain &big, TransportMode md, uint8_t sf,
-                         py::handle out) const {
-        std::vector<py::ssize_t> shape = batch_shape(big, 1, {});
-        py::array res;
-        if (out.is_none()) res = py::array_t<F>(shape);
-        else if (plain_out(out, o.type, shape)) res = py::reinterpret_borrow<py::array>(out);
-        else return py::none();
-        int64_t n = big.rows;
-        if (n == 0) return std::move(res);
-        const F *po = static_cast<const F *>(o.data), *pi = static_cast<const F *>(i.data);
-        F *pout = static_cast<F *>(res.mutable_data());
-        BadCounts bad;
-        {
-            py::gil_scoped_release release;
-            const Model<F> &m = get<F>();
-            int nt = num_threads();
-            if (o.rows == n && i.rows == n) pdf_batch<3, 3>(m, po, pi, n, md, sf, pout, nt, bad);
-            else if (o.rows == n) pdf_batch<3, 0>(m, po, pi, n, md, sf, pout, nt, bad);
-            else if (i.rows == n) pdf_batch<0, 3>(m, po, pi, n, md, sf, pout, nt, bad);
-            else pdf_batch<0, 0>(m, po, pi, n, md, sf, pout, nt, bad);
-        }
-        raise_if_interrupted();
-        raise_bad(bad, true, false);
-        return std::move(res);
+        return o.type == py::detail::npy_api::NPY_FLOAT_
+                   ? pair_plain<float, true>(o, i, *big, TransportMode(md), 0, out)
+                   : pair_plain<double, true>(o, i, *big, TransportMode(md), 0, out);
     }
 
     py::object pdf_fast(py::handle wo, py::handle wi, py::handle mode, py::handle sflags, py::handle out) const {
         Plain o, i;
         const Plain *big;
         int md = small_int(mode, 0, 1), sf = small_int(sflags, 0, 3);
-        if (md < 0 || sf < 0 || !plain(wo, 1, 3, o) || !plain(wi, 1, 3, i) || o.type != i.type ||
+        if (md < 0 || sf < 0 || !plain(wo, 1, 3, o, true) || !plain(wi, 1, 3, i, true) || o.type != i.type ||
             !simple_batch(o, 1, i, 1, big))
             return py::none();
         return o.type == py::detail::npy_api::NPY_FLOAT_
-                   ? pdf_plain<float>(o, i, *big, TransportMode(md), uint8_t(sf), out)
-                   : pdf_plain<double>(o, i, *big, TransportMode(md), uint8_t(sf), out);
+                   ? pair_plain<float, false>(o, i, *big, TransportMode(md), uint8_t(sf), out)
+                   : pair_plain<double, false>(o, i, *big, TransportMode(md), uint8_t(sf), out);
     }
 
     template <typename F>

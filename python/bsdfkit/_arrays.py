@@ -69,19 +69,41 @@ def flatten_to(a: np.ndarray, batch: tuple, tail: tuple, dtype) -> np.ndarray:
     return _canonical(np.ascontiguousarray(np.broadcast_to(a, batch + tail), dtype=dtype), dtype).reshape((-1,) + tail)
 
 
-def check_out(out, shape: tuple, dtype) -> np.ndarray:
-    """Validates a user-supplied output array or allocates one."""
+def planes_order(batch: tuple, *arrays: np.ndarray) -> str:
+    """eval's result layout: "F" (Fortran order: the x, y, z planes, as the compiled fast path
+    returns, cpp/bindings/bind_model.h) when the batch is 1-D of more than one element and
+    every direction array of the full batch is a Fortran-order (N, 3) array, else "C" (numpy's
+    order='K' rule)."""
+    full = [a for a in arrays if a.shape[:-1] == batch]
+    if len(batch) != 1 or batch[0] < 2 or not full:
+        return "C"
+    return "F" if all(a.flags.f_contiguous and not a.flags.c_contiguous for a in full) else "C"
+
+
+def check_out(out, shape: tuple, dtype, order: str = "C", fortran_ok: bool = False) -> np.ndarray:
+    """Validates a user-supplied output array or allocates one (in `order`). fortran_ok: a
+    Fortran-order `out` is accepted too (eval's (N, 3) planes); the caller then writes through
+    a C-order buffer (write_out)."""
     if out is None:
-        return np.empty(shape, dtype=dtype)
+        return np.empty(shape, dtype=dtype, order=order)
     if not isinstance(out, np.ndarray):
         raise TypeError(f"out: expected a numpy.ndarray, got {type(out).__name__}")
     if out.dtype != dtype:
         raise TypeError(f"out: dtype must be {dtype} for these inputs, got {out.dtype}")
     if out.shape != shape:
         raise ValueError(f"out: shape must be {shape}, got {out.shape}")
+    if fortran_ok and out.flags.f_contiguous and out.flags.writeable:
+        return out
     if not out.flags.c_contiguous or not out.flags.writeable:
-        raise ValueError("out: must be a writeable C-contiguous array")
+        raise ValueError("out: must be a writeable C-contiguous array" +
+                         (" or a writeable Fortran-order (N, 3) array" if fortran_ok else ""))
     return out
+
+
+def c_buffer(out: np.ndarray) -> np.ndarray:
+    """`out` itself when C-contiguous, else a C-order scratch array of its shape and dtype whose
+    values the caller copies into `out` (np.copyto) after the kernel."""
+    return out if out.flags.c_contiguous else np.empty(out.shape, dtype=out.dtype)
 
 
 def check_int(x, name: str, lo: int) -> int:

@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._arrays import (as_dirs, broadcast_batch, check_int, check_out, flatten_to, kernel_dtype,
-                       sample_uniforms)
+from .._arrays import (as_dirs, broadcast_batch, c_buffer, check_int, check_out, flatten_to, kernel_dtype,
+                       planes_order, sample_uniforms)
 from .._dask import dask_eval, is_dask_array
 from .._enums import BxDFFlags, ReflTrans, TransportMode
 from . import _spectral
@@ -349,6 +349,14 @@ class BxDF:
         Specular (delta) lobes evaluate to 0 for every given pair, as in pbrt-v4; use
         ``sample`` to reach them. Dask arrays of directions give a lazy Dask array (blockwise,
         bit-identical values; ``bsdfkit._dask``); ``pdf`` likewise.
+
+        Memory layout: an (N, 3) direction array may be C-ordered (x y z per row) or
+        Fortran-ordered, i.e. three contiguous component planes, the structure-of-arrays layout
+        Mitsuba's kernels read: ``d.T`` of a (3, N) array ``d`` (no copy) or
+        ``numpy.asfortranarray(w)``. Models with packet kernels read planes without transposing
+        them (faster; README "Performance"), with bit-identical values. The result is
+        Fortran-ordered (its ``.T`` is a (3, N) C-ordered view) when every full-length direction
+        argument is, C-ordered otherwise (numpy's ``order='K'``); ``out`` may be either.
         """
         if wavelengths is not None:
             return _spectral.eval(self, wo, wi, wavelengths, mode, out)
@@ -358,17 +366,21 @@ class BxDF:
         if is_dask_array(wo) or is_dask_array(wi):  # a lazy Dask array, blockwise (bsdfkit._dask)
             return dask_eval(self, "eval", wo, wi, mode, out=out)
         wo, wi, batch, dtype = self._pair(wo, wi)
-        out = check_out(out, batch + (3,), dtype)
+        out = check_out(out, batch + (3,), dtype, order=planes_order(batch, wo, wi), fortran_ok=len(batch) == 1)
         if out.size:
+            buf = c_buffer(out)
             _checked(self._core.eval(flatten_to(wo, batch, (3,), dtype), flatten_to(wi, batch, (3,), dtype),
-                                     _mode(mode), out.reshape(-1, 3)), ("wo", "wi"))
+                                     _mode(mode), buf.reshape(-1, 3)), ("wo", "wi"))
+            if buf is not out:
+                np.copyto(out, buf)
         return out
 
     def pdf(self, wo, wi, mode=TransportMode.Radiance, sample_flags=ReflTrans.All, out=None, *,
             wavelengths=None) -> np.ndarray:
         """Solid-angle density of ``sample`` producing wi from wo: shape (...). 0 for delta lobes.
         ``wavelengths`` (..., 4): the density of ``sample`` with those wavelengths (the first one's
-        for a dispersive dielectric)."""
+        for a dispersive dielectric). Directions may be (N, 3) Fortran-ordered planes, read
+        without transposition, with bit-identical values (see ``eval``)."""
         if wavelengths is not None:
             return _spectral.pdf(self, wo, wi, wavelengths, mode, sample_flags, out)
         r = self._core.pdf_fast(wo, wi, mode, sample_flags, out)

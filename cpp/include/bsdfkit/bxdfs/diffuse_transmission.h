@@ -34,40 +34,66 @@ template <typename F, int NC = 3> struct DiffuseTransmissionBxDF {
         return uint8_t((R.is_black() ? Unset : DiffuseReflection) | (T.is_black() ? Unset : DiffuseTransmission));
     }
 
-    Spectrum<F, NC> f(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode) const {
-        return select(SameHemisphere(wo, wi), R * InvPi<F>, T * InvPi<F>);
+    // Runs on packets in the batch kernels (batch.h; core/simd.h): every method is a template
+    // on the evaluation type V (F, or a packet of F). The lobe probabilities depend on the
+    // parameters and sample_flags only, so their normalization is one scalar division per call
+    // (LobeWeights); per element: f and pdf no division, sample 1 division (the concentric
+    // map's ratio) and 1 square root.
+    static constexpr bool Vectorized = true;
+
+    template <typename V> Spectrum<V, NC> over_pi(const Spectrum<F, NC> &a) const {
+        Spectrum<V, NC> r;
+        for (int c = 0; c < NC; ++c) r[c] = V(a[c] * InvPi<F>);
+        return r;
     }
 
-    // Lobe probabilities from the largest channel, restricted by sample_flags.
-    void lobe_probs(uint8_t sample_flags, F *pr, F *pt) const {
-        restrict_lobes(R.max_component(), T.max_component(), sample_flags, pr, pt);
+    // f = R / pi on the side of wo, T / pi across the surface.
+    template <typename V> Spectrum<V, NC> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
+        return select(SameHemisphere(wo, wi), over_pi<V>(R), over_pi<V>(T));
     }
 
-    BSDFSample<F, NC> sample_f(const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode,
-                               uint8_t sample_flags) const {
-        F pr, pt;
-        lobe_probs(sample_flags, &pr, &pt);
-        BSDFSample<F, NC> s;
-        F sum = pr + pt;
-        bool reflect = ChooseFirstLobe(uc, pr, pt);
-        Vec3<F> wi = SampleCosineHemisphere(u);
-        // reflection stays on wo's side, transmission goes to the other side (float selects, V2)
-        F zo = wo.z < F(0) ? -wi.z : wi.z; // on wo's side
-        wi.z = reflect ? zo : -zo;
+    // Lobe probabilities from the largest channel, restricted by sample_flags: pr, pt
+    // unnormalized, the reflection threshold pr / (pr + pt) of ChooseFirstLobe, and the pdf
+    // factors cr = pr / (pi (pr + pt)), ct likewise (0 when pr + pt = 0).
+    struct LobeWeights {
+        F pr, pt, first, cr, ct;
+        bool any;
+    };
+    LobeWeights lobe_weights(uint8_t sample_flags) const {
+        LobeWeights w;
+        restrict_lobes(R.max_component(), T.max_component(), sample_flags, &w.pr, &w.pt);
+        F sum = w.pr + w.pt;
+        w.any = sum > F(0);
+        F inv = w.any ? F(1) / sum : F(0);
+        w.first = w.pr * inv;
+        F k = InvPi<F> * inv;
+        w.cr = w.pr * k;
+        w.ct = w.pt * k;
+        return w;
+    }
+
+    template <typename V>
+    BSDFSample<V, NC> sample_f(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode, uint8_t sample_flags) const {
+        LobeWeights lw = lobe_weights(sample_flags);
+        BSDFSample<V, NC> s;
+        // ChooseFirstLobe (core/sampling.h) with its ratio computed once.
+        Mask<V> reflect = Mask<V>(lw.pr > F(0)) & (Mask<V>(lw.pt <= F(0)) | (uc < V(lw.first)));
+        Vec3<V> wi = SampleCosineHemisphere(u);
+        // reflection stays on wo's side, transmission goes to the other side
+        Mask<V> flip = (wo.z < V(0)) ^ !reflect;
+        wi.z = select(flip, -wi.z, wi.z);
         s.wi = wi;
-        s.pdf = CosineHemispherePDF(AbsCosTheta(wi)) * (reflect ? pr : pt) / sum;
-        s.f = f(wo, wi, mode);
-        s.flags = lobe_flag(DiffuseReflection, !reflect);
-        s.valid = sum > F(0);
+        s.pdf = AbsCosTheta(wi) * select(reflect, V(lw.cr), V(lw.ct));
+        // The chosen lobe's f: f(wo, wi) wherever the sample survives (wi.z != 0, wo.z != 0).
+        s.f = select(reflect, over_pi<V>(R), over_pi<V>(T));
+        s.flags = lobe_flag<V>(DiffuseReflection, !reflect);
+        s.valid = Mask<V>(lw.any);
         return s;
     }
 
-    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, TransportMode, uint8_t sample_flags) const {
-        F pr, pt;
-        lobe_probs(sample_flags, &pr, &pt);
-        F sum = pr + pt;
-        F p = CosineHemispherePDF(AbsCosTheta(wi)) * (SameHemisphere(wo, wi) ? pr : pt);
-        return sum > F(0) ? p / sum : F(0);
+    template <typename V> V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
+        LobeWeights lw = lobe_weights(sample_flags);
+        return AbsCosTheta(wi) * select(SameHemisphere(wo, wi), V(lw.cr), V(lw.ct));
     }
 
     void regularize() {}

@@ -24,35 +24,62 @@ template <typename F> struct ThinDielectricBxDF {
 
     uint8_t flags() const { return Reflection | Transmission | Specular; }
 
-    Spectrum<F> f(const Vec3<F> &, const Vec3<F> &, TransportMode) const { return Spectrum<F>(F(0)); }
+    // Runs on packets in the batch kernels (batch.h; core/simd.h): every method is a template
+    // on the evaluation type V (F, or a packet of F). sample: 2 divisions, 1 square root.
+    static constexpr bool Vectorized = true;
 
-    // The slab's reflectance at |cos| = cos_o: the geometric series of inter-reflections,
-    // R' = R + T^2 R / (1 - R^2) (pbrt-v4 ThinDielectricBxDF). Also used per wavelength in
-    // spectral mode (batch_spectral.h).
-    static F slab_reflectance(F cos_o, F eta) {
-        F R = FrDielectric(cos_o, eta);
-        F T = F(1) - R;
-        return R < F(1) ? R + sqr(T) * R / (F(1) - sqr(R)) : R;
+    // Delta lobes only: f and pdf are 0 for every given pair (pbrt-v4).
+    template <typename V> Spectrum<V> f(const Vec3<V> &, const Vec3<V> &, TransportMode) const {
+        return Spectrum<V>(V(0));
+    }
+    template <typename V> V pdf(const Vec3<V> &, const Vec3<V> &, TransportMode, uint8_t) const { return V(0); }
+
+    // The slab's reflectance R' and transmittance T' = 1 - R' at |cos| = cos_o as numerators
+    // over one denominator: R' = rs / den, T' = ts / den. The geometric series of
+    // inter-reflections R' = R + T^2 R / (1 - R^2) (pbrt-v4 ThinDielectricBxDF) with T = 1 - R
+    // is 2 R / (1 + R), and T' = (1 - R) / (1 + R); with the interface's R = r / d, T = t / d
+    // (FrDielectricRatio, r + t = d) they are 2 r / (d + r) and t / (d + r). T' from t keeps
+    // full relative precision where R -> 1; no division here (eta is a scalar: the index-matched
+    // test is uniform). R = 1 (grazing, or total internal
+    // reflection for eta < 1) gives r = d: R' = 1, T' = 0.
+    template <typename V, typename E> static void slab_ratio(V cos_o, E eta, V *rs, V *ts, V *den) {
+        V r, t, d;
+        FrDielectricRatio(cos_o, eta, &r, &t, &d);
+        *rs = r + r;
+        *ts = t;
+        if (eta == E(1)) *ts = d; // index-matched: r = 0, T' = 1 exactly (t = d only to rounding)
+        *den = d + r;
+    }
+    // R' alone (one division). Also used per wavelength in spectral mode (batch_spectral.h).
+    template <typename V, typename E> static V slab_reflectance(V cos_o, E eta) {
+        V rs, ts, den;
+        slab_ratio(cos_o, eta, &rs, &ts, &den);
+        return rs / den;
     }
 
-    BSDFSample<F> sample_f(const Vec3<F> &wo, F uc, Point2<F>, TransportMode, uint8_t sample_flags) const {
-        BSDFSample<F> s;
-        F Rs = slab_reflectance(AbsCosTheta(wo), eta);
-        F pr, pt;
-        restrict_lobes(Rs, F(1) - Rs, sample_flags, &pr, &pt);
-        bool reflect = ChooseFirstLobe(uc, pr, pt);
-        s.wi = Vec3<F>(-wo.x, -wo.y, reflect ? wo.z : -wo.z);
-        F cos_i = DeltaAbsCos(s.wi);
-        s.f = Spectrum<F>((reflect ? Rs : F(1) - Rs) / cos_i);
-        s.pdf = (reflect ? pr : pt) / (pr + pt);
-        s.flags = lobe_flag(SpecularReflection, !reflect);
-        s.eta = F(1);
-        // cos_i > 0 always holds (DeltaAbsCos).
-        s.valid = (pr + pt) > F(0);
+    // Lobe choice with probabilities proportional to R' and T' (restricted by sample_flags), so
+    // the common 1 / den cancels from the choice and the pdf: pr, pt are the numerators, one
+    // reciprocal of pr + pt serves both. f = R' / |cos_i| (or T') in one division.
+    template <typename V>
+    BSDFSample<V> sample_f(const Vec3<V> &wo, V uc, Point2<V>, TransportMode, uint8_t sample_flags) const {
+        BSDFSample<V> s;
+        V cos_i = DeltaAbsCos(wo); // |wi.z| = |wo.z| for both lobes
+        V rs, ts, den, pr, pt;
+        slab_ratio(AbsCosTheta(wo), eta, &rs, &ts, &den);
+        restrict_lobes(rs, ts, sample_flags, &pr, &pt);
+        V sum = pr + pt;
+        Mask<V> active = sum > V(0);
+        V inv_sum = V(1) / select(active, sum, V(1));
+        // ChooseFirstLobe's rule with pr / (pr + pt) as pr * inv_sum (core/sampling.h).
+        Mask<V> reflect = (pr > V(0)) & ((pt <= V(0)) | (uc < pr * inv_sum));
+        s.wi = Vec3<V>(-wo.x, -wo.y, select(reflect, wo.z, -wo.z));
+        s.f = Spectrum<V>(select(reflect, rs, ts) / (den * cos_i));
+        s.pdf = select(reflect, pr, pt) * inv_sum;
+        s.flags = lobe_flag<V>(SpecularReflection, !reflect);
+        s.eta = V(1);
+        s.valid = active;
         return s;
     }
-
-    F pdf(const Vec3<F> &, const Vec3<F> &, TransportMode, uint8_t) const { return F(0); }
 
     void regularize() {}
 };
