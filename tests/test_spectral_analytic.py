@@ -372,3 +372,48 @@ def test_spectral_parameters_in_rgb_mode_and_value_semantics():
         assert a == make() and hash(a) == hash(make()), name
         assert pickle.loads(pickle.dumps(a)) == a, name
         assert isinstance(a.describe(), str)
+
+
+# ---- the color="spectral"|"rgb" knob (bsdfkit.tuning) ------------------------------------------
+
+def test_color_weights_are_the_rgb_mode_projection():
+    """The knob's integration of a spectral result (D65 white furnace -> linear sRGB) reproduces
+    RGB mode's projection of a reflectance spectrum (Spectrum.to_rgb, colour-science CMFs) for a
+    spectrum linear between the 5 nm nodes, and to 1e-4 for one with off-grid nodes."""
+    from bsdfkit.tuning.errors import color_weights
+    lam, W = color_weights()
+    assert lam.shape[1] == 4 and lam.min() == 360.0 and lam.max() == 830.0
+    white = bk.Spectrum.constant(1.0).to_rgb("reflectance", "D65")
+    np.testing.assert_allclose(W.sum(axis=(0, 1)), white, rtol=1e-12)
+    on_grid = bk.Spectrum([360.0, 450.0, 600.0, 830.0], [0.1, 0.7, 0.2, 0.9])
+    for spec, tol in ((on_grid, 1e-12), (R_SPEC, 1e-4)):
+        z = np.array([0.0, 0.0, 1.0])
+        rgb = sum(bk.Diffuse(spec).eval(z, z, wavelengths=lam[g]) @ W[g] for g in range(len(lam))) * np.pi
+        np.testing.assert_allclose(rgb, spec.to_rgb("reflectance", "D65"), atol=tol)
+
+
+def test_color_knob_registry_and_errors():
+    """The knob exists for models with a non-constant spectrum (not for RGB ones: their knob sets
+    are unchanged), is moot without a spectral kernel, and measures what RGB mode costs in
+    accuracy: gold at grazing angles is far off (simplify keeps spectral at tol 1e-2), a
+    diffuse spectrum is exact up to the 5 nm quadrature (simplify picks rgb)."""
+    names = lambda m: {k.name: k.reachable for k in bk.knobs(m)}   # noqa: E731
+    assert "color" not in names(bk.Conductor.from_metal("Au", alpha=0.3))
+    assert names(bk.Conductor.from_metal("Au", alpha=0.3, spectral=True))["color"] is True
+    # the stochastic walk has no spectral kernel: moot there, reachable through method=analytic
+    cfgs = bk.tuning.configurations(bk.CoatedDiffuse(R_SPEC))
+    assert all(c.labels["color"] is None for c in cfgs if c.labels["method"] == "stochastic")
+    assert {c.labels["color"] for c in cfgs if c.labels["method"] == "analytic"} == {"spectral", "rgb"}
+    assert names(bk.CoatedDiffuse(R_SPEC, method="analytic"))["color"] is True
+    gold = bk.Conductor.from_metal("Au", alpha=0.3, spectral=True)
+    tab = bk.tradeoff(gold, n=1024, n_albedo=256, measure=False)
+    rows = {r["config"]: r for r in tab.to_records()}
+    e_rgb = rows["color=rgb"]
+    assert e_rgb["p99_err"] > 2e-2 and e_rgb["albedo_err"] > 1e-2
+    assert rows["most accurate"]["p99_err"] == 0
+    m, rep = bk.simplify(gold, 1e-2, n=1024, n_albedo=256)
+    assert rep.config["color"] == "spectral" and any(k == "color" for k, _ in rep.kept)
+    d = bk.Diffuse(R_SPEC)
+    m, rep = bk.simplify(d, 1e-2, n=1024, n_albedo=256)
+    assert rep.config["color"] == "rgb" and ("color", "spectral", "rgb") in [c[:3] for c in rep.changes]
+    assert rep.error["p99"] < 1e-3
