@@ -3,10 +3,17 @@ float32 and float64, the same directions and uniforms; spectral calls get 4 wave
 (pbrt-v4's visible sampling). Reported as the ratio spectral / RGB time per call (the machine is
 shared: absolute rates are not headlines), median of REPEATS interleaved repetitions with the
 spread (min..max of the per-repetition ratios), with the CPU model, the packet width of the RGB
-kernels, the thread count and the load average. Writes bench/spectral.json and the table of
-bench/SPECTRAL.md (between the markers).
+kernels, the thread count and the load average. Writes bench/spectral.json, the table of
+bench/SPECTRAL.md (between the markers) and the spectral / RGB cost ratios of the tuning registry's
+``color`` knob (python/bsdfkit/tuning/_color_costs.json, per cost family, dtype and op).
+
+``--errors``: instead, the RGB-versus-spectral error table per material (the ``color`` knob's
+error, bsdfkit.tuning: f |cos| of RGB mode against spectral mode integrated to linear sRGB under
+a D65 white furnace, per direction pair and as directional albedo), bench/SPECTRAL.md between
+the ``errors`` markers and bench/spectral_errors.json.
 
     python bench/spectral.py [--n 400000] [--repeats 7] [--threads 2]
+    python bench/spectral.py --errors [--pairs 8192]
 """
 import argparse
 import json
@@ -38,7 +45,72 @@ MODELS = {
     "Dielectric smooth, dispersive": (lambda: bk.Dielectric(1.5), lambda: bk.Dielectric(bk.Spectrum.named("glass-BK7"))),
     "ThinDielectric, dispersive": (lambda: bk.ThinDielectric(1.5),
                                    lambda: bk.ThinDielectric(bk.Spectrum.named("glass-BK7"))),
+    # session 6: the split-channel adapters (batch_spectral.h)
+    "Plastic rough": (lambda: bk.Plastic((0.8, 0.3, 0.1), alpha=0.2),
+                      lambda: bk.Plastic(bk.Spectrum([360.0, 830.0], [0.2, 0.8]), alpha=0.2)),
+    "Plastic smooth": (lambda: bk.Plastic((0.8, 0.3, 0.1)), lambda: bk.Plastic(bk.Spectrum([360.0, 830.0], [0.2, 0.8]))),
+    "NormalizedFresnel, BK7": (lambda: bk.NormalizedFresnel(1.5),
+                               lambda: bk.NormalizedFresnel(bk.Spectrum.named("glass-BK7"))),
+    "FilamentStandard": (lambda: bk.FilamentStandard((0.8, 0.3, 0.1), roughness=0.4),
+                         lambda: bk.FilamentStandard(bk.Spectrum([360.0, 830.0], [0.2, 0.8]), roughness=0.4)),
+    "FilamentStandard coat+sheen": (
+        lambda: bk.FilamentStandard((0.8, 0.3, 0.1), clear_coat=0.5, sheen_color=0.5, sheen_roughness=0.4),
+        lambda: bk.FilamentStandard(bk.Spectrum([360.0, 830.0], [0.2, 0.8]), clear_coat=0.5, sheen_color=0.5,
+                                    sheen_roughness=0.4)),
+    "CoatedDiffuse analytic": (lambda: bk.CoatedDiffuse((0.8, 0.3, 0.1), alpha=0.1, method="analytic"),
+                               lambda: bk.CoatedDiffuse(bk.Spectrum([360.0, 830.0], [0.2, 0.8]), alpha=0.1,
+                                                        method="analytic")),
+    "CoatedConductor analytic, Au": (
+        lambda: bk.CoatedConductor.from_metal("Au", conductor_alpha=0.3, interface_alpha=0.05, method="analytic"),
+        lambda: bk.CoatedConductor(bk.Spectrum.named("mitsuba-Au-eta"), bk.Spectrum.named("mitsuba-Au-k"),
+                                   conductor_alpha=0.3, interface_alpha=0.05, method="analytic")),
 }
+
+
+def _au(**kw):
+    return bk.Conductor.from_metal("Au", spectral=True, **kw)
+
+
+#: Materials of the RGB-versus-spectral error table (spectral parameters: measured metal and glass
+#: data, sampled reflectance spectra).
+R_SPEC = bk.Spectrum([360.0, 430.5, 520.0, 610.0, 700.0, 830.0], [0.05, 0.31, 0.62, 0.40, 0.90, 0.83])
+MATERIALS = {
+    "Au, rough (alpha 0.3)": lambda: _au(alpha=0.3),
+    "Au, mirror": lambda: _au(),
+    "Cu, rough (alpha 0.3)": lambda: bk.Conductor.from_metal("Cu", spectral=True, alpha=0.3),
+    "Ag, rough (alpha 0.3)": lambda: bk.Conductor.from_metal("Ag", spectral=True, alpha=0.3),
+    "Al, rough (alpha 0.3)": lambda: bk.Conductor.from_metal("Al", spectral=True, alpha=0.3),
+    "Cr, rough (alpha 0.3)": lambda: bk.Conductor.from_metal("Cr", spectral=True, alpha=0.3),
+    "BK7 glass, rough (alpha 0.3)": lambda: bk.Dielectric(bk.Spectrum.named("glass-BK7"), alpha=0.3),
+    "diffuse, sampled spectrum": lambda: bk.Diffuse(R_SPEC),
+    "plastic, sampled spectrum, alpha 0.2": lambda: bk.Plastic(R_SPEC, alpha=0.2),
+    "Filament, spectral base colour": lambda: bk.FilamentStandard(R_SPEC, roughness=0.4),
+    "Filament metal, spectral base colour": lambda: bk.FilamentStandard(R_SPEC, metallic=1.0, roughness=0.4),
+    "coated Au (analytic)": lambda: bk.CoatedConductor(bk.Spectrum.named("mitsuba-Au-eta"),
+                                                       bk.Spectrum.named("mitsuba-Au-k"), conductor_alpha=0.3,
+                                                       interface_alpha=0.05, method="analytic"),
+    "NormalizedFresnel, BK7": lambda: bk.NormalizedFresnel(bk.Spectrum.named("glass-BK7")),
+}
+
+
+def errors_table(pairs):
+    """RGB mode against spectral mode per material (float64, every other knob as given)."""
+    from bsdfkit.tuning.errors import _Evaluation
+    rows = []
+    for name, make in MATERIALS.items():
+        m = make()
+        t0 = time.perf_counter()
+        ev = _Evaluation(m, None, pairs, 0, 2048, allow=(), reference="input")
+        i = next(k for k, c in enumerate(ev.configs)
+                 if c.labels.get("color") == "rgb" and c.dtype is np.float64 and c.model == m)
+        e = ev.errors[i]
+        alb = ev.reference_albedo
+        rows.append({"material": name, "max_err": e["max_err"], "p99_err": e["p99_err"], "rms_err": e["rms_err"],
+                     "albedo_err": e["albedo_err"], "albedo_ref_max": float(np.max(alb)),
+                     "seconds": time.perf_counter() - t0})
+        print(f"{name:40s} p99 {e['p99_err']:.2e} max {e['max_err']:.2e} rms {e['rms_err']:.2e} "
+              f"albedo {e['albedo_err']:.2e}", flush=True)
+    return rows
 
 
 def timed(fn):
@@ -52,8 +124,12 @@ def main():
     ap.add_argument("--n", type=int, default=400_000)
     ap.add_argument("--repeats", type=int, default=7)
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--errors", action="store_true", help="the RGB-versus-spectral error table instead")
+    ap.add_argument("--pairs", type=int, default=8192)
     args = ap.parse_args()
     bk.set_num_threads(args.threads)
+    if args.errors:
+        return write_errors(errors_table(args.pairs), args.pairs)
     rng = np.random.default_rng(0)
     n = args.n
     v = rng.normal(size=(2, n, 3))
@@ -99,6 +175,39 @@ def main():
     md = HERE / "SPECTRAL.md"
     text = md.read_text() if md.exists() else "<!-- table -->\n<!-- /table -->\n"
     text = re.sub(r"<!-- table -->.*<!-- /table -->", "<!-- table -->\n" + "\n".join(lines) + "\n<!-- /table -->",
+                  text, flags=re.S)
+    md.write_text(text)
+    write_color_costs(rows, meta)
+
+
+def write_color_costs(rows, meta):
+    """The ``color`` knob's cost table: spectral / RGB time per cost family, dtype and op (the
+    spectral model's family), and their median as the default for unmeasured families."""
+    fams = {}
+    for r in rows:
+        fam = MODELS[r["model"]][1]().cost_family()
+        fams.setdefault(fam, {}).setdefault(r["dtype"], {})[r["op"]] = round(r["ratio"], 3)
+    out = {"meta": {k: meta[k] for k in ("cpu", "simd", "threads", "n", "repeats", "load_before", "date")},
+           "note": "spectral / RGB time of the same call (bench/spectral.py); median of interleaved repetitions",
+           "families": fams, "default": round(float(np.median([r["ratio"] for r in rows])), 3)}
+    path = HERE.parent / "python" / "bsdfkit" / "tuning" / "_color_costs.json"
+    path.write_text(json.dumps(out, indent=1) + "\n")
+
+
+def write_errors(rows, pairs):
+    (HERE / "spectral_errors.json").write_text(json.dumps({"pairs": pairs, "rows": rows}, indent=1))
+    lines = [f"bsdfkit {bk.__version__}, {pairs} direction pairs per material (tuning's default set: half "
+             "stratified, half samples of the spectral model) plus 6 x 2048 albedo samples; float64.", "",
+             "| material | p99 rel. error f cos | max rel. error | rel. RMS | albedo abs. error (max albedo) |",
+             "|---|--:|--:|--:|--:|"]
+    for r in rows:
+        lines.append(f"| {r['material']} | {r['p99_err']:.2e} | {r['max_err']:.2e} | {r['rms_err']:.2e} | "
+                     f"{r['albedo_err']:.2e} ({r['albedo_ref_max']:.2f}) |")
+    md = HERE / "SPECTRAL.md"
+    text = md.read_text()
+    if "<!-- errors -->" not in text:
+        text += "\n<!-- errors -->\n<!-- /errors -->\n"
+    text = re.sub(r"<!-- errors -->.*<!-- /errors -->", "<!-- errors -->\n" + "\n".join(lines) + "\n<!-- /errors -->",
                   text, flags=re.S)
     md.write_text(text)
 

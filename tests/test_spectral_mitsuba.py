@@ -8,7 +8,10 @@ Cases (>= 10,000 direction pairs each, 4 wavelengths per pair from pbrt-v4's vis
 a rough conductor with Mitsuba's measured gold (``material="Au"``; ours: ``from_metal("Au",
 spectral=True)``, the same Mitsuba data, piecewise linear), an anisotropic rough conductor with
 sampled eta / k spectra given to both, a rough non-dispersive dielectric (both sides, reflection
-and transmission), and a diffuse with an explicit reflectance spectrum. Masking is separable
+and transmission), a diffuse with an explicit reflectance spectrum, and Mitsuba's ``roughplastic``
+(GGX, visible normals, spectral diffuse and specular reflectances) and smooth ``plastic``
+(nonlinear) inside ``twosided`` (session 6: the lobe weight uses the spectral means over
+[360, 830] nm, Mitsuba's Texture::mean(), so the pdf matches too). Masking is separable
 (Mitsuba's). Compared: f |cos wi| and pdf. Tolerance: |ours - Mitsuba| <= rtol |Mitsuba| + 1e-6 max,
 rtol 1e-5 for the conductors and the diffuse, 2e-4 for the dielectric (Mitsuba runs in float32,
 ours in float64; measured at session 5 over values above 1e-3 of the maximum: conductors 2.2e-6
@@ -34,6 +37,8 @@ ETA_VALS = [0.35, 0.42, 0.61, 0.83, 1.05, 1.21, 1.33, 1.40]
 K_VALS = [2.10, 2.35, 2.70, 3.05, 3.40, 3.90, 4.40, 4.95]
 R_NODES = [360.0, 430.5, 470.0, 520.0, 575.25, 610.0, 680.0, 760.0, 830.0]
 R_VALS = [0.05, 0.12, 0.31, 0.62, 0.55, 0.40, 0.71, 0.90, 0.83]
+KS_NODES = [360.0, 480.0, 600.0, 830.0]
+KS_VALS = [0.6, 1.0, 0.8, 0.9]
 
 
 def _cases():
@@ -45,7 +50,17 @@ def _cases():
                            alpha_y=0.15, masking="separable")
     glass = bk.Dielectric(bk.Spectrum.constant(1.5), alpha=0.3, masking="separable")
     diffuse = bk.Diffuse(bk.Spectrum(R_NODES, R_VALS))
+    rough_plastic = bk.Plastic(bk.Spectrum(R_NODES, R_VALS), eta=1.49, alpha=0.2, masking="separable",
+                               specular_reflectance=bk.Spectrum(KS_NODES, KS_VALS))
+    smooth_plastic = bk.Plastic(bk.Spectrum(R_NODES, R_VALS), eta=1.5, nonlinear=True)
     return {
+        "plastic-rough": (rough_plastic, {"type": "twosided", "bsdf": {
+            "type": "roughplastic", "distribution": "ggx", "alpha": 0.2, "int_ior": 1.49, "ext_ior": 1.0,
+            "sample_visible": True, "nonlinear": False, "diffuse_reflectance": ms.spectrum_dict(R_NODES, R_VALS),
+            "specular_reflectance": ms.spectrum_dict(KS_NODES, KS_VALS)}}, up(), up(), lam()),
+        "plastic-smooth": (smooth_plastic, {"type": "twosided", "bsdf": {
+            "type": "plastic", "int_ior": 1.5, "ext_ior": 1.0, "nonlinear": True,
+            "diffuse_reflectance": ms.spectrum_dict(R_NODES, R_VALS)}}, up(), up(), lam()),
         "conductor-Au": (au, {"type": "roughconductor", "distribution": "ggx", "alpha": 0.3, "material": "Au"},
                          up(), up(), lam()),
         "conductor-sampled": (sampled, {"type": "roughconductor", "distribution": "ggx", "alpha_u": 0.4,

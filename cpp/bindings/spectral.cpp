@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "bind_all.h"
 #include "bind_model.h"
 #include "bsdfkit/batch_spectral.h"
 
@@ -196,6 +197,43 @@ void bind_conductor(py::module_ &m, const char *name) {
         py::arg("eta"), py::arg("k"), py::arg("alpha_x"), py::arg("alpha_y"), py::arg("masking"));
 }
 
+template <typename Fm> void check_plastic(double eta, double alpha, double w) {
+    if (!(eta > 0) || eta == 1 || !std::isfinite(eta)) value_error("eta: must be finite, > 0 and != 1");
+    if (!(alpha >= 0) || !std::isfinite(alpha)) value_error("alpha: must be finite and >= 0");
+    if (!(w >= 0 && w <= 1)) value_error("spec_weight: must be in [0, 1]");
+}
+
+// The analytic coated models: Params from the keyword arguments (the RGB projection, as the RGB
+// binding), the spectral parameters beside them.
+template <template <typename> class SM, template <typename> class Model>
+PySpectral<SM> coated_spectral(const char *name, const py::kwargs &kw) {
+    using Params = typename Model<double>::Params;
+    Params p = bind_detail::params_from_kwargs<Params>(name, py::args(), kw);
+    PySpectral<SM> o;
+    o.m32.proto = Model<float>::make(p);
+    o.m64.proto = Model<double>::make(p);
+    o.m32.internal = AnalyticInternal::of(o.m32.proto.top, o.m32.proto.thickness);
+    o.m64.internal = AnalyticInternal::of(o.m64.proto.top, o.m64.proto.thickness);
+    return o;
+}
+
+template <template <typename> class SM, bool Coat, bool Sheen> void bind_filament(py::module_ &m, const char *name) {
+    bind_spectral_model<SM>(m, name).def(
+        py::init([](const PySpectralParam &base, const PySpectralParam &sheen, const py::kwargs &kw) {
+            FilamentStandardParams p = bind_detail::params_from_kwargs<FilamentStandardParams>("FilamentStandard", py::args(), kw);
+            PySpectral<SM> o;
+            o.m32.proto = FilamentStandardT<float, Coat, Sheen>::make(p);   // the kernel part
+            o.m64.proto = FilamentStandardT<double, Coat, Sheen>::make(p);
+            o.m32.params = o.m64.params = p;  // owns the DFG table the kernels point into
+            o.m32.base_color = o.m64.base_color = base.p;
+            o.m32.sheen_color = o.m64.sheen_color = sheen.p;
+            o.keep = {base, sheen};
+            return o;
+        }),
+        py::arg("base_color"), py::arg("sheen_color"),
+        "The FilamentStandard keyword arguments (base_color / sheen_color as their RGB projection) follow.");
+}
+
 } // namespace
 
 void bind_spectral(py::module_ &m) {
@@ -303,6 +341,72 @@ void bind_spectral(py::module_ &m) {
                  return o;
              }),
              py::arg("eta"), py::arg("dispersive"));
+    bind_spectral_model<PlasticSpectral>(m, "PlasticSpectral")
+        .def(py::init([](const PySpectralParam &r, const PySpectralParam &ks, double eta, double alpha, bool nonlinear,
+                         int masking, double spec_weight, bool has_diffuse) {
+                 check_plastic<double>(eta, alpha, spec_weight);
+                 PlasticParams p;
+                 p.eta = eta;
+                 p.alpha = alpha;
+                 p.nonlinear = nonlinear;
+                 p.masking = to_masking(masking);
+                 PlasticTables tab = PlasticBxDF<double>::tables(p);
+                 double fdr = PlasticBxDF<double>::is_rough(p) ? tab.fdr : FresnelDiffuseReflectance(1 / eta);
+                 PySpectral<PlasticSpectral> o;
+                 o.m32.proto = PlasticBxDF<float>::make(p, tab);
+                 o.m64.proto = PlasticBxDF<double>::make(p, tab);
+                 o.m32.proto.spec_weight = float(spec_weight);
+                 o.m64.proto.spec_weight = spec_weight;
+                 o.m32.proto.has_diffuse = o.m64.proto.has_diffuse = has_diffuse;
+                 o.m32.reflectance = o.m64.reflectance = r.p;
+                 o.m32.specular = o.m64.specular = ks.p;
+                 o.m32.fdr = o.m64.fdr = fdr;
+                 o.m32.eta = o.m64.eta = eta;
+                 o.m32.nonlinear = o.m64.nonlinear = nonlinear;
+                 o.keep = {r, ks};
+                 return o;
+             }),
+             py::arg("reflectance"), py::arg("specular_reflectance"), py::arg("eta"), py::arg("alpha"),
+             py::arg("nonlinear"), py::arg("masking"), py::arg("spec_weight"), py::arg("has_diffuse"));
+    bind_filament<FilamentStandardSpectral, false, false>(m, "FilamentStandardSpectral");
+    bind_filament<FilamentStandardCoatSpectral, true, false>(m, "FilamentStandardCoatSpectral");
+    bind_filament<FilamentStandardSheenSpectral, false, true>(m, "FilamentStandardSheenSpectral");
+    bind_filament<FilamentStandardCoatSheenSpectral, true, true>(m, "FilamentStandardCoatSheenSpectral");
+    bind_spectral_model<CoatedDiffuseAnalyticSpectral>(m, "CoatedDiffuseAnalyticSpectral")
+        .def(py::init([](const PySpectralParam &r, const PySpectralParam &albedo, const py::kwargs &kw) {
+                 auto o = coated_spectral<CoatedDiffuseAnalyticSpectral, CoatedDiffuseAnalyticBxDF>(
+                     "CoatedDiffuseAnalytic", kw);
+                 o.m32.reflectance = o.m64.reflectance = r.p;
+                 o.m32.albedo = o.m64.albedo = albedo.p;
+                 o.keep = {r, albedo};
+                 return o;
+             }),
+             py::arg("reflectance"), py::arg("albedo"),
+             "The CoatedDiffuseAnalytic keyword arguments (reflectance / albedo as their RGB projection) follow.");
+    bind_spectral_model<CoatedConductorAnalyticSpectral>(m, "CoatedConductorAnalyticSpectral")
+        .def(py::init([](const PySpectralParam &eta, const PySpectralParam &k, const PySpectralParam &albedo,
+                         const py::kwargs &kw) {
+                 auto o = coated_spectral<CoatedConductorAnalyticSpectral, CoatedConductorAnalyticBxDF>(
+                     "CoatedConductorAnalytic", kw);
+                 double ie = bind_detail::params_from_kwargs<CoatedConductorParams>("CoatedConductorAnalytic", py::args(), kw).interface_eta;
+                 o.m32.eta = o.m64.eta = eta.p;
+                 o.m32.k = o.m64.k = k.p;
+                 o.m32.albedo = o.m64.albedo = albedo.p;
+                 o.m32.interface_eta = o.m64.interface_eta = ie;
+                 o.keep = {eta, k, albedo};
+                 return o;
+             }),
+             py::arg("conductor_eta"), py::arg("conductor_k"), py::arg("albedo"),
+             "The CoatedConductorAnalytic keyword arguments (conductor_eta / conductor_k / albedo as their RGB "
+             "projection) follow.");
+    bind_spectral_model<NormalizedFresnelSpectral>(m, "NormalizedFresnelSpectral")
+        .def(py::init([](const PySpectralParam &eta) {
+                 PySpectral<NormalizedFresnelSpectral> o;
+                 o.m32.eta = o.m64.eta = eta.p;
+                 o.keep = {eta};
+                 return o;
+             }),
+             py::arg("eta"));
 }
 
 } // namespace bsdfkit::py_bind

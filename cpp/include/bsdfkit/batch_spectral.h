@@ -28,6 +28,10 @@
 #include "bxdfs/dielectric.h"
 #include "bxdfs/diffuse.h"
 #include "bxdfs/diffuse_transmission.h"
+#include "bxdfs/filament.h"
+#include "bxdfs/layered_analytic.h"
+#include "bxdfs/normalized_fresnel.h"
+#include "bxdfs/plastic.h"
 #include "bxdfs/thin_dielectric.h"
 #include "core/spectral.h"
 
@@ -176,6 +180,235 @@ template <typename F> struct ThinDielectricSpectral {
                 r.f[i] = finite_or_zero((reflect ? Rs : F(1) - Rs) * inv_cos);
             }
         }
+        return r;
+    }
+};
+
+// ---- Split-channel adapters (Plastic, FilamentStandard, the analytic coated models): the RGB
+// model's own per-element code with its colour channels carrying wavelengths. Per element, two
+// copies of the RGB model `proto` get their per-channel fields set at (lambda0, lambda1, lambda2)
+// and at lambda3 (all three channels); f is the first copy's 3 values and the second's first.
+// What couples the channels in RGB mode (the lobe-choice weights from channel means or maxima,
+// Filament's f90 from the sum of f0) is wavelength-independent here: it stays the proto's, set
+// from the model's RGB projection or, where Mitsuba defines it spectrally, from the spectral
+// mean (Plastic's specular sampling weight, set by the binding). So pdf is the proto's, one value
+// per element, and for constant spectra every value equals the RGB model's bit for bit.
+//
+// Derived provides: `struct Chan` (one wavelength's per-channel values), `Chan chan(double
+// lambda)`, `void put(M &, int c, const Chan &)`, and kSharedChoice: true when the copies choose
+// the sample's lobe and direction exactly as proto (their channels do not enter the choice: the
+// sample is the copies' own, delta lobes included); false (FilamentStandard: its lobe weights
+// read f0 per channel) takes proto's direction and evaluates f there (no delta lobes allowed).
+template <typename F, int N = 3> inline Spectrum4<F> join_channels(const Spectrum<F, N> &a, const Spectrum<F, N> &b) {
+    Spectrum4<F> r;
+    r[0] = a[0];
+    r[1] = a[1];
+    r[2] = a[2];
+    r[3] = b[0];
+    return r;
+}
+
+template <typename Derived, typename F, typename M> struct SplitChannelModel {
+    M proto;
+
+    bool dispersive() const { return false; }
+
+    void split(const double *lam, M *a, M *b) const {
+        *a = proto;
+        *b = proto;
+        for (int c = 0; c < 3; ++c) self().put(*a, c, self().chan(lam[c]));
+        auto c3 = self().chan(lam[3]);
+        for (int c = 0; c < 3; ++c) self().put(*b, c, c3);
+    }
+    Spectrum4<F> f(const Vec3<F> &wo, const Vec3<F> &wi, const double *lam, TransportMode mode) const {
+        M a, b;
+        split(lam, &a, &b);
+        return join_channels(bsdf_f(a, wo, wi, mode), bsdf_f(b, wo, wi, mode));
+    }
+    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, const double *, TransportMode mode, uint8_t sf) const {
+        return bsdf_pdf(proto, wo, wi, mode, sf);
+    }
+    BSDFSample<F, 4> sample(const Vec3<F> &wo, F uc, Point2<F> u, const double *lam, TransportMode mode, uint8_t sf,
+                            bool *terminated) const {
+        *terminated = false;
+        M a, b;
+        split(lam, &a, &b);
+        uc = clamp_uniform(uc);
+        u = clamp_uniform(u);
+        BSDFSample<F> s0;
+        Spectrum4<F> f;
+        if constexpr (Derived::kSharedChoice) {
+            s0 = a.sample_f(wo, uc, u, mode, sf);
+            f = join_channels(s0.f, b.sample_f(wo, uc, u, mode, sf).f);
+        } else {
+            s0 = proto.sample_f(wo, uc, u, mode, sf);
+            f = join_channels(a.f(wo, s0.wi, mode), b.f(wo, s0.wi, mode));
+        }
+        // pbrt-v4's BSDF-level rules on the 4 values (bsdf_sample)
+        BSDFSample<F, 4> r;
+        r.f = f;
+        r.wi = s0.wi;
+        r.pdf = s0.pdf;
+        r.flags = s0.flags;
+        r.eta = s0.eta;
+        r.pdf_is_proportional = s0.pdf_is_proportional;
+        r.valid = s0.valid;
+        bool ok = sample_accepted(r, wo) & ((proto.flags() & sf) != 0);
+        BSDFSample<F, 4> o;
+        o.f = ok ? r.f : Spectrum4<F>(F(0));
+        o.wi = ok ? r.wi : kInvalidSampleWi<F>();
+        o.pdf = ok ? r.pdf : F(0);
+        o.flags = ok ? r.flags : uint8_t(Unset);
+        o.eta = ok ? r.eta : F(1);
+        o.pdf_is_proportional = ok && r.pdf_is_proportional;
+        o.valid = ok;
+        return o;
+    }
+
+  private:
+    const Derived &self() const { return static_cast<const Derived &>(*this); }
+};
+
+// Plastic: reflectance R(lambda) and specular_reflectance Ks(lambda); eta, alpha and the coating's
+// tables are wavelength-independent (Mitsuba's plastic / roughplastic take a scalar IOR). The
+// lobe weight w = mean Ks / (mean R + mean Ks) with spectral means over [360, 830] nm (Mitsuba's
+// Texture::mean() in its spectral variants), set by the binding in proto.spec_weight.
+template <typename F> struct PlasticSpectral : SplitChannelModel<PlasticSpectral<F>, F, PlasticBxDF<F>> {
+    static constexpr bool kSharedChoice = true;  // the choice reads spec_weight, eta, the table
+    SpectralParam reflectance, specular;
+    double fdr = 0, eta = 1.49;
+    bool nonlinear = false;
+    struct Chan {
+        F diffuse, Ks;
+    };
+    Chan chan(double l) const {
+        double R = reflectance(l);
+        // R / (1 - {Fdr | R Fdr}) / (pi eta^2) (PlasticBxDF::make)
+        return {F(R / (1 - (nonlinear ? R * fdr : fdr)) * InvPi<double> / (eta * eta)), F(specular(l))};
+    }
+    static void put(PlasticBxDF<F> &m, int c, const Chan &v) {
+        m.diffuse[c] = v.diffuse;
+        m.Ks[c] = v.Ks;
+    }
+};
+
+// FilamentStandard (each lobe variant): base_color(lambda) and sheen_color(lambda); f0 and the
+// diffuse colour per wavelength as per RGB channel (surface_colors). f90, the lobe weights and the
+// sheen scaling's max(sheenColor) are the RGB projection's (Filament defines them on RGB).
+template <typename F, bool Coat, bool Sheen>
+struct FilamentStandardSpectralT
+    : SplitChannelModel<FilamentStandardSpectralT<F, Coat, Sheen>, F, FilamentStandardKernel<F, Coat, Sheen>> {
+    using Model = FilamentStandardT<F, Coat, Sheen>;
+    static constexpr bool kSharedChoice = false;  // lobes() reads f0 per channel
+    SpectralParam base_color, sheen_color;
+    FilamentStandardParams params;  // keeps the DFG table alive (proto points into it)
+    struct Chan {
+        F f0, diffuse, sheen;
+    };
+    Chan chan(double l) const {
+        double f0, diffuse;
+        Model::surface_colors(params, base_color(l), &f0, &diffuse);
+        return {F(f0), F(diffuse), Sheen ? F(sheen_color(l)) : F(0)};
+    }
+    static void put(FilamentStandardKernel<F, Coat, Sheen> &m, int c, const Chan &v) {
+        m.f0[c] = v.f0;
+        m.diffuse_color[c] = v.diffuse;
+        m.sheen_color[c] = v.sheen;
+    }
+};
+template <typename F> using FilamentStandardSpectral = FilamentStandardSpectralT<F, false, false>;
+template <typename F> using FilamentStandardCoatSpectral = FilamentStandardSpectralT<F, true, false>;
+template <typename F> using FilamentStandardSheenSpectral = FilamentStandardSpectralT<F, false, true>;
+template <typename F> using FilamentStandardCoatSheenSpectral = FilamentStandardSpectralT<F, true, true>;
+
+// The analytic coated models: the base (a diffuse reflectance, or the metal's eta and k relative
+// to the coating) and the medium's albedo per wavelength, with the internal-reflection sum
+// M = 1 / (1 - rho_b Fdr_int t_d^2) per wavelength (AnalyticLayeredBxDF::set_layer); the coating's
+// IOR, roughness and the thickness are wavelength-independent, and so is the lobe choice
+// (base_weight and q_cos from the RGB projection: kSharedChoice).
+// Fdr_int and t_d as set_layer computes them (from proto's eta and thickness), and M as it does.
+struct AnalyticInternal {
+    double fdr_int = 0, td = 0;
+    template <typename F> static AnalyticInternal of(const DielectricBxDF<F> &top, F thickness) {
+        return {DiffuseFresnel(1.0 / double(top.eta)), DiffuseSlabTransmittance(double(thickness))};
+    }
+    double multi(double rho) const { return 1.0 / (1.0 - rho * fdr_int * td * td); }
+};
+
+template <typename F>
+struct CoatedDiffuseAnalyticSpectral
+    : SplitChannelModel<CoatedDiffuseAnalyticSpectral<F>, F, CoatedDiffuseAnalyticBxDF<F>> {
+    static constexpr bool kSharedChoice = true;
+    SpectralParam reflectance, albedo;
+    AnalyticInternal internal;
+    struct Chan {
+        F R, multi, albedo;
+    };
+    Chan chan(double l) const {
+        double R = reflectance(l);
+        return {F(R), F(internal.multi(R)), F(albedo(l))};
+    }
+    static void put(CoatedDiffuseAnalyticBxDF<F> &m, int c, const Chan &v) {
+        m.bottom.R[c] = v.R;
+        m.multi[c] = v.multi;
+        m.albedo[c] = v.albedo;
+    }
+};
+
+template <typename F>
+struct CoatedConductorAnalyticSpectral
+    : SplitChannelModel<CoatedConductorAnalyticSpectral<F>, F, CoatedConductorAnalyticBxDF<F>> {
+    static constexpr bool kSharedChoice = true;
+    SpectralParam eta, k, albedo;
+    double interface_eta = 1.5;
+    AnalyticInternal internal;
+    struct Chan {
+        F eta, k, multi, albedo;
+    };
+    Chan chan(double l) const {
+        // the metal relative to the coating and its smooth hemispherical albedo (CoatedConductorAnalyticBxDF::make)
+        double e = eta(l) / interface_eta, kk = k(l) / interface_eta;
+        double rho = CosineWeightedMean<double>([e, kk](double mu) { return FrComplex(mu, e, kk); });
+        return {F(e), F(kk), F(internal.multi(rho)), F(albedo(l))};
+    }
+    static void put(CoatedConductorAnalyticBxDF<F> &m, int c, const Chan &v) {
+        m.bottom.eta[c] = v.eta;
+        m.bottom.k[c] = v.k;
+        m.multi[c] = v.multi;
+        m.albedo[c] = v.albedo;
+    }
+};
+
+// NormalizedFresnel with eta(lambda): one scalar model per wavelength (its f is the same in every
+// channel); the cosine-weighted sampling does not depend on eta, so pdf and the direction are
+// lambda0's model's and f_i is model i's value at that direction.
+template <typename F> struct NormalizedFresnelSpectral {
+    SpectralParam eta;
+
+    bool dispersive() const { return false; }
+    static NormalizedFresnelBxDF<F> at1(double e) { return NormalizedFresnelBxDF<F>::make({e}); }
+
+    Spectrum4<F> f(const Vec3<F> &wo, const Vec3<F> &wi, const double *lam, TransportMode mode) const {
+        Spectrum4<F> r;
+        for (int i = 0; i < kSpectralN; ++i) r[i] = bsdf_f(at1(eta(lam[i])), wo, wi, mode)[0];
+        return r;
+    }
+    F pdf(const Vec3<F> &wo, const Vec3<F> &wi, const double *lam, TransportMode mode, uint8_t sf) const {
+        return bsdf_pdf(at1(eta(lam[0])), wo, wi, mode, sf);
+    }
+    BSDFSample<F, 4> sample(const Vec3<F> &wo, F uc, Point2<F> u, const double *lam, TransportMode mode, uint8_t sf,
+                            bool *terminated) const {
+        BSDFSample<F> s = bsdf_sample(at1(eta(lam[0])), wo, uc, u, mode, sf);
+        BSDFSample<F, 4> r;
+        r.f = Spectrum4<F>(s.f[0]);
+        r.wi = s.wi;
+        r.pdf = s.pdf;
+        r.flags = s.flags;
+        r.eta = s.eta;
+        r.valid = s.valid;
+        *terminated = false;
+        if (s.valid)
+            for (int i = 1; i < kSpectralN; ++i) r.f[i] = bsdf_f(at1(eta(lam[i])), wo, s.wi, mode)[0];
         return r;
     }
 };

@@ -22,7 +22,8 @@ from .._arrays import (as_dirs, broadcast_batch, check_int, check_out, flatten_t
                        sample_uniforms)
 from ..spectral.spectrum import Spectrum
 
-__all__ = ["LAMBDA_MIN", "LAMBDA_MAX", "DENSE_WAVELENGTHS", "check_wavelengths", "spectral_param", "rgb_of",
+__all__ = ["LAMBDA_MIN", "LAMBDA_MAX", "DENSE_WAVELENGTHS", "check_wavelengths", "spectral_param", "spectral_mean",
+           "spectral_max", "rgb_of",
            "scalar_of", "spectrum_or_rgb", "spectrum_or_scalar", "fmt_param", "is_dispersive", "eval", "pdf",
            "sample", "albedo"]
 
@@ -33,7 +34,8 @@ DENSE_WAVELENGTHS.setflags(write=False)
 #: RGB-mode eta of a dispersive dielectric: its value here (pbrt-v4 RGB renders have no dispersion).
 RGB_ETA_WAVELENGTH = 550.0
 
-_SPECTRAL_MODELS = "Diffuse, DiffuseTransmission, Conductor, Dielectric, ThinDielectric"
+_SPECTRAL_MODELS = ("Diffuse, DiffuseTransmission, Conductor, Dielectric, ThinDielectric, Plastic, NormalizedFresnel, "
+                    "FilamentStandard, CoatedDiffuse / CoatedConductor with method='analytic'")
 
 
 # ------------------------------------------------------------------------------- parameters
@@ -73,9 +75,11 @@ def rgb_of(v, kind: str) -> np.ndarray:
     """RGB-mode value of a parameter: an RGB array as is; a Spectrum projected to linear sRGB:
     ``kind="reflectance"`` under D65 (Mitsuba's rule for spectra in scene dicts), ``"unbounded"``
     (eta, k) without an illuminant (Mitsuba's projection of its IOR presets, how ``METALS`` was
-    made), floored at 1e-4 so that an eta stays positive."""
+    made), floored at 1e-4 so that an eta stays positive. A constant spectrum is its value."""
     if not isinstance(v, Spectrum):
         return v
+    if v.is_constant:   # a constant is that value in every channel (as a Mitsuba uniform spectrum), not
+        return np.full(3, float(v(np.float64(550.0))))   # its projection (D65 white is (0.999, 0.999, 0.999))
     if kind == "reflectance":
         return v.to_rgb("reflectance", "D65")
     return np.maximum(v.to_rgb("unbounded", None), 1e-4)
@@ -104,6 +108,28 @@ def fmt_param(v) -> str:
         return f"{v.kind} spectrum"
     from .base import fmt_value
     return fmt_value(v)
+
+
+def spectral_mean(v, kind: str) -> float:
+    """Mean of a parameter over [360, 830] nm in spectral mode (Mitsuba's ``Texture::mean()`` of its
+    spectral variants): a piecewise-linear spectrum's exact integral over its nodes (trapezoids),
+    an uplifted RGB or other smooth spectrum by trapezoids on the 1 nm grid, a constant itself."""
+    if isinstance(v, Spectrum) and v.kind == "sampled":
+        lam = v.wavelengths
+        inner = lam[(lam > LAMBDA_MIN) & (lam < LAMBDA_MAX)]
+        x = np.concatenate([[LAMBDA_MIN], inner, [LAMBDA_MAX]])
+    else:
+        x = DENSE_WAVELENGTHS
+    y = spectral_param(v, kind)(np.ascontiguousarray(x, dtype=np.float64))
+    return float(np.sum((y[1:] + y[:-1]) * np.diff(x)) * 0.5 / (LAMBDA_MAX - LAMBDA_MIN))
+
+
+def spectral_max(v, kind: str) -> float:
+    """Largest value of a parameter in spectral mode (over the 1 nm grid and a table's nodes)."""
+    x = DENSE_WAVELENGTHS
+    if isinstance(v, Spectrum) and v.kind == "sampled":
+        x = np.concatenate([x, np.clip(v.wavelengths, LAMBDA_MIN, LAMBDA_MAX)])
+    return float(np.max(spectral_param(v, kind)(np.ascontiguousarray(x, dtype=np.float64))))
 
 
 def spectral_param(v, kind: str) -> "_core.SpectralParam":
@@ -138,9 +164,10 @@ _CACHE_SIZE = 256
 
 def _spectral_core(model):
     """The model's ``_core.<Model>Spectral`` (built once per distinct model: the RGB uplift
-    polishes each colour, ~1-15 ms). Models without a spectral kernel raise NotImplementedError."""
+    polishes each colour, ~1-15 ms). Models without a spectral kernel (no ``_make_spectral_core``,
+    or ``_has_spectral_kernel()`` false: the stochastic coated models) raise NotImplementedError."""
     factory = getattr(type(model), "_make_spectral_core", None)
-    if factory is None:
+    if factory is None or not getattr(model, "_has_spectral_kernel", lambda: True)():
         raise NotImplementedError(
             f"wavelengths: spectral mode is not implemented for {type(model).__name__} yet "
             f"(models with wavelengths=: {_SPECTRAL_MODELS}); call without wavelengths= for RGB")

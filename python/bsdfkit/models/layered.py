@@ -5,6 +5,8 @@ import numpy as np
 
 from .. import _core
 from .._arrays import check_int
+from ..spectral.spectrum import Spectrum
+from . import _spectral as _sp
 from .base import _MASKING, BxDF, _alphas, _masking, _pick_alpha, _rgb, _scalar, fmt_value, masking_knob
 from .conductor import METALS
 from .registry import KnobDecl
@@ -49,6 +51,15 @@ _LAYER_DOC = """
         equals eval() / pdf()), reciprocal, and ignore max_depth, n_samples, seed and mis.
         A knob of the trade-off registry (an approximation: ``bk.simplify`` may choose it).
 
+    Spectral mode (``wavelengths=``, method="analytic" only; the stochastic walk raises
+    NotImplementedError): ``reflectance`` / ``conductor_eta`` / ``conductor_k`` / ``albedo`` may be
+    ``bsdfkit.Spectrum`` values (RGB ones are uplifted, Jakob & Hanika 2019: bounded for
+    reflectance and albedo, unbounded for eta and k) and are evaluated per wavelength, with the
+    internal-reflection sum M and the metal's hemispherical albedo per wavelength. The coating's
+    IOR and roughness and the thickness are wavelength-independent; so is the lobe choice (its
+    weights come from the RGB projection), hence pdf has one value per element. RGB mode projects
+    spectra to linear sRGB (D65 for reflectance / albedo, no illuminant for eta and k).
+
     The estimators are pbrt-v4's (book section 14.3; Guo et al. 2018): ``eval`` is a stochastic
     estimate of f (unbiased up to max_depth), ``sample`` returns a path sample whose ``pdf`` is
     only proportional to the true density (``pdf_is_proportional`` is True: use
@@ -65,7 +76,7 @@ _METHODS = ("stochastic", "analytic")
 
 def _layer(thickness, albedo, g, max_depth, n_samples, seed, mis, method="stochastic"):
     t = _scalar(thickness, "thickness", lo=0.0)
-    a = _rgb(albedo, "albedo", lo=0.0, hi=1.0)
+    a = _sp.spectrum_or_rgb(albedo, "albedo", lo=0.0, hi=1.0)
     gg = _scalar(g, "g", lo=-1.0, hi=1.0)
     md = check_int(max_depth, "max_depth", 1)
     ns = check_int(n_samples, "n_samples", 1)
@@ -82,7 +93,7 @@ def _layer(thickness, albedo, g, max_depth, n_samples, seed, mis, method="stocha
 
 
 def _layer_kw(p):
-    return dict(thickness=p["thickness"], albedo=p["albedo"].tolist(), g=p["g"], max_depth=p["max_depth"],
+    return dict(thickness=p["thickness"], albedo=_sp.rgb_of(p["albedo"], "reflectance").tolist(), g=p["g"], max_depth=p["max_depth"],
                 n_samples=p["n_samples"], seed=p["seed"], consistent_mis=p["mis"] == "consistent")
 
 
@@ -144,7 +155,7 @@ def _relative_cost(params, dtype=None) -> float:
 
 
 def _medium(p) -> str:
-    return ", medium" if np.any(np.asarray(p["albedo"]) > 0) else ""
+    return ", medium" if np.any(np.asarray(_sp.rgb_of(p["albedo"], "reflectance")) > 0) else ""
 
 
 def _method_text(p) -> str:
@@ -184,7 +195,7 @@ class CoatedDiffuse(BxDF):
                  albedo=0.0, g=0.0, max_depth=10, n_samples=1, seed=0, masking="correlated", mis="pbrt",
                  method="stochastic"):
         ax, ay = _alphas(alpha, alpha_x, alpha_y)
-        super().__init__(reflectance=_rgb(reflectance, "reflectance", lo=0.0, hi=1.0),
+        super().__init__(reflectance=_sp.spectrum_or_rgb(reflectance, "reflectance", lo=0.0, hi=1.0),
                          eta=_scalar(eta, "eta", lo=0.0, lo_open=True), alpha_x=ax, alpha_y=ay,
                          **_layer(thickness, albedo, g, max_depth, n_samples, seed, mis, method),
                          masking=_masking(masking))
@@ -196,8 +207,26 @@ class CoatedDiffuse(BxDF):
     def _make_core(self):
         p = self._params
         core = _core.CoatedDiffuseAnalytic if p["method"] == "analytic" else _core.CoatedDiffuse
-        return core(reflectance=p["reflectance"].tolist(), eta=p["eta"], alpha_x=p["alpha_x"],
-                                   alpha_y=p["alpha_y"], masking=_MASKING[p["masking"]], **_layer_kw(p))
+        return core(**self._core_kwargs())
+
+    def _core_kwargs(self) -> dict:
+        p = self._params
+        return dict(reflectance=_sp.rgb_of(p["reflectance"], "reflectance").tolist(), eta=p["eta"],
+                    alpha_x=p["alpha_x"], alpha_y=p["alpha_y"], masking=_MASKING[p["masking"]], **_layer_kw(p))
+
+    @staticmethod
+    def _spectral_ok(p) -> bool:
+        return p["method"] == "analytic"
+
+    def _has_spectral_kernel(self) -> bool:
+        return self._spectral_ok(self._params)
+
+    def _make_spectral_core(self):
+        # batch_spectral.h CoatedDiffuseAnalyticSpectral: reflectance and albedo per wavelength
+        p = self._params
+        return _core.CoatedDiffuseAnalyticSpectral(_sp.spectral_param(p["reflectance"], "reflectance"),
+                                                   _sp.spectral_param(p["albedo"], "reflectance"),
+                                                   **self._core_kwargs())
 
     @staticmethod
     def relative_cost(params, dtype=None) -> float:
@@ -210,7 +239,7 @@ class CoatedDiffuse(BxDF):
     def describe(self) -> str:
         p = self._params
         a = p["alpha_x"]
-        return (f"CoatedDiffuse R={fmt_value(p['reflectance'])}, " + (f"α={a:.2g}" if a >= 1e-3 else "smooth")
+        return (f"CoatedDiffuse R={_sp.fmt_param(p['reflectance'])}, " + (f"α={a:.2g}" if a >= 1e-3 else "smooth")
                 + _medium(p) + _method_text(p))
 
 
@@ -257,8 +286,8 @@ class CoatedConductor(BxDF):
                  masking="correlated", mis="pbrt", method="stochastic"):
         cax, cay = _named_alphas(conductor_alpha, conductor_alpha_x, conductor_alpha_y, "conductor_alpha")
         iax, iay = _named_alphas(interface_alpha, interface_alpha_x, interface_alpha_y, "interface_alpha")
-        super().__init__(conductor_eta=_rgb(conductor_eta, "conductor_eta", lo=0.0, lo_open=True),
-                         conductor_k=_rgb(conductor_k, "conductor_k", lo=0.0),
+        super().__init__(conductor_eta=_sp.spectrum_or_rgb(conductor_eta, "conductor_eta", lo=0.0, lo_open=True),
+                         conductor_k=_sp.spectrum_or_rgb(conductor_k, "conductor_k", lo=0.0),
                          conductor_alpha_x=cax, conductor_alpha_y=cay,
                          interface_eta=_scalar(interface_eta, "interface_eta", lo=0.0, lo_open=True),
                          interface_alpha_x=iax, interface_alpha_y=iay,
@@ -290,11 +319,30 @@ class CoatedConductor(BxDF):
     def _make_core(self):
         p = self._params
         core = _core.CoatedConductorAnalytic if p["method"] == "analytic" else _core.CoatedConductor
-        return core(conductor_eta=p["conductor_eta"].tolist(), conductor_k=p["conductor_k"].tolist(),
-                                     conductor_alpha_x=p["conductor_alpha_x"], conductor_alpha_y=p["conductor_alpha_y"],
-                                     interface_eta=p["interface_eta"], interface_alpha_x=p["interface_alpha_x"],
-                                     interface_alpha_y=p["interface_alpha_y"], masking=_MASKING[p["masking"]],
-                                     **_layer_kw(p))
+        return core(**self._core_kwargs())
+
+    def _core_kwargs(self) -> dict:
+        p = self._params
+        return dict(conductor_eta=_sp.rgb_of(p["conductor_eta"], "unbounded").tolist(),
+                    conductor_k=_sp.rgb_of(p["conductor_k"], "unbounded").tolist(),
+                    conductor_alpha_x=p["conductor_alpha_x"], conductor_alpha_y=p["conductor_alpha_y"],
+                    interface_eta=p["interface_eta"], interface_alpha_x=p["interface_alpha_x"],
+                    interface_alpha_y=p["interface_alpha_y"], masking=_MASKING[p["masking"]], **_layer_kw(p))
+
+    @staticmethod
+    def _spectral_ok(p) -> bool:
+        return p["method"] == "analytic"
+
+    def _has_spectral_kernel(self) -> bool:
+        return self._spectral_ok(self._params)
+
+    def _make_spectral_core(self):
+        # batch_spectral.h CoatedConductorAnalyticSpectral: the metal's eta, k and the albedo per wavelength
+        p = self._params
+        return _core.CoatedConductorAnalyticSpectral(_sp.spectral_param(p["conductor_eta"], "unbounded"),
+                                                     _sp.spectral_param(p["conductor_k"], "unbounded"),
+                                                     _sp.spectral_param(p["albedo"], "reflectance"),
+                                                     **self._core_kwargs())
 
     @staticmethod
     def relative_cost(params, dtype=None) -> float:
@@ -306,9 +354,11 @@ class CoatedConductor(BxDF):
 
     def describe(self) -> str:
         p = self._params
-        name = next((n for n, (eta, k) in METALS.items()
-                     if np.allclose(p["conductor_eta"], eta) and np.allclose(p["conductor_k"], k)), None)
-        name = name or f"η={fmt_value(p['conductor_eta'])}"
+        spectral = isinstance(p["conductor_eta"], Spectrum) or isinstance(p["conductor_k"], Spectrum)
+        name = None if spectral else next((n for n, (eta, k) in METALS.items()
+                                           if np.allclose(p["conductor_eta"], eta) and np.allclose(p["conductor_k"], k)),
+                                          None)
+        name = name or f"η={_sp.fmt_param(p['conductor_eta'])}"
         return (f"CoatedConductor {name}, α={p['conductor_alpha_x']:.2g}/{p['interface_alpha_x']:.2g}{_medium(p)}"
                 f"{_method_text(p)}")
 

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from .. import _core
+from . import _spectral as _sp
 from .base import BxDF, _scalar
 
 __all__ = ["NormalizedFresnel", "fresnel_moment1"]
@@ -24,6 +25,10 @@ class NormalizedFresnel(BxDF):
     In Radiance mode f is multiplied by eta^2 (pbrt-v4's adjoint correction), so for wo above
     the surface the albedo is 1 in Importance mode and eta^2 in Radiance mode (up to the
     polynomial fit of FresnelMoment1, ~1e-4). Cosine-weighted sampling. eta > 0.
+
+    eta may be a ``bsdfkit.Spectrum`` (e.g. ``Spectrum.named("glass-BK7")``): in spectral mode
+    (``wavelengths=``) f uses eta(lambda) per wavelength (c and the eta^2 factor too); RGB mode
+    uses its value at 550 nm. The sampling does not depend on eta.
     """
 
     __slots__ = ()
@@ -44,7 +49,7 @@ class NormalizedFresnel(BxDF):
                                   "bsdfkit.testing.hair_ref.normalized_fresnel_f as the reference")
 
     def __init__(self, eta=1.33):
-        super().__init__(eta=_scalar(eta, "eta", lo=0.0, lo_open=True))
+        super().__init__(eta=_sp.spectrum_or_scalar(eta, "eta", lo=0.0, lo_open=True))
 
     @classmethod
     def _from_params(cls, p):
@@ -54,4 +59,7 @@ class NormalizedFresnel(BxDF):
         return f"NormalizedFresnel(eta={self._params['eta']!r})"
 
     def _make_core(self):
-        return _core.NormalizedFresnel(eta=self._params["eta"])
+        return _core.NormalizedFresnel(eta=_sp.scalar_of(self._params["eta"]))
+
+    def _make_spectral_core(self):
+        return _core.NormalizedFresnelSpectral(_sp.spectral_param(self._params["eta"], "unbounded"))

@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _core
+from . import _spectral as _sp
 from .base import _MASKING, MIN_ALPHA, BxDF, _masking, _rgb, _scalar, fmt_value, masking_knob, rgb_dict
 from .registry import KnobDecl
 
@@ -70,6 +71,13 @@ class Plastic(BxDF):
     ``roughness`` remapped by default, and it samples the two lobes with equal probability. Its
     sum can exceed 1 (no energy exchange between the lobes); this model conserves energy
     (for Ks <= 1). pbrt-v4 replaced plastic by ``coateddiffuse`` (``bsdfkit.CoatedDiffuse``).
+
+    Spectral mode (``wavelengths=``): ``reflectance`` and ``specular_reflectance`` may be
+    ``bsdfkit.Spectrum`` values (RGB ones are uplifted, Jakob & Hanika 2019, bounded) and are
+    evaluated per wavelength; ``eta`` is a scalar (as Mitsuba's ``int_ior``: the rough coating's
+    tables belong to one IOR). The lobe weight w uses the spectral means over [360, 830] nm
+    (Mitsuba's ``Texture::mean()`` in its spectral variants), so spectral-mode pdf equals
+    Mitsuba ``llvm_ad_spectral``'s; RGB mode projects spectra to linear sRGB under D65.
     """
 
     __slots__ = ()
@@ -96,10 +104,11 @@ class Plastic(BxDF):
         if eta == 1.0:
             raise ValueError("eta: must differ from 1 (an index-matched coating is not a plastic; "
                              "use Diffuse)")
-        super().__init__(reflectance=_rgb(reflectance, "reflectance", lo=0.0, hi=1.0), eta=eta,
+        super().__init__(reflectance=_sp.spectrum_or_rgb(reflectance, "reflectance", lo=0.0, hi=1.0), eta=eta,
                          alpha=_scalar(alpha, "alpha", lo=0.0), nonlinear=_bool(nonlinear, "nonlinear"),
                          masking=_masking(masking),
-                         specular_reflectance=_rgb(specular_reflectance, "specular_reflectance", lo=0.0))
+                         specular_reflectance=_sp.spectrum_or_rgb(specular_reflectance, "specular_reflectance",
+                                                                  lo=0.0))
 
     @classmethod
     def _from_params(cls, p):
@@ -107,26 +116,39 @@ class Plastic(BxDF):
 
     def _make_core(self):
         p = self._params
-        return _core.Plastic(reflectance=p["reflectance"].tolist(), eta=p["eta"], alpha=p["alpha"],
-                             nonlinear=p["nonlinear"], masking=_MASKING[p["masking"]],
-                             specular_reflectance=p["specular_reflectance"].tolist())
+        return _core.Plastic(reflectance=_sp.rgb_of(p["reflectance"], "reflectance").tolist(), eta=p["eta"],
+                             alpha=p["alpha"], nonlinear=p["nonlinear"], masking=_MASKING[p["masking"]],
+                             specular_reflectance=_sp.rgb_of(p["specular_reflectance"], "reflectance").tolist())
+
+    def _make_spectral_core(self):
+        # batch_spectral.h PlasticSpectral: R and Ks per wavelength; the lobe weight from their
+        # means over [360, 830] nm (Mitsuba's Texture::mean() in its spectral variants)
+        p = self._params
+        r, ks = p["reflectance"], p["specular_reflectance"]
+        rm, sm = _sp.spectral_mean(r, "reflectance"), _sp.spectral_mean(ks, "reflectance")
+        w = sm / (rm + sm) if rm + sm > 0 else 0.5
+        return _core.PlasticSpectral(_sp.spectral_param(r, "reflectance"), _sp.spectral_param(ks, "reflectance"),
+                                     eta=p["eta"], alpha=p["alpha"] if p["alpha"] >= SMOOTH_ALPHA else 0.0,
+                                     nonlinear=p["nonlinear"], masking=_MASKING[p["masking"]], spec_weight=w,
+                                     has_diffuse=_sp.spectral_max(r, "reflectance") > 0)
 
     def cost_family(self) -> str:
         return "Plastic" + ("/smooth" if self._params["alpha"] < SMOOTH_ALPHA else "/rough")
 
     def describe(self) -> str:
         a = self._params["alpha"]
-        return f"Plastic R={fmt_value(self._params['reflectance'])}, " + (f"α={a:.2g}" if a >= SMOOTH_ALPHA else "smooth")
+        return f"Plastic R={_sp.fmt_param(self._params['reflectance'])}, " + (f"α={a:.2g}" if a >= SMOOTH_ALPHA else "smooth")
 
     def to_mitsuba(self) -> dict:
         """``twosided{plastic}`` (smooth coating) or ``twosided{roughplastic}`` (ggx, visible-normal
         sampling). Mitsuba's plastics are one-sided and use separable masking: a
         ``masking="correlated"`` rough model's f differs slightly (its pdf agrees)."""
         p = self._params
-        inner = {"diffuse_reflectance": rgb_dict(p["reflectance"]), "int_ior": float(p["eta"]), "ext_ior": 1.0,
+        inner = {"diffuse_reflectance": rgb_dict(_sp.rgb_of(p["reflectance"], "reflectance")), "int_ior": float(p["eta"]), "ext_ior": 1.0,
                  "nonlinear": bool(p["nonlinear"])}
-        if np.any(np.asarray(p["specular_reflectance"]) != 1.0):
-            inner["specular_reflectance"] = rgb_dict(p["specular_reflectance"])
+        ks = _sp.rgb_of(p["specular_reflectance"], "reflectance")
+        if np.any(np.asarray(ks) != 1.0):
+            inner["specular_reflectance"] = rgb_dict(ks)
         if p["alpha"] < SMOOTH_ALPHA:
             inner["type"] = "plastic"
         else:

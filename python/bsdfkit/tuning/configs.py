@@ -8,7 +8,7 @@ import numpy as np
 
 from ..models import BxDF
 
-__all__ = ["Knob", "family", "Config", "configurations", "knobs"]
+__all__ = ["Knob", "family", "Config", "configurations", "knobs", "COLOR_SETTINGS", "has_spectral_params"]
 
 
 _DTYPES = {"float64": np.float64, "float32": np.float32}
@@ -66,6 +66,32 @@ def _precision_spec():
                  "kernel precision: float32 directions run float32 kernels (a property of the call)")
 
 
+#: Settings of the ``color`` knob, most accurate first: spectral mode (``wavelengths=``, the
+#: model's spectra per wavelength, integrated to linear sRGB under D65) or RGB mode (spectra
+#: projected to linear sRGB once, at construction).
+COLOR_SETTINGS = ("spectral", "rgb")
+
+
+def has_spectral_params(p) -> bool:
+    """A parameter set with a non-constant ``bsdfkit.Spectrum``: the models the ``color`` knob applies to."""
+    from ..spectral.spectrum import Spectrum
+    return any(isinstance(v, Spectrum) and not v.is_constant for v in p.values())
+
+
+def _color_spec(model):
+    """The ``color`` knob (an approximation; a property of the call like precision): present only
+    for a model with a non-constant spectral parameter; moot in configurations without a spectral
+    kernel (e.g. the stochastic coated models)."""
+    cls = type(model)
+
+    def moot(q):
+        ok = getattr(cls, "_make_spectral_core", None) is not None and getattr(cls, "_spectral_ok", lambda _q: True)(q)
+        return None if ok else "no spectral kernel for this configuration (wavelengths= not implemented)"
+    return _Spec("color", "approximation", COLOR_SETTINGS, COLOR_SETTINGS, None, moot,
+                 "colour: spectral mode (per wavelength, integrated to linear sRGB under D65) or RGB mode "
+                 "(spectra projected once); a property of the call")
+
+
 def _spec_of(decl, p, fixed: bool) -> _Spec:
     """The instance form of a class's KnobDecl; ``fixed``: only the input's own setting."""
     settings = tuple(decl.settings(p)) if callable(decl.settings) else tuple(decl.settings)
@@ -111,6 +137,8 @@ def _specs(model, allow="all") -> list:
         fixed = allow != "all" and d.kind == "modelling" and d.name not in allow
         out.append(_spec_of(d, p, fixed))
     out.append(_precision_spec())
+    if has_spectral_params(p):
+        out.append(_color_spec(model))
     return out
 
 
@@ -144,6 +172,11 @@ class Config:
     dtype: type
     key: str
     cheapness: tuple = ()   # per knob: index / (settings - 1), 1 where moot (a moot knob costs nothing)
+
+    @property
+    def spectral(self) -> bool:
+        """True when this configuration is evaluated in spectral mode (the ``color`` knob)."""
+        return self.labels.get("color") == "spectral"
 
     @property
     def is_reference(self) -> bool:
@@ -194,18 +227,28 @@ def configurations(model, allow="all") -> list:
             continue
         seen.add(sig)
         labels = {s.name: (None if moot[s.name] else s.labels[index[s.name]]) for s in specs}
-        key = ";".join(f"{s.name}={s.labels[index[s.name]]}" for s in specs)
+        key = _key(specs, index, moot)
         cheap = tuple(1.0 if moot[s.name] else index[s.name] / max(1, len(s.settings) - 1) for s in specs)
         m = type(model)._from_params(params)
         out.append(Config(labels, index, m, _DTYPES[labels["precision"]], key, cheap))
     return out
 
 
+def _key(specs, index, moot) -> str:
+    """The cost-table key: every knob at its label (moot knobs at their reference label), except
+    ``color``, which adds ``;color=spectral`` only in spectral mode (an RGB-mode key is the key of
+    the same configuration of a model without spectra: the cost table's)."""
+    key = ";".join(f"{s.name}={s.labels[index[s.name]]}" for s in specs if s.name != "color")
+    if any(s.name == "color" and not moot[s.name] and index[s.name] == 0 for s in specs):
+        key += ";color=spectral"
+    return key
+
+
 def _reference_config(model, allow="all") -> Config:
     specs = _specs(model, allow)
     params, moot = _apply(model, specs, (0,) * len(specs))
     labels = {s.name: (None if moot[s.name] else s.labels[0]) for s in specs}
-    key = ";".join(f"{s.name}={s.labels[0]}" for s in specs)
+    key = _key(specs, {s.name: 0 for s in specs}, moot)
     return Config(labels, {s.name: 0 for s in specs}, type(model)._from_params(params), np.float64, key)
 
 

@@ -12,7 +12,7 @@ from ..directions import random_directions
 from .errors import _all_delta, _is_transmissive
 from .configs import Config, family
 
-__all__ = ["knob_costs", "COST_RESOLUTION", "best_time", "time_repeats", "spread", "SPREAD_WARN", "cost_deviations"]
+__all__ = ["knob_costs", "color_costs", "color_ratio", "SPECTRAL_KEY", "COST_RESOLUTION", "best_time", "time_repeats", "spread", "SPREAD_WARN", "cost_deviations"]
 
 
 _COSTS_CACHE: dict = {}
@@ -47,18 +47,55 @@ def _check_costs(costs) -> dict:
     return costs
 
 
+#: Suffix of a spectral-mode configuration's cost key (configs._key).
+SPECTRAL_KEY = ";color=spectral"
+
+
+def color_costs(path=None) -> dict:
+    """The shipped spectral-mode cost table (``bsdfkit/tuning/_color_costs.json``, written by
+    ``bench/spectral.py``): ``{"families": {family: {dtype: {"eval": r, "sample": r}}}, "default": r}``
+    with r = spectral time / RGB time of the same call; ``{}`` when missing."""
+    if path is None:
+        path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "_color_costs.json")
+    if path not in _COSTS_CACHE:
+        _COSTS_CACHE[path] = knob_costs(path)
+    return _COSTS_CACHE[path]
+
+
+def color_ratio(model, dtype, op: str) -> float | None:
+    """Spectral / RGB time of ``op`` for ``model``'s family at ``dtype`` (the table's median over
+    families when the family was not measured; None without a table)."""
+    t = color_costs()
+    if not t:
+        return None
+    row = t.get("families", {}).get(family(model), {}).get(np.dtype(dtype).name, {})
+    r = row.get(op)
+    return float(r) if r is not None else t.get("default")
+
+
 def _costs_for(model, configs, costs):
     fam = costs.get("families", {}).get(family(model))
+    op = fam.get("op", "eval") if fam else _op(model)
     table = (fam or {}).get("costs", {})
-    if hasattr(model, "relative_cost") and any(c.key not in table for c in configs):
+
+    def rgb_key(c):
+        return c.key[:-len(SPECTRAL_KEY)] if c.key.endswith(SPECTRAL_KEY) else c.key
+
+    def spectral(c, base):
+        # a spectral-mode configuration: the RGB configuration's cost times the measured ratio
+        if base is None or not c.spectral:
+            return base
+        r = color_ratio(model, c.dtype, op)
+        return None if r is None else base * r
+    if hasattr(model, "relative_cost") and any(rgb_key(c) not in table for c in configs):
         # a family whose cost follows its knobs (the stochastic layered models: linear in
         # n_samples): the measured entry where the table has one (bench/tradeoff.py --configs
         # times only some, e.g. the analytic method against the reference walk), else the
         # model's own cost model, relative to configs[0]
         c0 = model.relative_cost(configs[0].model._params, configs[0].dtype)
-        return [table[c.key] if c.key in table else model.relative_cost(c.model._params, c.dtype) / c0
-                for c in configs]
-    return [table.get(c.key) for c in configs]
+        return [spectral(c, table[rgb_key(c)] if rgb_key(c) in table
+                         else model.relative_cost(c.model._params, c.dtype) / c0) for c in configs]
+    return [spectral(c, table.get(rgb_key(c))) for c in configs]
 
 
 #: Relative cost differences below this are measurement noise of the cost table: among the
@@ -151,6 +188,12 @@ def _timing_inputs(model, n, seed):
 def _timed_call(cfg: Config, op: str, inputs):
     d = inputs["float64" if cfg.dtype is np.float64 else "float32"]
     n, dt, m = len(d["wo"]), d["wo"].dtype, cfg.model
+    if cfg.spectral:   # spectral mode: 4 wavelengths per pair (pbrt-v4's visible sampling)
+        from ..spectral import sample_wavelengths
+        lam = sample_wavelengths(np.random.default_rng(n).random(n))[0]
+        if op == "eval":
+            return lambda: m.eval(d["wo"], d["wi"], wavelengths=lam)
+        return lambda: m.sample(d["wo"], d["uc"], d["u"], wavelengths=lam)
     if op == "eval":
         out = np.empty((n, 3), dt)
         return lambda: m.eval(d["wo"], d["wi"], out=out)

@@ -12,7 +12,7 @@ from ..models import BxDF
 from .configs import Config, _check_model, _reference_config, configurations
 
 __all__ = ["FLOOR_FRACTION", "ALBEDO_COS_THETA", "MIN_COS", "DirectionSet", "direction_set", "relative_error",
-           "CONVERGED", "is_stochastic", "relative_rms"]
+           "CONVERGED", "is_stochastic", "relative_rms", "color_weights", "COLOR_STEP_NM"]
 
 
 #: floor = FLOOR_FRACTION * mean(albedo_ref) / pi (see the module docstring).
@@ -201,16 +201,66 @@ def _delta_cos(m, dtype, wo, uc, u, wi_ref, flags_ref):
     return np.where(same[:, None], v, 0.0)
 
 
+#: Spacing (nm) of the ``color`` knob's wavelength quadrature over [360, 830] nm.
+COLOR_STEP_NM = 5.0
+
+
+def color_weights():
+    """The ``color`` knob's view of a spectral result, as a renderer sees it: the model lit by a
+    D65 white furnace and integrated to linear sRGB. Returns (wavelengths (G, 4), W (G, 4, 3)),
+    rgb = sum over groups g of f(wavelengths[g]) @ W[g]: the values at nodes every 5 nm over
+    [360, 830] nm (95 nodes, one zero-weight pad to fill groups of 4), joined piecewise linearly and
+    projected exactly as RGB mode projects a reflectance spectrum (``Spectrum.to_rgb("reflectance",
+    "D65")``, bsdfkit.spectral.colorimetry's Mitsuba projection: CIE 1931 x-bar y-bar z-bar times
+    D65, XYZ to linear sRGB), so that a spectrum linear between the nodes integrates to its RGB-mode
+    colour; each node's weight is the projection's grid weights times the node's hat function."""
+    from ..spectral import colorimetry as cm
+    w = np.arange(360.0, 830.0 + 0.5 * COLOR_STEP_NM, COLOR_STEP_NM)
+    gw, GW = cm.grid_weights(illuminant="D65", normalization="mitsuba")
+    hat = np.maximum(0.0, 1.0 - np.abs(gw[None, :] - w[:, None]) / COLOR_STEP_NM)   # (nodes, grid)
+    W = cm.xyz_to_srgb(hat @ GW)
+    pad = (-len(w)) % 4
+    w = np.concatenate([w, np.full(pad, w[-1])])
+    W = np.concatenate([W, np.zeros((pad, 3))])
+    return w.reshape(-1, 4), W.reshape(-1, 4, 3)
+
+
+def _eval_cos_spectral(m, dtype, wo, wi):
+    if len(wo) == 0:
+        return np.empty((0, 3))
+    lam, W = color_weights()
+    out = np.zeros((len(wo), 3))
+    wo_, wi_ = wo.astype(dtype), wi.astype(dtype)
+    for g in range(len(lam)):
+        out += m.eval(wo_, wi_, wavelengths=lam[g]).astype(np.float64) @ W[g]
+    return out * np.abs(wi[:, 2:3])
+
+
+def _delta_cos_spectral(m, dtype, wo, uc, u, wi_ref, flags_ref):
+    if len(wo) == 0:
+        return np.empty((0, 3))
+    lam, W = color_weights()
+    out = np.zeros((len(wo), 3))
+    for g in range(len(lam)):
+        s = m.sample(wo.astype(dtype), uc.astype(dtype), u.astype(dtype), wavelengths=lam[g])
+        wi = s.wi.astype(np.float64)
+        same = s.valid & (s.flags == flags_ref) & (np.max(np.abs(wi - wi_ref), axis=1) < 1e-3)
+        out += np.where(same[:, None], (s.f.astype(np.float64) @ W[g]) * np.abs(wi[:, 2:3]), 0.0)
+    return out
+
+
 def _values(cfg: Config, prep: _Prepared):
-    """(values on the error set (N, 3), albedo (K, 3)) of one configuration."""
+    """(values on the error set (N, 3), albedo (K, 3)) of one configuration (spectral mode: the
+    per-wavelength values integrated to linear sRGB, :func:`color_weights`)."""
     ds, m, dt = prep.ds, cfg.model, cfg.dtype
-    v = np.concatenate([_eval_cos(m, dt, ds.wo, ds.wi),
-                        _delta_cos(m, dt, ds.delta_wo, ds.delta_uc, ds.delta_u, prep.d_wi, prep.d_flags)])
+    ev, dl = (_eval_cos_spectral, _delta_cos_spectral) if cfg.spectral else (_eval_cos, _delta_cos)
+    v = np.concatenate([ev(m, dt, ds.wo, ds.wi),
+                        dl(m, dt, ds.delta_wo, ds.delta_uc, ds.delta_u, prep.d_wi, prep.d_flags)])
     alb = np.zeros((prep.k, 3))
     if len(prep.a_wo):
-        np.add.at(alb, prep.a_group, _eval_cos(m, dt, prep.a_wo, prep.a_wi) * prep.a_w[:, None])
+        np.add.at(alb, prep.a_group, ev(m, dt, prep.a_wo, prep.a_wi) * prep.a_w[:, None])
     if len(prep.ad_wo):
-        vd = _delta_cos(m, dt, prep.ad_wo, prep.ad_uc, prep.ad_u, prep.ad_wi, prep.ad_flags)
+        vd = dl(m, dt, prep.ad_wo, prep.ad_uc, prep.ad_u, prep.ad_wi, prep.ad_flags)
         np.add.at(alb, prep.ad_group, vd * prep.ad_w[:, None])
     return v, alb
 

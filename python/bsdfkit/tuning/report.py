@@ -494,6 +494,13 @@ def simplify(model, tol, metric: str | None = None, directions=None, seed: int =
         changes.append(("precision", "float64", "float32",
                         f"{metric} error of float32 alone {alone:.2e} <= {margin:g} tol" if alone is not None
                         else "part of the cheapest configuration within tol"))
+    if cfg.spectral != ev.reference.spectral and "color" in cfg.labels:
+        # the colour mode is a property of the call, like precision: say which mode to call in
+        alone = single.get(("color", cfg.labels["color"]))
+        changes.append(("color", ev.reference.labels["color"], cfg.labels["color"],
+                        f"{metric} error of {cfg.labels['color']} mode alone {alone:.2e} <= {margin:g} tol "
+                        "(linear sRGB under a D65 white furnace)" if alone is not None
+                        else "part of the cheapest configuration within tol"))
     for s in specs:
         lab = cfg.labels[s.name]
         if lab is None or s.name == "precision" or len(s.settings) < 2:

@@ -439,6 +439,19 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardT : Filament
                                              : (Sheen ? "FilamentStandardSheen" : "FilamentStandard");
     SharedTable<FilamentDFG> dfg;  // keeps the table alive
 
+    // One colour channel's f0 and diffuse colour from its base colour (surface_shading_lit.fs
+    // getPixelParams: computeDielectricF0, computeF0 with CLEAR_COAT_IOR_CHANGE, computeDiffuseColor);
+    // make() per RGB channel, the spectral adapter (batch_spectral.h) per wavelength.
+    template <typename S>
+    static void surface_colors(const FilamentStandardParamsT<S> &p, S base, S *f0, S *diffuse) {
+        using namespace filament;
+        S f0d = S(0.16) * p.reflectance * p.reflectance;  // computeDielectricF0
+        S f = base * p.metallic + f0d * (S(1) - p.metallic);  // computeF0
+        if (p.clear_coat_ior_change) f = lerp(p.clear_coat, f, f0ClearCoatToSurface(f));
+        *f0 = f;
+        *diffuse = base * (S(1) - p.metallic);
+    }
+
     // Derived parameters in S = param_t<F>: double, or the Dual of a gradient model, so that
     // derivatives flow through this preprocessing (core/dual.h lists the one-sided points: the
     // roughness clamps, saturate(f90), the alpha floors, the DFG rows' bilinear weights).
@@ -449,12 +462,11 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardT : Filament
         FilamentStandardT m;
         double min_pr = p.min_perceptual_roughness, min_alpha = min_pr * min_pr;
         S cc = p.clear_coat;
-        S f0d = S(0.16) * p.reflectance * p.reflectance;  // computeDielectricF0
         for (int c = 0; c < 3; ++c) {
-            S f0 = p.base_color[c] * p.metallic + f0d * (S(1) - p.metallic);  // computeF0
-            if (p.clear_coat_ior_change) f0 = lerp(cc, f0, f0ClearCoatToSurface(f0));  // CLEAR_COAT_IOR_CHANGE
+            S f0, diffuse;
+            surface_colors(p, p.base_color[c], &f0, &diffuse);
             m.f0[c] = F(f0);
-            m.diffuse_color[c] = F(p.base_color[c] * (S(1) - p.metallic));  // computeDiffuseColor
+            m.diffuse_color[c] = F(diffuse);
             m.sheen_color[c] = Sheen ? F(p.sheen_color[c]) : F(0);
         }
         S sum_f0 = S(m.f0[0]) + S(m.f0[1]) + S(m.f0[2]);

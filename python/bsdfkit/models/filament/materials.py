@@ -7,6 +7,7 @@ import numpy as np
 
 from ... import _core
 from . import dfg as _fil
+from .. import _spectral as _sp
 from ..base import BxDF, _rgb, _scalar
 from ..registry import KnobDecl
 
@@ -53,9 +54,14 @@ def _lut_size(value):
 
 # ---------------------------------------------------------------- knob declarations (read by bsdfkit.tuning)
 
+def _proj(v):
+    """A colour parameter in RGB: as given, or a ``bsdfkit.Spectrum`` projected to linear sRGB (D65)."""
+    return _sp.rgb_of(v, "reflectance")
+
+
 def _f0(q) -> np.ndarray:
     """Per-channel f0 of a FilamentStandard parameter set (computeF0 + CLEAR_COAT_IOR_CHANGE)."""
-    f0 = q["base_color"] * q["metallic"] + 0.16 * q["reflectance"] ** 2 * (1 - q["metallic"])
+    f0 = _proj(q["base_color"]) * q["metallic"] + 0.16 * q["reflectance"] ** 2 * (1 - q["metallic"])
     if q["clear_coat_ior_change"] and q["clear_coat"] > 0:
         cc = q["clear_coat"]
         f0 = f0 + cc * (_fil.term("f0ClearCoatToSurface", f0) - f0)
@@ -63,7 +69,7 @@ def _f0(q) -> np.ndarray:
 
 
 def _strength(v) -> float:
-    return float(np.max(v))
+    return float(np.max(_proj(v)))
 
 
 def _lobe_settings(param):
@@ -81,7 +87,7 @@ def _lobe_labels(param):
 
 def _diffuse_moot(q):
     return ("no diffuse colour (base_color (1 - metallic) = 0)"
-            if float(np.max(q["base_color"] * (1 - q["metallic"]))) == 0 else None)
+            if float(np.max(_proj(q["base_color"]) * (1 - q["metallic"]))) == 0 else None)
 
 
 def _visibility_moot(q):
@@ -99,7 +105,7 @@ def _ec_moot(q):
 
 def _lut_moot(q):
     ec_on = q["energy_compensation"] and _ec_moot(q) is None
-    if not ec_on and float(np.max(q["sheen_color"])) == 0:
+    if not ec_on and _strength(q["sheen_color"]) == 0:
         return "without energy compensation and sheen, the DFG table only feeds sampling probabilities"
     return None
 
@@ -151,6 +157,13 @@ class FilamentStandard(BxDF):
     depend on wo only) and not energy conserving (Filament does not reduce the diffuse lobe by
     the specular albedo). Sampling: lobes chosen by their estimated albedo at wo; visible-normal
     sampling for the GGX lobes, cosine for diffuse, Charlie-NDF/cosine mixture for sheen.
+
+    Spectral mode (``wavelengths=``): ``base_color`` and ``sheen_color`` may be ``bsdfkit.Spectrum``
+    values (RGB ones are uplifted, Jakob & Hanika 2019, bounded); f0 and the diffuse colour are
+    computed per wavelength as per RGB channel. What Filament defines on the RGB triple stays
+    wavelength-independent, from the RGB projection (linear sRGB, D65): f90 = saturate(16.5
+    sum(f0)), the lobe-selection weights (so pdf has one value per element, the RGB model's) and
+    max(sheen_color) of the sheen scaling. RGB mode uses the projection.
 
     Not reproduced from the shaders: their fp16 overflow guards (D_GGX's cap k <= 453.5, which
     lowers the highlight peak by up to 16 % below perceptual roughness 0.047; the mobile-only
@@ -211,14 +224,14 @@ class FilamentStandard(BxDF):
                  min_roughness="desktop", clear_coat_layering="code", clear_coat_ior_change=True,
                  dfg_lut_size=128):
         super().__init__(
-            base_color=_rgb(base_color, "base_color", lo=0.0, hi=1.0),
+            base_color=_sp.spectrum_or_rgb(base_color, "base_color", lo=0.0, hi=1.0),
             metallic=_scalar(metallic, "metallic", lo=0.0, hi=1.0),
             roughness=_scalar(roughness, "roughness", lo=0.0, hi=1.0),
             reflectance=_scalar(reflectance, "reflectance", lo=0.0, hi=1.0),
             anisotropy=_scalar(anisotropy, "anisotropy", lo=-1.0, hi=1.0),
             clear_coat=_scalar(clear_coat, "clear_coat", lo=0.0, hi=1.0),
             clear_coat_roughness=_scalar(clear_coat_roughness, "clear_coat_roughness", lo=0.0, hi=1.0),
-            sheen_color=_rgb(sheen_color, "sheen_color", lo=0.0, hi=1.0),
+            sheen_color=_sp.spectrum_or_rgb(sheen_color, "sheen_color", lo=0.0, hi=1.0),
             sheen_roughness=_scalar(sheen_roughness, "sheen_roughness", lo=0.0, hi=1.0),
             diffuse=_choice(diffuse, "diffuse", _DIFFUSE),
             visibility=_choice(visibility, "visibility", _VISIBILITY),
@@ -233,9 +246,17 @@ class FilamentStandard(BxDF):
     def _from_params(cls, p):
         return cls(**p)
 
+    def describe(self) -> str:
+        p = self._params
+        spectral = [k for k in ("base_color", "sheen_color") if isinstance(p[k], _sp.Spectrum)]
+        if not spectral:
+            return super().describe()
+        q = dict(p, **{k: _proj(p[k]) for k in spectral})   # the spec text of the RGB projection
+        return type(self)._from_params(q).describe() + f" ({', '.join(spectral)} spectral)"
+
     def cost_family(self) -> str:
         p = self._params
-        lobes = [x for x, on in (("coat", p["clear_coat"] > 0), ("sheen", float(np.max(p["sheen_color"])) > 0)) if on]
+        lobes = [x for x, on in (("coat", p["clear_coat"] > 0), ("sheen", _strength(p["sheen_color"]) > 0)) if on]
         return "FilamentStandard" + ("/" + "+".join(lobes) if lobes else "")
 
     @property
@@ -248,7 +269,7 @@ class FilamentStandard(BxDF):
         # cost nothing; the sheen lobe's pow() keeps a kernel scalar); each equals the general
         # model with the missing lobe's strength 0.
         p = self._params
-        return self._core_variant(p["clear_coat"] > 0, float(np.max(p["sheen_color"])) > 0)
+        return self._core_variant(p["clear_coat"] > 0, _strength(p["sheen_color"]) > 0)
 
     def _grad_core(self, params):
         """``eval_grad``'s kernel: the model's own variant, or the one with the clear-coat / sheen
@@ -258,20 +279,35 @@ class FilamentStandard(BxDF):
         names = ("clear_coat", "sheen_color") if params is None else (params,) if isinstance(params, str) else params
         names = [str(n).partition(".")[0] for n in names]
         coat = p["clear_coat"] > 0 or any(n.startswith("clear_coat") for n in names)
-        sheen = float(np.max(p["sheen_color"])) > 0 or any(n.startswith("sheen") for n in names)
+        sheen = _strength(p["sheen_color"]) > 0 or any(n.startswith("sheen") for n in names)
         return self._core if (coat, sheen) == self._core_variant_key() else self._core_variant(coat, sheen)
 
     def _core_variant_key(self):
         p = self._params
-        return p["clear_coat"] > 0, float(np.max(p["sheen_color"])) > 0
+        return p["clear_coat"] > 0, _strength(p["sheen_color"]) > 0
 
     def _core_variant(self, coat, sheen):
         p = self._params
         cls = {(False, False): _core.FilamentStandard, (True, False): _core.FilamentStandardCoat,
                (False, True): _core.FilamentStandardSheen, (True, True): _core.FilamentStandardCoatSheen}[coat, sheen]
-        return cls(base_color=p["base_color"].tolist(), metallic=p["metallic"], roughness=p["roughness"],
+        return cls(**self._core_kwargs())
+
+    def _make_spectral_core(self):
+        # the variant of _make_core with base_color / sheen_color per wavelength (batch_spectral.h
+        # FilamentStandardSpectralT); f90, the lobe weights and max(sheenColor) of the sheen
+        # scaling are those of the RGB projection
+        p = self._params
+        cls = {(False, False): _core.FilamentStandardSpectral, (True, False): _core.FilamentStandardCoatSpectral,
+               (False, True): _core.FilamentStandardSheenSpectral,
+               (True, True): _core.FilamentStandardCoatSheenSpectral}[self._core_variant_key()]
+        return cls(_sp.spectral_param(p["base_color"], "reflectance"),
+                   _sp.spectral_param(p["sheen_color"], "reflectance"), **self._core_kwargs())
+
+    def _core_kwargs(self) -> dict:
+        p = self._params
+        return dict(base_color=_proj(p["base_color"]).tolist(), metallic=p["metallic"], roughness=p["roughness"],
                    reflectance=p["reflectance"], anisotropy=p["anisotropy"], clear_coat=p["clear_coat"],
-                   clear_coat_roughness=p["clear_coat_roughness"], sheen_color=p["sheen_color"].tolist(),
+                   clear_coat_roughness=p["clear_coat_roughness"], sheen_color=_proj(p["sheen_color"]).tolist(),
                    sheen_roughness=p["sheen_roughness"], diffuse=_DIFFUSE[p["diffuse"]],
                    visibility=_VISIBILITY[p["visibility"]], f90_filament=_F90[p["f90"]],
                    energy_compensation=p["energy_compensation"], min_perceptual_roughness=_min_pr(p["min_roughness"]),
