@@ -145,3 +145,17 @@ def test_bad_input():
     acc = np.zeros((4, 4, 3))
     with pytest.raises(ValueError, match="spectral"):   # tables and lights not set
         s.render_spectral([0, 1, 5], [0, 1, 0], [0, 1, 0], 40.0, 2, 0, 0, 1, acc)
+
+
+def test_cli_spectral(tmp_path, capsys):
+    from bsdfkit.__main__ import main
+    from bsdfkit.io import read_image
+    exr = tmp_path / "glass.exr"
+    assert main(["render", "dielectric eta=1.5", "-o", str(exr), "--width", "16", "--height", "12", "--spp", "2",
+                 "--spectral", "-q"]) == 0
+    img = read_image(str(exr))
+    assert img.shape == (12, 16, 3) and np.all(np.isfinite(img)) and img.mean() > 0
+    # a model without a spectral kernel: exit status 1 and the reason on stderr
+    assert main(["render", "filament_cloth", "-o", str(tmp_path / "c.png"), "--width", "8", "--height", "8",
+                 "--spp", "1", "--spectral", "-q"]) == 1
+    assert "FilamentCloth has no spectral kernel" in capsys.readouterr().err
