@@ -74,7 +74,8 @@ def test_run_demo_returns_paths(tmp_path):
     # run_demo itself (the CLI path is covered by the demo_dir fixture)
     paths = run_demo(str(tmp_path / "d"), verbose=False)
     assert [os.path.basename(p) for p in paths] == ["lobes.png", "albedo.png", "albedo.md", "views.png",
-                                                    "gallery.exr", "gallery.png", "gallery_labelled.png", "hair.exr", "hair.png"]
+                                                    "gallery.exr", "gallery.png", "gallery_labelled.png", "hair.exr", "hair.png",
+                                                    "dispersion.png", "dispersion_spectral.exr"]
     assert all(os.path.getsize(p) > 0 for p in paths)
 
 
@@ -251,6 +252,21 @@ def test_albedo_list_rgb_and_reference():
     for m, v in zip(models, d["value"]):
         np.testing.assert_allclose(v, m.albedo(wo, n_samples=4096, seed=0), rtol=1e-12)
     assert len(ax.get_legend().get_texts()) >= 6   # 2 models x RGB + furnace line
+
+
+def test_demo_dispersion_image(demo_dir):
+    # dispersion_spectral.exr: the flint sphere in spectral mode; its colour fringes make the
+    # image far more chromatic inside the sphere than the achromatic stripes around it
+    from bsdfkit import render as R
+    from bsdfkit.io import read_image
+    img = read_image(str(demo_dir / "dispersion_spectral.exr")).astype(np.float64)
+    w, h = R.DISPERSION_SIZE
+    assert img.shape == (h, w, 3) and np.all(np.isfinite(img))
+    chroma = img.max(axis=2) - img.min(axis=2)
+    inside = chroma[int(0.2 * h):int(0.6 * h), int(0.35 * w):int(0.65 * w)]
+    assert np.percentile(inside, 99) > 0.2
+    png = mimage.imread(str(demo_dir / "dispersion.png"))
+    assert png.shape[1] > 2 * w                          # three panels side by side
 
 
 def test_demo_hair_image(demo_dir):

@@ -12,10 +12,14 @@
 
 #include "bind_model.h"
 #include "bsdfkit/render/render.h"
+#include "bsdfkit/render/spectral.h"
 
 namespace bsdfkit::py_bind {
 
 using namespace bsdfkit::render;
+
+// cpp/bindings/spectral.cpp: the float adapter of a _core.<Model>Spectral (false: not one).
+bool spectral_render_material(const py::handle &h, render::SpectralMaterial *out);
 using V3 = std::array<double, 3>;
 template <typename T> using carray = py::array_t<T, py::array::c_style | py::array::forcecast>;
 
@@ -61,6 +65,9 @@ RGB to_rgb(const V3 &a, const char *name) {
 
 struct PyScene {
     std::unique_ptr<Scene> scene = std::make_unique<Scene>();
+    SpectralScene spec;                  // spectral mode (set_spectral_*; render_spectral)
+    std::vector<py::object> spec_keep;   // the spectral models the adapters point into
+    bool spec_tables = false, spec_lights = false;
 
     void check_open() const {
         if (scene->committed()) throw py::value_error("scene: already committed; build a new scene");
@@ -229,10 +236,80 @@ struct PyScene {
         if (!err.empty()) throw std::runtime_error(err);
     }
 
+    // Spectral mode: material m's spectral model (a _core.<Model>Spectral, kept alive here).
+    void set_spectral_material(int m, const py::object &core) {
+        check_material(m, "material");
+        if (spec.materials.size() < scene->materials.size()) spec.materials.resize(scene->materials.size());
+        SpectralMaterial sm;
+        if (!spectral_render_material(core, &sm))
+            throw py::type_error("material: expected a spectral model (_core.<Model>Spectral), got " +
+                                 std::string(py::str(py::type::of(core))));
+        spec.materials[size_t(m)] = sm;
+        spec_keep.push_back(core);
+    }
+
+    static UniformTable table_of(const carray<double> &a, double x0, double step, int ncol, const char *name) {
+        if (!(a.ndim() == (ncol == 1 ? 1 : 2)) || a.shape(0) < 2 || (ncol > 1 && a.shape(1) != ncol))
+            value_error(std::string(name) + ": wrong shape");
+        if (!std::isfinite(x0) || !(step > 0)) value_error(std::string(name) + ": bad grid");
+        UniformTable t;
+        t.x0 = x0;
+        t.step = step;
+        t.n = int(a.shape(0));
+        t.ncol = ncol;
+        t.v.assign(a.data(), a.data() + a.size());
+        for (double x : t.v)
+            if (!std::isfinite(x)) value_error(std::string(name) + ": must be finite");
+        return t;
+    }
+
+    // The colour tables: D65 of unit luminance on x0 + k step, and M cmf / integral(y-bar) (n, 3).
+    void set_spectral_tables(const carray<double> &d65, double d65_x0, double d65_step, const carray<double> &match,
+                             double match_x0, double match_step) {
+        spec.d65 = table_of(d65, d65_x0, d65_step, 1, "d65");
+        spec.rgb_match = table_of(match, match_x0, match_step, 3, "rgb_match");
+        spec_tables = true;
+    }
+
+    static Uplifted uplifted(const double *c, const char *name) {
+        if (!std::isfinite(c[0]) || !std::isfinite(c[1]) || std::isnan(c[2]) || !std::isfinite(c[3]) || c[3] < 0)
+            value_error(std::string(name) + ": bad sigmoid coefficients");
+        return Uplifted{c[0], c[1], c[2], c[3]};
+    }
+
+    // The uplifted lights: (c0, c1, c2, scale) of the constant environment and of the sun, and
+    // for a lat-long environment its texels' (H, W, 4) (None for a constant environment).
+    void set_spectral_lights(const carray<double> &constant, const carray<double> &sun, const py::object &texels) {
+        if (constant.size() != 4 || sun.size() != 4) value_error("lights: expected 4 coefficients each");
+        spec.constant_env = uplifted(constant.data(), "environment");
+        spec.sun = uplifted(sun.data(), "irradiance");
+        spec.width = spec.height = 0;
+        spec.texels.clear();
+        if (!texels.is_none()) {
+            carray<double> t = texels;
+            const Environment &env = scene->env;
+            if (env.constant || t.ndim() != 3 || t.shape(0) != env.height || t.shape(1) != env.width || t.shape(2) != 4)
+                value_error("texels: expected (H, W, 4) for the scene's lat-long environment");
+            int w = env.width, h = env.height;
+            spec.texels.resize(size_t(w + 1) * size_t(h));
+            const double *p = t.data();
+            for (int y = 0; y < h; ++y)
+                for (int x = 0; x <= w; ++x)
+                    spec.texels[size_t(y) * size_t(w + 1) + size_t(x)] =
+                        uplifted(p + (size_t(y) * size_t(w) + size_t(x % w)) * 4, "texels");
+            spec.width = w;
+            spec.height = h;
+        } else if (!scene->env.constant) {
+            value_error("texels: the scene's environment is a lat-long image: its texels are needed");
+        }
+        spec_lights = true;
+    }
+
     // Adds samples [s0, s1) to acc (H, W, 3) float64. Returns (completed, rays, nonfinite); a
-    // pending KeyboardInterrupt (Ctrl-C) stops the pass early and is re-raised.
-    py::tuple render(const V3 &origin, const V3 &target, const V3 &up, double fov, int max_depth, uint64_t seed,
-                     int s0, int s1, py::array_t<double> acc) {
+    // pending KeyboardInterrupt (Ctrl-C) stops the pass early and is re-raised. spectral: the
+    // spectral tracer (render/spectral.h), its materials, tables and lights set before.
+    py::tuple render_impl(const V3 &origin, const V3 &target, const V3 &up, double fov, int max_depth, uint64_t seed,
+                          int s0, int s1, py::array_t<double> acc, bool spectral) {
         commit();
         if (!(acc.flags() & py::array::c_style) || !acc.writeable() || acc.ndim() != 3 || acc.shape(2) != 3)
             value_error("acc: expected a writable C-contiguous (H, W, 3) float64 array");
@@ -247,6 +324,15 @@ struct PyScene {
         Vec3f fwd = t - o;
         if (!(length_squared(fwd) > 0)) value_error("target: must differ from origin");
         if (!(length_squared(cross(normalize(fwd), u)) > Float(1e-12))) value_error("up: must not be parallel to the view direction");
+        if (spectral) {
+            if (!spec_tables || !spec_lights) value_error("spectral: the tables and lights are not set");
+            if (spec.materials.size() < scene->materials.size()) spec.materials.resize(scene->materials.size());
+            for (size_t m = 0; m < scene->materials.size(); ++m)
+                if (std::holds_alternative<std::monostate>(spec.materials[m]))
+                    value_error("material " + std::to_string(m) + ": has no spectral model");
+            if (spec.width != (scene->env.constant ? 0 : scene->env.width))
+                value_error("texels: do not match the scene's environment");
+        }
         Camera cam = Camera::look_at(o, t, u, Float(fov));
         st.max_depth = max_depth;
         st.seed = seed;
@@ -262,10 +348,19 @@ struct PyScene {
                 if (PyErr_CheckSignals() != 0) interrupted = true;
                 return interrupted;
             };
-            done = render_samples(*scene, cam, st, s0, s1, pacc, &stats, should_stop);
+            done = spectral ? render_samples_spectral(*scene, spec, cam, st, s0, s1, pacc, &stats, should_stop)
+                            : render_samples(*scene, cam, st, s0, s1, pacc, &stats, should_stop);
         }
         if (interrupted) throw py::error_already_set();
         return py::make_tuple(done, stats.rays, stats.nonfinite);
+    }
+    py::tuple render(const V3 &origin, const V3 &target, const V3 &up, double fov, int max_depth, uint64_t seed,
+                     int s0, int s1, py::array_t<double> acc) {
+        return render_impl(origin, target, up, fov, max_depth, seed, s0, s1, acc, false);
+    }
+    py::tuple render_spectral(const V3 &origin, const V3 &target, const V3 &up, double fov, int max_depth,
+                              uint64_t seed, int s0, int s1, py::array_t<double> acc) {
+        return render_impl(origin, target, up, fov, max_depth, seed, s0, s1, acc, true);
     }
 
     // Environment sampling, exposed for tests: u (N, 2) -> (wi (N, 3), pdf (N,), L (N, 3)).
@@ -322,6 +417,10 @@ void bind_render(py::module_ &m) {
         .def("set_directional", &PyScene::set_directional)
         .def("commit", &PyScene::commit)
         .def("render", &PyScene::render)
+        .def("set_spectral_material", &PyScene::set_spectral_material)
+        .def("set_spectral_tables", &PyScene::set_spectral_tables)
+        .def("set_spectral_lights", &PyScene::set_spectral_lights)
+        .def("render_spectral", &PyScene::render_spectral)
         .def("env_sample", &PyScene::env_sample)
         .def("env_eval_pdf", &PyScene::env_eval_pdf)
         .def_property_readonly("num_objects", [](const PyScene &s) { return s.scene->objects.size(); });

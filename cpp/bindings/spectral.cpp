@@ -14,6 +14,7 @@
 #include "bind_all.h"
 #include "bind_model.h"
 #include "bsdfkit/batch_spectral.h"
+#include "bsdfkit/render/spectral_material.h"
 
 namespace bsdfkit::py_bind {
 
@@ -407,6 +408,21 @@ void bind_spectral(py::module_ &m) {
                  return o;
              }),
              py::arg("eta"));
+}
+
+// For the preview renderer's spectral mode (cpp/bindings/render.cpp): the float adapter of a bound
+// spectral model (a _core.<Model>Spectral); false if h is none of them. The caller keeps h alive
+// (the adapter points into its tables).
+template <template <typename> class SM> static bool spectral_as(const py::handle &h, render::SpectralMaterial *out) {
+    if (!py::isinstance<PySpectral<SM>>(h)) return false;
+    *out = h.cast<const PySpectral<SM> &>().m32;
+    return true;
+}
+bool spectral_render_material(const py::handle &h, render::SpectralMaterial *out) {
+    return spectral_as<DiffuseSpectral>(h, out) || spectral_as<DiffuseTransmissionSpectral>(h, out) ||
+           spectral_as<ConductorSpectral>(h, out) || spectral_as<ConductorSchlickSpectral>(h, out) ||
+           spectral_as<ConductorF82Spectral>(h, out) || spectral_as<DielectricSpectral>(h, out) ||
+           spectral_as<ThinDielectricSpectral>(h, out);
 }
 
 } // namespace bsdfkit::py_bind

@@ -209,6 +209,8 @@ def _add_render_command(sub) -> None:
     r.add_argument("--seed", type=int, default=0)
     r.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops (default 0)")
     r.add_argument("--threads", type=int, default=None, help="worker threads (default: all cores)")
+    r.add_argument("--spectral", action="store_true",
+                   help="hero-wavelength spectral rendering (4 wavelengths per path; see bsdfkit.render.preview)")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
 
 
@@ -229,7 +231,8 @@ def _run_render_command(args) -> int:
         if args.threads is not None:
             set_num_threads(args.threads)
         img = preview(model, envmap=args.env, width=args.width, height=args.height, spp=args.spp,
-                      max_depth=args.max_depth, seed=args.seed, progress=not args.quiet, shape=args.shape)
+                      max_depth=args.max_depth, seed=args.seed, progress=not args.quiet, shape=args.shape,
+                      spectral=args.spectral)
     except KeyboardInterrupt as e:
         partial = getattr(e, "image", None)
         if partial is not None:
@@ -238,7 +241,7 @@ def _run_render_command(args) -> int:
         else:
             sys.stderr.write("bsdfkit render: interrupted\n")
         return 130
-    except (ValueError, TypeError, OSError) as e:
+    except (ValueError, TypeError, OSError, NotImplementedError) as e:
         sys.stderr.write(f"bsdfkit render: {e}\n")
         return 1
     try:

@@ -182,7 +182,9 @@ def _albedo_table(configs, path, n_samples=TABLE_SAMPLES):
 def run_demo(outdir="bsdfkit-demo", *, verbose=True):
     """Write ``lobes.png``, ``albedo.png``, ``albedo.md``, ``views.png``, ``gallery.exr``,
     ``gallery.png``, ``gallery_labelled.png`` (the render with each sphere numbered and a key
-    of the specs), ``hair.exr`` and ``hair.png`` into ``outdir`` (created if missing); returns the list
+    of the specs), ``hair.exr``, ``hair.png``, ``dispersion.png`` (a dispersive glass sphere
+    rendered in RGB and spectral mode, and their difference) and ``dispersion_spectral.exr``
+    into ``outdir`` (created if missing); returns the list
     of written paths."""
     t0 = time.perf_counter()
     os.makedirs(outdir, exist_ok=True)
@@ -196,6 +198,8 @@ def run_demo(outdir="bsdfkit-demo", *, verbose=True):
     paths += write_gallery(outdir, configs, verbose=verbose, progress=verbose)
     from .render import write_hair  # hair.exr / hair.png: locks of Hair on fibres, labelled
     paths += write_hair(outdir, progress=verbose)
+    from .render import write_dispersion  # dispersion.png: a flint-glass sphere, RGB vs spectral render
+    paths += write_dispersion(outdir, progress=verbose)
     if verbose:
         for p in paths:
             print(os.path.abspath(p))

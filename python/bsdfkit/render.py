@@ -19,6 +19,8 @@ Conventions
   of Mitsuba 3's ``envmap`` plugin (with the identity ``to_world``). Radiance is bilinearly
   interpolated between pixel centres.
 * Values are linear radiance in RGB; images come back as float32 (H, W, 3), row 0 at the top.
+  ``spectral=True`` traces 4 wavelengths per path instead (pbrt-v4's hero-wavelength scheme) and
+  returns linear sRGB the same way; see :func:`preview`.
 * The camera is a pinhole: ``fov`` is the full horizontal field of view in degrees; image x
   grows along ``forward x up``. Pixels are box-filtered (uniform jitter inside the pixel).
 * ``max_depth`` counts scattering events (pbrt-v4): 0 shows the environment only, 1 is direct
@@ -46,6 +48,7 @@ Conventions
 """
 from __future__ import annotations
 
+import functools
 import math
 import os
 import sys
@@ -59,7 +62,8 @@ from . import _core
 
 __all__ = ["Camera", "Scene", "preview", "render", "default_environment", "procedural_environment", "default_scene",
            "gallery_scene", "hair_swatch", "hair_scene", "hair_row_scene", "load_mesh", "parse_spec", "write_gallery",
-           "write_hair", "ENVIRONMENTS", "HAIR_ROW"]
+           "write_hair", "ENVIRONMENTS", "HAIR_ROW", "SPECTRAL_MODELS", "stripes_environment",
+           "dispersion_scene", "write_dispersion"]
 
 #: Named environments: procedural ``"sky"`` (the default: sky gradient, ground and a sun-like
 #: hot spot), ``"studio"`` (dark room with three soft boxes) and ``"white"`` (uniform radiance 1,
@@ -595,16 +599,17 @@ class Scene:
         self.camera._checked()
         return self
 
-    def _build(self, envmap=None):
-        """The C++ scene: materials, Embree geometry, lighting (committed)."""
+    def _build(self, envmap=None, spectral=False):
+        """The C++ scene: materials, Embree geometry, lighting (committed); with ``spectral``
+        also the spectral models, colour tables and uplifted lights (:func:`_set_spectral`)."""
         s = _core.RenderScene()
         mats = {}
 
         def mat(m):
             key = id(m)
             if key not in mats:
-                mats[key] = s.add_material(m)
-            return mats[key]
+                mats[key] = (s.add_material(m), m)
+            return mats[key][0]
 
         for ob in self.objects:
             a = mat(ob["material"])
@@ -624,8 +629,66 @@ class Scene:
             s.set_environment_latlong(val)
         for light in self.lights:
             s.set_directional(light["direction"].tolist(), light["irradiance"].tolist())
+        if spectral:
+            _set_spectral(s, list(mats.values()), kind, val, self.lights)
         s.commit()
         return s
+
+
+# ---------------------------------------------------------------- spectral mode
+
+#: Models the spectral renderer accepts (those with a spectral kernel, batch_spectral.h).
+SPECTRAL_MODELS = ("Diffuse", "DiffuseTransmission", "Conductor", "Dielectric", "ThinDielectric")
+
+
+@functools.lru_cache(maxsize=1)
+def _spectral_tables():
+    """The colour tables of the spectral tracer: D65 of unit luminance on its 5 nm table (as
+    ``bk.spectrum_to_rgb(illuminant="D65")``) and XYZ_TO_SRGB @ cmf / integral(y-bar) on the
+    1 nm CMF table (``bk.spectrum_to_rgb``'s weights), both linear between nodes."""
+    from .spectral import colorimetry
+    w5, _, d, w1, c1 = colorimetry._tables()
+    d65_unit = np.ascontiguousarray(d * colorimetry._grid("pbrt")[4], dtype=np.float64)
+    match = np.ascontiguousarray(c1 @ colorimetry.XYZ_TO_SRGB.T / colorimetry.cie_y_integral(), dtype=np.float64)
+    return d65_unit, float(w5[0]), float(w5[1] - w5[0]), match, float(w1[0]), float(w1[1] - w1[0])
+
+
+def _uplift_illuminant(rgb, exact):
+    """(..., 4) = (c0, c1, c2, scale) of RGB radiance uplifted as pbrt-v4's RGBIlluminantSpectrum
+    (the D65 factor is applied by the tracer)."""
+    from .spectral import uplift
+    c, scale = uplift.rgb_coefficients(np.asarray(rgb, dtype=np.float64), "illuminant", exact=exact)
+    return np.ascontiguousarray(np.concatenate([c, np.asarray(scale)[..., None]], axis=-1), dtype=np.float64)
+
+
+def _set_spectral(s, materials, env_kind, env_val, lights):
+    """Spectral mode of a C++ scene: each material's spectral model (its ``_core.<Model>Spectral``,
+    the same kernels as ``model.eval(..., wavelengths=...)``), the colour tables and the lights
+    uplifted to illuminant spectra: a constant environment and the directional light with the
+    polished fit (``exact=True``, as model parameters), a lat-long image per texel with the
+    table lookup (pbrt-v4's ``RGBToSpectrumTable`` as is)."""
+    from .models import _spectral
+    for index, model in materials:
+        try:
+            core = _spectral._spectral_core(model)
+        except NotImplementedError:
+            raise NotImplementedError(
+                f"spectral: {type(model).__name__} has no spectral kernel yet; spectral=True renders "
+                f"{', '.join(SPECTRAL_MODELS)} (render this scene with spectral=False)") from None
+        try:
+            s.set_spectral_material(index, core)
+        except TypeError:   # a spectral kernel the renderer does not know yet
+            raise NotImplementedError(
+                f"spectral: the renderer has no spectral path for {type(model).__name__} yet; spectral=True "
+                f"renders {', '.join(SPECTRAL_MODELS)} (render this scene with spectral=False)") from None
+    s.set_spectral_tables(*_spectral_tables())
+    zero = np.array([0.0, 0.0, -np.inf, 0.0])
+    if env_kind == "constant":
+        constant, texels = _uplift_illuminant(env_val, True), None
+    else:
+        constant, texels = zero, _uplift_illuminant(env_val.astype(np.float64), False)
+    sun = _uplift_illuminant(lights[0]["irradiance"], True) if lights else zero
+    s.set_spectral_lights(constant, sun, texels)
 
 
 def default_scene(model, *, shape=None, envmap=None) -> Scene:
@@ -762,6 +825,83 @@ def write_gallery(outdir, configs, *, size=GALLERY_SIZE, spp=GALLERY_SPP, progre
     return paths
 
 
+# ---------------------------------------------------------------- dispersion demo
+
+#: The demo's dispersive glass (a dense flint: n = 1.819 at 450 nm, 1.777 at 650 nm; pbrt-v4's data).
+DISPERSION_GLASS = "glass-F11"
+DISPERSION_SIZE = (240, 180)
+DISPERSION_SPP = 128
+
+
+def stripes_environment(width: int = 512) -> np.ndarray:
+    """A dark lat-long environment with bright white stripes (12 vertical bars around the azimuth
+    and two horizontal bands), float32 (width // 2, width, 3): sharp white edges for a glass to
+    disperse into colour fringes."""
+    width = int(width)
+    if width < 16:
+        raise ValueError("width: must be >= 16")
+    d = _latlong_dirs(width, width // 2)
+    phi = np.arctan2(d[..., 0], -d[..., 2])
+    elev = np.degrees(np.arcsin(np.clip(d[..., 1], -1, 1)))
+    bars = (np.mod(np.degrees(phi), 30.0) < 6.0) & (elev > -10) & (elev < 55)
+    bands = (np.abs(elev - 22.0) < 2.5) | (np.abs(elev + 4.0) < 1.5)
+    env = np.where((bars | bands)[..., None], 6.0, 0.02) + 0.02 * np.clip(d[..., 1:2], 0, 1)
+    return np.ascontiguousarray(np.broadcast_to(env, d.shape), dtype=np.float32)
+
+
+def dispersion_scene(glass=DISPERSION_GLASS, *, envmap=None, aspect=4 / 3) -> Scene:
+    """A glass sphere with eta = ``bk.Spectrum.named(glass)`` (dispersive) floating in
+    :func:`stripes_environment`, framed close."""
+    from .models import Dielectric
+    from .spectral import Spectrum
+    sc = Scene(environment=stripes_environment() if envmap is None else envmap)
+    sc.add_sphere(Dielectric(eta=Spectrum.named(glass)), center=(0.0, 1.0, 0.0), radius=1.0)
+    sc.look_at((0.0, 1.25, 3.6), (0.0, 0.95, 0.0), fov=38.0 * max(1.0, aspect / (4 / 3)))
+    return sc
+
+
+def write_dispersion(outdir, *, glass=DISPERSION_GLASS, size=DISPERSION_SIZE, spp=DISPERSION_SPP, progress=True):
+    """The RGB-versus-spectral comparison of the demo: :func:`dispersion_scene` rendered in RGB
+    (the glass at eta(550 nm): no dispersion) and with ``spectral=True`` (hero wavelengths:
+    colour fringes along every bright edge seen through the glass), side by side with their
+    difference. Writes ``dispersion.png`` and ``dispersion_spectral.exr``; returns the paths."""
+    from matplotlib.figure import Figure
+
+    from .io import linear_to_srgb, write_image
+    from .spectral import Spectrum
+    w, h = size
+    sc = dispersion_scene(glass, aspect=w / h)
+    kw = dict(width=w, height=h, spp=spp, max_depth=12, progress=progress)
+    rgb = render(sc, **kw)
+    spec = render(sc, spectral=True, **kw)
+    paths = [os.path.join(outdir, "dispersion.png"), os.path.join(outdir, "dispersion_spectral.exr")]
+    write_image(paths[1], spec)
+    tone = lambda x: np.clip(linear_to_srgb(np.clip(x, 0, None)), 0, 1)   # noqa: E731
+
+    def mean3(x):   # 3 x 3 pixel mean: the per-path colour noise of the wavelength sampling drops,
+        pad = np.pad(x, ((1, 1), (1, 1), (0, 0)), mode="edge")   # the fringes (systematic) stay
+        return sum(pad[i:i + h, j:j + w] for i in range(3) for j in range(3)) / 9.0
+    # the difference of the displayed images (sRGB, clipped): what the eye compares
+    diff3 = mean3(tone(spec)) - mean3(tone(rgb))
+    eta = Spectrum.named(glass)(np.array([450.0, 550.0, 650.0]))
+    fig = Figure(figsize=(12.6, 4.1))
+    fig.subplots_adjust(left=0.01, right=0.99, top=0.80, bottom=0.03, wspace=0.04)
+    axes = fig.subplots(1, 3)
+    panels = ((tone(rgb), f"RGB: eta = {eta[1]:.3f} at every colour"),
+              (tone(spec), "spectral (4 hero wavelengths per path)"),
+              (np.clip(2.0 * np.abs(diff3), 0, 1), "|spectral - RGB| x 2 (displayed sRGB, 3x3 pixel mean)"))
+    for ax, (im, title) in zip(axes, panels):
+        ax.imshow(im, interpolation="nearest")
+        ax.set_title(title, fontsize=10)
+        ax.set_axis_off()
+    fig.suptitle(f"Dispersion: a {glass} sphere (dense flint, eta {eta[0]:.3f} at 450 nm, {eta[1]:.3f} at 550 nm, "
+                 f"{eta[2]:.3f} at 650 nm) under white stripes, {w}x{h}, {spp} spp;\n"
+                 "the spectral render splits every bright edge seen through the glass into colour fringes "
+                 "(pbrt-v4 hero wavelengths, secondaries terminated at each refraction)", fontsize=10.5)
+    fig.savefig(paths[0], dpi=100, facecolor="white")
+    return paths
+
+
 # ---------------------------------------------------------------- rendering
 
 def _check_int(v, name, lo):
@@ -801,7 +941,7 @@ class _Progress:
 
 
 def render(scene: Scene, *, envmap=None, width=256, height=256, spp=64, max_depth=8, seed=0, progress=True,
-           interrupt="raise", return_stats=False):
+           interrupt="raise", return_stats=False, spectral=False):
     """Renders a :class:`Scene`; see :func:`preview` for the arguments.
 
     With ``return_stats=True`` returns ``(image, stats)``, stats a dict with ``seconds``
@@ -819,22 +959,25 @@ def render(scene: Scene, *, envmap=None, width=256, height=256, spp=64, max_dept
         raise ValueError("width * height: at most 2**26 pixels")
     if interrupt not in ("raise", "return"):
         raise ValueError(f"interrupt: must be 'raise' or 'return', got {interrupt!r}")
+    if not isinstance(spectral, (bool, np.bool_)):
+        raise TypeError(f"spectral: expected True or False, got {spectral!r}")
     o, t, u, fov = scene.camera._checked()
 
     t0 = time.perf_counter()
-    core = scene._build(envmap)
+    core = scene._build(envmap, spectral=bool(spectral))
+    trace = core.render_spectral if spectral else core.render
     t1 = time.perf_counter()
     acc = np.zeros((height, width, 3), np.float64)
     scratch = np.empty_like(acc)
     done, rays, nonfinite = 0, 0, 0
-    bar = _Progress(progress, spp, f"render {width}x{height}")
+    bar = _Progress(progress, spp, f"render {width}x{height}{' spectral' if spectral else ''}")
     try:
         k = 1
         while done < spp:
             k = min(k, spp - done)
             np.copyto(scratch, acc)
             ts = time.perf_counter()
-            _, r, nf = core.render(o, t, u, fov, max_depth, seed, done, done + k, scratch)
+            _, r, nf = trace(o, t, u, fov, max_depth, seed, done, done + k, scratch)
             dt = time.perf_counter() - ts
             acc, scratch = scratch, acc
             done += k
@@ -863,7 +1006,7 @@ def render(scene: Scene, *, envmap=None, width=256, height=256, spp=64, max_dept
 
 
 def preview(model_or_scene, envmap=None, width=256, height=256, spp=64, max_depth=8, seed=0, progress=True, *,
-            shape=None, interrupt="raise", return_stats=False):
+            shape=None, interrupt="raise", return_stats=False, spectral=False):
     """Path-traced image of a material, float32 (height, width, 3) linear radiance.
 
     model_or_scene: a bsdfkit model (shown on a unit sphere, or on ``shape``, standing on a
@@ -879,6 +1022,18 @@ def preview(model_or_scene, envmap=None, width=256, height=256, spp=64, max_dept
     interrupt: on Ctrl-C, ``"raise"`` (default) re-raises KeyboardInterrupt carrying
         ``.image`` (the completed passes' average, or None) and ``.spp_done``; ``"return"``
         returns that partial image with a RuntimeWarning.
+    spectral: trace hero-wavelength paths (pbrt-v4's spectral PathIntegrator) instead of RGB:
+        4 wavelengths per path from pbrt-v4's visible-wavelength importance sampling
+        (``bk.sample_wavelengths``), the materials through their spectral kernels (the same as
+        ``model.eval(..., wavelengths=...)``: spectra as parameters, RGB parameters uplifted,
+        a dielectric with ``eta=bk.Spectrum(...)`` disperses), the environment and light RGB
+        uplifted to illuminant spectra (pbrt-v4 ``RGBIlluminantSpectrum``: Jakob & Hanika
+        sigmoid times D65; a lat-long image per texel, bilinear between texel spectra), a
+        refraction through a dispersive dielectric terminating the secondary wavelengths
+        (pbrt-v4 ``TerminateSecondary``), each path converted to linear sRGB as
+        ``bk.spectrum_to_rgb``. Models without a spectral kernel (see ``SPECTRAL_MODELS``)
+        raise NotImplementedError naming the model: their RGB f is not a spectrum, and
+        uplifting it per evaluation would pass an RGB render off as a spectral one.
 
     Write the result with ``bk.io.write_image("x.png", img, exposure=0)`` (sRGB PNG) or ".exr".
     """
@@ -889,7 +1044,7 @@ def preview(model_or_scene, envmap=None, width=256, height=256, spp=64, max_dept
     else:
         scene = default_scene(_model_check(model_or_scene, "model_or_scene"), shape=shape)
     return render(scene, envmap=envmap, width=width, height=height, spp=spp, max_depth=max_depth, seed=seed,
-                  progress=progress, interrupt=interrupt, return_stats=return_stats)
+                  progress=progress, interrupt=interrupt, return_stats=return_stats, spectral=spectral)
 
 
 # ---------------------------------------------------------------- model specs (CLI)

@@ -21,38 +21,12 @@
 #include <cmath>
 #include <vector>
 
-#include "bsdfkit/core/rng.h"
 #include "bsdfkit/render/render.h"
+#include "bsdfkit/render/sampler.h"
 
 namespace bsdfkit::render {
 
 namespace {
-
-// SplitMix64 stream seeded from (seed, pixel, sample): independent of tiles and threads.
-struct SampleRng {
-    uint64_t state = 0;
-    SampleRng() = default;
-    SampleRng(uint64_t seed, uint64_t pixel, uint64_t sample) : state(hash3(seed, pixel, sample)) {}
-    Float next() {
-        state += 0x9e3779b97f4a7c15ull;
-        return uniform_from_bits<Float>(mix64(state));
-    }
-    double next_double() {
-        state += 0x9e3779b97f4a7c15ull;
-        return uniform_from_bits<double>(mix64(state));
-    }
-    Point2<Float> next2() {
-        Float a = next();
-        return Point2<Float>{a, next()};
-    }
-};
-
-// Power heuristic with beta = 2 for one sample of each technique (Veach 1997 eq. 9.13).
-inline Float power_heuristic(Float f, Float g) {
-    Float f2 = f * f, g2 = g * g;
-    if (std::isinf(f2)) return Float(1);
-    return f2 + g2 > Float(0) ? f2 / (f2 + g2) : Float(0);
-}
 
 inline bool finite_rgb(const RGB &c) {
     return std::isfinite(c[0]) && std::isfinite(c[1]) && std::isfinite(c[2]);
@@ -331,7 +305,7 @@ struct Tracer {
         w.verts.emplace_back();
         Vertex &v = w.verts.back();
         scene.hit_point(rh, &v.h);
-        uint8_t flags = material_flags(scene.materials[size_t(v.h.material)]);
+        uint8_t flags = scene.flags[size_t(v.h.material)];
         if (flags == Unset) {
             w.verts.pop_back();
             return;

@@ -43,6 +43,7 @@ Scene::~Scene() {
 
 int Scene::add_material(const Material &m) {
     materials.push_back(m);
+    flags.push_back(material_flags(m));
     return int(materials.size()) - 1;
 }
 

@@ -81,6 +81,7 @@ public:
     Environment env = Environment::uniform(RGB(Float(1)));
     DirectionalLight sun;
     std::vector<Material> materials;
+    std::vector<uint8_t> flags;  // material_flags of each material (a visit of the variant per hit was 8 % of a render)
     std::vector<Object> objects;
 
 private:
