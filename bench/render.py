@@ -181,6 +181,16 @@ def run(args):
 
 
 NOTES = """
+## Session 6 (issue 17 item 5 still open; issue 15 renderer)
+
+The per-hit `std::visit` for the material flags (part of the 8.6 % "frame, wo, material flags"
+share of the profile below) is now a per-material table (`Scene::flags`); the RGB images are
+bit-identical to main's (checked on the bench scene at 96 x 64 and three single-model previews).
+At load 6-10 the ratio to Mitsuba is unchanged within the spread (table above): **1.5x is not
+reached**; the next steps are unchanged (below). `spectral=True` costs about 2x the RGB render of
+this scene: per-hit scalar shading through the spectral adapters, four sigmoid evaluations per
+environment texel and wavelength.
+
 ## Before / after the wavefront shading (issue 17 item 5), same machine, same scene
 
 Both measured on the same day with this script (`--rounds 8`), one after the other, machine

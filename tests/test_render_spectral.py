@@ -159,3 +159,26 @@ def test_cli_spectral(tmp_path, capsys):
     assert main(["render", "filament_cloth", "-o", str(tmp_path / "c.png"), "--width", "8", "--height", "8",
                  "--spp", "1", "--spectral", "-q"]) == 1
     assert "FilamentCloth has no spectral kernel" in capsys.readouterr().err
+
+
+def test_colours_multiply_per_wavelength():
+    """A diffuse sphere of colour rho in a constant environment of colour c, direct light only:
+    each visible point reflects rho(lambda) c(lambda) (a convex sphere sees the whole upper
+    hemisphere of the environment), so the spectral image is the colour of the product of the two
+    uplifted spectra. Reference: that product projected with numpy on the 1 nm CIE grid (pbrt-v4's
+    SpectrumToXYZ); it differs from the RGB product rho * c by several per cent."""
+    from bsdfkit.spectral import colorimetry
+    rho, c = np.array([0.2, 0.7, 0.4]), np.array([0.9, 0.5, 0.2])
+    sc = R.Scene(environment=c.tolist())
+    sc.add_sphere(bk.Diffuse(rho.tolist()), center=(0.0, 1.0, 0.0), radius=1.0)
+    sc.look_at((0.0, 1.0, 2.2), (0.0, 1.0, 0.0), fov=30.0)   # the sphere fills the frame
+    img = _batches(sc, True, 8, 32, width=12, height=12, max_depth=1)
+    per = img.reshape(8, -1, 3).mean(1)
+    mean, se = per.mean(0), per.std(0, ddof=1) / np.sqrt(8)
+    lam = np.arange(360.0, 831.0)
+    prod = bk.Spectrum.from_rgb(rho, "reflectance")(lam) * bk.Spectrum.from_rgb(c, "illuminant")(lam)
+    cmf = colorimetry.cmfs(lam)
+    expected = colorimetry.xyz_to_srgb(prod @ cmf / cmf[:, 1].sum())
+    assert np.abs(expected - rho * c).max() > 0.01          # spectral and RGB products differ here
+    assert np.all(np.abs(mean - expected) < 5 * se + 2e-3 * expected), (mean, expected, se)
+    assert np.abs(mean - rho * c).max() > 5 * se.max()      # and the render is the spectral one

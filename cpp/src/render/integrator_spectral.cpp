@@ -51,6 +51,21 @@ struct SWave {
 
 inline bool nonzero(const Spec4 &s) { return !s.is_black(); }
 
+// A PerElementModel adapter's model built once per hit at the path's wavelengths (the adapter's
+// own f / pdf / sample rebuild it on every call: the same calls on the same model, once).
+template <typename B> struct BuiltAtHit {
+    B b;
+    Spec4 f(const Vec3f &wo, const Vec3f &wi, const double *, TransportMode mode) const { return bsdf_f(b, wo, wi, mode); }
+    Float pdf(const Vec3f &wo, const Vec3f &wi, const double *, TransportMode mode, uint8_t sf) const {
+        return bsdf_pdf(b, wo, wi, mode, sf);
+    }
+    BSDFSample<Float, 4> sample(const Vec3f &wo, Float uc, Point2<Float> u, const double *, TransportMode mode,
+                                uint8_t sf, bool *terminated) const {
+        *terminated = false;
+        return bsdf_sample(b, wo, uc, u, mode, sf);
+    }
+};
+
 struct SpectralTracer {
     const Scene &scene;
     const SpectralScene &spec;
@@ -82,7 +97,12 @@ struct SpectralTracer {
         std::visit(
             [&](const auto &m) {
                 using M = std::decay_t<decltype(m)>;
-                if constexpr (!std::is_same_v<M, std::monostate>) shade(m, pi, h, fr, wo, flags, w);
+                if constexpr (std::is_base_of_v<PerElementModel<M, Float>, M>) {
+                    using B = decltype(m.at(w.paths[size_t(pi)].lam));
+                    shade(BuiltAtHit<B>{m.at(w.paths[size_t(pi)].lam)}, pi, h, fr, wo, flags, w);
+                } else if constexpr (!std::is_same_v<M, std::monostate>) {
+                    shade(m, pi, h, fr, wo, flags, w);
+                }
             },
             sm);
     }
