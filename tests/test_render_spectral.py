@@ -26,15 +26,29 @@ def _coloured_environment(width=64):
     return (base + 6.0 * spot[..., None] * np.array([1.0, 0.55, 0.2])).astype(np.float32)
 
 
-def _grey_scene(env):
+def _grey_scene(env, models=None):
     """Materials whose value is the same at every wavelength (greys, constant eta / k), lit by a
     coloured environment: the spectral image's expectation is the RGB image's."""
+    a, b, c = models or (bk.Diffuse(0.6), bk.Conductor(eta=(1.4, 1.4, 1.4), k=(3.0, 3.0, 3.0), alpha=0.25),
+                         bk.Dielectric(eta=1.5, alpha=0.0))
     sc = R.Scene(environment=env)
-    sc.add_sphere(bk.Diffuse(0.6), center=(-1.1, 1.0, 0.0), radius=1.0)
-    sc.add_sphere(bk.Conductor(eta=(1.4, 1.4, 1.4), k=(3.0, 3.0, 3.0), alpha=0.25), center=(1.1, 1.0, 0.0), radius=1.0)
-    sc.add_sphere(bk.Dielectric(eta=1.5, alpha=0.0), center=(0.0, 0.6, 1.6), radius=0.6)
+    sc.add_sphere(a, center=(-1.1, 1.0, 0.0), radius=1.0)
+    sc.add_sphere(b, center=(1.1, 1.0, 0.0), radius=1.0)
+    sc.add_sphere(c, center=(0.0, 0.6, 1.6), radius=0.6)
     sc.add_ground()   # grey checkerboard (Diffuse 0.45 / 0.15)
     return sc
+
+
+#: Grey models of the split-channel spectral kernels (batch_spectral.h), three per scene.
+GREY_SPLIT_CHANNEL = {
+    "plastic-filament-nf": (bk.Plastic(0.5, alpha=0.2), bk.FilamentStandard(0.6, roughness=0.4, clear_coat=0.5,
+                                                                            sheen_color=0.3),
+                            bk.NormalizedFresnel(1.4)),
+    "coated": (bk.CoatedDiffuse(0.5, alpha=0.15, method="analytic"),
+               bk.CoatedConductor(eta=(1.4, 1.4, 1.4), k=(3.0, 3.0, 3.0), conductor_alpha=0.3, interface_alpha=0.1,
+                                  method="analytic"),
+               bk.Plastic(0.4)),
+}
 
 
 def _block_means(x, b):
@@ -42,10 +56,11 @@ def _block_means(x, b):
     return x[:, :h // b * b, :w // b * b].reshape(k, h // b, b, w // b, b, c).mean(axis=(2, 4))
 
 
-def test_spectral_converges_to_rgb_on_a_non_dispersive_scene():
+@pytest.mark.parametrize("models", [None] + list(GREY_SPLIT_CHANNEL), ids=["pbrt"] + list(GREY_SPLIT_CHANNEL))
+def test_spectral_converges_to_rgb_on_a_non_dispersive_scene(models):
     """z-test per 4x4-pixel block and channel: the difference of the spectral and RGB means over
     16 independent batches each, against its standard error from the batch spread."""
-    sc = _grey_scene(_coloured_environment())
+    sc = _grey_scene(_coloured_environment(), GREY_SPLIT_CHANNEL.get(models))
     k, spp = 16, 16
     kw = dict(width=32, height=24, max_depth=4)
     rgb = _block_means(_batches(sc, False, k, spp, **kw), 4)

@@ -422,7 +422,12 @@ bool spectral_render_material(const py::handle &h, render::SpectralMaterial *out
     return spectral_as<DiffuseSpectral>(h, out) || spectral_as<DiffuseTransmissionSpectral>(h, out) ||
            spectral_as<ConductorSpectral>(h, out) || spectral_as<ConductorSchlickSpectral>(h, out) ||
            spectral_as<ConductorF82Spectral>(h, out) || spectral_as<DielectricSpectral>(h, out) ||
-           spectral_as<ThinDielectricSpectral>(h, out);
+           spectral_as<ThinDielectricSpectral>(h, out) || spectral_as<PlasticSpectral>(h, out) ||
+           spectral_as<FilamentStandardSpectral>(h, out) || spectral_as<FilamentStandardCoatSpectral>(h, out) ||
+           spectral_as<FilamentStandardSheenSpectral>(h, out) ||
+           spectral_as<FilamentStandardCoatSheenSpectral>(h, out) ||
+           spectral_as<CoatedDiffuseAnalyticSpectral>(h, out) ||
+           spectral_as<CoatedConductorAnalyticSpectral>(h, out) || spectral_as<NormalizedFresnelSpectral>(h, out);
 }
 
 } // namespace bsdfkit::py_bind

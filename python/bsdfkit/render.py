@@ -638,7 +638,9 @@ class Scene:
 # ---------------------------------------------------------------- spectral mode
 
 #: Models the spectral renderer accepts (those with a spectral kernel, batch_spectral.h).
-SPECTRAL_MODELS = ("Diffuse", "DiffuseTransmission", "Conductor", "Dielectric", "ThinDielectric")
+SPECTRAL_MODELS = ("Diffuse", "DiffuseTransmission", "Conductor", "Dielectric", "ThinDielectric", "Plastic",
+                   "FilamentStandard", "NormalizedFresnel", "CoatedDiffuse (method='analytic')",
+                   "CoatedConductor (method='analytic')")
 
 
 @functools.lru_cache(maxsize=1)

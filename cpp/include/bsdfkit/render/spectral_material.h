@@ -15,6 +15,9 @@ using Spec4 = Spectrum4<Float>;
 using SpectralMaterial =
     std::variant<std::monostate, DiffuseSpectral<Float>, DiffuseTransmissionSpectral<Float>, ConductorSpectral<Float>,
                  ConductorSchlickSpectral<Float>, ConductorF82Spectral<Float>, DielectricSpectral<Float>,
-                 ThinDielectricSpectral<Float>>;
+                 ThinDielectricSpectral<Float>, PlasticSpectral<Float>, FilamentStandardSpectral<Float>,
+                 FilamentStandardCoatSpectral<Float>, FilamentStandardSheenSpectral<Float>,
+                 FilamentStandardCoatSheenSpectral<Float>, CoatedDiffuseAnalyticSpectral<Float>,
+                 CoatedConductorAnalyticSpectral<Float>, NormalizedFresnelSpectral<Float>>;
 
 } // namespace bsdfkit::render
