@@ -45,7 +45,7 @@ GREY_SPLIT_CHANNEL = {
                                                                             sheen_color=0.3),
                             bk.NormalizedFresnel(1.4)),
     "coated": (bk.CoatedDiffuse(0.5, alpha=0.15, method="analytic"),
-               bk.CoatedConductor(eta=(1.4, 1.4, 1.4), k=(3.0, 3.0, 3.0), conductor_alpha=0.3, interface_alpha=0.1,
+               bk.CoatedConductor((1.4, 1.4, 1.4), (3.0, 3.0, 3.0), conductor_alpha=0.3, interface_alpha=0.1,
                                   method="analytic"),
                bk.Plastic(0.4)),
 }
