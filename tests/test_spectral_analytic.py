@@ -70,7 +70,9 @@ MODELS = {
                                                            albedo=ALB_SPEC, thickness=0.1, method="analytic"),
     "CoatedConductor-smooth-analytic": lambda: bk.CoatedConductor(*_au(), thickness=0.05, method="analytic"),
 }
-RECIPROCAL = [k for k in MODELS if not k.startswith(("Filament", "NormalizedFresnel"))]
+#: made only of delta lobes (eval is 0 everywhere): checked through sample
+DELTA_ONLY = {"CoatedConductor-smooth-analytic"}
+RECIPROCAL = [k for k in MODELS if not k.startswith(("Filament", "NormalizedFresnel")) and k not in DELTA_ONLY]
 
 
 def _grey_rebuild(name, lam):
@@ -108,7 +110,6 @@ def test_constant_spectra_equal_rgb(name, rng):
     for mode in (RAD, IMP):
         f, f_rgb = m.eval(wo, wi, mode=mode, wavelengths=lam), m.eval(wo, wi, mode=mode)
         np.testing.assert_allclose(f, np.repeat(f_rgb[:, :1], 4, 1), rtol=1e-12, atol=1e-300)
-    assert np.count_nonzero(f) > n
     np.testing.assert_allclose(m.pdf(wo, wi, wavelengths=lam), m.pdf(wo, wi), rtol=1e-12, atol=1e-300)
     s, s_rgb = m.sample(wo, uc, u, wavelengths=lam), m.sample(wo, uc, u)
     np.testing.assert_array_equal(s.valid, s_rgb.valid)
@@ -117,6 +118,7 @@ def test_constant_spectra_equal_rgb(name, rng):
     np.testing.assert_allclose(s.pdf, s_rgb.pdf, rtol=1e-12, atol=1e-300)
     np.testing.assert_array_equal(s.flags, s_rgb.flags)
     assert not s.terminated.any()
+    assert np.count_nonzero(f) > n or (name.endswith("smooth-analytic") and np.count_nonzero(s.f) > n)
     w3 = wo[:5]
     a, a_rgb = m.albedo(w3, n_samples=2048, seed=4, wavelengths=LAM4), m.albedo(w3, n_samples=2048, seed=4)
     np.testing.assert_allclose(a, np.repeat(a_rgb[:, :1], 4, 1), rtol=1e-12)
@@ -147,7 +149,8 @@ def test_eval_per_wavelength_is_the_grey_rgb_model(name, rng):
             np.testing.assert_allclose(gs.wi[same], s.wi[spec][same], atol=1e-12)
             np.testing.assert_allclose(s.f[spec][same, i], gs.f[same, 0], rtol=1e-12)
     # the wavelengths matter
-    assert np.mean(np.ptp(f, axis=1) > 1e-3 * f.max(axis=1)) > 0.3
+    v = s.f[s.valid] if name in DELTA_ONLY else f
+    assert np.mean(np.ptp(v, axis=1) > 1e-3 * v.max(axis=1)) > 0.3
 
 
 def test_normalized_fresnel_eta_of_lambda_vs_numpy(rng):
@@ -231,7 +234,7 @@ def test_sample_eval_consistency(name, rng):
     f = m.eval(wo, s.wi, wavelengths=lam)
     p = m.pdf(wo, s.wi, wavelengths=lam)
     nd = s.valid & ((s.flags & bk.BxDFFlags.Specular) == 0)
-    assert nd.sum() > n // 10
+    assert nd.sum() > n // 10 or (name in DELTA_ONLY and s.valid.sum() > n // 2 and not f.any())
     np.testing.assert_allclose(s.f[nd], f[nd], rtol=1e-9, atol=1e-300)
     np.testing.assert_allclose(s.pdf[nd], p[nd], rtol=1e-9, atol=1e-300)
     assert np.all(s.f[~s.valid] == 0) and np.all(s.pdf[~s.valid] == 0) and np.all(s.wi[~s.valid] == [0, 0, 1])
@@ -326,7 +329,8 @@ def test_extremes(rng):
     assert not black.sample(wo, rng.random(n), rng.random((n, 2)), wavelengths=LAM4).valid.any()
     white = bk.CoatedDiffuse(bk.Spectrum.constant(1.0), thickness=0.0, method="analytic")
     a = white.albedo(np.array([[0.0, 0.0, 1.0]]), n_samples=4096, mode=IMP, wavelengths=LAM4)
-    np.testing.assert_allclose(a, a[:, :1], rtol=1e-12)
+    np.testing.assert_allclose(a, np.repeat(a[:, :1], 4, 1), rtol=1e-12)
+    assert 0.99 < a[0, 0] <= 1.0
 
 
 def test_bad_input_and_models_without_spectral_kernel():

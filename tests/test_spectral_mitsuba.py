@@ -11,7 +11,10 @@ sampled eta / k spectra given to both, a rough non-dispersive dielectric (both s
 and transmission), a diffuse with an explicit reflectance spectrum, and Mitsuba's ``roughplastic``
 (GGX, visible normals, spectral diffuse and specular reflectances) and smooth ``plastic``
 (nonlinear) inside ``twosided`` (session 6: the lobe weight uses the spectral means over
-[360, 830] nm, Mitsuba's Texture::mean(), so the pdf matches too). Masking is separable
+[360, 830] nm, Mitsuba's Texture::mean(), so the pdf matches too; measured at session 6 over values
+above 1e-3 of the maximum: roughplastic f|cos| 3.2e-6 max relative (p99.9 2.1e-6), pdf 7.7e-6;
+smooth plastic f|cos| 7.0e-5 max at grazing cosines (p99.9 6.4e-6), pdf 5.8e-5 (p99.9 7.1e-6);
+tolerance 1e-5, 1e-4 for the smooth plastic). Masking is separable
 (Mitsuba's). Compared: f |cos wi| and pdf. Tolerance: |ours - Mitsuba| <= rtol |Mitsuba| + 1e-6 max,
 rtol 1e-5 for the conductors and the diffuse, 2e-4 for the dielectric (Mitsuba runs in float32,
 ours in float64; measured at session 5 over values above 1e-3 of the maximum: conductors 2.2e-6
@@ -27,7 +30,7 @@ from bsdfkit.testing import mitsuba_spectral as ms
 from conftest import random_dirs
 
 N = 12_000
-RTOL = {"dielectric": 2e-4}  # others 1e-5
+RTOL = {"dielectric": 2e-4, "plastic-smooth": 1e-4}  # others 1e-5
 ATOL = 1e-6
 
 # Nodes cover [360, 830]: beyond its data Mitsuba's irregular spectrum is 0, pbrt-v4's (and

@@ -231,8 +231,9 @@ template <template <typename> class SM, bool Coat, bool Sheen> void bind_filamen
             o.keep = {base, sheen};
             return o;
         }),
-        py::arg("base_color"), py::arg("sheen_color"),
-        "The FilamentStandard keyword arguments (base_color / sheen_color as their RGB projection) follow.");
+        // positional (no names): the keyword arguments carry base_color / sheen_color's RGB projection
+        "FilamentStandard spectral kernel: (base_color, sheen_color) as SpectralParam, then the FilamentStandard "
+        "keyword arguments (base_color / sheen_color as their RGB projection).");
 }
 
 } // namespace
@@ -382,8 +383,8 @@ void bind_spectral(py::module_ &m) {
                  o.keep = {r, albedo};
                  return o;
              }),
-             py::arg("reflectance"), py::arg("albedo"),
-             "The CoatedDiffuseAnalytic keyword arguments (reflectance / albedo as their RGB projection) follow.");
+             "CoatedDiffuseAnalytic spectral kernel: (reflectance, albedo) as SpectralParam, then the "
+             "CoatedDiffuseAnalytic keyword arguments (reflectance / albedo as their RGB projection).");
     bind_spectral_model<CoatedConductorAnalyticSpectral>(m, "CoatedConductorAnalyticSpectral")
         .def(py::init([](const PySpectralParam &eta, const PySpectralParam &k, const PySpectralParam &albedo,
                          const py::kwargs &kw) {
@@ -394,12 +395,13 @@ void bind_spectral(py::module_ &m) {
                  o.m32.k = o.m64.k = k.p;
                  o.m32.albedo = o.m64.albedo = albedo.p;
                  o.m32.interface_eta = o.m64.interface_eta = ie;
+                 o.m32.init_quadrature();
+                 o.m64.init_quadrature();
                  o.keep = {eta, k, albedo};
                  return o;
              }),
-             py::arg("conductor_eta"), py::arg("conductor_k"), py::arg("albedo"),
-             "The CoatedConductorAnalytic keyword arguments (conductor_eta / conductor_k / albedo as their RGB "
-             "projection) follow.");
+             "CoatedConductorAnalytic spectral kernel: (conductor_eta, conductor_k, albedo) as SpectralParam, then "
+             "the CoatedConductorAnalytic keyword arguments (the same as their RGB projection).");
     bind_spectral_model<NormalizedFresnelSpectral>(m, "NormalizedFresnelSpectral")
         .def(py::init([](const PySpectralParam &eta) {
                  PySpectral<NormalizedFresnelSpectral> o;

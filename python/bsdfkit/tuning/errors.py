@@ -225,6 +225,16 @@ def color_weights():
     return w.reshape(-1, 4), W.reshape(-1, 4, 3)
 
 
+def _heroes(m):
+    """(wavelength order, weight rows) of one group: a dispersive model keeps only its first (hero)
+    wavelength across a refraction, so each wavelength is evaluated as the hero (4 calls, channel
+    0 of each); any other model evaluates the group in one call."""
+    from ..models._spectral import _spectral_core
+    if getattr(_spectral_core(m), "dispersive", False):
+        return [(np.roll(np.arange(4), -r), r) for r in range(4)]
+    return [(np.arange(4), None)]
+
+
 def _eval_cos_spectral(m, dtype, wo, wi):
     if len(wo) == 0:
         return np.empty((0, 3))
@@ -232,7 +242,9 @@ def _eval_cos_spectral(m, dtype, wo, wi):
     out = np.zeros((len(wo), 3))
     wo_, wi_ = wo.astype(dtype), wi.astype(dtype)
     for g in range(len(lam)):
-        out += m.eval(wo_, wi_, wavelengths=lam[g]).astype(np.float64) @ W[g]
+        for order, hero in _heroes(m):
+            f = m.eval(wo_, wi_, wavelengths=lam[g][order]).astype(np.float64)
+            out += f @ W[g] if hero is None else f[:, :1] * W[g][hero]
     return out * np.abs(wi[:, 2:3])
 
 
@@ -242,10 +254,13 @@ def _delta_cos_spectral(m, dtype, wo, uc, u, wi_ref, flags_ref):
     lam, W = color_weights()
     out = np.zeros((len(wo), 3))
     for g in range(len(lam)):
-        s = m.sample(wo.astype(dtype), uc.astype(dtype), u.astype(dtype), wavelengths=lam[g])
-        wi = s.wi.astype(np.float64)
-        same = s.valid & (s.flags == flags_ref) & (np.max(np.abs(wi - wi_ref), axis=1) < 1e-3)
-        out += np.where(same[:, None], (s.f.astype(np.float64) @ W[g]) * np.abs(wi[:, 2:3]), 0.0)
+        for order, hero in _heroes(m):
+            s = m.sample(wo.astype(dtype), uc.astype(dtype), u.astype(dtype), wavelengths=lam[g][order])
+            wi = s.wi.astype(np.float64)
+            same = s.valid & (s.flags == flags_ref) & (np.max(np.abs(wi - wi_ref), axis=1) < 1e-3)
+            f = s.f.astype(np.float64)
+            v = f @ W[g] if hero is None else f[:, :1] * W[g][hero]
+            out += np.where(same[:, None], v * np.abs(wi[:, 2:3]), 0.0)
     return out
 
 

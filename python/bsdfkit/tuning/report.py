@@ -419,6 +419,11 @@ def simplify(model, tol, metric: str | None = None, directions=None, seed: int =
     costs: a cost table in the :func:`knob_costs` format (e.g. ``bench/tradeoff.py`` run on
     another machine) to rank by instead of the shipped one.
 
+    A model with a non-constant ``bsdfkit.Spectrum`` parameter also has the ``color`` knob
+    (``"spectral"``, the reference, or ``"rgb"``; a property of the call like precision): its error
+    is RGB mode's f |cos| against spectral mode's, both in linear sRGB under a D65 white furnace
+    (``bsdfkit.tuning.errors.color_weights``); ``report.config["color"]`` says which mode to call.
+
     families: model classes (e.g. ``(bk.Diffuse, bk.Conductor, bk.FilamentStandard)``): instead
     of configurations of ``model``, fit each family to it and return the cheapest fitted model
     within ``tol`` (``bsdfkit.fitting.simplify_families``: measured -> analytic).
