@@ -162,7 +162,19 @@ def _method_text(p) -> str:
     return ", analytic" if p["method"] == "analytic" else ""
 
 
-class CoatedDiffuse(BxDF):
+class _AnalyticSpectral:
+    """Spectral kernels exist for the analytic method only (batch_spectral.h); the stochastic
+    walk raises NotImplementedError for wavelengths=."""
+
+    @staticmethod
+    def _spectral_ok(p) -> bool:
+        return p["method"] == "analytic"
+
+    def _has_spectral_kernel(self) -> bool:
+        return self._spectral_ok(self._params)
+
+
+class CoatedDiffuse(_AnalyticSpectral, BxDF):
     """Diffuse base under a dielectric coating with an optional scattering medium between them:
     pbrt-v4's ``CoatedDiffuseBxDF`` (``LayeredBxDF<DielectricBxDF, DiffuseBxDF, true>``).
 
@@ -214,13 +226,6 @@ class CoatedDiffuse(BxDF):
         return dict(reflectance=_sp.rgb_of(p["reflectance"], "reflectance").tolist(), eta=p["eta"],
                     alpha_x=p["alpha_x"], alpha_y=p["alpha_y"], masking=_MASKING[p["masking"]], **_layer_kw(p))
 
-    @staticmethod
-    def _spectral_ok(p) -> bool:
-        return p["method"] == "analytic"
-
-    def _has_spectral_kernel(self) -> bool:
-        return self._spectral_ok(self._params)
-
     def _make_spectral_core(self):
         # batch_spectral.h CoatedDiffuseAnalyticSpectral: reflectance and albedo per wavelength
         p = self._params
@@ -243,7 +248,7 @@ class CoatedDiffuse(BxDF):
                 + _medium(p) + _method_text(p))
 
 
-class CoatedConductor(BxDF):
+class CoatedConductor(_AnalyticSpectral, BxDF):
     """Metal under a dielectric coating with an optional scattering medium between them
     (car paint, lacquered metal): pbrt-v4's ``CoatedConductorBxDF``
     (``LayeredBxDF<DielectricBxDF, ConductorBxDF, true>``).
@@ -328,13 +333,6 @@ class CoatedConductor(BxDF):
                     conductor_alpha_x=p["conductor_alpha_x"], conductor_alpha_y=p["conductor_alpha_y"],
                     interface_eta=p["interface_eta"], interface_alpha_x=p["interface_alpha_x"],
                     interface_alpha_y=p["interface_alpha_y"], masking=_MASKING[p["masking"]], **_layer_kw(p))
-
-    @staticmethod
-    def _spectral_ok(p) -> bool:
-        return p["method"] == "analytic"
-
-    def _has_spectral_kernel(self) -> bool:
-        return self._spectral_ok(self._params)
 
     def _make_spectral_core(self):
         # batch_spectral.h CoatedConductorAnalyticSpectral: the metal's eta, k and the albedo per wavelength

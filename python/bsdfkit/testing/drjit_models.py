@@ -107,6 +107,18 @@ def _prep(scalars=(), vectors=(), spectra=()):
     return batch, n, fs, vs, cs
 
 
+def _direction_planes(wo, wi):
+    """(batch, wo planes, wi planes): two (..., 3) direction arrays broadcast together and split
+    into Dr.Jit float64 component arrays (raises _Empty for an empty batch)."""
+    dr, F = _bk()
+    wo, wi = np.broadcast_arrays(np.asarray(wo, np.float64), np.asarray(wi, np.float64))
+    batch = wo.shape[:-1]
+    if wo.size == 0:
+        raise _Empty(batch)
+    return (batch, tuple(F(np.ascontiguousarray(wo[..., k]).reshape(-1)) for k in range(3)),
+            tuple(F(np.ascontiguousarray(wi[..., k]).reshape(-1)) for k in range(3)))
+
+
 def _out(batch, *arrs):
     """Evaluate Dr.Jit arrays in one kernel and return float64 numpy arrays of shape batch."""
     dr, _ = _bk()

@@ -88,12 +88,7 @@ def coated_f(p, family, wo, wi):
     """f (..., 3) of the analytic layered model with parameters ``p`` (attributes as the Python
     model's ``_params``), ``family`` "CoatedDiffuse" or "CoatedConductor"."""
     dr, F = dm._bk()
-    wo, wi = np.broadcast_arrays(np.asarray(wo, np.float64), np.asarray(wi, np.float64))
-    batch = wo.shape[:-1]
-    if wo.size == 0:
-        raise dm._Empty(batch)
-    o0 = tuple(F(np.ascontiguousarray(wo[..., k]).reshape(-1)) for k in range(3))
-    i0 = tuple(F(np.ascontiguousarray(wi[..., k]).reshape(-1)) for k in range(3))
+    batch, o0, i0 = dm._direction_planes(wo, wi)
     conductor = family == "CoatedConductor"
     eta = _num(p.interface_eta if conductor else p.eta)
     ax, ay = ((_num(p.interface_alpha_x), _num(p.interface_alpha_y)) if conductor

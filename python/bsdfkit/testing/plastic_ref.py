@@ -151,12 +151,7 @@ def plastic_f(p, wo, wi):
     """f (..., 3) of ``Plastic`` with parameters ``p`` (attributes as the Python model's
     ``_params``; numbers or Dr.Jit AD leaves)."""
     dr, F = dm._bk()
-    wo, wi = np.broadcast_arrays(np.asarray(wo, np.float64), np.asarray(wi, np.float64))
-    batch = wo.shape[:-1]
-    if wo.size == 0:
-        raise dm._Empty(batch)
-    o0 = tuple(F(np.ascontiguousarray(wo[..., k]).reshape(-1)) for k in range(3))
-    i0 = tuple(F(np.ascontiguousarray(wi[..., k]).reshape(-1)) for k in range(3))
+    batch, o0, i0 = dm._direction_planes(wo, wi)
     eta, alpha = _num(p.eta), _num(p.alpha)
     R, Ks = _rgb3(p.reflectance), _rgb3(p.specular_reflectance)
     rough = _value(alpha) >= SMOOTH_ALPHA
