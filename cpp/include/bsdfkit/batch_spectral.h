@@ -82,6 +82,20 @@ template <typename F> using ConductorSpectral = ConductorSpectralT<F, ConductorF
 template <typename F> using ConductorSchlickSpectral = ConductorSpectralT<F, ConductorFresnel::Schlick>;
 template <typename F> using ConductorF82Spectral = ConductorSpectralT<F, ConductorFresnel::F82>;
 
+// A 3-channel sample whose f is replaced by 4 per-wavelength values (direction, pdf, lobe and
+// flags as sampled).
+template <typename F> inline BSDFSample<F, 4> with_spectrum(const BSDFSample<F> &s, const Spectrum4<F> &f) {
+    BSDFSample<F, 4> r;
+    r.f = f;
+    r.wi = s.wi;
+    r.pdf = s.pdf;
+    r.flags = s.flags;
+    r.eta = s.eta;
+    r.pdf_is_proportional = s.pdf_is_proportional;
+    r.valid = s.valid;
+    return r;
+}
+
 // Dielectric with eta(lambda). Not dispersive (eta constant): the RGB model at that eta, its
 // value copied to the 4 wavelengths. Dispersive (docs/SPECTRAL.md):
 //  - sample: the hero wavelength lambda0's model chooses the lobe and the direction; a
@@ -115,14 +129,7 @@ template <typename F> struct DielectricSpectral {
                             bool *terminated) const {
         DielectricBxDF<F> m0 = at1(eta(lam[0]));
         BSDFSample<F> s = bsdf_sample(m0, wo, uc, u, mode, sf);
-        BSDFSample<F, 4> r;
-        r.f = Spectrum4<F>(s.f[0]);
-        r.wi = s.wi;
-        r.pdf = s.pdf;
-        r.flags = s.flags;
-        r.eta = s.eta;
-        r.pdf_is_proportional = s.pdf_is_proportional;
-        r.valid = s.valid;
+        BSDFSample<F, 4> r = with_spectrum(s, Spectrum4<F>(s.f[0]));
         *terminated = false;
         if (disp & bool(s.valid)) {
             if (s.flags & Transmission) {
@@ -164,13 +171,7 @@ template <typename F> struct ThinDielectricSpectral {
     BSDFSample<F, 4> sample(const Vec3<F> &wo, F uc, Point2<F> u, const double *lam, TransportMode mode, uint8_t sf,
                             bool *terminated) const {
         BSDFSample<F> s = bsdf_sample(at1(eta(lam[0])), wo, uc, u, mode, sf);
-        BSDFSample<F, 4> r;
-        r.f = Spectrum4<F>(s.f[0]);
-        r.wi = s.wi;
-        r.pdf = s.pdf;
-        r.flags = s.flags;
-        r.eta = s.eta;
-        r.valid = s.valid;
+        BSDFSample<F, 4> r = with_spectrum(s, Spectrum4<F>(s.f[0]));
         *terminated = false;
         if (disp & bool(s.valid)) {
             bool reflect = !(s.flags & Transmission);
@@ -244,25 +245,8 @@ template <typename Derived, typename F, typename M> struct SplitChannelModel {
             s0 = proto.sample_f(wo, uc, u, mode, sf);
             f = join_channels(a.f(wo, s0.wi, mode), b.f(wo, s0.wi, mode));
         }
-        // pbrt-v4's BSDF-level rules on the 4 values (bsdf_sample)
-        BSDFSample<F, 4> r;
-        r.f = f;
-        r.wi = s0.wi;
-        r.pdf = s0.pdf;
-        r.flags = s0.flags;
-        r.eta = s0.eta;
-        r.pdf_is_proportional = s0.pdf_is_proportional;
-        r.valid = s0.valid;
-        bool ok = sample_accepted(r, wo) & ((proto.flags() & sf) != 0);
-        BSDFSample<F, 4> o;
-        o.f = ok ? r.f : Spectrum4<F>(F(0));
-        o.wi = ok ? r.wi : kInvalidSampleWi<F>();
-        o.pdf = ok ? r.pdf : F(0);
-        o.flags = ok ? r.flags : uint8_t(Unset);
-        o.eta = ok ? r.eta : F(1);
-        o.pdf_is_proportional = ok && r.pdf_is_proportional;
-        o.valid = ok;
-        return o;
+        // pbrt-v4's BSDF-level rules on the 4 values (as bsdf_sample)
+        return accepted_sample(with_spectrum(s0, f), wo, (proto.flags() & sf) != 0);
     }
 
   private:
@@ -408,13 +392,7 @@ template <typename F> struct NormalizedFresnelSpectral {
     BSDFSample<F, 4> sample(const Vec3<F> &wo, F uc, Point2<F> u, const double *lam, TransportMode mode, uint8_t sf,
                             bool *terminated) const {
         BSDFSample<F> s = bsdf_sample(at1(eta(lam[0])), wo, uc, u, mode, sf);
-        BSDFSample<F, 4> r;
-        r.f = Spectrum4<F>(s.f[0]);
-        r.wi = s.wi;
-        r.pdf = s.pdf;
-        r.flags = s.flags;
-        r.eta = s.eta;
-        r.valid = s.valid;
+        BSDFSample<F, 4> r = with_spectrum(s, Spectrum4<F>(s.f[0]));
         *terminated = false;
         if (s.valid)
             for (int i = 1; i < kSpectralN; ++i) r.f[i] = bsdf_f(at1(eta(lam[i])), wo, s.wi, mode)[0];

@@ -57,14 +57,13 @@ inline F bsdf_pdf(const Model &m, const Vec3<F> &wo, const Vec3<F> &wi, Transpor
     return select(wo.z != F(0), p, F(0));
 }
 
-template <typename Model, typename F>
-inline auto bsdf_sample(const Model &m, const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode, uint8_t sf) {
-    // Uniforms are documented on [0, 1] and used on [0, 1) (pbrt-v4's OneMinusEpsilon).
-    auto s = m.sample_f(wo, clamp_uniform(uc), clamp_uniform(u), mode, sf);  // BSDFSample<F, N>
-    bool ok = sample_accepted(s, wo) & ((m.flags() & sf) != 0);
-    // Every output of a rejected sample is a defined value, never a NaN from a dead branch; its
-    // direction is the normal (0, 0, 1), so that eval / pdf accept every sampled wi.
-    decltype(s) r;
+// pbrt-v4's BSDF-level rules on a BxDF's raw sample; model_ok: the model has a lobe in the
+// requested sample flags. Every output of a rejected sample is a defined value, never a NaN from
+// a dead branch; its direction is the normal (0, 0, 1), so that eval / pdf accept every sampled wi.
+template <typename F, int N>
+inline BSDFSample<F, N> accepted_sample(const BSDFSample<F, N> &s, const Vec3<F> &wo, bool model_ok) {
+    bool ok = sample_accepted(s, wo) & model_ok;
+    BSDFSample<F, N> r;
     r.f = select(ok, s.f, decltype(s.f)(F(0)));
     r.wi = select(ok, s.wi, kInvalidSampleWi<F>());
     r.pdf = ok ? s.pdf : F(0);
@@ -73,6 +72,13 @@ inline auto bsdf_sample(const Model &m, const Vec3<F> &wo, F uc, Point2<F> u, Tr
     r.pdf_is_proportional = ok && s.pdf_is_proportional;
     r.valid = ok;
     return r;
+}
+
+template <typename Model, typename F>
+inline auto bsdf_sample(const Model &m, const Vec3<F> &wo, F uc, Point2<F> u, TransportMode mode, uint8_t sf) {
+    // Uniforms are documented on [0, 1] and used on [0, 1) (pbrt-v4's OneMinusEpsilon).
+    auto s = m.sample_f(wo, clamp_uniform(uc), clamp_uniform(u), mode, sf);  // BSDFSample<F, N>
+    return accepted_sample(s, wo, (m.flags() & sf) != 0);
 }
 
 } // namespace bsdfkit
