@@ -93,6 +93,16 @@ def test_spectral_metal_in_rgb_mode_is_the_projection():
         np.testing.assert_allclose(ms.eval(wo, wi), mr.eval(wo, wi), rtol=1e-5)   # METALS: 6 decimals
     assert "CuZn" in bk.models.conductor.spectral_metals()
     assert bk.Conductor.from_metal("CuZn", spectral=True).eta.name == "metal-CuZn-eta"
+    # Fe and Ti: Johnson & Christy's spectra; their RGB mode is the projection METALS uses
+    assert {"Fe", "Ti"} <= set(bk.models.conductor.spectral_metals())
+    for name in ("Fe", "Ti"):
+        ms = bk.Conductor.from_metal(name, spectral=True, alpha=0.3)
+        assert ms.eta.name == f"jc-{name}-eta" and ms.k.name == f"jc-{name}-k"
+        mr = bk.Conductor.from_metal(name, alpha=0.3)
+        for part, got in (("eta", mr.eta), ("k", mr.k)):
+            want = bk.Spectrum.named(f"jc-{name}-{part}").to_rgb("unbounded", illuminant=None)
+            np.testing.assert_allclose(got, want, rtol=1e-12)
+        np.testing.assert_allclose(ms.eval(wo, wi), mr.eval(wo, wi), rtol=1e-12)
     with pytest.raises(ValueError, match="name"):
         bk.Conductor.from_metal("Unobtainium", spectral=True)
 
