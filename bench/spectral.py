@@ -64,6 +64,15 @@ MODELS = {
         lambda: bk.CoatedConductor.from_metal("Au", conductor_alpha=0.3, interface_alpha=0.05, method="analytic"),
         lambda: bk.CoatedConductor(bk.Spectrum.named("mitsuba-Au-eta"), bk.Spectrum.named("mitsuba-Au-k"),
                                    conductor_alpha=0.3, interface_alpha=0.05, method="analytic")),
+    # session 7: Hair (sigma_a(lambda); spectral/hair_spectral.h) and FilamentCloth (split channels)
+    "Hair (h 0.3)": (lambda: bk.Hair([0.3, 0.9, 2.2], h=0.3),
+                     lambda: bk.Hair(bk.Spectrum([360.0, 830.0], [2.0, 0.3]), h=0.3)),
+    "Hair far field (16 nodes)": (lambda: bk.Hair([0.3, 0.9, 2.2], h=None, nodes=16),
+                                  lambda: bk.Hair(bk.Spectrum([360.0, 830.0], [2.0, 0.3]), h=None, nodes=16)),
+    "FilamentCloth subsurface": (
+        lambda: bk.FilamentCloth((0.35, 0.02, 0.08), subsurface_color=(0.3, 0.05, 0.05), roughness=0.35),
+        lambda: bk.FilamentCloth(bk.Spectrum([360.0, 830.0], [0.2, 0.8]), subsurface_color=(0.3, 0.05, 0.05),
+                                 roughness=0.35)),
 }
 
 

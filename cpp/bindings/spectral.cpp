@@ -264,6 +264,7 @@ template <template <typename> class SM> static bool spectral_as(const py::handle
     *out = h.cast<const PySpectral<SM> &>().m32;
     return true;
 }
+bool spectral_hair_render_material(const py::handle &h, render::SpectralMaterial *out);  // spectral_hair.cpp
 bool spectral_render_material(const py::handle &h, render::SpectralMaterial *out) {
     return spectral_as<DiffuseSpectral>(h, out) || spectral_as<DiffuseTransmissionSpectral>(h, out) ||
            spectral_as<ConductorSpectral>(h, out) || spectral_as<ConductorSchlickSpectral>(h, out) ||
@@ -273,7 +274,8 @@ bool spectral_render_material(const py::handle &h, render::SpectralMaterial *out
            spectral_as<FilamentStandardSheenSpectral>(h, out) ||
            spectral_as<FilamentStandardCoatSheenSpectral>(h, out) ||
            spectral_as<CoatedDiffuseAnalyticSpectral>(h, out) ||
-           spectral_as<CoatedConductorAnalyticSpectral>(h, out) || spectral_as<NormalizedFresnelSpectral>(h, out);
+           spectral_as<CoatedConductorAnalyticSpectral>(h, out) || spectral_as<NormalizedFresnelSpectral>(h, out) ||
+           spectral_hair_render_material(h, out);
 }
 
 } // namespace bsdfkit::py_bind

@@ -36,6 +36,7 @@ RGB_ETA_WAVELENGTH = 550.0
 
 _SPECTRAL_MODELS = ("Diffuse, DiffuseTransmission, Conductor, Dielectric, ThinDielectric, Plastic, NormalizedFresnel, "
                     "FilamentStandard, CoatedDiffuse / CoatedConductor with method='analytic'")
+_SPECTRAL_MODELS += ", Hair, FilamentCloth"
 
 
 # ------------------------------------------------------------------------------- parameters

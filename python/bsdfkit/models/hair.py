@@ -6,11 +6,13 @@ import math
 import numpy as np
 
 from .. import _core
+from . import _spectral as _sp
 from .base import BxDF, _rgb, _scalar
 from .registry import KnobDecl
+from ..spectral.spectrum import Spectrum
 
 __all__ = ["Hair", "EUMELANIN_SIGMA_A", "PHEOMELANIN_SIGMA_A", "sigma_a_from_concentration",
-           "sigma_a_from_reflectance"]
+           "sigma_a_from_reflectance", "sigma_a_spectrum_from_reflectance"]
 
 #: Absorption of eumelanin and pheomelanin per unit concentration, per unit fibre radius, RGB
 #: (d'Eon et al. 2011 via pbrt-v4 ``SigmaAFromConcentration``; Mitsuba 3 ``hair`` uses the same).
@@ -22,8 +24,9 @@ SIGMA_A_MAX = 1e4
 
 def sigma_a_from_concentration(eumelanin=1.3, pheomelanin=0.0) -> np.ndarray:
     """sigma_a = eumelanin (0.419, 0.697, 1.37) + pheomelanin (0.187, 0.4, 1.05), RGB (pbrt-v4
-    ``SigmaAFromConcentration``; pbrt-v4 then upsamples the RGB to a spectrum, bsdfkit renders
-    RGB). Concentrations >= 0 (1.3 / 0: pbrt-v4's default brown)."""
+    ``SigmaAFromConcentration``, which then uplifts this RGB as an ``RGBUnboundedSpectrum``: so
+    does bsdfkit's spectral mode, ``wavelengths=``, with any RGB sigma_a). Concentrations >= 0
+    (1.3 / 0: pbrt-v4's default brown)."""
     ce = _scalar(eumelanin, "eumelanin", lo=0.0)
     cp = _scalar(pheomelanin, "pheomelanin", lo=0.0)
     return ce * np.asarray(EUMELANIN_SIGMA_A) + cp * np.asarray(PHEOMELANIN_SIGMA_A)
@@ -36,10 +39,41 @@ def sigma_a_from_reflectance(color, beta_n=0.3) -> np.ndarray:
     0 (sigma_a = inf) is capped at ``SIGMA_A_MAX``."""
     c = _rgb(color, "color", lo=0.0, hi=1.0)
     bn = _scalar(beta_n, "beta_n", lo=0.0, hi=1.0)
-    den = 5.969 - 0.215 * bn + 2.532 * bn**2 - 10.73 * bn**3 + 5.574 * bn**4 + 0.245 * bn**5
     with np.errstate(divide="ignore"):
-        s = (np.log(c) / den) ** 2
+        s = (np.log(c) / _reflectance_denominator(bn)) ** 2
     return np.minimum(s, SIGMA_A_MAX)
+
+
+def _reflectance_denominator(bn: float) -> float:
+    # Chiang 2016 eq. 9's polynomial in beta_n (pbrt-v4 SigmaAFromReflectance)
+    return 5.969 - 0.215 * bn + 2.532 * bn**2 - 10.73 * bn**3 + 5.574 * bn**4 + 0.245 * bn**5
+
+
+def sigma_a_spectrum_from_reflectance(color, beta_n=0.3) -> Spectrum:
+    """sigma_a(lambda) of a colour as pbrt-v4's ``HairMaterial`` computes it in its spectral
+    renders: the colour as a reflectance spectrum (an RGB uplifted as ``RGBAlbedoSpectrum``, Jakob
+    & Hanika 2019; or a ``bsdfkit.Spectrum``), clamped to [0, 1], then ``SigmaAFromReflectance``
+    per wavelength (pbrt-v4 materials.h ``HairMaterial::GetBxDF``). Tabulated every nm over
+    [360, 830] (linear between, as the kernels read spectra); a value 0 is capped at
+    ``SIGMA_A_MAX``. Its RGB mode (projection, no illuminant) differs from
+    ``sigma_a_from_reflectance`` of the RGB colour: the formula is not linear."""
+    c = _sp.spectrum_or_rgb(color, "color", lo=0.0, hi=1.0)
+    bn = _scalar(beta_n, "beta_n", lo=0.0, hi=1.0)
+    rs = c if isinstance(c, Spectrum) else Spectrum.from_rgb(c, "reflectance")
+    v = np.clip(rs(_sp.DENSE_WAVELENGTHS), 0.0, 1.0)
+    with np.errstate(divide="ignore"):
+        s = (np.log(v) / _reflectance_denominator(bn)) ** 2
+    return Spectrum(_sp.DENSE_WAVELENGTHS, np.minimum(s, SIGMA_A_MAX))
+
+
+def _sigma_a_rgb(v) -> np.ndarray:
+    """RGB-mode sigma_a: as given, or a spectrum projected to linear sRGB without an illuminant
+    (Mitsuba 3's rule for unbounded spectra such as IOR data), clamped at 0; a constant is itself."""
+    if not isinstance(v, Spectrum):
+        return v
+    if v.is_constant:
+        return np.full(3, float(v(np.float64(550.0))))
+    return np.maximum(v.to_rgb("unbounded", None), 0.0)
 
 
 def _h(h):
@@ -85,6 +119,18 @@ class Hair(BxDF):
     "below the surface") and, as in pbrt-v4, divided by |wi.z| so that the |cos| a renderer
     multiplies by cancels: f |wi.z| = sum_p Mp Ap Np. The transport mode is ignored (as pbrt-v4).
     Not reciprocal. Sampling is exact for sigma_a = 0 (weights 1).
+
+    **Spectral mode** (``wavelengths=``, pbrt-v4's HairBxDF is spectral): sigma_a per wavelength,
+    eta, beta_m, beta_n, alpha and h wavelength-independent. ``sigma_a`` may be a
+    ``bsdfkit.Spectrum`` (>= 0 over [360, 830] nm); an RGB sigma_a (also from
+    ``from_concentration``: pbrt-v4's ``SigmaAFromConcentration`` computes RGB, then uplifts) is
+    uplifted as pbrt-v4's ``RGBUnboundedSpectrum`` (Jakob & Hanika 2019);
+    ``from_reflectance(color, spectral=True)`` is pbrt-v4's spectral route for a colour
+    (``sigma_a_spectrum_from_reflectance``). f is the RGB model's per wavelength. The lobe choice
+    of ``sample`` and ``pdf`` weights the lobes by A_p **averaged over the 4 wavelengths** (pbrt-v4
+    ``ApPDF``), so the spectral pdf differs from the RGB pdf (averaged over the 3 RGB channels) by
+    that average and depends on the wavelengths; ``sample`` and ``pdf`` agree with each other.
+    RGB mode projects a sigma_a spectrum to linear sRGB without an illuminant (clamped at 0).
     """
 
     __slots__ = ()
@@ -122,12 +168,12 @@ class Hair(BxDF):
             raise ValueError(f"Hair(h={self._params['h']!r}): Mitsuba 3's hair has no h parameter (it derives h "
                              "from the direction); only h=0 converts")
         from ..testing.hair_ref import mitsuba_dict
-        return mitsuba_dict(self)
+        return mitsuba_dict(dict(self._params, sigma_a=_sigma_a_rgb(self._params["sigma_a"])))
 
     def __init__(self, sigma_a=None, eta=1.55, beta_m=0.3, beta_n=0.3, alpha=2.0, h=0.0, nodes=64):
         if sigma_a is None:  # pbrt-v4's default: eumelanin 1.3
             sigma_a = sigma_a_from_concentration(1.3, 0.0)
-        super().__init__(sigma_a=_rgb(sigma_a, "sigma_a", lo=0.0),
+        super().__init__(sigma_a=_sp.spectrum_or_rgb(sigma_a, "sigma_a", lo=0.0),
                          eta=_scalar(eta, "eta", lo=1.0),
                          beta_m=_scalar(beta_m, "beta_m", lo=0.01, hi=1.0),
                          beta_n=_scalar(beta_n, "beta_n", lo=0.01, hi=1.0),
@@ -141,9 +187,16 @@ class Hair(BxDF):
         return cls(sigma_a_from_concentration(eumelanin, pheomelanin), **kw)
 
     @classmethod
-    def from_reflectance(cls, color, **kw) -> "Hair":
+    def from_reflectance(cls, color, *, spectral: bool = False, **kw) -> "Hair":
         """Hair of roughly the given multiply-scattered colour (see ``sigma_a_from_reflectance``,
-        which uses this model's ``beta_n``); other keywords as ``Hair``."""
+        which uses this model's ``beta_n``); other keywords as ``Hair``. ``spectral=True`` (or
+        ``color`` a ``bsdfkit.Spectrum``): sigma_a is the spectrum pbrt-v4 computes per wavelength
+        (``sigma_a_spectrum_from_reflectance``); otherwise an RGB sigma_a (uplifted as unbounded in
+        spectral mode)."""
+        if not isinstance(spectral, (bool, np.bool_)):
+            raise TypeError(f"spectral: expected True or False, got {spectral!r}")
+        if spectral or isinstance(color, Spectrum):
+            return cls(sigma_a_spectrum_from_reflectance(color, kw.get("beta_n", 0.3)), **kw)
         return cls(sigma_a_from_reflectance(color, kw.get("beta_n", 0.3)), **kw)
 
     @classmethod
@@ -153,12 +206,33 @@ class Hair(BxDF):
     def __repr__(self):
         p = self._params
         nodes = "" if p["nodes"] == 64 else f", nodes={p['nodes']!r}"
-        return (f"Hair(sigma_a=[{', '.join(repr(float(x)) for x in p['sigma_a'])}], eta={p['eta']!r}, "
+        sa = p["sigma_a"]
+        sa = repr(sa) if isinstance(sa, Spectrum) else f"[{', '.join(repr(float(x)) for x in sa)}]"
+        return (f"Hair(sigma_a={sa}, eta={p['eta']!r}, "
                 f"beta_m={p['beta_m']!r}, beta_n={p['beta_n']!r}, alpha={p['alpha']!r}, h={p['h']!r}{nodes})")
 
-    def _make_core(self):
+    def describe(self) -> str:
         p = self._params
-        kw = dict(sigma_a=p["sigma_a"].tolist(), eta=p["eta"], beta_m=p["beta_m"], beta_n=p["beta_n"], alpha=p["alpha"])
+        if not isinstance(p["sigma_a"], Spectrum):
+            return super().describe()
+        q = dict(p, sigma_a=_sigma_a_rgb(p["sigma_a"]))   # the spec text of the RGB projection
+        return type(self)._from_params(q).describe() + " (sigma_a spectral)"
+
+    def _core_kwargs(self) -> dict:
+        p = self._params
+        kw = dict(sigma_a=_sigma_a_rgb(p["sigma_a"]).tolist(), eta=p["eta"], beta_m=p["beta_m"], beta_n=p["beta_n"],
+                  alpha=p["alpha"])
         if p["h"] is None:
-            return _core.HairFarField(nodes=p["nodes"], **kw)
-        return _core.Hair(h=p["h"], **kw)
+            kw["nodes"] = p["nodes"]
+        else:
+            kw["h"] = p["h"]
+        return kw
+
+    def _make_core(self):
+        return (_core.HairFarField if self._params["h"] is None else _core.Hair)(**self._core_kwargs())
+
+    def _make_spectral_core(self):
+        # the fibre of _make_core with sigma_a per wavelength (spectral/hair_spectral.h)
+        p = self._params
+        cls = _core.HairFarFieldSpectral if p["h"] is None else _core.HairSpectral
+        return cls(_sp.spectral_param(p["sigma_a"], "unbounded"), **self._core_kwargs())

@@ -23,6 +23,9 @@ _LUM = np.array([0.212671, 0.715160, 0.072169])
 def _check_hair(model):
     if not isinstance(model, Hair):
         raise TypeError(f"model: expected a bsdfkit.Hair, got {type(model).__name__}")
+    if not isinstance(model.sigma_a, np.ndarray):   # a sigma_a spectrum: the views draw RGB mode
+        from ..models.hair import _sigma_a_rgb
+        model = Hair._from_params(dict(model._params, sigma_a=_sigma_a_rgb(model.sigma_a)))
     return model
 
 

@@ -61,13 +61,13 @@ template <typename F, typename S> inline F Mp(F cos_i, F cos_o, F sin_i, F sin_o
 
 // Attenuation of each lobe (Marschner 2003 sec. 4.3; pbrt-v4 Ap): A0 = f, A1 = (1-f)^2 T,
 // A2 = A1 T f, A3 = A2 f T / (1 - T f) (the geometric series of all p >= 3).
-template <typename F, typename E>
-inline void Ap(F cos_theta_o, E eta, F cos_gamma_o, const Spectrum<F> &T, Spectrum<F> ap[PMax + 1]) {
+template <typename F, int NC, typename E>
+inline void Ap(F cos_theta_o, E eta, F cos_gamma_o, const Spectrum<F, NC> &T, Spectrum<F, NC> ap[PMax + 1]) {
     F f = FrDielectric(cos_theta_o * cos_gamma_o, eta);
-    ap[0] = Spectrum<F>(f);
+    ap[0] = Spectrum<F, NC>(f);
     ap[1] = T * sqr(F(1) - f);
     ap[2] = ap[1] * T * f;
-    for (int c = 0; c < Spectrum<F>::Size; ++c) {
+    for (int c = 0; c < NC; ++c) {
         F den = F(1) - T[c] * f;
         Mask<F> ok = den > F(0);
         ap[3][c] = select(ok, ap[2][c] * f * T[c] / select(ok, den, F(1)), F(0));
@@ -158,25 +158,35 @@ inline void GaussLegendre(int n, double *x, double *w) {
 }
 } // namespace hair
 
-template <typename F> struct HairBxDF {
+// NC: colour channels (3: RGB; 4: the wavelengths of the spectral adapter, spectral/hair_spectral.h,
+// whose lobe weights then average Ap over the 4 wavelengths as pbrt-v4's ApPDF does).
+template <typename F, int NC = 3> struct HairBxDF {
     using Params = HairParams;
     static constexpr const char *Name = "Hair";
     static constexpr int P = hair::PMax;
 
     // All derived at construction (in double).
     F h, eta, eta2, gamma_o, cos_gamma_o;
-    Spectrum<F> two_sigma_a;          // 2 sigma_a (the path length is 2 cos gamma_t / cos theta_t)
+    Spectrum<F, NC> two_sigma_a;      // 2 sigma_a (the path length is 2 cos gamma_t / cos theta_t)
     F inv_v[P + 1], log_norm[P + 1];  // Mp per lobe
     F v[P + 1], exp_m2_over_v[P + 1]; // Mp sampling: cos = 1 + v ln(u + (1-u) e^{-2/v})
     F s, inv_trim, cdf_lo, cdf_hi;    // trimmed logistic
     F sin_tilt[P + 1], cos_tilt[P + 1];  // theta_o rotation per lobe: -2 alpha, alpha, 4 alpha, 0
 
     static HairBxDF make(const Params &p) {
+        HairBxDF m = make_fibre(p);
+        if constexpr (NC == 3)
+            for (int c = 0; c < 3; ++c) m.two_sigma_a[c] = F(2 * p.sigma_a[size_t(c)]);
+        return m;  // other NC: sigma_a 0 until set_sigma_a (the spectral adapter)
+    }
+
+    // Everything but sigma_a (zero): the spectral adapter sets sigma_a per element (set_sigma_a).
+    static HairBxDF make_fibre(const Params &p) {
         HairBxDF m;
         m.set_h(p.h);
         m.eta = F(p.eta);
         m.eta2 = F(p.eta * p.eta);
-        for (int c = 0; c < 3; ++c) m.two_sigma_a[c] = F(2 * p.sigma_a[c]);
+        m.two_sigma_a = Spectrum<F, NC>(F(0));
         // Longitudinal variance (Chiang 2016 eq. 7; pbrt-v4): v0, v0 / 4, 4 v0, 4 v0
         double b = p.beta_m;
         double v0 = sqr(0.726 * b + 0.812 * b * b + 3.7 * std::pow(b, 20));
@@ -211,6 +221,9 @@ template <typename F> struct HairBxDF {
         return m;
     }
 
+    // sigma_a per channel (>= 0), as make() sets it: 2 sigma_a, exact in F.
+    void set_sigma_a(const Spectrum<F, NC> &sigma_a) { two_sigma_a = sigma_a * F(2); }
+
     // The same fibre seen at offset h (the preview renderer sets h per curve hit): h, gamma_o = asin h
     // and cos gamma_o are the only members that depend on it.
     void set_h(double hh) {
@@ -237,13 +250,13 @@ template <typename F> struct HairBxDF {
     // T = exp(-sigma_a 2 cos gamma_t / cos theta_t) with cos theta_t = den / eta, den = sqrt(eta^2 -
     // sin^2 theta_o) floored at eta 1e-30 (cos theta_t > 0 unless eta == 1 at grazing): 1 division.
     template <typename V>
-    void refracted(const Offset<V> &g, V sin_o, V cos_o, V *gamma_t, Spectrum<V> *T) const {
+    void refracted(const Offset<V> &g, V sin_o, V cos_o, V *gamma_t, Spectrum<V, NC> *T) const {
         V inv_den = V(1) / max_(safe_sqrt(V(eta2) - sin_o * sin_o), V(F(1e-30) * eta));
         V sin_gt = clamp(g.h * cos_o * inv_den, V(-1), V(1));
         V cos_gt = safe_sqrt(V(1) - sin_gt * sin_gt);
         *gamma_t = asin(sin_gt);
         V len = cos_gt * V(eta) * inv_den;
-        for (int c = 0; c < Spectrum<V>::Size; ++c) (*T)[c] = exp(-V(two_sigma_a[c]) * len);
+        for (int c = 0; c < NC; ++c) (*T)[c] = exp(-V(two_sigma_a[c]) * len);
     }
 
     // theta_o rotated by the lobe's cuticle tilt; cos is taken as |cos| (pbrt-v4).
@@ -255,14 +268,14 @@ template <typename F> struct HairBxDF {
     // Everything that depends on wo alone: theta_o, gamma_t, Ap and the lobe weights.
     template <typename V> struct Outgoing {
         V sin_o, cos_o, gamma_t;
-        Spectrum<V> ap[P + 1];
+        Spectrum<V, NC> ap[P + 1];
         V w[P + 1];
     };
     template <typename V> Outgoing<V> outgoing(const Offset<V> &g, const Vec3<V> &wo) const {
         Outgoing<V> o;
         o.sin_o = wo.x;
         o.cos_o = safe_sqrt(V(1) - o.sin_o * o.sin_o);
-        Spectrum<V> T;
+        Spectrum<V, NC> T;
         refracted(g, o.sin_o, o.cos_o, &o.gamma_t, &T);
         hair::Ap(o.cos_o, eta, g.cos_gamma_o, T, o.ap);
         weights(o.ap, o.w);
@@ -283,8 +296,9 @@ template <typename F> struct HairBxDF {
         mn[P] = hair::Mp(cos_i, o.cos_o, sin_i, o.sin_o, inv_v[P], log_norm[P]) * V(Inv2Pi<scalar_t<V>>);
     }
 
-    // Lobe-selection probabilities: spectral averages of Ap, normalised (pbrt-v4 ApPDF).
-    template <typename V> static void weights(const Spectrum<V> ap[P + 1], V w[P + 1]) {
+    // Lobe-selection probabilities: averages of Ap over the NC channels (RGB, or the 4 sampled
+    // wavelengths in spectral mode), normalised (pbrt-v4 ApPDF: SampledSpectrum::Average).
+    template <typename V> static void weights(const Spectrum<V, NC> ap[P + 1], V w[P + 1]) {
         V sum = V(0);
         for (int p = 0; p <= P; ++p) sum += (w[p] = ap[p].average());
         V inv = select(sum > V(0), V(1) / select(sum > V(0), sum, V(1)), V(0));
@@ -300,10 +314,10 @@ template <typename F> struct HairBxDF {
     // sum_p Ap Mp Np / |cos theta_i| (divided where |cos| > 0, pbrt-v4) and sum_p w_p Mp Np.
     template <typename V>
     void f_pdf(const Offset<V> &g, const Vec3<V> &wo, const Vec3<V> &wi, V dphi, const Outgoing<V> &o,
-               Spectrum<V> *f, V *pdf) const {
+               Spectrum<V, NC> *f, V *pdf) const {
         V mn[P + 1];
         lobes(g, o, wi, dphi, mn);
-        Spectrum<V> sum = o.ap[0] * mn[0];
+        Spectrum<V, NC> sum = o.ap[0] * mn[0];
         V p = o.w[0] * mn[0];
         for (int q = 1; q <= P; ++q) {
             sum = sum + o.ap[q] * mn[q];
@@ -314,8 +328,8 @@ template <typename F> struct HairBxDF {
         if (pdf) *pdf = p;
     }
 
-    template <typename V> Spectrum<V> f_at(const Offset<V> &g, const Vec3<V> &wo, const Vec3<V> &wi) const {
-        Spectrum<V> r;
+    template <typename V> Spectrum<V, NC> f_at(const Offset<V> &g, const Vec3<V> &wo, const Vec3<V> &wi) const {
+        Spectrum<V, NC> r;
         f_pdf<V>(g, wo, wi, delta_phi(wo, wi), outgoing(g, wo), &r, nullptr);
         return r;
     }
@@ -325,7 +339,7 @@ template <typename F> struct HairBxDF {
         return r;
     }
 
-    template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
+    template <typename V> Spectrum<V, NC> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
         return f_at(offset<V>(), wo, wi);
     }
 
@@ -340,7 +354,7 @@ template <typename F> struct HairBxDF {
     }
 
     template <typename V>
-    BSDFSample<V> sample_at(const Offset<V> &g, const Vec3<V> &wo, V uc, Point2<V> u, uint8_t sample_flags) const {
+    BSDFSample<V, NC> sample_at(const Offset<V> &g, const Vec3<V> &wo, V uc, Point2<V> u, uint8_t sample_flags) const {
         using S = scalar_t<V>;
         Outgoing<V> o = outgoing(g, wo);
         const V *w = o.w;
@@ -373,16 +387,16 @@ template <typename F> struct HairBxDF {
         V cpo = select(on_axis, V(1), wo.y * inv_r), spo = select(on_axis, V(0), wo.z * inv_r);
         Vec3<V> wi(sin_i, cos_i * (cpo * cd - spo * sd), cos_i * (spo * cd + cpo * sd));
         // f and the full mixture density (pbrt-v4), so sample_f agrees with f and pdf.
-        BSDFSample<V> out;
+        BSDFSample<V, NC> out;
         f_pdf(g, wo, wi, dphi, o, &out.f, &out.pdf);
         out.wi = wi;
-        out.flags = typename BSDFSample<V>::Flags(GlossyReflection);
+        out.flags = typename BSDFSample<V, NC>::Flags(GlossyReflection);
         out.valid = Mask<V>((sample_flags & RT_Reflection) != 0) & (out.pdf > V(0));
         return out;
     }
 
     template <typename V>
-    BSDFSample<V> sample_f(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode, uint8_t sample_flags) const {
+    BSDFSample<V, NC> sample_f(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode, uint8_t sample_flags) const {
         return sample_at(offset<V>(), wo, uc, u, sample_flags);
     }
 
@@ -395,11 +409,12 @@ template <typename F> struct HairBxDF {
 // (weights normalised to sum 1). Sampling picks node k with its weight, then samples HairBxDF(h_k);
 // pdf is the same mixture, so sample_f, f and pdf agree exactly. Cost: `nodes` times HairBxDF. The
 // nodes share every member of HairBxDF but h, gamma_o and cos gamma_o (HairBxDF::set_h).
-template <typename F> struct HairFarFieldBxDF {
+template <typename F, int NC = 3> struct HairFarFieldBxDF {
     static constexpr int MaxNodes = 64;
     static constexpr const char *Name = "HairFarField";
     using Params = HairFarFieldParams;
-    HairBxDF<F> base;
+    using Base = HairBxDF<F, NC>;
+    Base base;
     int n = 16;
     F node_h[MaxNodes], node_gamma[MaxNodes], node_cos_gamma[MaxNodes], weight[MaxNodes], cdf[MaxNodes];
 
@@ -413,12 +428,12 @@ template <typename F> struct HairFarFieldBxDF {
         q.beta_n = p.beta_n;
         q.alpha = p.alpha;
         q.h = 0.0;
-        m.base = HairBxDF<F>::make(q);
+        m.base = Base::make(q);
         double x[MaxNodes], w[MaxNodes], wk[MaxNodes], wsum = 0;
         hair::GaussLegendre(m.n, x, w);
         for (int k = 0; k < m.n; ++k) {
             double gamma = x[k] * 1.5707963267948966;
-            HairBxDF<F> b = m.base;
+            Base b = m.base;
             b.set_h(std::sin(gamma));
             m.node_h[k] = b.h;
             m.node_gamma[k] = b.gamma_o;
@@ -438,8 +453,8 @@ template <typename F> struct HairFarFieldBxDF {
     }
 
     // The single-h fibre of node k.
-    HairBxDF<F> lobe(int k) const {
-        HairBxDF<F> b = base;
+    Base lobe(int k) const {
+        Base b = base;
         b.h = node_h[k];
         b.gamma_o = node_gamma[k];
         b.cos_gamma_o = node_cos_gamma[k];
@@ -451,18 +466,18 @@ template <typename F> struct HairFarFieldBxDF {
     // On packets too (batch.h): the node loop is uniform; sampling gives each lane its own node.
     static constexpr bool Vectorized = true;
 
-    template <typename V> typename HairBxDF<F>::template Offset<V> node(int k) const {
+    template <typename V> typename Base::template Offset<V> node(int k) const {
         return {V(node_h[k]), V(node_gamma[k]), V(node_cos_gamma[k])};
     }
 
     // sum_k weight_k (f_k, pdf_k): the azimuth difference is shared by the nodes.
-    template <typename V> void f_pdf(const Vec3<V> &wo, const Vec3<V> &wi, Spectrum<V> *f, V *pdf) const {
-        V dphi = HairBxDF<F>::delta_phi(wo, wi);
-        Spectrum<V> fs(V(0));
+    template <typename V> void f_pdf(const Vec3<V> &wo, const Vec3<V> &wi, Spectrum<V, NC> *f, V *pdf) const {
+        V dphi = Base::delta_phi(wo, wi);
+        Spectrum<V, NC> fs(V(0));
         V ps = V(0);
         for (int k = 0; k < n; ++k) {
             auto g = node<V>(k);
-            Spectrum<V> fk;
+            Spectrum<V, NC> fk;
             V pk;
             base.f_pdf(g, wo, wi, dphi, base.outgoing(g, wo), f ? &fk : nullptr, pdf ? &pk : nullptr);
             if (f) fs = fs + fk * V(weight[k]);
@@ -472,8 +487,8 @@ template <typename F> struct HairFarFieldBxDF {
         if (pdf) *pdf = ps;
     }
 
-    template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
-        Spectrum<V> r;
+    template <typename V> Spectrum<V, NC> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
+        Spectrum<V, NC> r;
         f_pdf<V>(wo, wi, &r, nullptr);
         return r;
     }
@@ -485,16 +500,16 @@ template <typename F> struct HairFarFieldBxDF {
     }
 
     template <typename V>
-    BSDFSample<V> sample_f(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode, uint8_t sample_flags) const {
+    BSDFSample<V, NC> sample_f(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode, uint8_t sample_flags) const {
         using S = scalar_t<V>;
         // node k with probability weight[k]; uc remapped for the lobe choice inside node k
         V k = V(0);
         for (int j = 0; j < n - 1; ++j) k += mask_to_float<V>(uc >= V(cdf[j]));
         V start = select(k == V(0), V(0), gather_index(cdf, max_(k - V(1), V(0))));
         V ur = clamp((uc - start) / gather_index(weight, k), V(0), V(S(1) - std::numeric_limits<S>::epsilon() / 2));
-        typename HairBxDF<F>::template Offset<V> g{gather_index(node_h, k), gather_index(node_gamma, k),
-                                                  gather_index(node_cos_gamma, k)};
-        BSDFSample<V> s = base.sample_at(g, wo, ur, u, sample_flags);
+        typename Base::template Offset<V> g{gather_index(node_h, k), gather_index(node_gamma, k),
+                                            gather_index(node_cos_gamma, k)};
+        BSDFSample<V, NC> s = base.sample_at(g, wo, ur, u, sample_flags);
         f_pdf<V>(wo, s.wi, &s.f, &s.pdf);
         s.pdf = select(Mask<V>((sample_flags & RT_Reflection) != 0), s.pdf, V(0));
         s.valid = s.valid & (s.pdf > V(0));

@@ -5,6 +5,7 @@
 #include <variant>
 
 #include "../batch_spectral.h"
+#include "../spectral/hair_spectral.h"
 #include "material.h"
 
 namespace bsdfkit::render {
@@ -18,6 +19,7 @@ using SpectralMaterial =
                  ThinDielectricSpectral<Float>, PlasticSpectral<Float>, FilamentStandardSpectral<Float>,
                  FilamentStandardCoatSpectral<Float>, FilamentStandardSheenSpectral<Float>,
                  FilamentStandardCoatSheenSpectral<Float>, CoatedDiffuseAnalyticSpectral<Float>,
-                 CoatedConductorAnalyticSpectral<Float>, NormalizedFresnelSpectral<Float>>;
+                 CoatedConductorAnalyticSpectral<Float>, NormalizedFresnelSpectral<Float>,
+                 HairSpectral<Float>>;
 
 } // namespace bsdfkit::render

@@ -8,7 +8,7 @@ import numpy as np
 from ... import _core
 from . import dfg as _fil
 from .. import _spectral as _sp
-from ..base import BxDF, _rgb, _scalar
+from ..base import BxDF, _scalar
 from ..registry import KnobDecl
 
 __all__ = ["FilamentStandard", "FilamentCloth", "examples"]
@@ -333,6 +333,13 @@ class FilamentCloth(BxDF):
     conserving (the diffuse lobe is not reduced by the sheen, as in Filament). Sampling: diffuse
     by cosine (or by a cos(theta) + 0.5 density with a subsurface color), sheen by an equal
     mixture of Charlie-NDF and diffuse-sampler directions; lobes chosen by estimated albedo.
+
+    Spectral mode (``wavelengths=``): ``base_color``, ``sheen_color`` and ``subsurface_color`` may
+    be ``bsdfkit.Spectrum`` values in [0, 1] (RGB ones are uplifted, Jakob & Hanika 2019,
+    bounded); per wavelength each is what one RGB channel holds, and a missing sheen_color is
+    sqrt(base_color(lambda)). The lobe-selection weights (max(base_color), max(sheen_color)) stay
+    wavelength-independent, from the RGB projection (linear sRGB, D65), so pdf has one value per
+    element, the RGB model's. RGB mode uses the projection.
     """
 
     __slots__ = ()
@@ -351,7 +358,7 @@ class FilamentCloth(BxDF):
                     "roughness": (0.0, 1.0)}
     knobs = (
         KnobDecl("diffuse", ("burley", "lambert"), "modelling", "diffuse term: Fd_Burley or Fd_Lambert",
-                 moot=lambda q: "black base colour" if float(np.max(q["base_color"])) == 0 else None),
+                 moot=lambda q: "black base colour" if _strength(q["base_color"]) == 0 else None),
         KnobDecl("dfg_lut_size", lambda q: (q["dfg_lut_size"],), "approximation",
                  "side of the DFG table (sampling probabilities only)",
                  moot=lambda q: "the cloth's DFG table only feeds the lobe-selection probabilities of sample/pdf"),
@@ -360,10 +367,10 @@ class FilamentCloth(BxDF):
     def __init__(self, base_color=0.5, sheen_color=None, subsurface_color=None, roughness=0.5, *,
                  diffuse="lambert", min_roughness="desktop", dfg_lut_size=128):
         super().__init__(
-            base_color=_rgb(base_color, "base_color", lo=0.0, hi=1.0),
-            sheen_color=None if sheen_color is None else _rgb(sheen_color, "sheen_color", lo=0.0, hi=1.0),
+            base_color=_sp.spectrum_or_rgb(base_color, "base_color", lo=0.0, hi=1.0),
+            sheen_color=None if sheen_color is None else _sp.spectrum_or_rgb(sheen_color, "sheen_color", lo=0.0, hi=1.0),
             subsurface_color=(None if subsurface_color is None
-                              else _rgb(subsurface_color, "subsurface_color", lo=0.0, hi=1.0)),
+                              else _sp.spectrum_or_rgb(subsurface_color, "subsurface_color", lo=0.0, hi=1.0)),
             roughness=_scalar(roughness, "roughness", lo=0.0, hi=1.0),
             diffuse=_choice(diffuse, "diffuse", _DIFFUSE),
             min_roughness=_min_roughness(min_roughness),
@@ -375,23 +382,43 @@ class FilamentCloth(BxDF):
 
     @property
     def effective_sheen_color(self) -> np.ndarray:
-        """sheen_color, or sqrt(base_color) when it was not given."""
+        """sheen_color, or sqrt(base_color) when it was not given (RGB; a spectrum's RGB projection)."""
         s = self._params["sheen_color"]
-        return np.sqrt(self._params["base_color"]) if s is None else s
+        return np.sqrt(_proj(self._params["base_color"])) if s is None else _proj(s)
+
+    def describe(self) -> str:
+        p = self._params
+        spectral = [k for k in ("base_color", "sheen_color", "subsurface_color") if isinstance(p[k], _sp.Spectrum)]
+        if not spectral:
+            return super().describe()
+        q = dict(p, **{k: _proj(p[k]) for k in spectral})   # the spec text of the RGB projection
+        return type(self)._from_params(q).describe() + f" ({', '.join(spectral)} spectral)"
 
     @property
     def min_perceptual_roughness(self) -> float:
         """The MIN_PERCEPTUAL_ROUGHNESS value in effect."""
         return _min_pr(self._params["min_roughness"])
 
-    def _make_core(self):
+    def _core_kwargs(self) -> dict:
         p = self._params
         ss = p["subsurface_color"]
-        return _core.FilamentCloth(
-            base_color=p["base_color"].tolist(), sheen_color=self.effective_sheen_color.tolist(),
-            subsurface_color=[0.0, 0.0, 0.0] if ss is None else ss.tolist(), has_subsurface=ss is not None,
-            roughness=p["roughness"], diffuse=_DIFFUSE[p["diffuse"]],
-            min_perceptual_roughness=_min_pr(p["min_roughness"]), dfg=_fil._table(p["dfg_lut_size"]))
+        return dict(base_color=_proj(p["base_color"]).tolist(), sheen_color=self.effective_sheen_color.tolist(),
+                    subsurface_color=[0.0, 0.0, 0.0] if ss is None else _proj(ss).tolist(),
+                    has_subsurface=ss is not None, roughness=p["roughness"], diffuse=_DIFFUSE[p["diffuse"]],
+                    min_perceptual_roughness=_min_pr(p["min_roughness"]), dfg=_fil._table(p["dfg_lut_size"]))
+
+    def _make_core(self):
+        return _core.FilamentCloth(**self._core_kwargs())
+
+    def _make_spectral_core(self):
+        # the kernel of _make_core with the colours per wavelength (spectral/hair_spectral.h
+        # FilamentClothSpectral); the lobe weights are those of the RGB projection
+        p = self._params
+        sheen, ss = p["sheen_color"], p["subsurface_color"]
+        return _core.FilamentClothSpectral(
+            _sp.spectral_param(p["base_color"], "reflectance"),
+            _sp.spectral_param(0.0 if sheen is None else sheen, "reflectance"),
+            _sp.spectral_param(0.0 if ss is None else ss, "reflectance"), sheen is None, **self._core_kwargs())
 
 
 def examples() -> dict:
