@@ -5,6 +5,8 @@
 #include <variant>
 
 #include "../batch_spectral.h"
+#include "../spectral/layered_spectral.h"
+#include "../spectral/measured_spectral.h"
 #include "material.h"
 
 namespace bsdfkit::render {
@@ -18,6 +20,8 @@ using SpectralMaterial =
                  ThinDielectricSpectral<Float>, PlasticSpectral<Float>, FilamentStandardSpectral<Float>,
                  FilamentStandardCoatSpectral<Float>, FilamentStandardSheenSpectral<Float>,
                  FilamentStandardCoatSheenSpectral<Float>, CoatedDiffuseAnalyticSpectral<Float>,
-                 CoatedConductorAnalyticSpectral<Float>, NormalizedFresnelSpectral<Float>>;
+                 CoatedConductorAnalyticSpectral<Float>, NormalizedFresnelSpectral<Float>,
+                 MeasuredSpectral<Float>, MERLNearestSpectral<Float>, MERLLinearSpectral<Float>,
+                 CoatedDiffuseSpectral<Float>, CoatedConductorSpectral<Float>>;
 
 } // namespace bsdfkit::render
