@@ -28,17 +28,14 @@ import numpy as np
 os.environ.setdefault("DRJIT_LIBLLVM_PATH", "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1")
 
 import bsdfkit as bk  # noqa: E402
+from bsdfkit.directions import random_directions  # noqa: E402
 from bsdfkit.tuning.costs import best_time  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 
 
 def dirs(rng, n, upper=True):
-    v = rng.normal(size=(n, 3))
-    v /= np.linalg.norm(v, axis=1, keepdims=True)
-    if upper:
-        v[:, 2] = np.abs(v[:, 2])
-    return v
+    return random_directions(n, rng, upper=upper)
 
 
 def layered_rows(n, quick):

@@ -35,6 +35,19 @@ def _rel_err(ours, ref):
     return np.abs(ours - ref) / np.maximum(a, 1e-6 * scale)
 
 
+def _grad_and_ref(model, params, rng, two_sided, ref):
+    """eval_grad of ``model`` on _pairs and the reference ``ref(model, wo, wi, columns)``; checks the
+    gradient's shape and that its value path is eval's arithmetic (bit for bit).
+    Returns (wo, wi, f, g, column names, f_ref, g_ref)."""
+    wo, wi = _pairs(model, rng, two_sided=two_sided)
+    f, g = model.eval_grad(wo, wi, params)
+    names, cols = _columns(model, params)
+    assert g.shape == (N, 3, len(cols))
+    np.testing.assert_array_equal(f, model.eval(wo, wi))   # the dual's value path is eval's arithmetic
+    f_ref, g_ref = ref(model, wo, wi, cols)
+    return wo, wi, f, g, names, f_ref, g_ref
+
+
 def _fd_check(name, g, fd_h, f, tol=1e-5, noise_eps=64, min_clean=0.3):
     """Central differences against eval_grad. The differences carry a rounding error of about
     eps |f| / h, which swamps them where f is huge and its derivative small (a grazing coat peak,
@@ -126,10 +139,7 @@ CLOTH = {
 def test_cloth_grad(name, rng):
     make, params = CLOTH[name]
     model = make()
-    wo, wi = _pairs(model, rng, two_sided=False)
-    f, g = model.eval_grad(wo, wi, params)
-    np.testing.assert_array_equal(f, model.eval(wo, wi))   # the dual's value path is eval's arithmetic
-    f_ref, g_ref = cloth_grad(model, wo, wi, _columns(model, params)[1])
+    wo, wi, f, g, _, f_ref, g_ref = _grad_and_ref(model, params, rng, False, cloth_grad)
     np.testing.assert_allclose(f, f_ref, rtol=1e-9, atol=1e-300)
     assert np.count_nonzero(g_ref) > g_ref.size // 4
     err = _rel_err(g, g_ref)
@@ -186,11 +196,8 @@ COATED = {
 def test_coated_analytic_grad(name, rng):
     make, params = COATED[name]
     model = make()
-    wo, wi = _pairs(model, rng, two_sided=True)
-    f, g = model.eval_grad(wo, wi, params)
-    assert g.shape == (N, 3, len(bk.fitting.grad_columns(model, params)))
-    np.testing.assert_array_equal(f, model.eval(wo, wi))
-    f_ref, g_ref = coated_analytic_grad(model, wo, wi, _columns(model, params)[1])
+    assert len(bk.fitting.grad_columns(model, params)) == len(_columns(model, params)[1])
+    wo, wi, f, g, _, f_ref, g_ref = _grad_and_ref(model, params, rng, True, coated_analytic_grad)
     err_f = _rel_err(f[..., None], f_ref[..., None])
     assert np.quantile(err_f, 0.99) < 1e-10 and err_f.max() < 1e-6, (np.quantile(err_f, 0.99), err_f.max())
     assert np.count_nonzero(g_ref) > g_ref.size // 8   # per-channel columns are 0 in the other channels

@@ -8,9 +8,8 @@ import numpy as np
 import pytest
 
 import bsdfkit as bk
-from bsdfkit.fitting.grad import _columns
 from bsdfkit.testing.drjit_grad import plastic_grad
-from test_grad_more import N, _fd, _fd_check, _pairs, _rel_err, _report
+from test_grad_more import N, _fd, _fd_check, _grad_and_ref, _pairs, _rel_err, _report
 
 ALL = ("reflectance", "eta", "alpha", "specular_reflectance")
 
@@ -31,12 +30,7 @@ CASES = {
 def test_plastic_grad(name, rng):
     make, params = CASES[name]
     model = make()
-    wo, wi = _pairs(model, rng, two_sided=True)
-    f, g = model.eval_grad(wo, wi, params)
-    names, cols = _columns(model, params)
-    assert g.shape == (N, 3, len(cols))
-    np.testing.assert_array_equal(f, model.eval(wo, wi))   # the dual's value path is eval's arithmetic
-    f_ref, g_ref = plastic_grad(model, wo, wi, cols)
+    wo, wi, f, g, names, f_ref, g_ref = _grad_and_ref(model, params, rng, True, plastic_grad)
     err_f = _rel_err(f[..., None], f_ref[..., None])
     assert np.quantile(err_f, 0.99) < 1e-11 and err_f.max() < 1e-9, (np.quantile(err_f, 0.99), err_f.max())
     # per-channel columns are 0 in the other channels; eta < 1 from outside: T = 0 below the

@@ -197,6 +197,27 @@ def test_named_pbrt_values_at_550():
         assert abs(Spectrum.named(name)(550.0) - eta) < 1e-12, name
 
 
+def test_named_johnson_christy_fe_ti():
+    """jc-Fe / jc-Ti (Johnson & Christy, Phys. Rev. B 9, 5056 (1974)) against the paper's table at
+    five of its photon energies, typed here separately: a transcription check of the data file
+    (eV -> nm as lambda = 1239.84 / E, rounded to 1 nm as refractiveindex.info tabulates it; the
+    column order n, k; the metal), and piecewise linear between samples."""
+    table = {  # E (eV): (Fe n, Fe k, Ti n, Ti k)
+        3.12: (2.24, 2.58, 2.08, 2.95), 2.38: (2.86, 2.91, 2.44, 3.30), 2.26: (2.95, 2.93, 2.54, 3.43),
+        1.76: (2.86, 3.19, 2.86, 3.96), 1.51: (2.94, 3.39, 3.21, 4.01)}
+    for e, vals in table.items():
+        lam = 1239.84 / e
+        for (metal, part), want in zip([("Fe", "eta"), ("Fe", "k"), ("Ti", "eta"), ("Ti", "k")], vals):
+            s = Spectrum.named(f"jc-{metal}-{part}")
+            i = np.argmin(np.abs(s.wavelengths - lam))
+            assert abs(s.wavelengths[i] - lam) < 1.0, (metal, e)
+            assert s.values[i] == want, (metal, part, e)
+    fe = Spectrum.named("jc-Fe-eta")
+    assert fe.wavelengths[0] == 188.0 and fe.wavelengths[-1] == 1937.0 and len(fe.wavelengths) == 49
+    assert abs(fe(0.5 * (549.0 + 582.0)) - 0.5 * (2.95 + 2.94)) < 1e-12
+    assert named.data("jc-Ti-k")[2] == "johnson-christy"
+
+
 def test_named_bk7_equals_sellmeier():
     """glass-BK7 (refractiveindex.info, computed there from Schott's N-BK7 Sellmeier formula):
     n^2 = 1 + sum B_i l^2 / (l^2 - C_i), l in um, at every sample."""
@@ -211,6 +232,9 @@ def test_named_bk7_equals_sellmeier():
 def test_named_lists():
     assert set(named.metal_names("pbrt")) == {"Ag", "Al", "Au", "Cu", "CuZn", "MgO", "TiO2"}
     assert {"Ag", "Al", "Au", "Cu", "Cr"} <= set(named.metal_names("mitsuba"))
+    assert set(named.metal_names("jc")) == {"Fe", "Ti"}
+    with pytest.raises(ValueError, match="source"):
+        named.metal_names("palik")
     for g in ("BK7", "BAF10", "FK51A", "LASF9", "F5", "F10", "F11"):
         assert f"glass-{g}" in Spectrum.names()
 

@@ -6,7 +6,8 @@ fixture), so the other tests of an xdist worker never see a variant switch.
 
 Cases (>= 10,000 direction pairs each, 4 wavelengths per pair from pbrt-v4's visible sampling):
 a rough conductor with Mitsuba's measured gold (``material="Au"``; ours: ``from_metal("Au",
-spectral=True)``, the same Mitsuba data, piecewise linear), an anisotropic rough conductor with
+spectral=True)``, the same Mitsuba data, piecewise linear), iron (``from_metal("Fe", spectral=True)``,
+Johnson & Christy's data given to Mitsuba as an irregular spectrum), an anisotropic rough conductor with
 sampled eta / k spectra given to both, a rough non-dispersive dielectric (both sides, reflection
 and transmission), a diffuse with an explicit reflectance spectrum, and Mitsuba's ``roughplastic``
 (GGX, visible normals, spectral diffuse and specular reflectances) and smooth ``plastic``
@@ -56,6 +57,8 @@ def _cases():
     rough_plastic = bk.Plastic(bk.Spectrum(R_NODES, R_VALS), eta=1.49, alpha=0.2, masking="separable",
                                specular_reflectance=bk.Spectrum(KS_NODES, KS_VALS))
     smooth_plastic = bk.Plastic(bk.Spectrum(R_NODES, R_VALS), eta=1.5, nonlinear=True)
+    fe = bk.Conductor.from_metal("Fe", spectral=True, alpha=0.25, masking="separable")
+    fe_eta, fe_k = (bk.Spectrum.named(f"jc-Fe-{p}") for p in ("eta", "k"))
     return {
         "plastic-rough": (rough_plastic, {"type": "twosided", "bsdf": {
             "type": "roughplastic", "distribution": "ggx", "alpha": 0.2, "int_ior": 1.49, "ext_ior": 1.0,
@@ -66,6 +69,9 @@ def _cases():
             "diffuse_reflectance": ms.spectrum_dict(R_NODES, R_VALS)}}, up(), up(), lam()),
         "conductor-Au": (au, {"type": "roughconductor", "distribution": "ggx", "alpha": 0.3, "material": "Au"},
                          up(), up(), lam()),
+        "conductor-Fe": (fe, {"type": "roughconductor", "distribution": "ggx", "alpha": 0.25,
+                              "eta": ms.spectrum_dict(fe_eta.wavelengths, fe_eta.values),
+                              "k": ms.spectrum_dict(fe_k.wavelengths, fe_k.values)}, up(), up(), lam()),
         "conductor-sampled": (sampled, {"type": "roughconductor", "distribution": "ggx", "alpha_u": 0.4,
                                         "alpha_v": 0.15, "eta": ms.spectrum_dict(ETA_NODES, ETA_VALS),
                                         "k": ms.spectrum_dict(ETA_NODES, K_VALS)}, up(), up(), lam()),

@@ -9,6 +9,7 @@ import pytest
 import bsdfkit as bk
 from bsdfkit.spectral import colorimetry, uplift
 from bsdfkit.testing import mitsuba as ref
+from bsdfkit.testing import spectral_checks as checks
 from conftest import random_dirs
 
 IMP = bk.TransportMode.Importance
@@ -93,6 +94,16 @@ def test_spectral_metal_in_rgb_mode_is_the_projection():
         np.testing.assert_allclose(ms.eval(wo, wi), mr.eval(wo, wi), rtol=1e-5)   # METALS: 6 decimals
     assert "CuZn" in bk.models.conductor.spectral_metals()
     assert bk.Conductor.from_metal("CuZn", spectral=True).eta.name == "metal-CuZn-eta"
+    # Fe and Ti: Johnson & Christy's spectra; their RGB mode is the projection METALS uses
+    assert {"Fe", "Ti"} <= set(bk.models.conductor.spectral_metals())
+    for name in ("Fe", "Ti"):
+        ms = bk.Conductor.from_metal(name, spectral=True, alpha=0.3)
+        assert ms.eta.name == f"jc-{name}-eta" and ms.k.name == f"jc-{name}-k"
+        mr = bk.Conductor.from_metal(name, alpha=0.3)
+        for part, got in (("eta", mr.eta), ("k", mr.k)):
+            want = bk.Spectrum.named(f"jc-{name}-{part}").to_rgb("unbounded", illuminant=None)
+            np.testing.assert_allclose(got, want, rtol=1e-12)
+        np.testing.assert_allclose(ms.eval(wo, wi), mr.eval(wo, wi), rtol=1e-12)
     with pytest.raises(ValueError, match="name"):
         bk.Conductor.from_metal("Unobtainium", spectral=True)
 
@@ -266,12 +277,7 @@ def test_reciprocity(name, rng):
     m = SPECTRAL_MODELS[name]()
     n = 3000
     wo, wi, lam = random_dirs(rng, n), random_dirs(rng, n), _lam(rng, n)
-    a, b = m.eval(wo, wi, mode=RAD, wavelengths=lam), m.eval(wi, wo, mode=IMP, wavelengths=lam)
-    if "dispersive" in name:
-        keep = wo[:, 2] * wi[:, 2] > 0
-        a, b = a[keep], b[keep]
-    # rtol as the RGB contract (1e-7); atol for values cancelling to ~1e-9 of the maximum
-    np.testing.assert_allclose(a, b, rtol=1e-7, atol=1e-12 * a.max())
+    checks.reciprocity(m, wo, wi, lam, keep=wo[:, 2] * wi[:, 2] > 0 if "dispersive" in name else None)
 
 
 @pytest.mark.parametrize("name", sorted(SPECTRAL_MODELS))
@@ -280,16 +286,7 @@ def test_sample_eval_consistency(name, rng):
     m = SPECTRAL_MODELS[name]()
     n = 5000
     wo, lam = random_dirs(rng, n), _lam(rng, n)
-    s = m.sample(wo, rng.random(n), rng.random((n, 2)), wavelengths=lam)
-    f = m.eval(wo, s.wi, wavelengths=lam)
-    p = m.pdf(wo, s.wi, wavelengths=lam)
-    glossy = s.valid & ((s.flags & bk.BxDFFlags.Specular) == 0)
-    np.testing.assert_allclose(s.f[glossy], f[glossy], rtol=1e-9, atol=1e-300)
-    np.testing.assert_allclose(s.pdf[glossy], p[glossy], rtol=1e-9, atol=1e-300)
-    # invalid samples: f = pdf = 0, wi = +z
-    assert np.all(s.f[~s.valid] == 0) and np.all(s.pdf[~s.valid] == 0)
-    assert np.all(s.wi[~s.valid] == [0, 0, 1])
-    assert np.all(np.isfinite(s.f)) and np.all(np.isfinite(f)) and np.all(np.isfinite(p))
+    s, _, _, _ = checks.sample_consistency(m, wo, rng.random(n), rng.random((n, 2)), lam)
     assert s.terminated.dtype == bool and (s.terminated.any() == ("Dielectric-" in name and "dispersive" in name))
 
 

@@ -15,6 +15,7 @@ import pytest
 
 import bsdfkit as bk
 from bsdfkit.models import registry
+from bsdfkit.directions import random_directions
 from bsdfkit.models.spec import parse_spec, to_spec
 
 RAD, IMP = bk.TransportMode.Radiance, bk.TransportMode.Importance
@@ -39,11 +40,7 @@ def has_smooth_lobe(m) -> bool:
 
 
 def random_dirs(rng, n, upper=False):
-    v = rng.normal(size=(n, 3))
-    v /= np.linalg.norm(v, axis=1, keepdims=True)
-    if upper:
-        v[:, 2] = np.abs(v[:, 2])
-    return v
+    return random_directions(n, rng, upper=upper)
 
 
 def wo_set(cls):

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import bsdfkit as bk
+from bsdfkit.directions import random_directions
 from bsdfkit.testing import layered_ref as L
 
 CU_ETA, CU_K = np.array(bk.METALS["Cu"][0]), np.array(bk.METALS["Cu"][1])
@@ -16,11 +17,7 @@ AU_ETA, AU_K = np.array(bk.METALS["Au"][0]), np.array(bk.METALS["Au"][1])
 
 
 def _unit(rng, n, upper=False):
-    v = rng.normal(size=(n, 3))
-    v /= np.linalg.norm(v, axis=1, keepdims=True)
-    if upper:
-        v[:, 2] = np.abs(v[:, 2])
-    return v
+    return random_directions(n, rng, upper=upper)
 
 
 def _fr(c, eta):

@@ -112,26 +112,32 @@ class Conductor(BxDF):
     @classmethod
     def from_metal(cls, name: str, roughness=None, *, alpha=None, alpha_x=None, alpha_y=None,
                    masking="correlated", fresnel="exact", spectral: bool = False) -> "Conductor":
-        """A measured metal by name (see ``bsdfkit.METALS``: Cu, Au, Ag, Al, Cr).
+        """A measured metal by name: ``bsdfkit.METALS`` (Cu, Au, Ag, Al, Cr) or any name of
+        ``spectral_metals()`` (also Be, CuZn, Fe, Ir, MgO, Mo, Ni_palik, Rh, Ta, Ti, TiN, TiO2, W).
 
         Roughness as pbrt-v4's ``roughness`` (alpha = sqrt(roughness)) or directly as ``alpha``.
         ``fresnel`` as in ``Conductor``. ``spectral=True``: eta and k are the measured spectra
         (``bsdfkit.Spectrum``): Mitsuba 3's IOR data (``mitsuba-<name>-eta/k``, the data ``METALS``
-        projects) where Mitsuba has the metal, else pbrt-v4's (``metal-<name>-eta/k``: also
-        CuZn, MgO, TiO2); ``spectral_metals()`` lists the names. Its RGB mode equals ``METALS``
-        within 1e-6.
+        projects) where Mitsuba has the metal, else pbrt-v4's (``metal-<name>-eta/k``: CuZn, MgO,
+        TiO2), else Johnson & Christy 1974's (``jc-<name>-eta/k``: Fe, Ti). Its RGB mode equals
+        ``METALS`` within 1e-6. ``spectral=False`` with a metal outside ``METALS``: eta and k are
+        those spectra projected to RGB the way ``METALS`` was made (CIE 1931 to linear sRGB, no
+        illuminant weighting: ``Spectrum.to_rgb("unbounded", illuminant=None)``).
         """
         if spectral:
             names = spectral_metals()
             if name not in names:
                 raise ValueError(f"name: unknown metal {name!r} for spectral=True; known: {', '.join(names)}")
-            src = "mitsuba" if f"mitsuba-{name}-eta" in Spectrum.names() else "metal"
-            eta, k = Spectrum.named(f"{src}-{name}-eta"), Spectrum.named(f"{src}-{name}-k")
+            eta, k = _metal_spectra(name)
             return cls(eta, k, alpha=_pick_alpha(roughness, alpha), alpha_x=alpha_x, alpha_y=alpha_y,
                        masking=masking, fresnel=fresnel)
-        if name not in METALS:
-            raise ValueError(f"name: unknown metal {name!r}; known metals: {', '.join(sorted(METALS))}")
-        eta, k = METALS[name]
+        if name in METALS:
+            eta, k = METALS[name]
+        elif isinstance(name, str) and name in spectral_metals():
+            eta, k = (tuple(float(v) for v in s.to_rgb("unbounded", illuminant=None)) for s in _metal_spectra(name))
+        else:
+            known = sorted(set(METALS) | set(spectral_metals()))
+            raise ValueError(f"name: unknown metal {name!r}; known metals: {', '.join(known)}")
         return cls(eta, k, alpha=_pick_alpha(roughness, alpha), alpha_x=alpha_x, alpha_y=alpha_y, masking=masking,
                    fresnel=fresnel)
 
@@ -211,19 +217,30 @@ class Conductor(BxDF):
 
 
 
+#: Where ``from_metal(..., spectral=True)`` takes a metal's eta / k spectra, first match wins.
+_METAL_SOURCES = ("mitsuba", "metal", "jc")
+
+
 def spectral_metals() -> tuple:
-    """The names ``Conductor.from_metal(name, spectral=True)`` accepts (Mitsuba 3's and pbrt-v4's
-    measured metals, ``bsdfkit.Spectrum.names()``)."""
+    """The names ``Conductor.from_metal(name, spectral=True)`` accepts (Mitsuba 3's, pbrt-v4's and
+    Johnson & Christy's measured metals, ``bsdfkit.Spectrum.names()``)."""
     out = []
     for n in Spectrum.names():
         parts = n.split("-")
-        if len(parts) == 3 and parts[0] in ("mitsuba", "metal") and parts[2] == "eta" and parts[1] not in out:
+        if len(parts) == 3 and parts[0] in _METAL_SOURCES and parts[2] == "eta" and parts[1] not in out:
             out.append(parts[1])
     return tuple(sorted(out))
 
 
+def _metal_spectra(name: str):
+    """(eta, k) named spectra of a metal of ``spectral_metals()`` from its first source."""
+    names = Spectrum.names()
+    src = next(s for s in _METAL_SOURCES if f"{s}-{name}-eta" in names)
+    return Spectrum.named(f"{src}-{name}-eta"), Spectrum.named(f"{src}-{name}-k")
+
+
 #: The values of ``Conductor.from_metal``'s first argument (listed by the spec parser's usage text).
-Conductor.from_metal.__func__.choices = tuple(METALS)
+Conductor.from_metal.__func__.choices = tuple(METALS) + tuple(m for m in spectral_metals() if m not in METALS)
 
 
 def conductor_fresnel(cos_theta, eta, k, fresnel="exact") -> np.ndarray:

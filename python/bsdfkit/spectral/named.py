@@ -7,8 +7,9 @@ The numbers live in ``bsdfkit/data/spectra.json`` with their source (file, array
 * Mitsuba 3 ``data/ior/<X>.{eta,k}.spd`` (the conductor ``material`` presets), as
   ``mitsuba-<X>-eta`` / ``mitsuba-<X>-k`` for X in Ag, Al, Au, Cu, Cr, W, Ni_palik, Mo, Ir, Rh,
   Ta, TiN, Be.
-
-Neither project ships Fe or Ti data, so neither is here.
+* Johnson & Christy, Phys. Rev. B 9, 5056 (1974) (tabulated in wavelength by the CC0
+  refractiveindex.info database), as ``jc-<X>-eta`` / ``jc-<X>-k`` for X in Fe, Ti: neither project
+  ships iron or titanium.
 """
 from __future__ import annotations
 
@@ -36,7 +37,8 @@ def _load():
 
 
 def names() -> tuple[str, ...]:
-    """Every named spectrum, in file order (pbrt-v4 metals, pbrt-v4 glasses, Mitsuba metals)."""
+    """Every named spectrum, in file order (pbrt-v4 metals, pbrt-v4 glasses, Mitsuba metals,
+    Johnson & Christy metals)."""
     return tuple(_load())
 
 
@@ -49,8 +51,8 @@ def data(name: str):
 
 
 def metal_names(source: str = "pbrt") -> tuple[str, ...]:
-    """Metals with eta and k spectra from ``source`` ("pbrt" or "mitsuba")."""
-    prefix = {"pbrt": "metal-", "mitsuba": "mitsuba-"}.get(source)
+    """Metals with eta and k spectra from ``source`` ("pbrt", "mitsuba" or "jc" = Johnson & Christy)."""
+    prefix = {"pbrt": "metal-", "mitsuba": "mitsuba-", "jc": "jc-"}.get(source)
     if prefix is None:
-        raise ValueError(f"source: expected 'pbrt' or 'mitsuba', got {source!r}")
+        raise ValueError(f"source: expected 'pbrt', 'mitsuba' or 'jc', got {source!r}")
     return tuple(n[len(prefix):-4] for n in _load() if n.startswith(prefix) and n.endswith("-eta"))
