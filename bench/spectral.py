@@ -73,7 +73,40 @@ MODELS = {
         lambda: bk.FilamentCloth((0.35, 0.02, 0.08), subsurface_color=(0.3, 0.05, 0.05), roughness=0.35),
         lambda: bk.FilamentCloth(bk.Spectrum([360.0, 830.0], [0.2, 0.8]), subsurface_color=(0.3, 0.05, 0.05),
                                  roughness=0.35)),
+    # session 7 (measspec): the measured models (one model: RGB mode reads its RGB / projected
+    # table, spectral mode its spectra or uplifted bins) and the stochastic coated walk
+    "Measured, spectral file": (lambda: _spectral_tensor(), lambda: _spectral_tensor()),
+    "MERL nearest, Cu": (lambda: bk.MERL.from_metal("Cu"), lambda: bk.MERL.from_metal("Cu")),
+    "MERL linear, Cu": (lambda: bk.MERL.from_metal("Cu", interpolation="linear"),
+                        lambda: bk.MERL.from_metal("Cu", interpolation="linear")),
+    "CoatedDiffuse walk, medium": (
+        lambda: bk.CoatedDiffuse((0.8, 0.3, 0.1), alpha=0.1, albedo=(0.7, 0.5, 0.3), thickness=0.2),
+        lambda: bk.CoatedDiffuse(bk.Spectrum([360.0, 830.0], [0.2, 0.8]), alpha=0.1,
+                                 albedo=bk.Spectrum([360.0, 830.0], [0.3, 0.7]), thickness=0.2)),
+    "CoatedConductor walk, Au": (
+        lambda: bk.CoatedConductor.from_metal("Au", conductor_alpha=0.3, interface_alpha=0.05),
+        lambda: bk.CoatedConductor(bk.Spectrum.named("mitsuba-Au-eta"), bk.Spectrum.named("mitsuba-Au-k"),
+                                   conductor_alpha=0.3, interface_alpha=0.05)),
 }
+
+
+def _spectral_tensor(_cache={}):
+    """A spectral RGL tensor file (the tabulated rough gold's luminance times a reflectance peak
+    moving with the sample-space position; 26 wavelengths over 360-1000 nm), written once."""
+    if "m" not in _cache:
+        import tempfile
+        from bsdfkit.models import measured as mm
+        tab = bk.measured.tabulate(bk.Conductor.from_metal("Au", alpha=0.3), resolution=32, n_theta=8)
+        f = {k: np.array(v) for k, v in tab.fields.items()}
+        rgb = f.pop("rgb")
+        lum = np.einsum("c,ptcyx->ptyx", [0.2126, 0.7152, 0.0722], rgb)
+        wl = np.concatenate([np.linspace(360, 700, 18), np.linspace(720, 1000, 8)])
+        y = np.linspace(0, 1, rgb.shape[-1])[:, None]
+        peak = 0.15 + 0.7 * np.exp(-0.5 * ((wl[:, None, None] - (430 + 250 * y)) / 45.0) ** 2)
+        f["spectra"] = (lum[:, :, None] * peak[None, None]).astype(np.float32)
+        f["wavelengths"] = wl.astype(np.float32)
+        _cache["m"] = bk.Measured(mm.write_tensor(os.path.join(tempfile.mkdtemp(), "au_spec.bsdf"), f))
+    return _cache["m"]
 
 
 def _au(**kw):

@@ -347,10 +347,8 @@ def test_bad_input_and_models_without_spectral_kernel():
         bk.NormalizedFresnel(bk.Spectrum([400.0, 700.0], [1.5, 0.0]))
     with pytest.raises(ValueError, match="conductor_k"):
         bk.CoatedConductor(1.0, bk.Spectrum([400.0, 700.0], [1.0, -1.0]), method="analytic")
-    # the models still without a spectral kernel say so, naming wavelengths
-    for other in (bk.CoatedDiffuse(0.5), bk.CoatedConductor.from_metal("Au")):   # Hair, FilamentCloth: session 7
-        with pytest.raises(NotImplementedError, match="wavelengths"):
-            other.eval(z, z, wavelengths=LAM4)
+    # (a model without a spectral kernel says so, naming wavelengths: since session 7 the only one
+    # is an RGB tensor file of Measured, tested in test_spectral_measured.py)
 
 
 def test_spectral_parameters_in_rgb_mode_and_value_semantics():

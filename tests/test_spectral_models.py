@@ -438,10 +438,8 @@ def test_bad_input():
         m.eval(z, z, wavelengths=["a", "b", "c", "d"])
     with pytest.raises(ValueError, match="wavelengths"):
         m.eval(np.tile(z, (3, 1)), z, wavelengths=np.full((2, 4), 500.0))
-    # models without a spectral kernel say so
-    for other in (bk.CoatedDiffuse(0.5),):   # (session 6: Plastic, Filament; session 7: Hair, FilamentCloth have kernels)
-        with pytest.raises(NotImplementedError, match="wavelengths"):
-            other.eval(z, z, wavelengths=LAM4)
+    # (a model without a spectral kernel says so, naming wavelengths: since session 7 the only one
+    # is an RGB tensor file of Measured, tested in test_spectral_measured.py)
     # spectra as parameters are validated over [360, 830] nm, naming the parameter
     with pytest.raises(ValueError, match="reflectance"):
         bk.Diffuse(bk.Spectrum([400.0, 700.0], [0.5, 1.2]))

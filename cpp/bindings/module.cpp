@@ -28,6 +28,7 @@ void bind_grad_models(py::module_ &m);
 void bind_render(py::module_ &m);
 void bind_spectral(py::module_ &m);  // spectral.cpp: wavelengths= (issue 15)
 void bind_spectral_hair(py::module_ &m);  // spectral_hair.cpp: Hair, HairFarField, FilamentCloth spectral
+void bind_spectral_measured(py::module_ &m);  // spectral_measured.cpp: Measured, MERL, stochastic coated
 
 } // namespace bsdfkit::py_bind
 
@@ -60,6 +61,7 @@ PYBIND11_MODULE(_core, m) {
     py_bind::bind_render(m);
     py_bind::bind_spectral(m);
     py_bind::bind_spectral_hair(m);
+    py_bind::bind_spectral_measured(m);
 
     m.def("read_image", [](const std::string &path) {
         io::Image img;

@@ -265,8 +265,9 @@ template <template <typename> class SM> static bool spectral_as(const py::handle
     return true;
 }
 bool spectral_hair_render_material(const py::handle &h, render::SpectralMaterial *out);  // spectral_hair.cpp
+bool spectral_measured_render_material(const py::handle &h, render::SpectralMaterial *out);  // spectral_measured.cpp
 bool spectral_render_material(const py::handle &h, render::SpectralMaterial *out) {
-    return spectral_as<DiffuseSpectral>(h, out) || spectral_as<DiffuseTransmissionSpectral>(h, out) ||
+    return spectral_measured_render_material(h, out) || spectral_as<DiffuseSpectral>(h, out) || spectral_as<DiffuseTransmissionSpectral>(h, out) ||
            spectral_as<ConductorSpectral>(h, out) || spectral_as<ConductorSchlickSpectral>(h, out) ||
            spectral_as<ConductorF82Spectral>(h, out) || spectral_as<DielectricSpectral>(h, out) ||
            spectral_as<ThinDielectricSpectral>(h, out) || spectral_as<PlasticSpectral>(h, out) ||

@@ -34,43 +34,18 @@ N_COS, N_PHI = 6, 8
 WO = bk.direction(np.radians(40), 0.3)
 
 
-def _bins_eval(model, wo, K, rng, n_seeds=1):
-    ce, pe = L.bin_edges(N_COS, N_PHI)
-    c = ce[:-1, None, None] + (ce[1] - ce[0]) * rng.random((N_COS, N_PHI, K))
-    p = pe[None, :-1, None] + (pe[1] - pe[0]) * rng.random((N_COS, N_PHI, K))
-    s = np.sqrt(1 - c * c)
-    wi = np.stack([s * np.cos(p), s * np.sin(p), c], -1)
-    fc = model.eval(np.broadcast_to(wo, wi.shape), wi) * c[..., None]
-    om = L.bin_solid_angles(N_COS, N_PHI)[..., None]
-    return om * fc.mean(2), om ** 2 * fc.var(2, ddof=1) / K
+def _bins_eval(model, wo, K, rng):
+    return L.bins_eval(model, wo, K, rng, N_COS, N_PHI)
 
 
 def _bins_sample(model, wo, n, seed):
-    s = model.sample(wo, n=n, seed=seed)
-    w = s.weight
-    spec = (s.flags & bk.BxDFFlags.Specular) != 0
-    keep = s.valid & ~spec & (s.wi[:, 2] > 0)
-    ce, pe = L.bin_edges(N_COS, N_PHI)
-    ci = np.clip(np.searchsorted(ce, s.wi[:, 2], side="right") - 1, 0, N_COS - 1)
-    ph = np.mod(np.arctan2(s.wi[:, 1], s.wi[:, 0]), 2 * np.pi)
-    pj = np.clip(np.searchsorted(pe, ph, side="right") - 1, 0, N_PHI - 1)
-    s1 = np.zeros((N_COS, N_PHI, 3))
-    s2 = np.zeros((N_COS, N_PHI, 3))
-    for c in range(3):
-        np.add.at(s1[..., c], (ci[keep], pj[keep]), w[keep, c])
-        np.add.at(s2[..., c], (ci[keep], pj[keep]), w[keep, c] ** 2)
-    m = s1 / n
-    return m, (s2 / n - m * m) / n
+    return L.bins_sample(model, wo, n, seed, N_COS, N_PHI)
 
 
-def _z(m, v, ref):
-    return (m - ref["mean"]) / np.sqrt(v + ref["var"] + 1e-300)
+_z = L.z_scores
 
 
-def _assert_z(z, what):
-    rms = np.sqrt(np.mean(z ** 2))
-    print(f"{what}: max |z| {np.abs(z).max():.2f}, rms z {rms:.2f}, mean z {z.mean():.2f}")
-    assert np.abs(z).max() < 4.5 and rms < 1.5, what
+_assert_z = L.assert_z
 
 
 CU_ETA, CU_K = np.array(bk.METALS["Cu"][0]), np.array(bk.METALS["Cu"][1])

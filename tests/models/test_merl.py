@@ -9,34 +9,9 @@ import pytest
 
 import bsdfkit as bk
 from bsdfkit.testing import mitsuba as ref
+from bsdfkit.testing.merl_ref import index_ref as merl_index_ref, linear_corners
 
 SCALE = np.array([1.0 / 1500, 1.15 / 1500, 1.66 / 1500])
-
-
-# ---------------------------------------------------------------- independent numpy reference
-
-def merl_index_ref(wo, wi):
-    """MERL BRDFRead.cpp: std_coords_to_half_diff_coords(in = wi, out = wo) and the bin indices
-    (theta_half_index, theta_diff_index, phi_diff_index), written independently with numpy."""
-    h = wi + wo
-    h /= np.linalg.norm(h, axis=-1, keepdims=True)
-    th = np.arccos(np.clip(h[..., 2], -1, 1))
-    ph = np.arctan2(h[..., 1], h[..., 0])
-
-    def rot(v, axis, ang):   # Rodrigues, as rotate_vector
-        c, s = np.cos(ang)[..., None], np.sin(ang)[..., None]
-        return v * c + axis * np.sum(v * axis, -1, keepdims=True) * (1 - c) + np.cross(axis, v) * s
-
-    n = np.broadcast_to([0.0, 0.0, 1.0], wi.shape)
-    b = np.broadcast_to([0.0, 1.0, 0.0], wi.shape)
-    d = rot(rot(wi, n, -ph), b, -th)
-    td = np.arccos(np.clip(d[..., 2], -1, 1))
-    pd = np.arctan2(d[..., 1], d[..., 0])
-    pd = np.where(pd < 0, pd + np.pi, pd)
-    ih = np.where(th <= 0, 0, np.clip((np.sqrt(np.maximum(th, 0) / (np.pi / 2)) * 90).astype(int), 0, 89))
-    idd = np.clip((td / (np.pi / 2) * 90).astype(int), 0, 89)
-    ip = np.clip((pd / np.pi * 180).astype(int), 0, 179)
-    return ih, idd, ip, th, td, pd
 
 
 def write_raw(path, planes, dims=(90, 90, 180)):
@@ -97,17 +72,9 @@ def test_linear_lookup_matches_trilinear_reference(random_file):
     rng = np.random.default_rng(2)
     wo, wi = upper_pairs(rng, 5000)
     _, _, _, th, td, pd = merl_index_ref(wo, wi)
-    xh = np.clip(np.sqrt(th / (np.pi / 2)) * 90 - 0.5, 0, 89)
-    xd = np.clip(td / (np.pi / 2) * 90 - 0.5, 0, 89)
-    xp = pd / np.pi * 180 - 0.5
-    h0, d0 = np.minimum(xh.astype(int), 88), np.minimum(xd.astype(int), 88)
-    p0 = np.floor(xp).astype(int)
-    wh, wd, wp = xh - h0, xd - d0, xp - p0
     out = 0
-    for a, wa in ((h0, 1 - wh), (h0 + 1, wh)):
-        for b, wb in ((d0, 1 - wd), (d0 + 1, wd)):
-            for p, wpp in ((p0 % 180, 1 - wp), ((p0 + 1) % 180, wp)):
-                out = out + (wa * wb * wpp)[:, None] * vals[:, a, b, p].T
+    for (a, b, p), w in linear_corners(th, td, pd):
+        out = out + w[:, None] * vals[:, a, b, p].T
     np.testing.assert_allclose(m.eval(wo, wi), out, rtol=1e-9, atol=1e-12)
     # linear is reciprocal (the fold makes phi_d pi-periodic and the rest is symmetric)
     np.testing.assert_allclose(m.eval(wi, wo), m.eval(wo, wi), rtol=1e-7, atol=1e-12)

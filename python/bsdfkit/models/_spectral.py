@@ -35,7 +35,8 @@ DENSE_WAVELENGTHS.setflags(write=False)
 RGB_ETA_WAVELENGTH = 550.0
 
 _SPECTRAL_MODELS = ("Diffuse, DiffuseTransmission, Conductor, Dielectric, ThinDielectric, Plastic, NormalizedFresnel, "
-                    "FilamentStandard, CoatedDiffuse / CoatedConductor with method='analytic'")
+                    "FilamentStandard, CoatedDiffuse / CoatedConductor (both methods), Measured (spectral "
+                    "tensor files), MERL")
 _SPECTRAL_MODELS += ", Hair, FilamentCloth"
 
 
@@ -166,7 +167,7 @@ _CACHE_SIZE = 256
 def _spectral_core(model):
     """The model's ``_core.<Model>Spectral`` (built once per distinct model: the RGB uplift
     polishes each colour, ~1-15 ms). Models without a spectral kernel (no ``_make_spectral_core``,
-    or ``_has_spectral_kernel()`` false: the stochastic coated models) raise NotImplementedError."""
+    or ``_has_spectral_kernel()`` false) raise NotImplementedError."""
     factory = getattr(type(model), "_make_spectral_core", None)
     if factory is None or not getattr(model, "_has_spectral_kernel", lambda: True)():
         raise NotImplementedError(

@@ -51,14 +51,19 @@ _LAYER_DOC = """
         equals eval() / pdf()), reciprocal, and ignore max_depth, n_samples, seed and mis.
         A knob of the trade-off registry (an approximation: ``bk.simplify`` may choose it).
 
-    Spectral mode (``wavelengths=``, method="analytic" only; the stochastic walk raises
-    NotImplementedError): ``reflectance`` / ``conductor_eta`` / ``conductor_k`` / ``albedo`` may be
-    ``bsdfkit.Spectrum`` values (RGB ones are uplifted, Jakob & Hanika 2019: bounded for
-    reflectance and albedo, unbounded for eta and k) and are evaluated per wavelength, with the
-    internal-reflection sum M and the metal's hemispherical albedo per wavelength. The coating's
-    IOR and roughness and the thickness are wavelength-independent; so is the lobe choice (its
-    weights come from the RGB projection), hence pdf has one value per element. RGB mode projects
-    spectra to linear sRGB (D65 for reflectance / albedo, no illuminant for eta and k).
+    Spectral mode (``wavelengths=``, both methods): ``reflectance`` / ``conductor_eta`` /
+    ``conductor_k`` / ``albedo`` may be ``bsdfkit.Spectrum`` values (RGB ones are uplifted, Jakob &
+    Hanika 2019: bounded for reflectance and albedo, unbounded for eta and k) and are evaluated per
+    wavelength. The coating's IOR and roughness and the thickness are wavelength-independent.
+    method="analytic": the internal-reflection sum M and the metal's hemispherical albedo per
+    wavelength; the lobe choice (its weights from the RGB projection) is wavelength-independent,
+    hence pdf has one value per element. method="stochastic": the walk carries 4 channels (pbrt-v4's
+    SampledSpectrum): the 4 wavelengths share one path (the same hashed generator as in RGB mode),
+    the base and the medium act per wavelength and Russian roulette reads the largest of the 4
+    throughputs, so each wavelength is an unbiased estimate of its own f, and a grey spectrum gives
+    exactly the RGB model's values (same seed, same path, bit for bit); pdf is the walk's (one
+    value). RGB mode projects spectra to linear sRGB (D65 for reflectance / albedo, no illuminant
+    for eta and k) and runs the walk on the 3 channels.
 
     The estimators are pbrt-v4's (book section 14.3; Guo et al. 2018): ``eval`` is a stochastic
     estimate of f (unbiased up to max_depth), ``sample`` returns a path sample whose ``pdf`` is
@@ -163,15 +168,24 @@ def _method_text(p) -> str:
 
 
 class _AnalyticSpectral:
-    """Spectral kernels exist for the analytic method only (batch_spectral.h); the stochastic
-    walk raises NotImplementedError for wavelengths=."""
+    """Spectral kernels exist for both methods (the analytic closed form: batch_spectral.h; the
+    random walk with 4 channels: spectral/layered_spectral.h). The ``color`` knob of the trade-off
+    registry (tuning/configs.py reads ``_spectral_ok``) applies to the analytic method only: the
+    walk's RGB-versus-spectral error would be measured through its own noise."""
 
     @staticmethod
     def _spectral_ok(p) -> bool:
         return p["method"] == "analytic"
 
     def _has_spectral_kernel(self) -> bool:
-        return self._spectral_ok(self._params)
+        return True
+
+    def _has_medium(self) -> bool:
+        """The walk samples the medium: the albedo is not 0 (over [360, 830] nm for a spectrum)."""
+        a = self._params["albedo"]
+        if isinstance(a, Spectrum):
+            return _sp.spectral_max(a, "reflectance") > 0
+        return bool(np.any(np.asarray(a) > 0))
 
 
 class CoatedDiffuse(_AnalyticSpectral, BxDF):
@@ -227,11 +241,13 @@ class CoatedDiffuse(_AnalyticSpectral, BxDF):
                     alpha_x=p["alpha_x"], alpha_y=p["alpha_y"], masking=_MASKING[p["masking"]], **_layer_kw(p))
 
     def _make_spectral_core(self):
-        # batch_spectral.h CoatedDiffuseAnalyticSpectral: reflectance and albedo per wavelength
+        # reflectance and albedo per wavelength: batch_spectral.h CoatedDiffuseAnalyticSpectral
+        # (analytic), spectral/layered_spectral.h CoatedDiffuseSpectral (the walk)
         p = self._params
-        return _core.CoatedDiffuseAnalyticSpectral(_sp.spectral_param(p["reflectance"], "reflectance"),
-                                                   _sp.spectral_param(p["albedo"], "reflectance"),
-                                                   **self._core_kwargs())
+        r, a = _sp.spectral_param(p["reflectance"], "reflectance"), _sp.spectral_param(p["albedo"], "reflectance")
+        if p["method"] == "analytic":
+            return _core.CoatedDiffuseAnalyticSpectral(r, a, **self._core_kwargs())
+        return _core.CoatedDiffuseSpectral(r, a, self._has_medium(), **self._core_kwargs())
 
     @staticmethod
     def relative_cost(params, dtype=None) -> float:
@@ -335,12 +351,14 @@ class CoatedConductor(_AnalyticSpectral, BxDF):
                     interface_alpha_y=p["interface_alpha_y"], masking=_MASKING[p["masking"]], **_layer_kw(p))
 
     def _make_spectral_core(self):
-        # batch_spectral.h CoatedConductorAnalyticSpectral: the metal's eta, k and the albedo per wavelength
+        # the metal's eta, k and the albedo per wavelength: batch_spectral.h
+        # CoatedConductorAnalyticSpectral (analytic), spectral/layered_spectral.h CoatedConductorSpectral (the walk)
         p = self._params
-        return _core.CoatedConductorAnalyticSpectral(_sp.spectral_param(p["conductor_eta"], "unbounded"),
-                                                     _sp.spectral_param(p["conductor_k"], "unbounded"),
-                                                     _sp.spectral_param(p["albedo"], "reflectance"),
-                                                     **self._core_kwargs())
+        e, k = _sp.spectral_param(p["conductor_eta"], "unbounded"), _sp.spectral_param(p["conductor_k"], "unbounded")
+        a = _sp.spectral_param(p["albedo"], "reflectance")
+        if p["method"] == "analytic":
+            return _core.CoatedConductorAnalyticSpectral(e, k, a, **self._core_kwargs())
+        return _core.CoatedConductorSpectral(e, k, a, self._has_medium(), **self._core_kwargs())
 
     @staticmethod
     def relative_cost(params, dtype=None) -> float:

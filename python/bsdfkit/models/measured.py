@@ -22,7 +22,7 @@ from .. import _core
 from .base import BxDF
 from .registry import KnobDecl
 
-__all__ = ["example_dir", "MERL", "MERL_SCALE", "MERL_DIMS", "read_merl", "parse_merl", "Measured", "read_tensor", "write_tensor", "parse_tensor",
+__all__ = ["example_dir", "MERL", "MERL_SCALE", "MERL_DIMS", "read_merl", "parse_merl", "merl_uplift_coefficients", "Measured", "read_tensor", "write_tensor", "parse_tensor",
            "tensor_bytes", "validate_measured"]
 
 #: MERL's channel scale factors (RED_SCALE, GREEN_SCALE, BLUE_SCALE of BRDFRead.cpp): stored
@@ -137,6 +137,41 @@ def _merl_table(digest: str, linear: bool, values=None):
     return t
 
 
+_SPECTRAL_TABLES: "collections.OrderedDict" = collections.OrderedDict()   # digest -> _core.MERLSpectralTable
+
+
+def merl_uplift_coefficients(values: np.ndarray, chunk: int = 1 << 18) -> np.ndarray:
+    """pbrt-v4's ``RGBUnboundedSpectrum`` of every MERL bin: float32 (..., 4) = (c0, c1, c2, scale)
+    with value(lambda) = scale * s(c0 lambda^2 + c1 lambda + c2) (lambda in nm, s the Jakob &
+    Hanika 2019 sigmoid), scale = 2 max(rgb), the coefficients of rgb / scale from the sRGB table
+    (:func:`bsdfkit.spectral.uplift.rgb_coefficients`, the table lookup as pbrt-v4, no polish).
+    values: (..., 3) RGB >= 0 (a zero bin gets scale 0: the spectrum 0)."""
+    from ..spectral import uplift
+    v = np.asarray(values, np.float64)
+    flat = v.reshape(-1, 3)
+    out = np.empty((flat.shape[0], 4), np.float32)
+    for i in range(0, flat.shape[0], chunk):
+        c, scale = uplift.rgb_coefficients(flat[i:i + chunk], "unbounded")
+        out[i:i + chunk, :3] = c
+        out[i:i + chunk, 3] = scale
+    return out.reshape(v.shape[:-1] + (4,))
+
+
+def _merl_spectral_table(digest: str, table):
+    """The uplifted bins of a MERL table (one per file content, shared; 16 bytes per bin)."""
+    with _LOCK:
+        t = _SPECTRAL_TABLES.get(digest)
+        if t is not None:
+            _SPECTRAL_TABLES.move_to_end(digest)
+            return t
+    t = _core.MERLSpectralTable(merl_uplift_coefficients(table.values()))
+    with _LOCK:
+        _SPECTRAL_TABLES[digest] = t
+        while len(_SPECTRAL_TABLES) > 2:
+            _SPECTRAL_TABLES.popitem(last=False)
+    return t
+
+
 class MERL(BxDF):
     """A MERL measured isotropic BRDF table (Matusik et al. 2003, ``.binary``), evaluated and
     importance-sampled.
@@ -155,6 +190,14 @@ class MERL(BxDF):
     wi are on the same side. Sampling: bsdfkit's tabulated half-vector sampler (32 incidence
     angles x 90 theta_h rows x 64 azimuth columns, piecewise constant per solid angle, built from
     luminance(f) cos(theta_i) on load) mixed with 10 % cosine sampling; see bxdfs/merl.h.
+
+    Spectral mode (``wavelengths=``): MERL data are RGB. Every bin is uplifted once (on the first
+    spectral call) to pbrt-v4's ``RGBUnboundedSpectrum`` (2 max(rgb) times the Jakob & Hanika
+    sigmoid of rgb / (2 max(rgb)); :func:`merl_uplift_coefficients`), kept as 4 float32 per bin
+    (23.3 MB per table, beside the RGB table's 52.5 MB of float64 + float32 values). f(lambda) is the
+    uplifted spectrum of the bin the RGB model reads (nearest) or the trilinear interpolation of
+    the 8 bins' spectra at lambda with the RGB model's weights (linear); pdf and sampling are the
+    RGB model's (wavelength-independent). In RGB mode the bins' RGB values are used as they are.
 
     Pickles by (path, digest): unpickling re-reads the file and refuses a changed one.
     """
@@ -214,6 +257,13 @@ class MERL(BxDF):
 
     def _make_core(self):
         return getattr(_core, _INTERPOLATION[self._params["interpolation"]])(table=self._keep[0])
+
+    def _make_spectral_core(self):
+        # spectral/measured_spectral.h MERLNearestSpectral / MERLLinearSpectral: every bin uplifted once
+        table = self._keep[0]
+        coef = _merl_spectral_table(self._params["digest"], table)
+        return getattr(_core, _INTERPOLATION[self._params["interpolation"]] + "Spectral")(table=table,
+                                                                                          coefficients=coef)
 
     @property
     def values(self) -> np.ndarray:
@@ -493,6 +543,26 @@ def _measured_entry(digest, data: bytes | None, name: str):
     return e
 
 
+_SPECTRA: "collections.OrderedDict" = collections.OrderedDict()   # digest -> _core.MeasuredSpectraTable
+
+
+def _measured_spectra(digest: str, fields: dict, info: dict):
+    """The spectra warp of a spectral tensor file (built on the first spectral call, shared)."""
+    with _LOCK:
+        t = _SPECTRA.get(digest)
+        if t is not None:
+            _SPECTRA.move_to_end(digest)
+            return t
+    t = _core.MeasuredSpectraTable(np.asarray(fields["spectra"], np.float64),
+                                   np.asarray(fields["wavelengths"], np.float64).tolist(),
+                                   info["phi_i"].tolist(), info["theta_i"].tolist())
+    with _LOCK:
+        _SPECTRA[digest] = t
+        while len(_SPECTRA) > _MAX_TABLES:
+            _SPECTRA.popitem(last=False)
+    return t
+
+
 class Measured(BxDF):
     """A measured BRDF in the RGL tensor format (Dupuy & Jakob 2018; the ``.bsdf`` files of the
     RGL material database), as pbrt-v4's ``MeasuredBxDF`` and Mitsuba 3's ``measured`` read it.
@@ -512,6 +582,16 @@ class Measured(BxDF):
     Tables are shared and immutable. A model loaded from a file pickles by (path, SHA-256 digest)
     and refuses a changed file when unpickled; a model built in memory (:func:`bsdfkit.measured.tabulate`)
     pickles by value (its serialized tensor file).
+
+    Spectral mode (``wavelengths=``, spectral files only; an RGB file raises NotImplementedError,
+    as pbrt-v4 and Mitsuba's spectral variants need spectral files): f at each wavelength comes
+    from the file's ``spectra`` tensor at the same sample-space point the RGB mode reads, linear in
+    wavelength between the file's tabulated wavelengths (the multilinear interpolation of pbrt-v4's
+    MeasuredBxDF and Mitsuba's ``measured``), negative values clamped to 0 as pbrt-v4 does,
+    times ndf / (4 sigma); wavelengths outside the file's range take its end values (both
+    renderers clamp the interpolation weight). pdf and sampling are the RGB mode's (the luminance
+    and VNDF warps do not depend on the wavelength). In RGB mode the spectra are projected once,
+    at load (above).
     """
 
     # registry declarations (issue 10)
@@ -602,6 +682,16 @@ class Measured(BxDF):
 
     def _make_core(self):
         return _core.Measured(table=self._entry()[2])
+
+    def _make_spectral_core(self):
+        # spectral/measured_spectral.h MeasuredSpectral: the file's spectra per wavelength
+        fields, info, table, _ = self._entry()
+        if not info["spectral"]:
+            raise NotImplementedError(
+                "wavelengths: this tensor file holds RGB data (an `rgb` field, e.g. *_rgb.bsdf or "
+                "bsdfkit.measured.tabulate); spectral mode needs a spectral file (`spectra` and `wavelengths` "
+                "fields, *_spec.bsdf), as pbrt-v4 and Mitsuba's spectral variants do; call without wavelengths=")
+        return _core.MeasuredSpectral(table=table, spectra=_measured_spectra(self._params["digest"], fields, info))
 
     @property
     def fields(self) -> dict:

@@ -32,7 +32,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Slab", "simulate", "bin_solid_angles", "bin_edges"]
+from .._enums import BxDFFlags
+
+__all__ = ["Slab", "simulate", "bin_solid_angles", "bin_edges", "bins_eval", "bins_sample", "z_scores", "assert_z"]
 
 
 @dataclass(frozen=True)
@@ -184,16 +186,21 @@ def simulate(slab: Slab, wo, n_photons, *, seed=0, n_cos=6, n_phi=8, max_events=
     * ``specular`` (3,): weight of the specular entrance reflection per photon (smooth coats);
     * ``albedo`` (3,): total exit weight per photon (everything, specular included);
     * ``truncated``: fraction of photons still alive after max_events (should be ~0).
+
+    Channels: 3, or more when the slab's channel parameters (albedo, and reflectance or
+    cond_eta / cond_k) have more entries (e.g. 4 wavelengths; give them all the same length).
     """
     rng = np.random.default_rng(seed)
     wo = np.asarray(wo, float) / np.linalg.norm(wo)
-    alb = np.broadcast_to(np.asarray(slab.albedo, float), (3,))
-    R = np.broadcast_to(np.asarray(slab.reflectance, float), (3,))
+    base = slab.reflectance if slab.base == "diffuse" else slab.cond_eta
+    nc = max(3, np.size(slab.albedo), np.size(base))
+    alb = np.broadcast_to(np.asarray(slab.albedo, float), (nc,))
+    R = np.broadcast_to(np.asarray(slab.reflectance, float), (nc,)) if slab.base == "diffuse" else None
     ce, cos_edges, phi_edges = None, *bin_edges(n_cos, n_phi)
-    s1 = np.zeros((n_cos, n_phi, 3))
-    s2 = np.zeros((n_cos, n_phi, 3))
-    spec = np.zeros(3)
-    total = np.zeros(3)
+    s1 = np.zeros((n_cos, n_phi, nc))
+    s2 = np.zeros((n_cos, n_phi, nc))
+    spec = np.zeros(nc)
+    total = np.zeros(nc)
     alive_end = 0
     done = 0
     while done < n_photons:
@@ -202,7 +209,7 @@ def simulate(slab: Slab, wo, n_photons, *, seed=0, n_cos=6, n_phi=8, max_events=
         d = np.tile(-wo, (n, 1))
         # entrance
         d, wgt, tr = _interface(d, slab.eta, slab.alpha, rng, slab.masking)
-        w = wgt[:, None] * np.ones((1, 3))
+        w = wgt[:, None] * np.ones((1, nc))
         # photons that reflect at the entrance leave at once
         out = ~tr
         _tally(d[out], w[out], s1, s2, cos_edges, phi_edges, specular=slab.alpha < 1e-3, spec_acc=spec)
@@ -265,6 +272,58 @@ def _tally(d, w, s1, s2, cos_edges, phi_edges, specular=False, spec_acc=None):
     ci = np.clip(np.searchsorted(cos_edges, d[:, 2], side="right") - 1, 0, len(cos_edges) - 2)
     ph = np.mod(np.arctan2(d[:, 1], d[:, 0]), 2 * np.pi)
     pi = np.clip(np.searchsorted(phi_edges, ph, side="right") - 1, 0, len(phi_edges) - 2)
-    for c in range(3):
+    for c in range(s1.shape[-1]):
         np.add.at(s1[..., c], (ci, pi), w[:, c])
         np.add.at(s2[..., c], (ci, pi), w[:, c] ** 2)
+
+
+# ------------------------------------------------------------------ a model's estimates per bin
+
+def bins_eval(model, wo, K, rng, n_cos=6, n_phi=8, **kw):
+    """Monte Carlo estimate of the integral of E[f] cos over each (cos theta, phi) bin from K
+    uniform directions per bin (each an independent realization of a stochastic f): (mean,
+    variance of the mean), (n_cos, n_phi, channels). ``kw`` goes to ``model.eval`` (e.g.
+    ``wavelengths``)."""
+    ce, pe = bin_edges(n_cos, n_phi)
+    c = ce[:-1, None, None] + (ce[1] - ce[0]) * rng.random((n_cos, n_phi, K))
+    p = pe[None, :-1, None] + (pe[1] - pe[0]) * rng.random((n_cos, n_phi, K))
+    s = np.sqrt(1 - c * c)
+    wi = np.stack([s * np.cos(p), s * np.sin(p), c], -1)
+    fc = model.eval(np.broadcast_to(wo, wi.shape), wi, **kw) * c[..., None]
+    om = bin_solid_angles(n_cos, n_phi)[..., None]
+    return om * fc.mean(2), om ** 2 * fc.var(2, ddof=1) / K
+
+
+def bins_sample(model, wo, n, seed, n_cos=6, n_phi=8, **kw):
+    """The weighted histogram of n samples' f |cos| / pdf over the bins (specular samples and
+    samples below the surface left out): (mean, variance of the mean) per bin and channel. ``kw``
+    goes to ``model.sample``."""
+    s = model.sample(wo, n=n, seed=seed, **kw)
+    w = s.weight
+    spec = (s.flags & BxDFFlags.Specular) != 0
+    keep = s.valid & ~spec & (s.wi[:, 2] > 0)
+    ce, pe = bin_edges(n_cos, n_phi)
+    ci = np.clip(np.searchsorted(ce, s.wi[:, 2], side="right") - 1, 0, n_cos - 1)
+    ph = np.mod(np.arctan2(s.wi[:, 1], s.wi[:, 0]), 2 * np.pi)
+    pj = np.clip(np.searchsorted(pe, ph, side="right") - 1, 0, n_phi - 1)
+    nc = w.shape[-1]
+    s1 = np.zeros((n_cos, n_phi, nc))
+    s2 = np.zeros((n_cos, n_phi, nc))
+    for c in range(nc):
+        np.add.at(s1[..., c], (ci[keep], pj[keep]), w[keep, c])
+        np.add.at(s2[..., c], (ci[keep], pj[keep]), w[keep, c] ** 2)
+    m = s1 / n
+    return m, (s2 / n - m * m) / n
+
+
+def z_scores(m, v, ref):
+    """Per bin and channel z of an estimate (mean m, variance v) against a simulate() result."""
+    return (m - ref["mean"]) / np.sqrt(v + ref["var"] + 1e-300)
+
+
+def assert_z(z, what):
+    """Every |z| < 4.5 (1e-3 family-wise over ~150 bin x channel cells, Bonferroni) and the
+    root-mean-square z < 1.5 (a systematic offset shows there first)."""
+    rms = np.sqrt(np.mean(z ** 2))
+    print(f"{what}: max |z| {np.abs(z).max():.2f}, rms z {rms:.2f}, mean z {z.mean():.2f}")
+    assert np.abs(z).max() < 4.5 and rms < 1.5, what

@@ -105,7 +105,7 @@ template <typename F> inline uint64_t hash_vec(uint64_t h, const Vec3<F> &w) {
 }
 
 // pbrt-v4's "!bs || !bs->f || bs->pdf == 0 || bs->wi.z == 0" test of an interface sample.
-template <typename F> inline bool usable(const BSDFSample<F> &s) {
+template <typename F, int N> inline bool usable(const BSDFSample<F, N> &s) {
     return s.valid & nonzero_mask(s.f) & (s.pdf > F(0)) & (s.wi.z != F(0));
 }
 
@@ -188,11 +188,16 @@ using CoatedConductorParams = CoatedConductorParamsT<>;
 // length is data-dependent (each path ends by absorption, escape, Russian roulette or max_depth), so
 // the lanes of a packet would diverge at every bounce and wait for the longest walk; per element,
 // each path costs only its own depth. The analytic counterpart (layered_analytic.h) runs on packets.
-template <typename F, typename Bottom> struct LayeredBxDF {
+// NC: channels of the throughput, 3 (RGB) or 4 (spectral mode: one per wavelength, with a 4-channel
+// Bottom; pbrt-v4 carries a SampledSpectrum through the walk). The coating is grey (one eta), so
+// its 3-channel values enter as their first channel (grey()); Russian roulette reads the largest
+// channel, the only place where the channels meet.
+template <typename F, typename Bottom, int NC = 3> struct LayeredBxDF {
+    using Spec = Spectrum<F, NC>;
     DielectricBxDF<F> top;
     Bottom bottom;
     F thickness = F(0.01);
-    Spectrum<F> albedo{F(0)};
+    Spec albedo{F(0)};
     bool has_albedo = false;
     F g = 0;
     int max_depth = 10, n_samples = 1;
@@ -201,6 +206,7 @@ template <typename F, typename Bottom> struct LayeredBxDF {
 
     void set_layer(const LayerParams &p) {
         thickness = max_(F(p.thickness), F(std::numeric_limits<float>::min()));
+        albedo = Spec(F(0));
         for (int c = 0; c < 3; ++c) albedo[c] = F(p.albedo[c]);
         has_albedo = !albedo.is_black();
         g = F(clamp(p.g, -0.99, 0.99));
@@ -217,6 +223,26 @@ template <typename F, typename Bottom> struct LayeredBxDF {
                               : top.pdf(-w, wi, mode, RT_Transmission);
     }
 
+    // The coating's (grey) value as NC channels (the identity for RGB).
+    static Spec grey(const Spectrum<F> &s) {
+        if constexpr (NC == 3) return s; else return Spec(s[0]);
+    }
+    static BSDFSample<F, NC> grey(const BSDFSample<F> &s) {
+        if constexpr (NC == 3) {
+            return s;
+        } else {
+            BSDFSample<F, NC> r;
+            r.f = Spec(s.f[0]);
+            r.wi = s.wi;
+            r.pdf = s.pdf;
+            r.flags = s.flags;
+            r.eta = s.eta;
+            r.pdf_is_proportional = s.pdf_is_proportional;
+            r.valid = s.valid;
+            return r;
+        }
+    }
+
     bool top_specular() const { return top.is_smooth(); }
     bool bottom_specular() const { return (bottom.flags() & Specular) != 0; }
 
@@ -231,15 +257,15 @@ template <typename F, typename Bottom> struct LayeredBxDF {
     }
 
     // ---- f: pbrt-v4 LayeredBxDF::f (book eq. 14.38 estimator), exit interface = top
-    Spectrum<F> f(Vec3<F> wo, Vec3<F> wi, TransportMode mode) const {
+    Spec f(Vec3<F> wo, Vec3<F> wi, TransportMode mode) const {
         if (wo.z < F(0)) {  // two-sided
             wo = -wo;
             wi = -wi;
         }
-        Spectrum<F> fsum(F(0));
+        Spec fsum(F(0));
         if (!SameHemisphere(wo, wi)) return fsum;  // no transmission through the base
         // specular or glossy reflection at the entrance, counted once per sample
-        fsum = top.f(wo, wi, mode) * F(n_samples);
+        fsum = grey(top.f(wo, wi, mode)) * F(n_samples);
         WalkRNG<F> r{hash_vec(hash_vec(mix64(seed), wo), wi)};
         const F exit_z = thickness;
         const bool top_spec = top_specular(), bot_spec = bottom_specular();
@@ -253,8 +279,8 @@ template <typename F, typename Bottom> struct LayeredBxDF {
             Point2<F> u1{r(), r()};
             BSDFSample<F> wis = top.sample_f(wi, uc, u1, flip_mode(mode), RT_Transmission);
             if (!usable(wis)) continue;
-            Spectrum<F> beta = wos.f * (AbsCosTheta(wos.wi) / wos.pdf);
-            Spectrum<F> wis_w = wis.f / wis.pdf;
+            Spec beta = grey(wos.f) * (AbsCosTheta(wos.wi) / wos.pdf);
+            Spec wis_w = grey(wis.f) / wis.pdf;
             F z = thickness;
             Vec3<F> w = wos.wi;
             for (int depth = 0; depth < max_depth; ++depth) {
@@ -288,7 +314,7 @@ template <typename F, typename Bottom> struct LayeredBxDF {
                         z = zp;
                         // the phase sample heading for the exit interface: its transmission (MIS)
                         if (((z < exit_z && w.z > F(0)) || (z > exit_z && w.z < F(0))) && !top_spec) {
-                            Spectrum<F> fe = top.f(-w, wi, mode);
+                            Spec fe = grey(top.f(-w, wi, mode));
                             if (nonzero_mask(fe)) {
                                 F ep = exit_pdf(w, wi, mode);
                                 fsum = fsum + beta * fe * (LayerTr(zp - exit_z, w) * PowerHeuristic(ps_pdf, ep));
@@ -304,7 +330,7 @@ template <typename F, typename Bottom> struct LayeredBxDF {
                     Point2<F> u{r(), r()};
                     BSDFSample<F> bs = top.sample_f(-w, uc, u, mode, RT_Reflection);
                     if (!usable(bs)) break;
-                    beta = beta * bs.f * (AbsCosTheta(bs.wi) / bs.pdf);
+                    beta = beta * grey(bs.f) * (AbsCosTheta(bs.wi) / bs.pdf);
                     w = bs.wi;
                 } else {
                     // the base: NEE along wis, then a reflection sample, then its exit (MIS)
@@ -315,12 +341,12 @@ template <typename F, typename Bottom> struct LayeredBxDF {
                     }
                     uc = r();
                     Point2<F> u{r(), r()};
-                    BSDFSample<F> bs = bottom.sample_f(-w, uc, u, mode, RT_Reflection);
+                    BSDFSample<F, NC> bs = bottom.sample_f(-w, uc, u, mode, RT_Reflection);
                     if (!usable(bs)) break;
                     beta = beta * bs.f * (AbsCosTheta(bs.wi) / bs.pdf);
                     w = bs.wi;
                     if (!top_spec) {
-                        Spectrum<F> fe = top.f(-w, wi, mode);
+                        Spec fe = grey(top.f(-w, wi, mode));
                         if (nonzero_mask(fe)) {
                             F wt = F(1);
                             if (!bot_spec) wt = PowerHeuristic(bs.pdf, exit_pdf(w, wi, mode));
@@ -334,8 +360,8 @@ template <typename F, typename Bottom> struct LayeredBxDF {
     }
 
     // ---- sample_f: pbrt-v4 LayeredBxDF::Sample_f (pdf_is_proportional = true)
-    BSDFSample<F> sample_f(Vec3<F> wo, F uc, Point2<F> u, TransportMode mode, uint8_t sample_flags) const {
-        BSDFSample<F> none;
+    BSDFSample<F, NC> sample_f(Vec3<F> wo, F uc, Point2<F> u, TransportMode mode, uint8_t sample_flags) const {
+        BSDFSample<F, NC> none;
         if (!(sample_flags & RT_Reflection)) return none;  // the walk only returns reflection
         bool flip = wo.z < F(0);
         if (flip) wo = -wo;
@@ -344,13 +370,13 @@ template <typename F, typename Bottom> struct LayeredBxDF {
         if (bs.is_reflection()) {
             if (flip) bs.wi = -bs.wi;
             bs.pdf_is_proportional = true;
-            return bs;
+            return grey(bs);
         }
         Vec3<F> w = bs.wi;
         bool specular_path = bs.is_specular();
         uint64_t h = hash3(mix64(seed ^ 0x5a5a5a5aull), float_bits(uc), float_bits(u.x) ^ (float_bits(u.y) << 1));
         WalkRNG<F> r{hash_vec(h, wo)};
-        Spectrum<F> f = bs.f * AbsCosTheta(bs.wi);
+        Spec f = grey(bs.f) * AbsCosTheta(bs.wi);
         F pdf = bs.pdf;
         F z = thickness;
         for (int depth = 0; depth < max_depth; ++depth) {
@@ -384,14 +410,15 @@ template <typename F, typename Bottom> struct LayeredBxDF {
             }
             F uc2 = r();
             Point2<F> u2{r(), r()};
-            BSDFSample<F> is = z == F(0) ? bottom.sample_f(-w, uc2, u2, mode, RT_All) : top.sample_f(-w, uc2, u2, mode, RT_All);
+            BSDFSample<F, NC> is = z == F(0) ? bottom.sample_f(-w, uc2, u2, mode, RT_All)
+                                             : grey(top.sample_f(-w, uc2, u2, mode, RT_All));
             if (!usable(is)) return none;
             f = f * is.f;
             pdf *= is.pdf;
             specular_path = specular_path & is.is_specular();
             w = is.wi;
             if (is.is_transmission()) {  // left the slab (only the top transmits)
-                BSDFSample<F> out;
+                BSDFSample<F, NC> out;
                 out.f = f;
                 out.wi = flip ? -w : w;
                 out.pdf = pdf;
@@ -434,7 +461,7 @@ template <typename F, typename Bottom> struct LayeredBxDF {
                 } else {
                     uc = r();
                     Point2<F> u2{r(), r()};
-                    BSDFSample<F> rs = bottom.sample_f(-wos.wi, uc, u2, mode, RT_All);
+                    BSDFSample<F, NC> rs = bottom.sample_f(-wos.wi, uc, u2, mode, RT_All);
                     if (!(rs.valid & nonzero_mask(rs.f) & (rs.pdf > F(0)))) continue;
                     if (bot_spec) {
                         psum += top.pdf(-rs.wi, wi, mode, RT_All);

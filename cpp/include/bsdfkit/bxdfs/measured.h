@@ -96,38 +96,64 @@ template <typename F> struct MeasuredKernel {
         return c;
     }
 
-    // rgb at sample-space point s, times ndf / (4 sigma) if the file says so: f cos(theta_i).
+    // ndf / (4 sigma) if the file says so (else 1): the factor of the tabulated reflectance.
+    F jacobian_scale(const Coords &c) const {
+        return jacobian ? ndf.eval(c.u_wm, nullptr) / (F(4) * sigma.eval(c.u_wo, nullptr)) : F(1);
+    }
+
+    // rgb at sample-space point s, times jacobian_scale: f cos(theta_i).
     Spectrum<F> f_cos(Point2<F> s, const Coords &c) const {
         Spectrum<F> v;
         auto w = rgb.weights(c.params);  // one parameter search for the three channels
         for (int ch = 0; ch < 3; ++ch) v[ch] = rgb.eval(s, w, ch);
-        F scale = jacobian ? ndf.eval(c.u_wm, nullptr) / (F(4) * sigma.eval(c.u_wo, nullptr)) : F(1);
-        return v * scale;
+        return v * jacobian_scale(c);
     }
 
-    // f and pdf of one pair (either may be skipped: a null pointer, a constant after
-    // inlining) through ONE flip + fold + coordinates prelude and ONE VNDF inverse, shared by
-    // f(), pdf() and sample_f(). pdf is that of wi (upper hemisphere, folded) as sample_f
-    // produces it, with all lobes allowed.
-    void f_pdf(Vec3<F> wo, Vec3<F> wi, Spectrum<F> *f_out, F *pdf_out) const {
-        bool active = SameHemisphere(wo, wi);
+    // The part of f and pdf shared by every channel layout (RGB here, wavelengths in
+    // spectral/measured_spectral.h): ONE flip + fold + coordinates prelude and ONE VNDF inverse.
+    struct Lookup {
+        Coords c;
+        Point2<F> s;     // wm's point in sample space (the VNDF inverse)
+        F vndf_pdf;
+        F cos_i;         // wi.z after the flip
+        F wo_wm;         // wo . wm after the flip and fold
+        bool active;     // same hemisphere
+    };
+    Lookup lookup(Vec3<F> wo, Vec3<F> wi) const {
+        Lookup l;
+        l.active = SameHemisphere(wo, wi);
         bool flip = wo.z < F(0);
         wo = select(flip, -wo, wo);
         wi = select(flip, -wi, wi);
         F sx, sy;
         fold(wo, wi, &sx, &sy);
-        Coords c = coords(wo, wi);
-        auto [s, vndf_pdf] = vndf.invert(c.u_wm, c.params);
-        if (f_out) {
-            Spectrum<F> v = f_cos(s, c) * (F(1) / max_(wi.z, F(measured::kMinCos)));
-            *f_out = select(active & (wi.z > F(0)), v, Spectrum<F>(F(0)));
-        }
-        if (pdf_out) {
-            F lum_pdf = luminance.eval(s, c.params);
-            F sin_m = std::sqrt(c.wm.x * c.wm.x + c.wm.y * c.wm.y);
-            F jac = max_(F(2) * sqr(Pi<F>) * c.u_wm.x * sin_m, F(1e-6)) * F(4) * dot(wo, c.wm);
-            *pdf_out = active ? vndf_pdf * lum_pdf / jac : F(0);
-        }
+        l.c = coords(wo, wi);
+        auto [s, vndf_pdf] = vndf.invert(l.c.u_wm, l.c.params);
+        l.s = s;
+        l.vndf_pdf = vndf_pdf;
+        l.cos_i = wi.z;
+        l.wo_wm = dot(wo, l.c.wm);
+        return l;
+    }
+    // f from f cos(theta_i): the bounded quotient (see the header), 0 off the hemisphere.
+    template <int N> Spectrum<F, N> f_of(const Spectrum<F, N> &fcos, const Lookup &l) const {
+        Spectrum<F, N> v = fcos * (F(1) / max_(l.cos_i, F(measured::kMinCos)));
+        return select(l.active & (l.cos_i > F(0)), v, Spectrum<F, N>(F(0)));
+    }
+    // pdf of wi as sample_f produces it (all lobes allowed).
+    F pdf_of(const Lookup &l) const {
+        F lum_pdf = luminance.eval(l.s, l.c.params);
+        F sin_m = std::sqrt(l.c.wm.x * l.c.wm.x + l.c.wm.y * l.c.wm.y);
+        F jac = max_(F(2) * sqr(Pi<F>) * l.c.u_wm.x * sin_m, F(1e-6)) * F(4) * l.wo_wm;
+        return l.active ? l.vndf_pdf * lum_pdf / jac : F(0);
+    }
+
+    // f and pdf of one pair (either may be skipped: a null pointer, a constant after
+    // inlining) through one lookup(), shared by f(), pdf() and sample_f().
+    void f_pdf(Vec3<F> wo, Vec3<F> wi, Spectrum<F> *f_out, F *pdf_out) const {
+        Lookup l = lookup(wo, wi);
+        if (f_out) *f_out = f_of(f_cos(l.s, l.c), l);
+        if (pdf_out) *pdf_out = pdf_of(l);
     }
 
     Spectrum<F> f(Vec3<F> wo, Vec3<F> wi, TransportMode) const {
@@ -142,43 +168,42 @@ template <typename F> struct MeasuredKernel {
         return keep_or_zero(p, (sample_flags & RT_Reflection) != 0);
     }
 
-    BSDFSample<F> sample_f(Vec3<F> wo, F, Point2<F> u, TransportMode mode, uint8_t sample_flags) const {
+    // The sampled direction (luminance warp, then the VNDF warp; Mitsuba swaps the uniforms
+    // first) in wo's frame (unflipped, unfolded); *ok: wo and wi above the surface after the flip.
+    Vec3<F> sample_wi(Vec3<F> wo, Point2<F> u, bool *ok) const {
         using namespace measured;
-        const Vec3<F> wo_in = wo;
         bool flip = wo.z < F(0);
         wo = select(flip, -wo, wo);
         Vec3<F> dummy(0, 0, 1);
         F sx, sy;
         fold(wo, dummy, &sx, &sy);
         F theta_o = elevation(wo), phi_o = std::atan2(wo.y, wo.x);
-        Coords c;
-        c.params[0] = phi_o;
-        c.params[1] = theta_o;
-        c.u_wo = {theta2u(theta_o), phi2u(phi_o)};
-        // luminance warp, then the VNDF warp (Mitsuba swaps the uniforms first)
-        auto [s, lum_pdf_unused] = luminance.sample(Point2<F>{u.y, u.x}, c.params);
-        auto [um, vndf_pdf_unused] = vndf.sample(s, c.params);
+        F params[2] = {phi_o, theta_o};
+        auto [s, lum_pdf_unused] = luminance.sample(Point2<F>{u.y, u.x}, params);
+        auto [um, vndf_pdf_unused] = vndf.sample(s, params);
         (void)lum_pdf_unused;
         (void)vndf_pdf_unused;
         F phi_m = u2phi(um.y) + (isotropic ? phi_o : F(0)), theta_m = u2theta(um.x);
         F sp, cp, st, ct;
         sincos_(phi_m, &sp, &cp);
         sincos_(theta_m, &st, &ct);
-        Vec3<F> m(cp * st, sp * st, ct);
-        c.wm = m;
-        c.u_wm = um;
-        Vec3<F> wi = Reflect(wo, m);
-        BSDFSample<F> r;
+        Vec3<F> wi = Reflect(wo, Vec3<F>(cp * st, sp * st, ct));
+        *ok = (wo.z > F(0)) & (wi.z > F(0));
         wi.x = mulsign_neg(wi.x, sx);
         wi.y = mulsign_neg(wi.y, sy);
-        r.wi = select(flip, -wi, wi);
+        return select(flip, -wi, wi);
+    }
+
+    BSDFSample<F> sample_f(Vec3<F> wo, F, Point2<F> u, TransportMode, uint8_t sample_flags) const {
+        BSDFSample<F> r;
+        bool ok;
+        r.wi = sample_wi(wo, u, &ok);
         // f and pdf of the final direction through eval's own path (the warp inverse, once for
         // both), so that sample() agrees with eval()/pdf() to the last bit, not only to the
         // inverse's round trip.
-        (void)mode;
-        f_pdf(wo_in, r.wi, &r.f, &r.pdf);
+        f_pdf(wo, r.wi, &r.f, &r.pdf);
         r.flags = uint8_t(GlossyReflection);
-        r.valid = ((sample_flags & RT_Reflection) != 0) & (wo.z > F(0)) & (wi.z > F(0));
+        r.valid = ((sample_flags & RT_Reflection) != 0) & ok;
         return r;
     }
 

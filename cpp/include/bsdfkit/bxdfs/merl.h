@@ -124,20 +124,21 @@ template <typename F, bool Linear> struct MERLKernel {
 
     F value(int64_t bin, int c) const { return table_at(values, bin * 3 + c); }
 
-    // The table at (theta_h, theta_d, phi_d), folded phi_d in [0, pi].
-    Spectrum<F> lookup(const HalfDiff<F> &hd) const {
+    // The table at (theta_h, theta_d, phi_d), folded phi_d in [0, pi]: the bins' values through
+    // get(bin) -> Spectrum<F, N> (the RGB values here; spectral/measured_spectral.h reads the
+    // bins' uplifted spectra), nearest or trilinear per channel.
+    template <int N, typename Get> Spectrum<F, N> lookup_with(const HalfDiff<F> &hd, const Get &get) const {
         using namespace merl;
         F xh = std::sqrt(max_(hd.theta_h, F(0)) * F(2 / 3.14159265358979323846)) * F(kThetaH);
         F xd = hd.theta_d * F(2 / 3.14159265358979323846) * F(kThetaD);
         F xp = hd.phi_d * F(1 / 3.14159265358979323846) * F(kPhiD);
-        Spectrum<F> out;
+        Spectrum<F, N> out;
         if constexpr (!Linear) {
             // MERL: int(x), clamped to the table
             int ih = int(clamp(xh, F(0), F(kThetaH - 1)));
             int id = int(clamp(xd, F(0), F(kThetaD - 1)));
             int ip = int(clamp(xp, F(0), F(kPhiD - 1)));
-            int64_t bin = (int64_t(ih) * kThetaD + id) * kPhiD + ip;
-            for (int c = 0; c < 3; ++c) out[c] = value(bin, c);
+            out = get((int64_t(ih) * kThetaD + id) * kPhiD + ip);
         } else {
             // bin centres at x = i + 1/2
             F th = clamp(xh - F(0.5), F(0), F(kThetaH - 1)), td = clamp(xd - F(0.5), F(0), F(kThetaD - 1));
@@ -151,25 +152,39 @@ template <typename F, bool Linear> struct MERLKernel {
             p1 = p1 >= kPhiD ? p1 - kPhiD : p1;
             p0 = clamp(p0, 0, kPhiD - 1);
             p1 = clamp(p1, 0, kPhiD - 1);
-            for (int c = 0; c < 3; ++c) {
-                auto at = [&](int a, int b, int p) { return value((int64_t(a) * kThetaD + b) * kPhiD + p, c); };
-                F v00 = lerp(wp, at(h0, d0, p0), at(h0, d0, p1));
-                F v01 = lerp(wp, at(h0, d0 + 1, p0), at(h0, d0 + 1, p1));
-                F v10 = lerp(wp, at(h0 + 1, d0, p0), at(h0 + 1, d0, p1));
-                F v11 = lerp(wp, at(h0 + 1, d0 + 1, p0), at(h0 + 1, d0 + 1, p1));
+            auto at = [&](int a, int b, int p) { return get((int64_t(a) * kThetaD + b) * kPhiD + p); };
+            Spectrum<F, N> a000 = at(h0, d0, p0), a001 = at(h0, d0, p1), a010 = at(h0, d0 + 1, p0),
+                           a011 = at(h0, d0 + 1, p1), a100 = at(h0 + 1, d0, p0), a101 = at(h0 + 1, d0, p1),
+                           a110 = at(h0 + 1, d0 + 1, p0), a111 = at(h0 + 1, d0 + 1, p1);
+            for (int c = 0; c < N; ++c) {
+                F v00 = lerp(wp, a000[c], a001[c]);
+                F v01 = lerp(wp, a010[c], a011[c]);
+                F v10 = lerp(wp, a100[c], a101[c]);
+                F v11 = lerp(wp, a110[c], a111[c]);
                 out[c] = lerp(wh, lerp(wd, v00, v01), lerp(wd, v10, v11));
             }
         }
         return out;
     }
+    // The RGB values of a bin.
+    Spectrum<F> rgb_at(int64_t bin) const {
+        Spectrum<F> v;
+        for (int c = 0; c < 3; ++c) v[c] = value(bin, c);
+        return v;
+    }
 
-    Spectrum<F> f(Vec3<F> wo, Vec3<F> wi, TransportMode) const {
+    // f through lookup_with: reflection only, two-sided by flipping (pbrt-v4 MeasuredBxDF).
+    template <int N, typename Get> Spectrum<F, N> f_with(Vec3<F> wo, Vec3<F> wi, const Get &get) const {
         bool active = SameHemisphere(wo, wi);
-        bool flip = wo.z < F(0);  // two-sided by flipping (pbrt-v4 MeasuredBxDF)
+        bool flip = wo.z < F(0);
         wo = select(flip, -wo, wo);
         wi = select(flip, -wi, wi);
-        Spectrum<F> v = lookup(half_diff(wo, wi));
-        return select(active, v, Spectrum<F>(F(0)));
+        Spectrum<F, N> v = lookup_with<N>(half_diff(wo, wi), get);
+        return select(active, v, Spectrum<F, N>(F(0)));
+    }
+
+    Spectrum<F> f(Vec3<F> wo, Vec3<F> wi, TransportMode) const {
+        return f_with<3>(wo, wi, [&](int64_t bin) { return rgb_at(bin); });
     }
 
     // ---------------------------------------------------------------- sampling

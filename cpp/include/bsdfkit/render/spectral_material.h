@@ -6,6 +6,8 @@
 
 #include "../batch_spectral.h"
 #include "../spectral/hair_spectral.h"
+#include "../spectral/layered_spectral.h"
+#include "../spectral/measured_spectral.h"
 #include "material.h"
 
 namespace bsdfkit::render {
@@ -20,6 +22,8 @@ using SpectralMaterial =
                  FilamentStandardCoatSpectral<Float>, FilamentStandardSheenSpectral<Float>,
                  FilamentStandardCoatSheenSpectral<Float>, CoatedDiffuseAnalyticSpectral<Float>,
                  CoatedConductorAnalyticSpectral<Float>, NormalizedFresnelSpectral<Float>,
-                 HairSpectral<Float>>;
+                 HairSpectral<Float>,
+                 MeasuredSpectral<Float>, MERLNearestSpectral<Float>, MERLLinearSpectral<Float>,
+                 CoatedDiffuseSpectral<Float>, CoatedConductorSpectral<Float>>;
 
 } // namespace bsdfkit::render
