@@ -37,8 +37,10 @@ Conventions
   signed distance between the ray and the fibre axis (c, radius r at the hit) along y = z x x, in
   [-1, 1] (the Hair model's own ``h`` is ignored there). With this sign the R lobe
   (phi_i - phi_o = -2 asin h, pbrt-v4) is the mirror reflection off the cylinder at the hit. For
-  other models z is the tube's outward normal. Rays leave a fibre from its axis, past its own
-  cylinder, so a fibre does not shadow itself at the scattering point.
+  other models z is the tube's outward normal and rays leave the fibre from its surface, as from
+  any surface (and as in Mitsuba). Rays leave a hair fibre from its axis, past its own cylinder:
+  the hair model is a far-field description of the whole fibre (its TT and TRT lobes exit on the
+  far side), so a hair does not shadow itself at the scattering point.
 * Determinism: a sample's random numbers depend only on (seed, pixel, sample index), so an image
   is bit-identical for any thread count (``bk.set_num_threads``) and any split into passes.
 * Ctrl-C: the render stops within a fraction of a second and, by default

@@ -2,10 +2,12 @@
 // PathIntegrator::Li (Pharr, Jakob, Humphreys, "Physically Based Rendering" 4th ed. sec. 13.4):
 //   L = sum over path vertices of beta * (MIS-weighted light sample + MIS-weighted escaped ray),
 //   beta *= f |cos| / pdf after each BSDF sample; power heuristic (Veach 1997 sec. 9.2.4).
-// It runs as a small wavefront: the paths of kWaveSamples sample indices over a 16 x 16 tile
-// advance together, one bounce at a time. Each bounce: Embree traces the rays as 16-wide
-// packets; the environment data of all rays is computed in tight loops of its own (alias-table
-// sample, texel lookups: memory-bound work whose misses then overlap); every surface hit becomes
+// It runs in the wavefront loop shared with the spectral tracer (render/wavefront.h): the paths
+// of kWaveSamples sample indices over a 16 x 16 tile advance together, one bounce at a time.
+// Each bounce: Embree traces the rays as 16-wide packets; the environment data of all rays is
+// computed in passes of its own (the alias-table walk in a tight scalar loop, memory-bound work
+// whose misses then overlap; lat-long coordinates, texel lookups, directions and pdfs on 16-lane
+// packets, lane by lane the scalar arithmetic); every surface hit becomes
 // a Vertex (frame, wo, environment sample, uniforms); the vertices are grouped by material and
 // each group is shaded through its model's concrete type, on 16-lane packets (f and pdf toward
 // the environment sample, f toward the directional light, the BSDF sample) for models with a
@@ -13,16 +15,13 @@
 // queues its shadow rays and its next ray. Every path owns its random stream (drawn in the same
 // order as a one-path-at-a-time tracer) and its radiance sum, and a packet lane's result depends
 // on its own inputs only, so the image does not depend on how paths are grouped or on threads.
-#include <omp.h>
-
 #include <algorithm>
-#include <atomic>
-#include <chrono>
 #include <cmath>
 #include <vector>
 
 #include "bsdfkit/render/render.h"
 #include "bsdfkit/render/sampler.h"
+#include "bsdfkit/render/wavefront.h"
 
 namespace bsdfkit::render {
 
@@ -32,10 +31,6 @@ inline bool finite_rgb(const RGB &c) {
     return std::isfinite(c[0]) && std::isfinite(c[1]) && std::isfinite(c[2]);
 }
 
-constexpr int kTile = 16;
-// Sample indices of a tile traced together: one wave holds kTile^2 * kWaveSamples paths, enough
-// for each material's hits of a bounce to fill whole packets.
-constexpr int kWaveSamples = 4;
 constexpr Float kInf = std::numeric_limits<Float>::infinity();
 
 using P = Packet<Float>;
@@ -79,28 +74,17 @@ struct Vertex {
 // per-hit set-up (their table and texel cache misses then overlap): for a surface hit the
 // environment sample of its vertex, for an escaped ray the radiance and pdf of its direction.
 struct EnvRay {
-    Float uu, vv, cell_prob;
+    Float uu, vv;
+    int texel;  // of the sampled cell (Environment::sample_cell)
     Vec3f wi;
     RGB le;
     Float pdf;
 };
 
-struct Shadow {
-    int path;
-    RGB contribution;  // added to the path's L when the ray is unoccluded
-};
-
-// Scratch of one thread: the paths of a wave and their ray streams.
-struct Wave {
-    std::vector<Path> paths;
-    std::vector<RTCRayHit> rays;
-    std::vector<int> ray_path;      // path of each ray in `rays`
-    std::vector<Point2<Float>> miss_uv;  // lat-long coordinates of the rays that escaped
+// Scratch of one thread: the paths of a wave, their ray streams (WaveBase) and the per-bounce data.
+struct Wave : WaveBase<Path, RGB> {
     std::vector<EnvRay> env;             // per ray: its environment sample (hits) or radiance (misses)
-    std::vector<RTCRayHit> next_rays;
-    std::vector<int> next_path;
-    std::vector<RTCRay> shadow_rays;
-    std::vector<Shadow> shadows;
+    std::vector<int> hit_rays, miss_rays;  // indices of the rays that hit a surface / escaped
     std::vector<Vertex> verts;
     std::vector<int> vert_mat;      // material of each vertex
     std::vector<int> group_start, group_items;  // vertices grouped by material (counting sort)
@@ -112,6 +96,8 @@ struct Lanes {
 };
 
 struct Tracer {
+    using Path = render::Path;
+    using Wave = render::Wave;
     const Scene &scene;
     const Camera &camera;
     const RenderSettings &st;
@@ -251,42 +237,97 @@ struct Tracer {
 
     // ---- passes A and C ----
 
-    // First pass over a bounce's rays: lat-long coordinates of escaped rays, environment-sample
-    // uniforms of surface hits.
-    void prepare(int pi, const RTCRayHit &rh, Point2<Float> *uv, Wave &w) const {
-        Path &path = w.paths[size_t(pi)];
-        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
-            latlong_uv(Vec3f(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z), &uv->x, &uv->y);
-        } else {
-            path.env_u0 = path.rng.next_double();
-            path.env_u1 = path.rng.next();
-        }
-    }
-
-    // The environment stages of a bounce (see EnvRay), each a loop of its own.
+    // The environment passes of a bounce (see EnvRay). Surface hits draw their environment
+    // sample's uniforms first (every hit, as a one-path-at-a-time tracer would); the alias-table
+    // walk runs as a tight scalar loop (its cache misses overlap); the lat-long arithmetic and the
+    // texel lookups of escaped rays and of the samples run on packets (the tails padded, lanes
+    // independent), lane by lane the scalar functions of Environment.
     void environment_pass(Wave &w) const {
         const size_t nr = w.rays.size();
         const Environment &env = scene.env;
-        for (size_t k = 0; k < nr; ++k)
-            if (w.rays[k].hit.geomID != RTC_INVALID_GEOMETRY_ID) {
-                const Path &p = w.paths[size_t(w.ray_path[k])];
-                EnvRay &e = w.env[k];
-                env.sample_cell(p.env_u0, p.env_u1, &e.uu, &e.vv, &e.cell_prob);
-            }
-        for (size_t k = 0; k < nr; ++k)
+        w.hit_rays.clear();
+        w.miss_rays.clear();
+        for (size_t k = 0; k < nr; ++k) {
             if (w.rays[k].hit.geomID == RTC_INVALID_GEOMETRY_ID) {
-                const RTCRay &r = w.rays[k].ray;
+                w.miss_rays.push_back(int(k));
+            } else {
+                Path &path = w.paths[size_t(w.ray_path[k])];
+                path.env_u0 = path.rng.next_double();
+                path.env_u1 = path.rng.next();
+                w.hit_rays.push_back(int(k));
+            }
+        }
+        if (env.constant || env.cells.empty()) {
+            for (int k : w.miss_rays) {
+                const RTCRay &r = w.rays[size_t(k)].ray;
                 Vec3f d(r.dir_x, r.dir_y, r.dir_z);
-                EnvRay &e = w.env[k];
-                e.le = env.eval_uv(d, w.miss_uv[k].x, w.miss_uv[k].y);
-                e.pdf = env.pdf_uv_dir(d, w.miss_uv[k].x, w.miss_uv[k].y);
+                Float u = 0, v = 0;
+                if (!env.constant) latlong_uv(d, &u, &v);
+                w.env[size_t(k)].le = env.eval_uv(d, u, v);
+                w.env[size_t(k)].pdf = env.pdf_uv_dir(d, u, v);
             }
-        for (size_t k = 0; k < nr; ++k)
-            if (w.rays[k].hit.geomID != RTC_INVALID_GEOMETRY_ID) {
-                const Path &p = w.paths[size_t(w.ray_path[k])];
-                EnvRay &e = w.env[k];
-                e.le = env.sample_finish(p.env_u0, p.env_u1, e.uu, e.vv, e.cell_prob, &e.wi, &e.pdf);
+            for (int k : w.hit_rays) {
+                const Path &p = w.paths[size_t(w.ray_path[size_t(k)])];
+                EnvRay &e = w.env[size_t(k)];
+                env.sample_cell(p.env_u0, p.env_u1, &e.uu, &e.vv, &e.texel);
+                e.le = env.sample_finish(p.env_u0, p.env_u1, e.uu, e.vv, e.texel, &e.wi, &e.pdf);
             }
+            return;
+        }
+        using I = Environment::IntOf<P>;
+        alignas(64) Float a[4][kPacketWidth];
+        alignas(64) int32_t ti[kPacketWidth];
+        // escaped rays: radiance and pdf of their direction
+        const int nm = int(w.miss_rays.size());
+        for (int i0 = 0; i0 < nm; i0 += kPW) {
+            int cnt = std::min(kPW, nm - i0);
+            for (int j = 0; j < kPW; ++j) {
+                const RTCRay &r = w.rays[size_t(w.miss_rays[size_t(i0 + std::min(j, cnt - 1))])].ray;
+                a[0][j] = r.dir_x, a[1][j] = r.dir_y, a[2][j] = r.dir_z;
+            }
+            Vec3<P> d(drjit::load_aligned<P>(a[0]), drjit::load_aligned<P>(a[1]), drjit::load_aligned<P>(a[2]));
+            Spectrum<P> le;
+            P pdf;
+            env.eval_pdf(d, &le, &pdf);
+            for (int k = 0; k < 3; ++k) drjit::store_aligned(a[k], le[k]);
+            drjit::store_aligned(a[3], pdf);
+            for (int j = 0; j < cnt; ++j) {
+                EnvRay &e = w.env[size_t(w.miss_rays[size_t(i0 + j)])];
+                for (int k = 0; k < 3; ++k) e.le[k] = a[k][j];
+                e.pdf = a[3][j];
+            }
+        }
+        // surface hits: the cell of their environment sample (alias table, scalar)
+        for (int k : w.hit_rays) {
+            const Path &p = w.paths[size_t(w.ray_path[size_t(k)])];
+            EnvRay &e = w.env[size_t(k)];
+            env.sample_cell(p.env_u0, p.env_u1, &e.uu, &e.vv, &e.texel);
+        }
+        // ... and its direction, pdf and radiance
+        const int nh = int(w.hit_rays.size());
+        for (int i0 = 0; i0 < nh; i0 += kPW) {
+            int cnt = std::min(kPW, nh - i0);
+            for (int j = 0; j < kPW; ++j) {
+                const EnvRay &e = w.env[size_t(w.hit_rays[size_t(i0 + std::min(j, cnt - 1))])];
+                a[0][j] = e.uu, a[1][j] = e.vv, ti[j] = e.texel;
+            }
+            Vec3<P> wi;
+            P pdf;
+            Spectrum<P> le = env.sample_finish(drjit::load_aligned<P>(a[0]), drjit::load_aligned<P>(a[1]),
+                                               drjit::load_aligned<I>(ti), &wi, &pdf);
+            alignas(64) Float o[7][kPacketWidth];
+            for (int k = 0; k < 3; ++k) drjit::store_aligned(o[k], le[k]);
+            drjit::store_aligned(o[3], wi.x);
+            drjit::store_aligned(o[4], wi.y);
+            drjit::store_aligned(o[5], wi.z);
+            drjit::store_aligned(o[6], pdf);
+            for (int j = 0; j < cnt; ++j) {
+                EnvRay &e = w.env[size_t(w.hit_rays[size_t(i0 + j)])];
+                for (int k = 0; k < 3; ++k) e.le[k] = o[k][j];
+                e.wi = Vec3f(o[3][j], o[4][j], o[5][j]);
+                e.pdf = o[6][j];
+            }
+        }
     }
 
     // Pass A: an escaped ray adds the environment; a surface hit becomes a vertex (frame, wo,
@@ -395,84 +436,29 @@ struct Tracer {
         }
     }
 
-    // Sample indices [s, s + ns) of every pixel of tile [x0, x1) x [y0, y1); adds to acc in
-    // pixel-then-sample order, returns the rays traced.
-    int64_t render_tile_wave(int x0, int y0, int x1, int y1, int s, int ns, double *acc, Wave &w, int64_t *bad) const {
-        const int W = st.width, H = st.height;
-        int64_t rays = 0;
-        w.paths.clear();
-        w.rays.clear();
-        w.ray_path.clear();
-        for (int k = 0; k < ns; ++k)
-            for (int y = y0; y < y1; ++y)
-                for (int x = x0; x < x1; ++x) {
-                    uint64_t pix = uint64_t(y) * uint64_t(W) + uint64_t(x);
-                    Path p;
-                    p.L = RGB(Float(0));
-                    p.beta = RGB(Float(1));
-                    p.p_b = 1;
-                    p.eta_scale = 1;
-                    p.depth = 0;
-                    p.specular_bounce = false;
-                    p.rng = SampleRng(st.seed, pix, uint64_t(s + k));
-                    Point2<Float> j = p.rng.next2();  // box filter: uniform over the pixel
-                    Vec3f d = camera.direction(Float(x) + j.x, Float(y) + j.y, W, H);
-                    w.rays.emplace_back();
-                    make_rayhit(w.rays.back(), camera.origin, d);
-                    w.ray_path.push_back(int(w.paths.size()));
-                    w.paths.push_back(p);
-                }
-        bool coherent = true;  // camera rays of a tile
-        while (!w.rays.empty()) {
-            scene.intersect_n(w.rays.data(), unsigned(w.rays.size()), coherent);
-            rays += int64_t(w.rays.size());
-            w.next_rays.clear();
-            w.next_path.clear();
-            w.shadow_rays.clear();
-            w.shadows.clear();
-            w.verts.clear();
-            w.vert_mat.clear();
-            const size_t nr = w.rays.size();
-            w.miss_uv.resize(nr);
-            w.env.resize(nr);
-            for (size_t k = 0; k < nr; ++k) prepare(w.ray_path[k], w.rays[k], &w.miss_uv[k], w);
-            environment_pass(w);
-            for (size_t k = 0; k < nr; ++k) setup(w.ray_path[k], w.rays[k], w.env[k], w);
-            shade(w);
-            for (Vertex &v : w.verts) finish(v, w);
-            if (!w.shadow_rays.empty()) {
-                scene.occluded_n(w.shadow_rays.data(), unsigned(w.shadow_rays.size()), false);
-                rays += int64_t(w.shadow_rays.size());
-                for (size_t k = 0; k < w.shadows.size(); ++k)
-                    if (!(w.shadow_rays[k].tfar < 0.f)) {
-                        Path &p = w.paths[size_t(w.shadows[k].path)];
-                        p.L = p.L + w.shadows[k].contribution;
-                    }
-            }
-            std::swap(w.rays, w.next_rays);
-            std::swap(w.ray_path, w.next_path);
-            coherent = false;
-        }
-        // Accumulate in pixel order, each pixel's samples in index order (the per-pixel sum order
-        // of one sample per call).
-        const int npix = (x1 - x0) * (y1 - y0);
-        int k = 0;
-        for (int y = y0; y < y1; ++y)
-            for (int x = x0; x < x1; ++x, ++k) {
-                double *a = acc + (size_t(y) * size_t(W) + size_t(x)) * 3;
-                for (int q = 0; q < ns; ++q) {
-                    const RGB &L = w.paths[size_t(q * npix + k)].L;
-                    if (!finite_rgb(L)) {
-                        ++*bad;
-                        continue;
-                    }
-                    a[0] += double(L[0]);
-                    a[1] += double(L[1]);
-                    a[2] += double(L[2]);
-                }
-            }
-        (void)H;
-        return rays;
+    // ---- the wavefront loop's hooks (wavefront.h) ----
+    void start(Path &p) const {
+        p.L = RGB(Float(0));
+        p.beta = RGB(Float(1));
+        p.p_b = 1;
+        p.eta_scale = 1;
+        p.depth = 0;
+        p.specular_bounce = false;
+    }
+    void bounce(Wave &w) const {
+        w.verts.clear();
+        w.vert_mat.clear();
+        const size_t nr = w.rays.size();
+        w.env.resize(nr);
+        environment_pass(w);
+        for (size_t k = 0; k < nr; ++k) setup(w.ray_path[k], w.rays[k], w.env[k], w);
+        shade(w);
+        for (Vertex &v : w.verts) finish(v, w);
+    }
+    bool pixel_value(const Path &p, double *rgb) const {
+        if (!finite_rgb(p.L)) return false;
+        for (int c = 0; c < 3; ++c) rgb[c] = double(p.L[c]);
+        return true;
     }
 };
 
@@ -480,58 +466,7 @@ struct Tracer {
 
 bool render_samples(const Scene &scene, const Camera &camera, const RenderSettings &st, int s0, int s1, double *acc,
                     RenderStats *stats, const std::function<bool()> &should_stop) {
-    const int W = st.width, H = st.height;
-    const int tiles_x = (W + kTile - 1) / kTile, tiles_y = (H + kTile - 1) / kTile;
-    const int64_t ntiles = int64_t(tiles_x) * tiles_y;
-    Tracer tracer{scene, camera, st};
-    std::atomic<bool> stop{false};
-    std::atomic<int64_t> rays_total{0}, nonfinite_total{0};
-    using clock = std::chrono::steady_clock;
-    auto last_poll = clock::now();
-
-    auto run_tile = [&](int64_t t, Wave &w) {
-        int tx = int(t % tiles_x), ty = int(t / tiles_x);
-        int x0 = tx * kTile, y0 = ty * kTile, x1 = std::min(W, x0 + kTile), y1 = std::min(H, y0 + kTile);
-        int64_t rays = 0, bad = 0;
-        for (int s = s0; s < s1; s += kWaveSamples)
-            rays += tracer.render_tile_wave(x0, y0, x1, y1, s, std::min(kWaveSamples, s1 - s), acc, w, &bad);
-        rays_total += rays;
-        nonfinite_total += bad;
-    };
-
-    // The calling thread (OpenMP thread 0) polls should_stop at most every 50 ms.
-    auto poll = [&]() {
-        if (!should_stop || stop.load(std::memory_order_relaxed)) return;
-        auto now = clock::now();
-        if (now - last_poll < std::chrono::milliseconds(50)) return;
-        last_poll = now;
-        if (should_stop()) stop = true;
-    };
-
-    int nthreads = std::max(1, st.threads);
-    if (nthreads == 1 || ntiles == 1) {
-        Wave w;
-        for (int64_t t = 0; t < ntiles && !stop; ++t) {
-            run_tile(t, w);
-            poll();
-        }
-    } else {
-#pragma omp parallel num_threads(nthreads)
-        {
-            Wave w;
-#pragma omp for schedule(dynamic, 1)
-            for (int64_t t = 0; t < ntiles; ++t) {
-                if (stop.load(std::memory_order_relaxed)) continue;
-                run_tile(t, w);
-                if (omp_get_thread_num() == 0) poll();
-            }
-        }
-    }
-    if (stats) {
-        stats->rays += rays_total.load();
-        stats->nonfinite += nonfinite_total.load();
-    }
-    return !stop.load();
+    return render_tiles(Tracer{scene, camera, st}, scene, camera, st, s0, s1, acc, stats, should_stop);
 }
 
 } // namespace bsdfkit::render

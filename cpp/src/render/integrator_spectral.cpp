@@ -4,27 +4,23 @@
 // Per path: the pixel jitter, then one uniform for the wavelengths (pbrt-v4
 // SampledWavelengths::SampleVisible), then per vertex the environment sample's uniforms, the
 // BSDF sample's and the roulette's, as in the RGB tracer.
-// Paths of a tile advance bounce by bounce (Embree 16-wide packets for the rays and the shadow
-// rays); each hit is shaded on its own with its material's spectral adapter (batch_spectral.h:
-// scalar per-element code). Every path owns its random stream and its sums, so the image does
-// not depend on the grouping of paths or on the thread count.
-#include <omp.h>
-
-#include <algorithm>
-#include <atomic>
-#include <chrono>
+// Paths of a tile advance bounce by bounce in the wavefront loop shared with the RGB tracer
+// (render/wavefront.h); each hit is shaded on its own with its material's spectral adapter
+// (batch_spectral.h: scalar per-element code). Every path owns its random stream and its sums,
+// so the image does not depend on the grouping of paths or on the thread count.
 #include <cmath>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "bsdfkit/render/sampler.h"
 #include "bsdfkit/render/spectral.h"
+#include "bsdfkit/render/wavefront.h"
 
 namespace bsdfkit::render {
 
 namespace {
 
-constexpr int kTileS = 16;
-constexpr int kWaveS = 4;  // sample indices of a tile traced together
 constexpr Float kInfS = std::numeric_limits<Float>::infinity();
 
 struct SPath {
@@ -36,20 +32,13 @@ struct SPath {
     SampleRng rng;
 };
 
-struct SShadow {
-    int path;
-    Spec4 contribution;
-};
-
-struct SWave {
-    std::vector<SPath> paths;
-    std::vector<RTCRayHit> rays, next_rays;
-    std::vector<int> ray_path, next_path;
-    std::vector<RTCRay> shadow_rays;
-    std::vector<SShadow> shadows;
-};
+using SWave = WaveBase<SPath, Spec4>;
 
 inline bool nonzero(const Spec4 &s) { return !s.is_black(); }
+
+// Models with an offset across a fibre (the hair models: set_h).
+template <typename B, typename = void> struct has_set_h : std::false_type {};
+template <typename B> struct has_set_h<B, std::void_t<decltype(std::declval<B &>().set_h(0.0))>> : std::true_type {};
 
 // A PerElementModel adapter's model built once per hit at the path's wavelengths (the adapter's
 // own f / pdf / sample rebuild it on every call: the same calls on the same model, once).
@@ -67,6 +56,8 @@ template <typename B> struct BuiltAtHit {
 };
 
 struct SpectralTracer {
+    using Path = SPath;
+    using Wave = SWave;
     const Scene &scene;
     const SpectralScene &spec;
     const Camera &camera;
@@ -99,7 +90,11 @@ struct SpectralTracer {
                 using M = std::decay_t<decltype(m)>;
                 if constexpr (std::is_base_of_v<PerElementModel<M, Float>, M>) {
                     using B = decltype(m.at(w.paths[size_t(pi)].lam));
-                    shade(BuiltAtHit<B>{m.at(w.paths[size_t(pi)].lam)}, pi, h, fr, wo, flags, w);
+                    BuiltAtHit<B> built{m.at(w.paths[size_t(pi)].lam)};
+                    // a hair model on a fibre takes the offset h of the hit (as material_at in RGB mode)
+                    if constexpr (has_set_h<B>::value)
+                        if (h.fibre) built.b.set_h(double(h.h));
+                    shade(built, pi, h, fr, wo, flags, w);
                 } else if constexpr (!std::is_same_v<M, std::monostate>) {
                     shade(m, pi, h, fr, wo, flags, w);
                 }
@@ -116,10 +111,11 @@ struct SpectralTracer {
             // and sampling: the luminance of the RGB environment), plus the directional light.
             double u0 = path.rng.next_double();
             Float u1 = path.rng.next();
-            Float uu, vv, prob, pdf_l;
+            Float uu, vv, pdf_l;
+            int texel;
             Vec3f wi;
-            env.sample_cell(u0, u1, &uu, &vv, &prob);
-            env.sample_finish(u0, u1, uu, vv, prob, &wi, &pdf_l);
+            env.sample_cell(u0, u1, &uu, &vv, &texel);
+            env.sample_finish(u0, u1, uu, vv, texel, &wi, &pdf_l);
             if (pdf_l > Float(0)) {
                 Spec4 le = spec.env_uv(uu, vv, path.lam);
                 if (nonzero(le)) {
@@ -172,73 +168,22 @@ struct SpectralTracer {
         w.next_path.push_back(pi);
     }
 
-    int64_t render_tile_wave(int x0, int y0, int x1, int y1, int s, int ns, double *acc, SWave &w, int64_t *bad) const {
-        const int W = st.width;
-        int64_t rays = 0;
-        w.paths.clear();
-        w.rays.clear();
-        w.ray_path.clear();
-        for (int k = 0; k < ns; ++k)
-            for (int y = y0; y < y1; ++y)
-                for (int x = x0; x < x1; ++x) {
-                    uint64_t pix = uint64_t(y) * uint64_t(W) + uint64_t(x);
-                    SPath p;
-                    p.L = Spec4(Float(0));
-                    p.beta = Spec4(Float(1));
-                    p.p_b = 1;
-                    p.eta_scale = 1;
-                    p.depth = 0;
-                    p.specular_bounce = false;
-                    p.rng = SampleRng(st.seed, pix, uint64_t(s + k));
-                    Point2<Float> j = p.rng.next2();  // box filter: uniform over the pixel
-                    SpectralScene::sample_wavelengths(p.rng.next_double(), p.lam, p.pdf);
-                    Vec3f d = camera.direction(Float(x) + j.x, Float(y) + j.y, W, st.height);
-                    w.rays.emplace_back();
-                    make_rayhit(w.rays.back(), camera.origin, d);
-                    w.ray_path.push_back(int(w.paths.size()));
-                    w.paths.push_back(p);
-                }
-        bool coherent = true;
-        while (!w.rays.empty()) {
-            scene.intersect_n(w.rays.data(), unsigned(w.rays.size()), coherent);
-            rays += int64_t(w.rays.size());
-            w.next_rays.clear();
-            w.next_path.clear();
-            w.shadow_rays.clear();
-            w.shadows.clear();
-            for (size_t k = 0; k < w.rays.size(); ++k) step(w.ray_path[k], w.rays[k], w);
-            if (!w.shadow_rays.empty()) {
-                scene.occluded_n(w.shadow_rays.data(), unsigned(w.shadow_rays.size()), false);
-                rays += int64_t(w.shadow_rays.size());
-                for (size_t k = 0; k < w.shadows.size(); ++k)
-                    if (!(w.shadow_rays[k].tfar < 0.f)) {
-                        SPath &p = w.paths[size_t(w.shadows[k].path)];
-                        p.L = p.L + w.shadows[k].contribution;
-                    }
-            }
-            std::swap(w.rays, w.next_rays);
-            std::swap(w.ray_path, w.next_path);
-            coherent = false;
-        }
-        const int npix = (x1 - x0) * (y1 - y0);
-        int k = 0;
-        for (int y = y0; y < y1; ++y)
-            for (int x = x0; x < x1; ++x, ++k) {
-                double *a = acc + (size_t(y) * size_t(W) + size_t(x)) * 3;
-                for (int q = 0; q < ns; ++q) {
-                    const SPath &p = w.paths[size_t(q * npix + k)];
-                    double rgb[3];
-                    spec.to_rgb(p.L, p.lam, p.pdf, rgb);
-                    if (!(std::isfinite(rgb[0]) && std::isfinite(rgb[1]) && std::isfinite(rgb[2]))) {
-                        ++*bad;
-                        continue;
-                    }
-                    a[0] += rgb[0];
-                    a[1] += rgb[1];
-                    a[2] += rgb[2];
-                }
-            }
-        return rays;
+    // The wavefront loop's hooks (wavefront.h).
+    void start(SPath &p) const {
+        p.L = Spec4(Float(0));
+        p.beta = Spec4(Float(1));
+        p.p_b = 1;
+        p.eta_scale = 1;
+        p.depth = 0;
+        p.specular_bounce = false;
+        SpectralScene::sample_wavelengths(p.rng.next_double(), p.lam, p.pdf);
+    }
+    void bounce(SWave &w) const {
+        for (size_t k = 0; k < w.rays.size(); ++k) step(w.ray_path[k], w.rays[k], w);
+    }
+    bool pixel_value(const SPath &p, double *rgb) const {
+        spec.to_rgb(p.L, p.lam, p.pdf, rgb);
+        return std::isfinite(rgb[0]) && std::isfinite(rgb[1]) && std::isfinite(rgb[2]);
     }
 };
 
@@ -247,55 +192,7 @@ struct SpectralTracer {
 bool render_samples_spectral(const Scene &scene, const SpectralScene &spec, const Camera &camera,
                              const RenderSettings &st, int s0, int s1, double *acc, RenderStats *stats,
                              const std::function<bool()> &should_stop) {
-    const int W = st.width, H = st.height;
-    const int tiles_x = (W + kTileS - 1) / kTileS, tiles_y = (H + kTileS - 1) / kTileS;
-    const int64_t ntiles = int64_t(tiles_x) * tiles_y;
-    SpectralTracer tracer{scene, spec, camera, st};
-    std::atomic<bool> stop{false};
-    std::atomic<int64_t> rays_total{0}, nonfinite_total{0};
-    using clock = std::chrono::steady_clock;
-    auto last_poll = clock::now();
-
-    auto run_tile = [&](int64_t t, SWave &w) {
-        int tx = int(t % tiles_x), ty = int(t / tiles_x);
-        int x0 = tx * kTileS, y0 = ty * kTileS, x1 = std::min(W, x0 + kTileS), y1 = std::min(H, y0 + kTileS);
-        int64_t rays = 0, bad = 0;
-        for (int s = s0; s < s1; s += kWaveS)
-            rays += tracer.render_tile_wave(x0, y0, x1, y1, s, std::min(kWaveS, s1 - s), acc, w, &bad);
-        rays_total += rays;
-        nonfinite_total += bad;
-    };
-    auto poll = [&]() {
-        if (!should_stop || stop.load(std::memory_order_relaxed)) return;
-        auto now = clock::now();
-        if (now - last_poll < std::chrono::milliseconds(50)) return;
-        last_poll = now;
-        if (should_stop()) stop = true;
-    };
-    int nthreads = std::max(1, st.threads);
-    if (nthreads == 1 || ntiles == 1) {
-        SWave w;
-        for (int64_t t = 0; t < ntiles && !stop; ++t) {
-            run_tile(t, w);
-            poll();
-        }
-    } else {
-#pragma omp parallel num_threads(nthreads)
-        {
-            SWave w;
-#pragma omp for schedule(dynamic, 1)
-            for (int64_t t = 0; t < ntiles; ++t) {
-                if (stop.load(std::memory_order_relaxed)) continue;
-                run_tile(t, w);
-                if (omp_get_thread_num() == 0) poll();
-            }
-        }
-    }
-    if (stats) {
-        stats->rays += rays_total.load();
-        stats->nonfinite += nonfinite_total.load();
-    }
-    return !stop.load();
+    return render_tiles(SpectralTracer{scene, spec, camera, st}, scene, camera, st, s0, s1, acc, stats, should_stop);
 }
 
 } // namespace bsdfkit::render

@@ -270,6 +270,7 @@ void Scene::hit_point(const RTCRayHit &rh, Hit *hit) const {
     }
     hit->material = mat;
     hit->fibre = false;
+    hit->from_axis = false;
 }
 
 // Fibre hit (see scene.h): axis point, tangent and radius interpolated by Embree at u, the
@@ -303,7 +304,8 @@ void Scene::curve_hit(const Object &ob, const RTCRayHit &rh, Hit *hit) const {
     hit->radius = r;
     hit->tangent = T;
     hit->material = ob.mat_a;
-    if (is_hair_material(materials[size_t(ob.mat_a)])) {
+    hit->from_axis = is_hair_material(materials[size_t(ob.mat_a)]);
+    if (hit->from_axis) {
         hit->n = z;
     } else {
         // the tube's outward normal at p (facing the ray when p is numerically on the axis)

@@ -18,25 +18,43 @@ What maps to what
   the opposite of ours).
 * Fibres (``Scene.add_curves``: Embree round Catmull-Rom curves) -> ``bsplinecurve``: each
   Catmull-Rom segment is rewritten exactly as a 4-point cubic B-spline (same position and radius
-  polynomials), one curve per segment. Our rays leave a fibre from its axis, Mitsuba's from the
-  surface, so shadows differ at the scale of the fibre radius. Hair models map through
+  polynomials), one curve per segment. Rays leave a fibre of a surface material from its surface
+  in both renderers; for hair models ours leave from the axis (the far-field hair model, see
+  render/scene.h), Mitsuba's from the surface. Hair models map through
   ``Hair.to_mitsuba`` (Mitsuba derives h from wo and the tube normal: the same h as ours).
 * Spheres -> ``sphere`` with its pole on +y (its tangent then runs along our parallels, so
   anisotropic materials line up); meshes -> a temporary PLY file loaded by the ``ply`` plugin.
+* Spectral (``spectral=True``, for ``render(..., spectral=True)``; the process must already run
+  a spectral variant, see :func:`render_spectral`, which renders in a child process so that the
+  caller keeps the suite's one ``llvm_ad_rgb`` variant): each model's ``bk.Spectrum`` parameters
+  (reflectances, eta, k) become Mitsuba ``spectrum`` dicts of the same nodes (piecewise linear in
+  both; the end values are repeated at 360 and 830 nm, where bk.Spectrum clamps and Mitsuba's
+  irregular spectrum would drop to 0); RGB parameters stay ``rgb`` (then Mitsuba uplifts them with
+  its own table, pbrt-v4's table differs slightly). A dispersive dielectric has no Mitsuba
+  counterpart (its ``int_ior`` is a scalar): NotImplementedError. The environment and the sun
+  stay RGB: Mitsuba's spectral ``envmap`` and ``directional`` uplift them as illuminants (times
+  D65), as the renderer does (an achromatic map uplifts to a constant spectrum in both).
 * Materials -> :func:`bsdfkit.testing.mitsuba.to_mitsuba` (or ``bsdf_fn``). A checkerboard
   ground of two ``Diffuse`` models -> ``diffuse`` with a ``checkerboard`` texture on the
   rectangle's uv (same squares, possibly swapped colours: for benchmarks, not for pixel tests).
 """
 from __future__ import annotations
 
+import io
 import os
+import pickle
+import subprocess
+import sys
 import tempfile
 
 import numpy as np
 
 from . import mitsuba as _ref
 
-__all__ = ["mitsuba_envmap_image", "to_mitsuba_scene"]
+__all__ = ["mitsuba_envmap_image", "to_mitsuba_scene", "spectral_bsdf", "render_spectral", "SPECTRAL_VARIANT"]
+
+#: The Mitsuba variant of :func:`render_spectral`.
+SPECTRAL_VARIANT = "llvm_ad_spectral"
 
 
 def mitsuba_envmap_image(env, height=None, width=None) -> np.ndarray:
@@ -111,18 +129,125 @@ def _rgb(v):
     return {"type": "rgb", "value": [float(x) for x in a]}
 
 
+def _spectrum_param(spec):
+    """A ``bk.Spectrum`` as a Mitsuba spectrum parameter: a float for a constant, else the
+    irregular ``spectrum`` of its nodes with the end values repeated at 360 and 830 nm."""
+    if spec.is_constant:
+        return float(spec.values[0]) if spec.values is not None else float(spec(550.0))
+    if spec.wavelengths is None:    # an analytic spectrum (uplifted RGB, blackbody): its 1 nm samples
+        lam = np.arange(360.0, 831.0)
+        val = np.asarray(spec(lam), dtype=np.float64)
+    else:
+        lam, val = np.asarray(spec.wavelengths, np.float64), np.asarray(spec.values, np.float64)
+        if lam[0] > 360.0:
+            lam, val = np.concatenate([[360.0], lam]), np.concatenate([[val[0]], val])
+        if lam[-1] < 830.0:
+            lam, val = np.concatenate([lam, [830.0]]), np.concatenate([val, [val[-1]]])
+    return {"type": "spectrum", "value": [(float(a), float(b)) for a, b in zip(lam, val)]}
+
+
+# Mitsuba parameter name -> bsdfkit attribute holding the same quantity.
+_SPECTRAL_KEYS = {"reflectance": "reflectance", "eta": "eta", "k": "k", "diffuse_reflectance": "reflectance",
+                  "specular_reflectance": "specular_reflectance", "transmittance": "transmittance"}
+
+
+def spectral_bsdf(model) -> dict:
+    """The Mitsuba BSDF dict of ``model`` for a spectral variant: :func:`bsdfkit.testing.mitsuba.to_mitsuba`'s
+    dict with every parameter the model holds as a ``bk.Spectrum`` given as that spectrum (see the
+    module docstring). Raises NotImplementedError for a dispersive dielectric."""
+    from ..spectral.spectrum import Spectrum
+
+    d = _ref.to_mitsuba(model)
+    if isinstance(model, dict):
+        return d
+    eta = getattr(model, "eta", None)
+    if isinstance(eta, Spectrum) and not eta.is_constant and _has_key(d, "int_ior"):
+        raise NotImplementedError(f"{type(model).__name__}: a dispersive eta has no Mitsuba counterpart "
+                                  "(its dielectrics take a scalar int_ior)")
+
+    def walk(node):
+        if isinstance(node, dict):
+            out = {}
+            for k, v in node.items():
+                attr = _SPECTRAL_KEYS.get(k)
+                val = getattr(model, attr, None) if attr else None
+                out[k] = _spectrum_param(val) if isinstance(val, Spectrum) else walk(v)
+            return out
+        return node
+    return walk(d)
+
+
+def _has_key(node, key):
+    return isinstance(node, dict) and (key in node or any(_has_key(v, key) for v in node.values()))
+
+
+def render_spectral(scenes, *, seeds, width, height, spp, max_depth, envmap_bitmap=None, timeout=900.0):
+    """Mitsuba's ``path`` integrator in ``llvm_ad_spectral`` on each of ``scenes`` (bsdfkit.render
+    Scenes, exported by :func:`to_mitsuba_scene` with ``spectral=True``), one render per seed:
+    a list of (len(seeds), height, width, 3) float64 linear sRGB arrays. ``envmap_bitmap``: an
+    (H, W, 3) array given to Mitsuba's ``envmap`` instead of the scenes' environment (for images
+    sampled on Mitsuba's own texel grid). All scenes render in ONE child process (``python -m
+    bsdfkit.testing.mitsuba_scene``) that selects the spectral variant, so the caller's process
+    keeps its variant; raises RuntimeError with the child's stderr if it fails."""
+    payload = {"scenes": list(scenes), "seeds": [int(s) for s in seeds], "width": int(width), "height": int(height),
+               "spp": int(spp), "max_depth": int(max_depth),
+               "envmap": None if envmap_bitmap is None else np.ascontiguousarray(envmap_bitmap, np.float32)}
+    from .llvm import configure_llvm_env
+    env = dict(os.environ)
+    path = configure_llvm_env()
+    if path:
+        env["DRJIT_LIBLLVM_PATH"] = path
+    proc = subprocess.run([sys.executable, "-m", "bsdfkit.testing.mitsuba_scene"], input=pickle.dumps(payload),
+                          capture_output=True, env=env, timeout=timeout)
+    if proc.returncode != 0:
+        raise RuntimeError(f"Mitsuba {SPECTRAL_VARIANT} child failed ({proc.returncode}):\n"
+                           f"{proc.stderr.decode(errors='replace')[-4000:]}")
+    data = np.load(io.BytesIO(proc.stdout))
+    return [data[f"img{i}"] for i in range(len(payload["scenes"]))]
+
+
+def _child():  # pragma: no cover - runs in the child process of render_spectral
+    payload = pickle.loads(sys.stdin.buffer.read())
+    import drjit as dr
+    import mitsuba as mi
+    mi.set_variant(SPECTRAL_VARIANT)
+    dr.set_flag(dr.JitFlag.FastMath, False)
+    out = {}
+    for i, sc in enumerate(payload["scenes"]):
+        d = to_mitsuba_scene(sc, width=payload["width"], height=payload["height"], spp=payload["spp"],
+                             max_depth=payload["max_depth"], spectral=True)
+        if payload["envmap"] is not None:
+            d["environment"] = {"type": "envmap", "bitmap": mi.Bitmap(payload["envmap"])}
+        msc = mi.load_dict(d)
+        out[f"img{i}"] = np.stack([np.array(mi.render(msc, seed=s, spp=payload["spp"]), dtype=np.float64)
+                                   for s in payload["seeds"]])
+    buf = io.BytesIO()
+    np.savez(buf, **out)
+    sys.stdout.buffer.write(buf.getvalue())
+    sys.stdout.buffer.flush()
+
+
 def to_mitsuba_scene(scene, *, width=256, height=256, spp=64, max_depth=8, envmap=None, rr_depth=None,
-                     bsdf_fn=None, tmpdir=None) -> dict:
+                     bsdf_fn=None, tmpdir=None, spectral=False) -> dict:
     """Mitsuba scene dictionary equivalent to ``bsdfkit.render.render(scene, width=..., ...)``.
 
     ``rr_depth``: Mitsuba's Russian-roulette start (default: Mitsuba's own, 5). ``bsdf_fn``:
     model -> Mitsuba BSDF dict (default :func:`bsdfkit.testing.mitsuba.to_mitsuba`, which
-    raises for DiffuseTransmission). Meshes are written as PLY files into ``tmpdir`` (default: a
-    new temporary directory, kept for the lifetime of the dict's use)."""
-    _ref.variant()
-    import mitsuba as mi
-
-    bsdf_fn = bsdf_fn or _ref.to_mitsuba
+    raises for DiffuseTransmission; with ``spectral=True`` :func:`spectral_bsdf`). Meshes are
+    written as PLY files into ``tmpdir`` (default: a new temporary directory, kept for the
+    lifetime of the dict's use). ``spectral=True``: the dict of ``render(..., spectral=True)``
+    for the spectral variant the process runs already (this function then selects none; see
+    :func:`render_spectral`)."""
+    if spectral:
+        import mitsuba as mi
+        if not mi.variant() or "spectral" not in mi.variant():
+            raise RuntimeError(f"to_mitsuba_scene(spectral=True): the process runs Mitsuba variant "
+                               f"{mi.variant()!r}; select a spectral one first (or use render_spectral)")
+        bsdf_fn = bsdf_fn or spectral_bsdf
+    else:
+        _ref.variant()
+        import mitsuba as mi
+        bsdf_fn = bsdf_fn or _ref.to_mitsuba
     o, t, u, fov = scene.camera._checked()
     d = {
         "type": "scene",
@@ -187,3 +312,7 @@ def to_mitsuba_scene(scene, *, width=256, height=256, spp=64, max_depth=8, envma
             _write_ply(path, ob["vertices"], ob["indices"])
             d[f"obj{k}"] = {"type": "ply", "filename": path, "face_normals": True, "bsdf": bsdf}
     return d
+
+
+if __name__ == "__main__":  # pragma: no cover
+    _child()

@@ -8,27 +8,28 @@
 namespace bsdfkit::render {
 
 struct AliasTable {
-    // One 16-byte entry per bin, so that a sample touches one cache line: keep bin i if the
-    // remainder is below threshold, else take alias; both bins' probabilities ride along.
+    // One 8-byte entry per bin (8 bins per cache line): keep bin i if the remainder is below
+    // threshold, else take alias. The bins' probabilities are not in the entry (the sampler
+    // looks the chosen bin's probability up in its own data, see Environment::texels): the
+    // table a sample walks is half the size.
     struct Entry {
         float threshold = 1.f;
         uint32_t alias = 0;
-        float pmf = 0.f;        // probability of bin i
-        float pmf_alias = 0.f;  // probability of bin alias
     };
     std::vector<Entry> entries;
-    double total = 0;  // sum of the weights it was built from
+    std::vector<float> pmfs;  // probability of each bin
+    double total = 0;         // sum of the weights it was built from
 
     AliasTable() = default;
     // weights: n >= 1 non-negative finite values. All zero gives an empty (unsamplable) table.
-    AliasTable(const float *w, size_t n) : entries(n) {
+    AliasTable(const float *w, size_t n) : entries(n), pmfs(n, 0.f) {
         for (size_t i = 0; i < n; ++i) total += double(w[i]);
         for (size_t i = 0; i < n; ++i) entries[i].alias = uint32_t(i);
         if (!(total > 0)) return;
         std::vector<double> scaled(n);
         std::vector<uint32_t> small, large;
         for (size_t i = 0; i < n; ++i) {
-            entries[i].pmf = float(double(w[i]) / total);
+            pmfs[i] = float(double(w[i]) / total);
             scaled[i] = double(w[i]) / total * double(n);
             (scaled[i] < 1.0 ? small : large).push_back(uint32_t(i));
         }
@@ -44,16 +45,15 @@ struct AliasTable {
         // Leftovers are 1 up to rounding: they keep themselves.
         for (uint32_t i : small) entries[i].threshold = 1.f;
         for (uint32_t i : large) entries[i].threshold = 1.f;
-        for (size_t i = 0; i < n; ++i) entries[i].pmf_alias = entries[entries[i].alias].pmf;
     }
 
     bool empty() const { return !(total > 0); }
     size_t size() const { return entries.size(); }
-    float pmf(size_t i) const { return entries[i].pmf; }
+    float pmf(size_t i) const { return pmfs[i]; }
 
-    // Bin for u in [0, 1) and its probability; *remainder receives a fresh uniform in [0, 1)
-    // from u's leftover bits.
-    uint32_t sample(double u, double *remainder, float *prob) const {
+    // Bin for u in [0, 1) (its probability is pmf(bin)); *remainder receives a fresh uniform in
+    // [0, 1) from u's leftover bits.
+    uint32_t sample(double u, double *remainder) const {
         size_t n = size();
         double x = u * double(n);
         size_t i = size_t(x);
@@ -64,7 +64,6 @@ struct AliasTable {
         bool keep = frac < t;
         double r = keep ? frac / t : (frac - t) / (1.0 - t);
         *remainder = r < 1.0 ? (r > 0.0 ? r : 0.0) : 0x1.fffffffffffffp-1;
-        *prob = keep ? e.pmf : e.pmf_alias;
         return keep ? uint32_t(i) : e.alias;
     }
 };

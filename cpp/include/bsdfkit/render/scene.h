@@ -10,9 +10,14 @@
 // fibre: (p - c) . y does not depend on where along the ray p is, since d . y = 0). With that sign,
 // the R lobe's azimuth phi_i - phi_o = -2 asin h (pbrt-v4 Phi(0)) is the mirror reflection of the ray
 // off the cylinder at p. A Hair(h=...) material on a fibre takes h from the hit (its own h is ignored).
-// Rays leave a fibre from its axis point c with tnear = the distance at which they exit its
-// cylinder, 1.05 r / |d x T| (capped at 50 r): a fibre never shadows or re-hits itself at the
-// scattering point, whatever its width in floats.
+// Where rays leave a fibre: for a surface material (anything but Hair / HairFarField) from the
+// hit point pushed off the tube along its normal, as from any surface (and as Mitsuba does), so
+// that one fibre's hard shadow on another falls where the tube's does. For a hair material from
+// the axis point c with tnear = the distance at which they exit its cylinder, 1.05 r / |d x T|
+// (capped at 50 r): the hair model is a far-field description of the whole fibre (its TT and TRT
+// lobes leave from the far side, pbrt-v4's Hair BSDF is evaluated on a ribbon through the axis),
+// and the fibre never shadows or re-hits itself at the scattering point, whatever its width in
+// floats.
 #pragma once
 #include <embree3/rtcore.h>
 
@@ -42,6 +47,7 @@ struct Hit {
     Vec3f p, n, tangent;
     int material = 0;
     bool fibre = false;
+    bool from_axis = false;  // rays leave from the fibre's axis (a hair material on a fibre)
     Vec3f axis{0, 0, 0}, axis_dir{1, 0, 0};
     Float radius = 0, h = 0;
 };
@@ -139,10 +145,10 @@ inline Vec3f offset_ray_origin(const Vec3f &p, const Vec3f &n, const Vec3f &d) {
     return p + n * (dot(n, d) < Float(0) ? -eps : eps);
 }
 
-// A ray leaving hit toward d (unit): from p pushed off the surface, or for a fibre from its axis
-// point with tnear past its own cylinder (see the header comment).
+// A ray leaving hit toward d (unit): from p pushed off the surface, or for a hair fibre from its
+// axis point with tnear past its own cylinder (see the header comment).
 inline void make_spawn_ray(RTCRay &r, const Hit &hit, const Vec3f &d, Float tfar) {
-    if (!hit.fibre) {
+    if (!hit.from_axis) {
         make_ray(r, offset_ray_origin(hit.p, hit.n, d), d, tfar);
         return;
     }
