@@ -641,8 +641,8 @@ class Scene:
 
 #: Models the spectral renderer accepts (those with a spectral kernel, batch_spectral.h).
 SPECTRAL_MODELS = ("Diffuse", "DiffuseTransmission", "Conductor", "Dielectric", "ThinDielectric", "Plastic",
-                   "FilamentStandard", "NormalizedFresnel", "CoatedDiffuse (method='analytic')",
-                   "CoatedConductor (method='analytic')")
+                   "FilamentStandard", "NormalizedFresnel", "CoatedDiffuse", "CoatedConductor",
+                   "Measured (spectral tensor files)", "MERL", "Hair (a single h; not the far field h=None)")
 
 
 @functools.lru_cache(maxsize=1)
