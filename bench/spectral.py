@@ -3,7 +3,9 @@ float32 and float64, the same directions and uniforms; spectral calls get 4 wave
 (pbrt-v4's visible sampling). Reported as the ratio spectral / RGB time per call (the machine is
 shared: absolute rates are not headlines), median of REPEATS interleaved repetitions with the
 spread (min..max of the per-repetition ratios), with the CPU model, the packet width of the RGB
-kernels, the thread count and the load average. Writes bench/spectral.json, the table of
+kernels, the thread count and the load average. Each row also times the scalar per-element
+spectral path (the ``_core`` entry with ``packets=False``: the path before the packet kernels,
+outputs allocated as the Python layer does) in the same repetitions, so "before / after" is one run. Writes bench/spectral.json, the table of
 bench/SPECTRAL.md (between the markers) and the spectral / RGB cost ratios of the tuning registry's
 ``color`` knob (python/bsdfkit/tuning/_color_costs.json, per cost family, dtype and op).
 
@@ -25,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 import bsdfkit as bk
+from bsdfkit.models._spectral import _spectral_core
 from _machine import cpu_model, simd_isa  # same directory
 
 HERE = Path(__file__).resolve().parent
@@ -166,6 +169,12 @@ def errors_table(pairs):
     return rows
 
 
+def _sample_outputs(n, dtype):
+    """The spectral sample's output arrays (wi, f, pdf, flags, eta, valid, pdf_is_proportional, terminated)."""
+    return (np.empty((n, 3), dtype), np.empty((n, 4), dtype), np.empty(n, dtype), np.empty(n, np.uint8),
+            np.empty(n, dtype), np.empty(n, bool), np.empty(n, bool), np.empty(n, bool))
+
+
 def timed(fn):
     t = time.perf_counter()
     fn()
@@ -196,35 +205,46 @@ def main():
         for dtype in (np.float32, np.float64):
             wo, wi = v[0].astype(dtype), v[1].astype(dtype)
             ucd, ud = uc.astype(dtype), u.astype(dtype)
+            core = _spectral_core(m_sp)
             ops = {
-                "eval": (lambda: m_rgb.eval(wo, wi), lambda: m_sp.eval(wo, wi, wavelengths=lam)),
-                "sample": (lambda: m_rgb.sample(wo, ucd, ud), lambda: m_sp.sample(wo, ucd, ud, wavelengths=lam)),
+                "eval": (lambda: m_rgb.eval(wo, wi), lambda: m_sp.eval(wo, wi, wavelengths=lam),
+                         lambda: core.eval(wo, wi, lam, 0, np.empty((n, 4), dtype), packets=False)),
+                "sample": (lambda: m_rgb.sample(wo, ucd, ud), lambda: m_sp.sample(wo, ucd, ud, wavelengths=lam),
+                           lambda: core.sample(wo, ucd, ud, lam, 0, 3, *_sample_outputs(n, dtype), packets=False)),
             }
-            for op, (f_rgb, f_sp) in ops.items():
-                f_rgb(), f_sp()  # warm-up (uplift, caches, first touch)
-                t_rgb, t_sp = [], []
-                for _ in range(args.repeats):     # interleaved: load changes hit both
+            for op, (f_rgb, f_sp, f_scalar) in ops.items():
+                f_rgb(), f_sp(), f_scalar()  # warm-up (uplift, caches, first touch)
+                t_rgb, t_sp, t_sc = [], [], []
+                for _ in range(args.repeats):     # interleaved: load changes hit all three
                     t_rgb.append(timed(f_rgb))
                     t_sp.append(timed(f_sp))
+                    t_sc.append(timed(f_scalar))
                 ratios = np.array(t_sp) / np.array(t_rgb)
+                ratios_sc = np.array(t_sc) / np.array(t_rgb)
                 rows.append({"model": name, "dtype": np.dtype(dtype).name, "op": op,
                              "rgb_s": float(np.median(t_rgb)), "spectral_s": float(np.median(t_sp)),
                              "ratio": float(np.median(ratios)), "ratio_min": float(ratios.min()),
-                             "ratio_max": float(ratios.max())})
+                             "ratio_max": float(ratios.max()), "scalar_s": float(np.median(t_sc)),
+                             "ratio_scalar": float(np.median(ratios_sc)), "ratio_scalar_min": float(ratios_sc.min()),
+                             "ratio_scalar_max": float(ratios_sc.max())})
                 print(f"{name:32s} {np.dtype(dtype).name:8s} {op:7s} spectral/RGB time {rows[-1]['ratio']:6.2f} "
-                      f"({ratios.min():.2f}..{ratios.max():.2f})", flush=True)
+                      f"({ratios.min():.2f}..{ratios.max():.2f}); scalar path {rows[-1]['ratio_scalar']:6.2f} "
+                      f"({ratios_sc.min():.2f}..{ratios_sc.max():.2f})", flush=True)
     meta = {"cpu": cpu_model(), "simd": simd_isa(), "packet_width": 16, "threads": args.threads, "n": n,
             "repeats": args.repeats, "load_before": load_before, "load_after": os.getloadavg(),
             "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())}
     (HERE / "spectral.json").write_text(json.dumps({"meta": meta, "rows": rows}, indent=1))
-    lines = [f"CPU: {meta['cpu']} ({meta['simd']}; RGB kernels of Diffuse/Conductor/Dielectric on "
-             f"{meta['packet_width']}-lane packets, the spectral kernels scalar), {args.threads} threads, "
+    lines = [f"CPU: {meta['cpu']} ({meta['simd']}; {meta['packet_width']}-lane packets), {args.threads} threads, "
              f"n = {n} pairs per call, {args.repeats} interleaved repetitions, load average "
-             f"{load_before[0]:.1f} before / {meta['load_after'][0]:.1f} after ({meta['date']}).", "",
-             "| model | dtype | op | spectral / RGB time (median) | spread (min..max) |", "|---|---|---|---|---|"]
+             f"{load_before[0]:.1f} before / {meta['load_after'][0]:.1f} after ({meta['date']}). "
+             "Spectral: the kernel `wavelengths=` runs (packets for the pbrt-core models); scalar path: the "
+             "per-element loop (`packets=False`, the spectral kernels before the packet path).", "",
+             "| model | dtype | op | spectral / RGB time (median) | spread (min..max) | scalar path / RGB | spread |",
+             "|---|---|---|--:|---|--:|---|"]
     for r in rows:
         lines.append(f"| {r['model']} | {r['dtype']} | {r['op']} | {r['ratio']:.2f} | "
-                     f"{r['ratio_min']:.2f}..{r['ratio_max']:.2f} |")
+                     f"{r['ratio_min']:.2f}..{r['ratio_max']:.2f} | {r['ratio_scalar']:.2f} | "
+                     f"{r['ratio_scalar_min']:.2f}..{r['ratio_scalar_max']:.2f} |")
     md = HERE / "SPECTRAL.md"
     text = md.read_text() if md.exists() else "<!-- table -->\n<!-- /table -->\n"
     text = re.sub(r"<!-- table -->.*<!-- /table -->", "<!-- table -->\n" + "\n".join(lines) + "\n<!-- /table -->",

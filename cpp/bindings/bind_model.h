@@ -72,6 +72,33 @@ inline bool overlaps(const py::array &a, const py::array &b) {
     return pa < pb + uintptr_t(b.nbytes()) && pb < pa + uintptr_t(a.nbytes());
 }
 
+// The outputs every sample entry writes (wi, f with NC channels: 3 RGB, 4 spectral, pdf, flags,
+// eta, valid, pdf_is_proportional), each checked for dtype, layout and n rows, into Out's pointers
+// (SampleOut<F>, or SpectralSampleOut<F> whose further outputs the caller adds).
+template <int NC, typename F, typename Out>
+inline void checked_sample_out(int64_t n, Out &o, const py::array &wi, const py::array &f, const py::array &pdf,
+                               const py::array &flags, const py::array &eta, const py::array &valid,
+                               const py::array &prop) {
+    int64_t r;
+    auto rows_n = [&](const char *name) { if (r != n) value_error(std::string(name) + ": wrong shape"); };
+    o.wi = checked<F>(wi, "wi", {3}, &r, true); rows_n("wi");
+    o.f = checked<F>(f, "f", {NC}, &r, true); rows_n("f");
+    o.pdf = checked<F>(pdf, "pdf", {}, &r, true); rows_n("pdf");
+    o.flags = checked<uint8_t>(flags, "flags", {}, &r, true); rows_n("flags");
+    o.eta = checked<F>(eta, "eta", {}, &r, true); rows_n("eta");
+    o.valid = checked<bool>(valid, "valid", {}, &r, true); rows_n("valid");
+    o.proportional = checked<bool>(prop, "pdf_is_proportional", {}, &r, true); rows_n("pdf_is_proportional");
+}
+
+// The sample kernels' pointers are restrict: no output may overlap an input or another output.
+// arrs: the inputs (the first n_in), then the outputs.
+inline void check_sample_no_overlap(std::initializer_list<const py::array *> arrs, size_t n_in) {
+    const py::array *const *a = arrs.begin();
+    for (size_t i = n_in; i < arrs.size(); ++i)
+        for (size_t c = 0; c < i; ++c)
+            if (overlaps(*a[i], *a[c])) value_error("sample: output arrays must not overlap the inputs or each other");
+}
+
 inline int64_t broadcast_rows(int64_t a, int64_t b, const char *na, const char *nb) {
     if (a != b && a != 1 && b != 1)
         value_error(std::string(na) + " and " + nb + " have incompatible lengths");

@@ -54,7 +54,8 @@ template <template <typename> class SM> struct PySpectral {
     }
 
     template <typename F>
-    py::tuple eval_t(const py::array &wo, const py::array &wi, const py::array &lam, int mode, py::array &out) const {
+    py::tuple eval_t(const py::array &wo, const py::array &wi, const py::array &lam, int mode, py::array &out,
+                     bool packets) const {
         int64_t n, so, si, sl;
         F *po = checked<F>(out, "out", {4}, &n, true);
         const F *pwo = rows<F>(wo, "wo", 3, n, &so), *pwi = rows<F>(wi, "wi", 3, n, &si);
@@ -63,7 +64,7 @@ template <template <typename> class SM> struct PySpectral {
         SpectralBadCounts bad;
         {
             py::gil_scoped_release release;
-            eval_spectral_batch(get<F>(), pwo, so, pwi, si, pl, sl, n, md, po, num_threads(), bad);
+            eval_spectral_batch(get<F>(), pwo, so, pwi, si, pl, sl, n, md, po, num_threads(), bad, packets);
         }
         raise_if_interrupted();
         return py::make_tuple(bad.wo.load(), bad.wi.load(), bad.lam.load());
@@ -71,7 +72,7 @@ template <template <typename> class SM> struct PySpectral {
 
     template <typename F>
     py::tuple pdf_t(const py::array &wo, const py::array &wi, const py::array &lam, int mode, int sf,
-                    py::array &out) const {
+                    py::array &out, bool packets) const {
         int64_t n, so, si, sl;
         F *po = checked<F>(out, "out", {}, &n, true);
         const F *pwo = rows<F>(wo, "wo", 3, n, &so), *pwi = rows<F>(wi, "wi", 3, n, &si);
@@ -81,7 +82,7 @@ template <template <typename> class SM> struct PySpectral {
         SpectralBadCounts bad;
         {
             py::gil_scoped_release release;
-            pdf_spectral_batch(get<F>(), pwo, so, pwi, si, pl, sl, n, md, s, po, num_threads(), bad);
+            pdf_spectral_batch(get<F>(), pwo, so, pwi, si, pl, sl, n, md, s, po, num_threads(), bad, packets);
         }
         raise_if_interrupted();
         return py::make_tuple(bad.wo.load(), bad.wi.load(), bad.lam.load());
@@ -90,7 +91,8 @@ template <template <typename> class SM> struct PySpectral {
     template <typename F>
     py::tuple sample_t(const py::array &wo, const py::array &uc, const py::array &u, const py::array &lam, int mode,
                        int sf, py::array &wi_out, py::array &f_out, py::array &pdf_out, py::array &flags_out,
-                       py::array &eta_out, py::array &valid_out, py::array &prop_out, py::array &term_out) const {
+                       py::array &eta_out, py::array &valid_out, py::array &prop_out, py::array &term_out,
+                       bool packets) const {
         int64_t n, nu, r, so, sl;
         const F *puc = checked<F>(uc, "uc", {}, &n);
         const F *pu = checked<F>(u, "u", {2}, &nu);
@@ -98,29 +100,17 @@ template <template <typename> class SM> struct PySpectral {
         const F *pwo = rows<F>(wo, "wo", 3, n, &so);
         const double *pl = rows<double>(lam, "wavelengths", 4, n, &sl);
         SpectralSampleOut<F> o;
-        o.wi = checked<F>(wi_out, "wi", {3}, &r, true); if (r != n) value_error("wi: wrong shape");
-        o.f = checked<F>(f_out, "f", {4}, &r, true); if (r != n) value_error("f: wrong shape");
-        o.pdf = checked<F>(pdf_out, "pdf", {}, &r, true); if (r != n) value_error("pdf: wrong shape");
-        o.flags = checked<uint8_t>(flags_out, "flags", {}, &r, true); if (r != n) value_error("flags: wrong shape");
-        o.eta = checked<F>(eta_out, "eta", {}, &r, true); if (r != n) value_error("eta: wrong shape");
-        o.valid = checked<bool>(valid_out, "valid", {}, &r, true); if (r != n) value_error("valid: wrong shape");
-        o.proportional = checked<bool>(prop_out, "pdf_is_proportional", {}, &r, true);
-        if (r != n) value_error("pdf_is_proportional: wrong shape");
+        checked_sample_out<kSpectralN, F>(n, o, wi_out, f_out, pdf_out, flags_out, eta_out, valid_out, prop_out);
         o.terminated = checked<bool>(term_out, "terminated", {}, &r, true);
         if (r != n) value_error("terminated: wrong shape");
-        {
-            const py::array *arrs[] = {&wo, &uc, &u, &lam, &wi_out, &f_out, &pdf_out, &flags_out,
-                                       &eta_out, &valid_out, &prop_out, &term_out};
-            for (int a = 4; a < 12; ++a)
-                for (int c = 0; c < a; ++c)
-                    if (overlaps(*arrs[a], *arrs[c])) value_error("sample: output arrays must not overlap the inputs or each other");
-        }
+        check_sample_no_overlap({&wo, &uc, &u, &lam, &wi_out, &f_out, &pdf_out, &flags_out, &eta_out, &valid_out,
+                                 &prop_out, &term_out}, 4);
         TransportMode md = to_mode(mode);
         uint8_t s = to_sflags(sf);
         SpectralBadCounts bad;
         {
             py::gil_scoped_release release;
-            sample_spectral_batch(get<F>(), pwo, so, puc, pu, pl, sl, n, md, s, o, num_threads(), bad);
+            sample_spectral_batch(get<F>(), pwo, so, puc, pu, pl, sl, n, md, s, o, num_threads(), bad, packets);
         }
         raise_if_interrupted();
         return py::make_tuple(bad.wo.load(), bad.uc.load(), bad.u.load(), bad.lam.load());
@@ -149,21 +139,26 @@ template <template <typename> class SM> struct PySpectral {
 template <template <typename> class SM> inline py::class_<PySpectral<SM>> bind_spectral_model(py::module_ &m, const char *name) {
     using P = PySpectral<SM>;
     py::class_<P> c(m, name);
-    c.def("eval", [](const P &self, py::array wo, py::array wi, py::array lam, int mode, py::array out) {
-         return is_dtype<float>(out) ? self.template eval_t<float>(wo, wi, lam, mode, out)
-                                     : self.template eval_t<double>(wo, wi, lam, mode, out);
-     })
-        .def("pdf", [](const P &self, py::array wo, py::array wi, py::array lam, int mode, int sf, py::array out) {
-            return is_dtype<float>(out) ? self.template pdf_t<float>(wo, wi, lam, mode, sf, out)
-                                        : self.template pdf_t<double>(wo, wi, lam, mode, sf, out);
-        })
+    // packets=False: the scalar per-element path (the packet path's reference in the tests).
+    c.def("eval", [](const P &self, py::array wo, py::array wi, py::array lam, int mode, py::array out, bool packets) {
+         return is_dtype<float>(out) ? self.template eval_t<float>(wo, wi, lam, mode, out, packets)
+                                     : self.template eval_t<double>(wo, wi, lam, mode, out, packets);
+     }, py::arg("wo"), py::arg("wi"), py::arg("wavelengths"), py::arg("mode"), py::arg("out"), py::arg("packets") = true)
+        .def("pdf", [](const P &self, py::array wo, py::array wi, py::array lam, int mode, int sf, py::array out,
+                       bool packets) {
+            return is_dtype<float>(out) ? self.template pdf_t<float>(wo, wi, lam, mode, sf, out, packets)
+                                        : self.template pdf_t<double>(wo, wi, lam, mode, sf, out, packets);
+        }, py::arg("wo"), py::arg("wi"), py::arg("wavelengths"), py::arg("mode"), py::arg("sample_flags"), py::arg("out"),
+           py::arg("packets") = true)
         .def("sample", [](const P &self, py::array wo, py::array uc, py::array u, py::array lam, int mode, int sf,
                           py::array wi, py::array f, py::array pdf, py::array flags, py::array eta, py::array valid,
-                          py::array prop, py::array term) {
+                          py::array prop, py::array term, bool packets) {
             return is_dtype<float>(f)
-                       ? self.template sample_t<float>(wo, uc, u, lam, mode, sf, wi, f, pdf, flags, eta, valid, prop, term)
-                       : self.template sample_t<double>(wo, uc, u, lam, mode, sf, wi, f, pdf, flags, eta, valid, prop, term);
-        })
+                       ? self.template sample_t<float>(wo, uc, u, lam, mode, sf, wi, f, pdf, flags, eta, valid, prop, term, packets)
+                       : self.template sample_t<double>(wo, uc, u, lam, mode, sf, wi, f, pdf, flags, eta, valid, prop, term, packets);
+        }, py::arg("wo"), py::arg("uc"), py::arg("u"), py::arg("wavelengths"), py::arg("mode"), py::arg("sample_flags"),
+           py::arg("wi"), py::arg("f"), py::arg("pdf"), py::arg("flags"), py::arg("eta"), py::arg("valid"),
+           py::arg("pdf_is_proportional"), py::arg("terminated"), py::arg("packets") = true)
         .def("albedo", [](const P &self, py::array wo, py::array lam, int64_t n, uint64_t seed, int mode, py::array out) {
             return is_dtype<float>(out) ? self.template albedo_t<float>(wo, lam, n, seed, mode, out)
                                         : self.template albedo_t<double>(wo, lam, n, seed, mode, out);

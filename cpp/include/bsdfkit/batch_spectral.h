@@ -9,11 +9,17 @@
 // dielectrics with the hero wavelength's eta (plus the other wavelengths' Fresnel terms where
 // the direction is shared, see DielectricSpectral). Bodies of the models do not change.
 //
-// Why scalar (one element at a time) rather than packets: the model instance is built per
-// element from per-element parameters (a table gather, a sigmoid, the conductor's per-wavelength
-// setup), whereas the packet path keeps one model for a whole packet with lane-uniform
-// parameters. Making the models' parameters per lane is the next step (see docs/SPECTRAL.md);
-// bench/SPECTRAL.md measures what the scalar path costs against RGB.
+// Two paths. The scalar path runs one element at a time: the model instance is built per element
+// from the parameters at its wavelengths (every adapter has it; the renderer uses it). The packet
+// path (adapters with `kPackets`, below) runs kPacketWidth elements at a time on Packet<F> with
+// the padded tail of batch.h: the parameters are evaluated per lane (SpectralParam::lanes, in
+// double, the same operations as the scalar path) and the model is instantiated with per-lane
+// channel values (DiffuseBxDF<F, 4, Packet<F>>, ConductorBxDF<F, FR, 4, Packet<F>>,
+// DielectricBxDF<F, Packet<F>>, ...), the same model code as RGB mode. Per element both paths
+// compute the same operations; they agree bit for bit except where packet math differs from
+// libm (the rough models' visible-normal sampling: sincos; tests/test_spectral_packets.py).
+// Adapters without `kPackets` (the split-channel ones, the other helpers' families) and
+// parameters a packet model cannot take (see on_packets()) stay on the scalar path.
 //
 // Determinism: element i's results depend only on element i's inputs (and, in albedo, on the
 // seed and its indices), so they are bit-identical for any thread count and array position.
@@ -41,7 +47,13 @@ namespace bsdfkit {
 // pdf(wo, wi, lambda, mode, sf), sample(wo, uc, u, lambda, mode, sf, &terminated) (bsdf_sample's
 // rules: an invalid sample has f = pdf = 0 and wi = +z). lambda: the element's 4 wavelengths.
 
+// The 4 wavelengths of kPacketWidth elements: l[i] holds wavelength i of every lane (nm, float64).
+struct LambdaLanes {
+    Packet<double> l[kSpectralN];
+};
+
 // Families whose spectral model is the RGB model with 4 channels: Derived::at(lambda) builds it.
+// The packet path (Derived::kPackets): Derived::lanes(lam) builds it with per-lane channel values.
 template <typename Derived, typename F> struct PerElementModel {
     bool dispersive() const { return false; }
     Spectrum4<F> f(const Vec3<F> &wo, const Vec3<F> &wi, const double *lam, TransportMode mode) const {
@@ -56,27 +68,68 @@ template <typename Derived, typename F> struct PerElementModel {
         return bsdf_sample(self().at(lam), wo, uc, u, mode, sf);
     }
 
+    // ---- Packet path (instantiated only for a Derived with lanes()).
+    using P = Packet<F>;
+    bool on_packets() const { return true; }
+    Spectrum<P, 4> f(const Vec3<P> &wo, const Vec3<P> &wi, const LambdaLanes &lam, TransportMode mode) const {
+        return bsdf_f(self().lanes(lam), wo, wi, mode);
+    }
+    P pdf(const Vec3<P> &wo, const Vec3<P> &wi, const LambdaLanes &lam, TransportMode mode, uint8_t sf) const {
+        return bsdf_pdf(self().lanes(lam), wo, wi, mode, sf);
+    }
+    // model_ok = true: these models' sample_f already honours sample_flags, and a model whose
+    // flags() are Unset at an element's wavelengths (a reflectance that is 0 at all 4) samples
+    // f = 0, which the acceptance rule rejects as the scalar path's flags() test does.
+    BSDFSample<P, 4> sample(const Vec3<P> &wo, P uc, Point2<P> u, const LambdaLanes &lam, TransportMode mode,
+                            uint8_t sf, Mask<P> *terminated) const {
+        *terminated = Mask<P>(false);
+        return accepted_sample(self().lanes(lam).sample_f(wo, clamp_uniform(uc), clamp_uniform(u), mode, sf), wo, true);
+    }
+
   private:
     const Derived &self() const { return static_cast<const Derived &>(*this); }
 };
 
 template <typename F> struct DiffuseSpectral : PerElementModel<DiffuseSpectral<F>, F> {
+    static constexpr bool kPackets = true;
     SpectralParam reflectance;
     DiffuseBxDF<F, 4> at(const double *lam) const { return {reflectance.at<F>(lam)}; }
+    DiffuseBxDF<F, 4, Packet<F>> lanes(const LambdaLanes &lam) const { return {reflectance.at_lanes<Packet<F>>(lam.l)}; }
 };
 
 template <typename F> struct DiffuseTransmissionSpectral : PerElementModel<DiffuseTransmissionSpectral<F>, F> {
+    static constexpr bool kPackets = true;
     SpectralParam reflectance, transmittance;
     DiffuseTransmissionBxDF<F, 4> at(const double *lam) const {
         return {reflectance.at<F>(lam), transmittance.at<F>(lam)};
+    }
+    DiffuseTransmissionBxDF<F, 4, Packet<F>> lanes(const LambdaLanes &lam) const {
+        return {reflectance.at_lanes<Packet<F>>(lam.l), transmittance.at_lanes<Packet<F>>(lam.l)};
     }
 };
 
 template <typename F, ConductorFresnel FR>
 struct ConductorSpectralT : PerElementModel<ConductorSpectralT<F, FR>, F> {
+    static constexpr bool kPackets = true;
     SpectralParam eta, k;
     TrowbridgeReitz<F> mfd;
     ConductorBxDF<F, FR, 4> at(const double *lam) const { return ConductorBxDF<F, FR, 4>(mfd, eta.at<F>(lam), k.at<F>(lam)); }
+    // As the constructor, per lane: F0 and the F82 coefficient in double from eta, k at the
+    // model's precision (unused by Exact).
+    ConductorBxDF<F, FR, 4, Packet<F>> lanes(const LambdaLanes &lam) const {
+        using P = Packet<F>;
+        ConductorBxDF<F, FR, 4, P> m;
+        m.mfd = mfd;
+        m.eta = eta.at_lanes<P>(lam.l);
+        m.k = k.at_lanes<P>(lam.l);
+        if constexpr (FR != ConductorFresnel::Exact)
+            for (int i = 0; i < kSpectralN; ++i) {
+                Packet<double> e(m.eta[i]), kk(m.k[i]);
+                m.f0[i] = P(ConductorF0(e, kk));
+                m.f82_a[i] = P(ConductorF82A(e, kk));
+            }
+        return m;
+    }
 };
 template <typename F> using ConductorSpectral = ConductorSpectralT<F, ConductorFresnel::Exact>;
 template <typename F> using ConductorSchlickSpectral = ConductorSpectralT<F, ConductorFresnel::Schlick>;
@@ -96,6 +149,25 @@ template <typename F> inline BSDFSample<F, 4> with_spectrum(const BSDFSample<F> 
     return r;
 }
 
+// Whether a sample (valid: wi.z != 0, wo.z != 0) crossed the surface. F: a scalar or a packet.
+template <typename F, int N> inline Mask<F> crossed(const BSDFSample<F, N> &s, const Vec3<F> &wo) {
+    return (s.wi.z < F(0)) ^ (wo.z < F(0));
+}
+
+// The hero wavelength lambda0's sample: m0's sample under pbrt-v4's BSDF-level rules (as
+// bsdf_sample; model_ok: m0 has a lobe in sf), its f copied to the 4 channels; where
+// `secondaries` and the sample is valid, channel i = 1..3 is fi(i, s) instead: wavelength i's
+// value at the same direction. V: a scalar or a packet (per lane).
+template <typename V, typename Model, typename Fi>
+inline BSDFSample<V, 4> hero_sample(const Model &m0, bool model_ok, const Vec3<V> &wo, V uc, Point2<V> u,
+                                    TransportMode mode, uint8_t sf, bool secondaries, const Fi &fi) {
+    BSDFSample<V> s = accepted_sample(m0.sample_f(wo, clamp_uniform(uc), clamp_uniform(u), mode, sf), wo, model_ok);
+    BSDFSample<V, 4> r = with_spectrum(s, Spectrum4<V>(s.f[0]));
+    if (secondaries & bool(any(s.valid)))
+        for (int i = 1; i < kSpectralN; ++i) r.f[i] = select(s.valid, fi(i, s), V(0));
+    return r;
+}
+
 // Dielectric with eta(lambda). Not dispersive (eta constant): the RGB model at that eta, its
 // value copied to the 4 wavelengths. Dispersive (docs/SPECTRAL.md):
 //  - sample: the hero wavelength lambda0's model chooses the lobe and the direction; a
@@ -105,7 +177,11 @@ template <typename F> inline BSDFSample<F, 4> with_spectrum(const BSDFSample<F> 
 //  - eval: a reflection pair per wavelength; a transmission pair is a refraction of lambda0
 //    only (f of lambda1..3 = 0);
 //  - pdf: lambda0's, in both cases (the density sample uses).
+// Packets: a constant eta as the RGB model's (lane-uniform); a dispersive eta per lane
+// (DielectricBxDF<F, Packet<F>>) when it never reaches 1 (eta_never_one: the index-matched case
+// is a per-model switch of DielectricBxDF); otherwise the scalar path.
 template <typename F> struct DielectricSpectral {
+    static constexpr bool kPackets = true;
     SpectralParam eta;
     TrowbridgeReitz<F> mfd;
     bool disp = false;
@@ -113,14 +189,37 @@ template <typename F> struct DielectricSpectral {
     bool dispersive() const { return disp; }
     DielectricBxDF<F> at1(double e) const { return {F(e), mfd}; }
 
-    Spectrum4<F> f(const Vec3<F> &wo, const Vec3<F> &wi, const double *lam, TransportMode mode) const {
-        Spectrum4<F> r(bsdf_f(at1(eta(lam[0])), wo, wi, mode)[0]);
+    // Shared by both paths (V = F or Packet<F>; M: the hero's model, eta_i(i): eta at lambda_i).
+    template <typename V, typename M, typename Models>
+    Spectrum4<V> f_hero(const M &m0, const Vec3<V> &wo, const Vec3<V> &wi, TransportMode mode, const Models &model_i) const {
+        Spectrum4<V> r(bsdf_f(m0, wo, wi, mode)[0]);
         if (disp) {
-            bool reflect = CosTheta(wi) * CosTheta(wo) > F(0);
-            for (int i = 1; i < kSpectralN; ++i)
-                r[i] = reflect ? bsdf_f(at1(eta(lam[i])), wo, wi, mode)[0] : F(0);
+            Mask<V> reflect = CosTheta(wi) * CosTheta(wo) > V(0);
+            for (int i = 1; i < kSpectralN; ++i) r[i] = select(reflect, bsdf_f(model_i(i), wo, wi, mode)[0], V(0));
         }
         return r;
+    }
+    template <typename V, typename M, typename EtaAt>
+    BSDFSample<V, 4> sample_hero(const M &m0, bool model_ok, const Vec3<V> &wo, V uc, Point2<V> u, TransportMode mode,
+                                 uint8_t sf, const EtaAt &eta_i, Mask<V> *terminated) const {
+        const bool smooth = m0.is_smooth();
+        BSDFSample<V, 4> r = hero_sample(m0, model_ok, wo, uc, u, mode, sf, disp, [&](int i, const BSDFSample<V> &s) {
+            V e = eta_i(i), v;
+            if (smooth) { // the delta mirror: Fresnel reflectance / |cos| (sample_smooth)
+                V fr = FrDielectric(CosTheta(wo), e);
+                if constexpr (!is_packet_v<V>) fr = keep_or_zero(fr, e != V(1)); // a packet eta is never 1
+                v = fr / DeltaAbsCos(s.wi);
+            } else {
+                v = DielectricBxDF<F, V>{e, mfd}.f(wo, s.wi, mode)[0];
+            }
+            return select(crossed(s, wo), V(0), finite_or_zero(v));
+        });
+        *terminated = Mask<V>(disp) & r.valid & crossed(r, wo);
+        return r;
+    }
+
+    Spectrum4<F> f(const Vec3<F> &wo, const Vec3<F> &wi, const double *lam, TransportMode mode) const {
+        return f_hero(at1(eta(lam[0])), wo, wi, mode, [&](int i) { return at1(eta(lam[i])); });
     }
     F pdf(const Vec3<F> &wo, const Vec3<F> &wi, const double *lam, TransportMode mode, uint8_t sf) const {
         return bsdf_pdf(at1(eta(lam[0])), wo, wi, mode, sf);
@@ -128,39 +227,69 @@ template <typename F> struct DielectricSpectral {
     BSDFSample<F, 4> sample(const Vec3<F> &wo, F uc, Point2<F> u, const double *lam, TransportMode mode, uint8_t sf,
                             bool *terminated) const {
         DielectricBxDF<F> m0 = at1(eta(lam[0]));
-        BSDFSample<F> s = bsdf_sample(m0, wo, uc, u, mode, sf);
-        BSDFSample<F, 4> r = with_spectrum(s, Spectrum4<F>(s.f[0]));
-        *terminated = false;
-        if (disp & bool(s.valid)) {
-            if (s.flags & Transmission) {
-                for (int i = 1; i < kSpectralN; ++i) r.f[i] = F(0);
-                *terminated = true;
-            } else {
-                for (int i = 1; i < kSpectralN; ++i) {
-                    double e = eta(lam[i]);
-                    F v;
-                    if (m0.is_smooth()) // the delta mirror: Fresnel reflectance / |cos| (sample_smooth)
-                        v = keep_or_zero(FrDielectric(CosTheta(wo), F(e)), e != 1.0) / DeltaAbsCos(s.wi);
-                    else
-                        v = at1(e).f(wo, s.wi, mode)[0];
-                    r.f[i] = finite_or_zero(v);
-                }
-            }
+        return sample_hero(m0, (m0.flags() & sf) != 0, wo, uc, u, mode, sf, [&](int i) { return F(eta(lam[i])); },
+                           terminated);
+    }
+
+    // ---- Packet path
+    using P = Packet<F>;
+    // A table or constant eta whose values keep away from 1 (so does its piecewise-linear
+    // interpolant, also at the model's precision).
+    bool eta_never_one() const {
+        if (eta.kind == SpectralParam::Constant) return std::abs(eta.c[0] - 1.0) > 1e-6;
+        if (eta.kind != SpectralParam::Table) return false;
+        bool above = true, below = true;
+        for (int32_t j = 0; j < eta.n; ++j) {
+            above &= eta.v[j] > 1.0 + 1e-6;
+            below &= eta.v[j] < 1.0 - 1e-6;
         }
-        return r;
+        return above | below;
+    }
+    bool on_packets() const { return disp ? eta_never_one() : eta.kind == SpectralParam::Constant; }
+    DielectricBxDF<F, P> lanes1(const Packet<double> &l) const { return {P(eta.lanes(l)), mfd}; }
+
+    Spectrum<P, 4> f(const Vec3<P> &wo, const Vec3<P> &wi, const LambdaLanes &lam, TransportMode mode) const {
+        if (!disp) return Spectrum<P, 4>(bsdf_f(at1(eta.c[0]), wo, wi, mode)[0]);
+        return f_hero(lanes1(lam.l[0]), wo, wi, mode, [&](int i) { return lanes1(lam.l[i]); });
+    }
+    P pdf(const Vec3<P> &wo, const Vec3<P> &wi, const LambdaLanes &lam, TransportMode mode, uint8_t sf) const {
+        if (!disp) return bsdf_pdf(at1(eta.c[0]), wo, wi, mode, sf);
+        return bsdf_pdf(lanes1(lam.l[0]), wo, wi, mode, sf);
+    }
+    BSDFSample<P, 4> sample(const Vec3<P> &wo, P uc, Point2<P> u, const LambdaLanes &lam, TransportMode mode,
+                            uint8_t sf, Mask<P> *terminated) const {
+        auto eta_i = [&](int i) { return P(eta.lanes(lam.l[i])); };
+        if (!disp) {
+            DielectricBxDF<F> m0 = at1(eta.c[0]);
+            return sample_hero(m0, (m0.flags() & sf) != 0, wo, uc, u, mode, sf, eta_i, terminated);
+        }
+        // flags(): both lobes (eta != 1), Specular or Glossy
+        return sample_hero(lanes1(lam.l[0]), (uint8_t(Reflection | Transmission) & sf) != 0, wo, uc, u, mode, sf,
+                           eta_i, terminated);
     }
 };
 
 // Thin slab with eta(lambda). Both lobes keep their direction for every wavelength (mirror and
 // straight through), so a dispersive slab never terminates: lambda0 chooses the lobe, f per
 // wavelength is that lobe's slab reflectance / transmittance at eta(lambda_i). (pbrt-v4
-// terminates the secondaries for any non-constant eta; here it is not needed.)
+// terminates the secondaries for any non-constant eta; here it is not needed.) Packets: eta per
+// lane (ThinDielectricBxDF<F, Packet<F>>), any parameter.
 template <typename F> struct ThinDielectricSpectral {
+    static constexpr bool kPackets = true;
     SpectralParam eta;
     bool disp = false;
 
     bool dispersive() const { return false; }
     ThinDielectricBxDF<F> at1(double e) const { return {F(e)}; }
+
+    template <typename V, typename M, typename EtaAt>
+    BSDFSample<V, 4> sample_hero(const M &m0, const Vec3<V> &wo, V uc, Point2<V> u, TransportMode mode, uint8_t sf,
+                                 const EtaAt &eta_i) const {
+        return hero_sample(m0, (m0.flags() & sf) != 0, wo, uc, u, mode, sf, disp, [&](int i, const BSDFSample<V> &s) {
+            V Rs = ThinDielectricBxDF<F>::slab_reflectance(AbsCosTheta(wo), eta_i(i));
+            return finite_or_zero(select(crossed(s, wo), V(1) - Rs, Rs) * (V(1) / DeltaAbsCos(s.wi)));
+        });
+    }
 
     Spectrum4<F> f(const Vec3<F> &wo, const Vec3<F> &wi, const double *lam, TransportMode mode) const {
         return Spectrum4<F>(bsdf_f(at1(eta(lam[0])), wo, wi, mode)[0]); // 0: delta lobes
@@ -170,18 +299,22 @@ template <typename F> struct ThinDielectricSpectral {
     }
     BSDFSample<F, 4> sample(const Vec3<F> &wo, F uc, Point2<F> u, const double *lam, TransportMode mode, uint8_t sf,
                             bool *terminated) const {
-        BSDFSample<F> s = bsdf_sample(at1(eta(lam[0])), wo, uc, u, mode, sf);
-        BSDFSample<F, 4> r = with_spectrum(s, Spectrum4<F>(s.f[0]));
         *terminated = false;
-        if (disp & bool(s.valid)) {
-            bool reflect = !(s.flags & Transmission);
-            F inv_cos = F(1) / DeltaAbsCos(s.wi);
-            for (int i = 1; i < kSpectralN; ++i) {
-                F Rs = ThinDielectricBxDF<F>::slab_reflectance(AbsCosTheta(wo), F(eta(lam[i])));
-                r.f[i] = finite_or_zero((reflect ? Rs : F(1) - Rs) * inv_cos);
-            }
-        }
-        return r;
+        return sample_hero(at1(eta(lam[0])), wo, uc, u, mode, sf, [&](int i) { return F(eta(lam[i])); });
+    }
+
+    // ---- Packet path
+    using P = Packet<F>;
+    bool on_packets() const { return true; }
+    ThinDielectricBxDF<F, P> lanes1(const Packet<double> &l) const { return {P(eta.lanes(l))}; }
+    Spectrum<P, 4> f(const Vec3<P> &, const Vec3<P> &, const LambdaLanes &, TransportMode) const {
+        return Spectrum<P, 4>(P(0)); // delta lobes (bsdf_f of the model: 0)
+    }
+    P pdf(const Vec3<P> &, const Vec3<P> &, const LambdaLanes &, TransportMode, uint8_t) const { return P(0); }
+    BSDFSample<P, 4> sample(const Vec3<P> &wo, P uc, Point2<P> u, const LambdaLanes &lam, TransportMode mode,
+                            uint8_t sf, Mask<P> *terminated) const {
+        *terminated = Mask<P>(false);
+        return sample_hero(lanes1(lam.l[0]), wo, uc, u, mode, sf, [&](int i) { return P(eta.lanes(lam.l[i])); });
     }
 };
 
@@ -376,6 +509,7 @@ struct CoatedConductorAnalyticSpectral
 // channel); the cosine-weighted sampling does not depend on eta, so pdf and the direction are
 // lambda0's model's and f_i is model i's value at that direction.
 template <typename F> struct NormalizedFresnelSpectral {
+    static constexpr bool kPackets = true;
     SpectralParam eta;
 
     bool dispersive() const { return false; }
@@ -391,12 +525,34 @@ template <typename F> struct NormalizedFresnelSpectral {
     }
     BSDFSample<F, 4> sample(const Vec3<F> &wo, F uc, Point2<F> u, const double *lam, TransportMode mode, uint8_t sf,
                             bool *terminated) const {
-        BSDFSample<F> s = bsdf_sample(at1(eta(lam[0])), wo, uc, u, mode, sf);
-        BSDFSample<F, 4> r = with_spectrum(s, Spectrum4<F>(s.f[0]));
         *terminated = false;
-        if (s.valid)
-            for (int i = 1; i < kSpectralN; ++i) r.f[i] = bsdf_f(at1(eta(lam[i])), wo, s.wi, mode)[0];
+        NormalizedFresnelBxDF<F> m0 = at1(eta(lam[0]));
+        return hero_sample(m0, (m0.flags() & sf) != 0, wo, uc, u, mode, sf, true, [&](int i, const BSDFSample<F> &s) {
+            return bsdf_f(at1(eta(lam[i])), wo, s.wi, mode)[0];
+        });
+    }
+
+    // ---- Packet path: one model per wavelength with eta per lane (its 1 / (c pi) per lane).
+    using P = Packet<F>;
+    bool on_packets() const { return true; }
+    NormalizedFresnelBxDF<F, P> lanes1(const Packet<double> &l) const {
+        return NormalizedFresnelBxDF<F, P>::from_eta(eta.lanes(l));
+    }
+    Spectrum<P, 4> f(const Vec3<P> &wo, const Vec3<P> &wi, const LambdaLanes &lam, TransportMode mode) const {
+        Spectrum<P, 4> r;
+        for (int i = 0; i < kSpectralN; ++i) r[i] = bsdf_f(lanes1(lam.l[i]), wo, wi, mode)[0];
         return r;
+    }
+    P pdf(const Vec3<P> &wo, const Vec3<P> &wi, const LambdaLanes &lam, TransportMode mode, uint8_t sf) const {
+        return bsdf_pdf(lanes1(lam.l[0]), wo, wi, mode, sf); // cosine-weighted: eta unread
+    }
+    BSDFSample<P, 4> sample(const Vec3<P> &wo, P uc, Point2<P> u, const LambdaLanes &lam, TransportMode mode,
+                            uint8_t sf, Mask<P> *terminated) const {
+        *terminated = Mask<P>(false);
+        NormalizedFresnelBxDF<F, P> m0 = lanes1(lam.l[0]);
+        return hero_sample(m0, (m0.flags() & sf) != 0, wo, uc, u, mode, sf, true, [&](int i, const BSDFSample<P> &s) {
+            return bsdf_f(lanes1(lam.l[i]), wo, s.wi, mode)[0];
+        });
     }
 };
 
@@ -405,6 +561,12 @@ template <typename F> struct NormalizedFresnelSpectral {
 
 struct SpectralBadCounts : BadCounts {
     std::atomic<int64_t> lam{0};  // wavelengths not finite or outside [360, 830] nm
+};
+
+template <typename F> struct SpectralSampleOut {
+    F *wi, *f, *pdf, *eta;
+    uint8_t *flags;
+    bool *valid, *proportional, *terminated;
 };
 
 inline int64_t load_lambda(const double *p, int64_t i, int64_t sl, double (&l)[kSpectralN]) {
@@ -416,9 +578,103 @@ inline int64_t load_lambda(const double *p, int64_t i, int64_t sl, double (&l)[k
     return bad > 0;
 }
 
+// ---- The packet path's building blocks (batch.h's packet loop and lane loads / stores).
+
+// Whether an adapter has the packet path (`static constexpr bool kPackets = true;` and the
+// packet overloads of f / pdf / sample plus on_packets(), whether its parameters allow it).
+template <typename SM, typename = void> struct spectral_packets : std::false_type {};
+template <typename SM>
+struct spectral_packets<SM, std::void_t<decltype(SM::kPackets)>> : std::bool_constant<SM::kPackets> {};
+template <typename SM> inline bool use_packets(const SM &m, bool packets) {
+    if constexpr (spectral_packets<SM>::value) return packets & m.on_packets();
+    else return false;
+}
+
+// A row array of directions (stride 3) or one broadcast row (stride 0) as batch.h's Dirs.
+template <typename F> inline Dirs<F> spectral_dirs(const F *p, int64_t stride) {
+    return {p, stride == 0 ? DirLayout::One : DirLayout::Rows, 0};
+}
+
+// Lanes [i, i + cnt) of the wavelength rows (stride sl: 4, or 0 for one broadcast row); past cnt,
+// 550 nm. Adds the elements with a wavelength outside [360, 830] nm (or NaN) to bad.lam.
+inline void load_lambda_lanes(const double *p, int64_t sl, int64_t i, int64_t cnt, LambdaLanes &lam,
+                              SpectralBadCounts &bad) {
+    using D = Packet<double>;
+    static constexpr double pad[kSpectralN] = {550.0, 550.0, 550.0, 550.0};
+    if (sl == 0) load_lanes<0, kSpectralN>(p, i, cnt, pad, lam.l);
+    else load_lanes<kSpectralN, kSpectralN>(p, i, cnt, pad, lam.l);
+    Mask<D> ok(true);
+    for (int c = 0; c < kSpectralN; ++c) ok = ok & (lam.l[c] >= D(kLambdaMin)) & (lam.l[c] <= D(kLambdaMax));
+    int64_t nbad = int64_t(drjit::count(!ok));
+    if (nbad > 0) bad.lam += sl == 0 ? cnt : nbad;  // a broadcast row: once per element
+}
+
+template <typename F> inline void store4_lanes(F *p, int64_t i, int64_t cnt, const Spectrum<Packet<F>, 4> &s) {
+    const Packet<F> v[4] = {s[0], s[1], s[2], s[3]};
+    store_lanes<4>(p, i, cnt, v);
+}
+
+// sample on packets: the adapter returns the accepted sample (pbrt-v4's rules applied) and the
+// terminated mask; flags, pdf_is_proportional and terminated are staged as F (flags + 256 prop +
+// 512 terminated) and written as bytes in a second pass, as batch.h's sample_chunk_packet.
+template <typename SM, typename F>
+void sample_spectral_packets(const SM &m, const F *wo, int64_t so, const F *uc, const F *u, const double *lam,
+                             int64_t sl, int64_t n, TransportMode mode, uint8_t sf, const SpectralSampleOut<F> &out,
+                             int nthreads, SpectralBadCounts &bad) {
+    using P = Packet<F>;
+    const Dirs<F> dwo = spectral_dirs(wo, so);
+    parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
+        F stage[kChunk];
+        int64_t bo = 0, buc = count_bad_uniforms(uc, b, e), bu = count_bad_uniforms(u, 2 * b, 2 * e);
+        const SM mloc = m;
+        static constexpr F pad_u[2] = {F(0), F(0)};
+        for (int64_t i = b; i < e; i += kW<F>) {
+            int64_t cnt = std::min(kW<F>, e - i);
+            Vec3<P> o = load_dirs<kAnyLayout>(dwo, i, cnt);
+            bo += count_not_unit(o);
+            P uv[2];
+            load_lanes<2, 2>(u, i, cnt, pad_u, uv);
+            LambdaLanes l;
+            load_lambda_lanes(lam, sl, i, cnt, l, bad);
+            Mask<P> term;
+            BSDFSample<P, 4> s = mloc.sample(o, load1_lanes(uc, i, cnt, F(0)), Point2<P>{uv[0], uv[1]}, l, mode, sf, &term);
+            store4_lanes(out.f, i, cnt, s.f);
+            store3_lanes(out.wi, i, cnt, s.wi);
+            store1_lanes(out.pdf, i, cnt, s.pdf);
+            store1_lanes(out.eta, i, cnt, s.eta);
+            P tag = s.flags + select(s.pdf_is_proportional, P(256), P(0)) + select(term, P(512), P(0));
+            store1_lanes(stage, i - b, cnt, tag);
+        }
+        for (int64_t i = b; i < e; ++i) {
+            int32_t t = int32_t(stage[i - b]);
+            out.flags[i] = uint8_t(t & 255);
+            out.proportional[i] = (t >> 8) & 1;
+            out.terminated[i] = (t >> 9) & 1;
+            out.valid[i] = out.pdf[i] > F(0);  // accepted samples have pdf > 0, rejected ones 0
+        }
+        bad.wo += so == 0 ? (bo > 0 ? e - b : 0) : bo;
+        bad.uc += buc;
+        bad.u += bu;
+    });
+}
+
+// packets = false keeps the scalar path (tests compare the two; tests/test_spectral_packets.py).
 template <typename SM, typename F>
 void eval_spectral_batch(const SM &m, const F *wo, int64_t so, const F *wi, int64_t si, const double *lam, int64_t sl,
-                         int64_t n, TransportMode mode, F *out, int nthreads, SpectralBadCounts &bad) {
+                         int64_t n, TransportMode mode, F *out, int nthreads, SpectralBadCounts &bad,
+                         bool packets = true) {
+    if constexpr (spectral_packets<SM>::value) {
+        if (use_packets(m, packets)) {
+            pair_packet_loop<kAnyLayout, kAnyLayout>(
+                m, spectral_dirs(wo, so), spectral_dirs(wi, si), n, nthreads, bad,
+                [&](const SM &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
+                    LambdaLanes l;
+                    load_lambda_lanes(lam, sl, i, cnt, l, bad);
+                    store4_lanes(out, i, cnt, mm.f(o, w, l, mode));
+                });
+            return;
+        }
+    }
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
         int64_t bo = 0, bi = 0, bl = 0;
         const SM mloc = m;
@@ -439,7 +695,20 @@ void eval_spectral_batch(const SM &m, const F *wo, int64_t so, const F *wi, int6
 
 template <typename SM, typename F>
 void pdf_spectral_batch(const SM &m, const F *wo, int64_t so, const F *wi, int64_t si, const double *lam, int64_t sl,
-                        int64_t n, TransportMode mode, uint8_t sf, F *out, int nthreads, SpectralBadCounts &bad) {
+                        int64_t n, TransportMode mode, uint8_t sf, F *out, int nthreads, SpectralBadCounts &bad,
+                        bool packets = true) {
+    if constexpr (spectral_packets<SM>::value) {
+        if (use_packets(m, packets)) {
+            pair_packet_loop<kAnyLayout, kAnyLayout>(
+                m, spectral_dirs(wo, so), spectral_dirs(wi, si), n, nthreads, bad,
+                [&](const SM &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
+                    LambdaLanes l;
+                    load_lambda_lanes(lam, sl, i, cnt, l, bad);
+                    store1_lanes(out, i, cnt, mm.pdf(o, w, l, mode, sf));
+                });
+            return;
+        }
+    }
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
         int64_t bo = 0, bi = 0, bl = 0;
         const SM mloc = m;
@@ -457,16 +726,16 @@ void pdf_spectral_batch(const SM &m, const F *wo, int64_t so, const F *wi, int64
     });
 }
 
-template <typename F> struct SpectralSampleOut {
-    F *wi, *f, *pdf, *eta;
-    uint8_t *flags;
-    bool *valid, *proportional, *terminated;
-};
-
 template <typename SM, typename F>
 void sample_spectral_batch(const SM &m, const F *wo, int64_t so, const F *uc, const F *u, const double *lam, int64_t sl,
                            int64_t n, TransportMode mode, uint8_t sf, const SpectralSampleOut<F> &out, int nthreads,
-                           SpectralBadCounts &bad) {
+                           SpectralBadCounts &bad, bool packets = true) {
+    if constexpr (spectral_packets<SM>::value) {
+        if (use_packets(m, packets)) {
+            sample_spectral_packets(m, wo, so, uc, u, lam, sl, n, mode, sf, out, nthreads, bad);
+            return;
+        }
+    }
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
         int64_t bo = 0, bl = 0;
         int64_t buc = count_bad_uniforms(uc, b, e), bu = count_bad_uniforms(u, 2 * b, 2 * e);

@@ -37,16 +37,18 @@ template <typename S = double> struct ConductorParamsT {
 using ConductorParams = ConductorParamsT<>;
 
 // NC: channels (3 RGB; 4 in spectral mode: eta and k at the element's wavelengths, core/spectral.h).
-template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3> struct ConductorBxDF {
+// C: the channel values' type, F; or Packet<F> for a spectral packet (eta, k, f0, f82_a per lane,
+// set field by field by batch_spectral.h; the constructor serves C = F).
+template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3, typename C = F> struct ConductorBxDF {
     using Params = ConductorParamsT<param_t<F>>;
     static constexpr const char *Name = FR == ConductorFresnel::Schlick ? "ConductorSchlick"
                                         : FR == ConductorFresnel::F82   ? "ConductorF82"
                                                                         : "Conductor";
     TrowbridgeReitz<F> mfd;
-    Spectrum<F, NC> eta, k;
+    Spectrum<C, NC> eta, k;
     // Per-channel Schlick F0 and F82-tint a, computed in double at construction (unused by Exact);
     // for a Dual model in the Dual (param_t), so their derivatives reach eta and k.
-    Spectrum<F, NC> f0{F(0)}, f82_a{F(0)};
+    Spectrum<C, NC> f0{C(0)}, f82_a{C(0)};
 
     ConductorBxDF() = default;
     ConductorBxDF(const TrowbridgeReitz<F> &mfd_, const Spectrum<F, NC> &eta_, const Spectrum<F, NC> &k_)

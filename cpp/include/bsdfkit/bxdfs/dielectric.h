@@ -26,10 +26,12 @@ template <typename S = double> struct DielectricParamsT {
 };
 using DielectricParams = DielectricParamsT<>;
 
-template <typename F> struct DielectricBxDF {
+// Eta: eta's type, F; or Packet<F> for a dispersive glass on a spectral packet (eta per lane,
+// never 1: batch_spectral.h keeps a glass whose eta(lambda) reaches 1 on the scalar path).
+template <typename F, typename Eta = F> struct DielectricBxDF {
     using Params = DielectricParamsT<param_t<F>>;
     static constexpr const char *Name = "Dielectric";
-    F eta;
+    Eta eta;
     TrowbridgeReitz<F> mfd;
 
     static DielectricBxDF make(const Params &p) {
@@ -37,7 +39,11 @@ template <typename F> struct DielectricBxDF {
     }
 
     // Bitwise | (not ||): a short-circuit here becomes control flow in every batch loop.
-    bool is_smooth() const { return (eta == F(1)) | mfd.effectively_smooth(); }
+    bool is_smooth() const { return (!not_index_matched()) | mfd.effectively_smooth(); }
+    bool not_index_matched() const {
+        if constexpr (is_packet_v<Eta>) return true; // a per-lane eta is never 1 (above)
+        else return eta != F(1);
+    }
 
     uint8_t flags() const {
         uint8_t f = eta == F(1) ? Transmission : (Reflection | Transmission);
@@ -110,7 +116,7 @@ template <typename F> struct DielectricBxDF {
     BSDFSample<V> sample_smooth(const Vec3<V> &wo, V uc, TransportMode mode, uint8_t sample_flags) const {
         BSDFSample<V> s;
         // eta == 1 is a pure pass-through; force R = 0 rather than trusting rounding.
-        V R = keep_or_zero(FrDielectric(CosTheta(wo), eta), eta != F(1)), pr, pt;
+        V R = keep_or_zero(FrDielectric(CosTheta(wo), eta), not_index_matched()), pr, pt;
         lobe_probs(R, V(1) - R, sample_flags, &pr, &pt);
         Mask<V> reflect = ChooseFirstLobe(uc, pr, pt);
         // Specular reflection about +z, or refraction through the flat interface.

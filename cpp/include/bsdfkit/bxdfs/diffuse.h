@@ -17,10 +17,11 @@ using DiffuseParams = DiffuseParamsT<>;
 
 // NC: channels (3 RGB; 4 in spectral mode, one per wavelength, built per element from the
 // parameters evaluated at that element's wavelengths: core/spectral.h, batch_spectral.h).
-template <typename F, int NC = 3> struct DiffuseBxDF {
+// C: the channel values' type, F; or Packet<F> for a spectral packet (a value per lane).
+template <typename F, int NC = 3, typename C = F> struct DiffuseBxDF {
     using Params = DiffuseParamsT<param_t<F>>;
     static constexpr const char *Name = "Diffuse";
-    Spectrum<F, NC> R;
+    Spectrum<C, NC> R;
 
     static DiffuseBxDF make(const Params &p) { return {to_spectrum<F>(p.reflectance)}; }
 

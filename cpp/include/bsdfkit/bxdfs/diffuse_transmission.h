@@ -21,10 +21,12 @@ using DiffuseTransmissionParams = DiffuseTransmissionParamsT<>;
 
 // NC: channels (3 RGB; 4 in spectral mode, see DiffuseBxDF). The lobe choice uses the largest
 // channel, as pbrt-v4's MaxComponentValue over the sampled wavelengths.
-template <typename F, int NC = 3> struct DiffuseTransmissionBxDF {
+// C: the channel values' type, F; or Packet<F> for a spectral packet (a value per lane, and so
+// per-lane lobe weights).
+template <typename F, int NC = 3, typename C = F> struct DiffuseTransmissionBxDF {
     using Params = DiffuseTransmissionParamsT<param_t<F>>;
     static constexpr const char *Name = "DiffuseTransmission";
-    Spectrum<F, NC> R, T;
+    Spectrum<C, NC> R, T;
 
     static DiffuseTransmissionBxDF make(const Params &p) {
         return {to_spectrum<F>(p.reflectance), to_spectrum<F>(p.transmittance)};
@@ -41,7 +43,7 @@ template <typename F, int NC = 3> struct DiffuseTransmissionBxDF {
     // map's ratio) and 1 square root.
     static constexpr bool Vectorized = true;
 
-    template <typename V> Spectrum<V, NC> over_pi(const Spectrum<F, NC> &a) const {
+    template <typename V> Spectrum<V, NC> over_pi(const Spectrum<C, NC> &a) const {
         Spectrum<V, NC> r;
         for (int c = 0; c < NC; ++c) r[c] = V(a[c] * InvPi<F>);
         return r;
@@ -55,18 +57,19 @@ template <typename F, int NC = 3> struct DiffuseTransmissionBxDF {
     // Lobe probabilities from the largest channel, restricted by sample_flags: pr, pt
     // unnormalized, the reflection threshold pr / (pr + pt) of ChooseFirstLobe, and the pdf
     // factors cr = pr / (pi (pr + pt)), ct likewise (0 when pr + pt = 0).
+    // (Per lane when C is a packet.)
     struct LobeWeights {
-        F pr, pt, first, cr, ct;
-        bool any;
+        C pr, pt, first, cr, ct;
+        Mask<C> any;
     };
     LobeWeights lobe_weights(uint8_t sample_flags) const {
         LobeWeights w;
         restrict_lobes(R.max_component(), T.max_component(), sample_flags, &w.pr, &w.pt);
-        F sum = w.pr + w.pt;
-        w.any = sum > F(0);
-        F inv = w.any ? F(1) / sum : F(0);
+        C sum = w.pr + w.pt;
+        w.any = sum > C(0);
+        C inv = select(w.any, C(1) / select(w.any, sum, C(1)), C(0));
         w.first = w.pr * inv;
-        F k = InvPi<F> * inv;
+        C k = InvPi<F> * inv;
         w.cr = w.pr * k;
         w.ct = w.pt * k;
         return w;
@@ -77,7 +80,7 @@ template <typename F, int NC = 3> struct DiffuseTransmissionBxDF {
         LobeWeights lw = lobe_weights(sample_flags);
         BSDFSample<V, NC> s;
         // ChooseFirstLobe (core/sampling.h) with its ratio computed once.
-        Mask<V> reflect = Mask<V>(lw.pr > F(0)) & (Mask<V>(lw.pt <= F(0)) | (uc < V(lw.first)));
+        Mask<V> reflect = Mask<V>(lw.pr > C(0)) & (Mask<V>(lw.pt <= C(0)) | (uc < V(lw.first)));
         Vec3<V> wi = SampleCosineHemisphere(u);
         // reflection stays on wo's side, transmission goes to the other side
         Mask<V> flip = (wo.z < V(0)) ^ !reflect;

@@ -17,11 +17,12 @@
 namespace bsdfkit {
 
 // pbrt-v4 FresnelMoment1: polynomial fit of the first Fresnel moment, int_0^1 Fr(mu, 1/eta) mu dmu.
-inline double FresnelMoment1(double eta) {
-    double e2 = eta * eta, e3 = e2 * eta, e4 = e3 * eta, e5 = e4 * eta;
-    if (eta < 1)
-        return 0.45966 - 1.73965 * eta + 3.37668 * e2 - 3.904945 * e3 + 2.49277 * e4 - 0.68441 * e5;
-    return -4.61686 + 11.1136 * eta - 10.4646 * e2 + 5.11455 * e3 - 1.27198 * e4 + 0.12746 * e5;
+// T: double, or a packet of double (per lane, spectral mode: batch_spectral.h).
+template <typename T> inline T FresnelMoment1(T eta) {
+    T e2 = eta * eta, e3 = e2 * eta, e4 = e3 * eta, e5 = e4 * eta;
+    T below = T(0.45966) - T(1.73965) * eta + T(3.37668) * e2 - T(3.904945) * e3 + T(2.49277) * e4 - T(0.68441) * e5;
+    T above = T(-4.61686) + T(11.1136) * eta - T(10.4646) * e2 + T(5.11455) * e3 - T(1.27198) * e4 + T(0.12746) * e5;
+    return select(eta < T(1), below, above);
 }
 
 struct NormalizedFresnelParams {
@@ -29,17 +30,20 @@ struct NormalizedFresnelParams {
     template <class V> void fields(V &&v) { v("eta", eta); }
 };
 
-template <typename F> struct NormalizedFresnelBxDF {
+// C: the parameters' type, F; or Packet<F> for spectral packets (eta(lambda) per lane: lanes()).
+template <typename F, typename C = F> struct NormalizedFresnelBxDF {
     using Params = NormalizedFresnelParams;
     static constexpr const char *Name = "NormalizedFresnel";
 
-    F eta;
-    F inv_c_pi;  // 1 / (c pi)
-    F eta2;      // Radiance-mode factor
+    C eta;
+    C inv_c_pi;  // 1 / (c pi)
+    C eta2;      // Radiance-mode factor
 
-    static NormalizedFresnelBxDF make(const Params &p) {
-        double c = 1.0 - 2.0 * FresnelMoment1(1.0 / p.eta);
-        return {F(p.eta), F(1.0 / (c * 3.14159265358979323846)), F(p.eta * p.eta)};
+    static NormalizedFresnelBxDF make(const Params &p) { return from_eta(p.eta); }
+    // From eta in double (D: double, or a packet of double giving C = Packet<F>).
+    template <typename D> static NormalizedFresnelBxDF from_eta(const D &e) {
+        D c = D(1.0) - D(2.0) * FresnelMoment1(D(1.0) / e);
+        return {C(e), C(D(1.0) / (c * D(3.14159265358979323846))), C(e * e)};
     }
 
     uint8_t flags() const { return DiffuseReflection; }
@@ -53,7 +57,7 @@ template <typename F> struct NormalizedFresnelBxDF {
     template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode mode) const {
         V r, t, den;
         FrDielectricRatio(CosTheta(wi), eta, &r, &t, &den);
-        F scale = mode == TransportMode::Radiance ? inv_c_pi * eta2 : inv_c_pi;
+        C scale = mode == TransportMode::Radiance ? inv_c_pi * eta2 : inv_c_pi;
         return Spectrum<V>(select(SameHemisphere(wo, wi), t * V(scale) / den, V(0)));
     }
 

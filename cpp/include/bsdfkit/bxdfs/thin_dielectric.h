@@ -15,10 +15,11 @@ struct ThinDielectricParams {
     template <class V> void fields(V &&v) { v("eta", eta); }
 };
 
-template <typename F> struct ThinDielectricBxDF {
+// Eta: eta's type, F; or Packet<F> for a dispersive slab on a spectral packet (eta per lane).
+template <typename F, typename Eta = F> struct ThinDielectricBxDF {
     using Params = ThinDielectricParams;
     static constexpr const char *Name = "ThinDielectric";
-    F eta;
+    Eta eta;
 
     static ThinDielectricBxDF make(const Params &p) { return {F(p.eta)}; }
 
@@ -47,7 +48,9 @@ template <typename F> struct ThinDielectricBxDF {
         FrDielectricRatio(cos_o, eta, &r, &t, &d);
         *rs = r + r;
         *ts = t;
-        if (eta == E(1)) *ts = d; // index-matched: r = 0, T' = 1 exactly (t = d only to rounding)
+        // index-matched: r = 0, T' = 1 exactly (t = d only to rounding); per lane for a packet eta
+        if constexpr (is_packet_v<E>) *ts = select(eta == E(1), d, t);
+        else if (eta == E(1)) *ts = d;
         *den = d + r;
     }
     // R' alone (one division). Also used per wavelength in spectral mode (batch_spectral.h).

@@ -60,16 +60,18 @@ inline F bsdf_pdf(const Model &m, const Vec3<F> &wo, const Vec3<F> &wi, Transpor
 // pbrt-v4's BSDF-level rules on a BxDF's raw sample; model_ok: the model has a lobe in the
 // requested sample flags. Every output of a rejected sample is a defined value, never a NaN from
 // a dead branch; its direction is the normal (0, 0, 1), so that eval / pdf accept every sampled wi.
+// F is a scalar or a packet (per lane; the spectral packet kernels, batch_spectral.h).
 template <typename F, int N>
 inline BSDFSample<F, N> accepted_sample(const BSDFSample<F, N> &s, const Vec3<F> &wo, bool model_ok) {
-    bool ok = sample_accepted(s, wo) & model_ok;
+    Mask<F> ok = sample_accepted(s, wo) & Mask<F>(model_ok);
     BSDFSample<F, N> r;
     r.f = select(ok, s.f, decltype(s.f)(F(0)));
     r.wi = select(ok, s.wi, kInvalidSampleWi<F>());
-    r.pdf = ok ? s.pdf : F(0);
-    r.flags = ok ? s.flags : uint8_t(Unset);
-    r.eta = ok ? s.eta : F(1);
-    r.pdf_is_proportional = ok && s.pdf_is_proportional;
+    r.pdf = select(ok, s.pdf, F(0));
+    if constexpr (is_packet_v<F>) r.flags = select(ok, s.flags, F(0));
+    else r.flags = ok ? s.flags : uint8_t(Unset);
+    r.eta = select(ok, s.eta, F(1));
+    r.pdf_is_proportional = ok & s.pdf_is_proportional;
     r.valid = ok;
     return r;
 }

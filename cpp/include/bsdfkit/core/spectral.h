@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "simd.h"
 #include "spectrum.h"
 
 namespace bsdfkit {
@@ -59,6 +60,42 @@ struct SpectralParam {
     template <typename F> Spectrum4<F> at(const double *lambda) const {
         Spectrum4<F> s;
         for (int i = 0; i < kSpectralN; ++i) s[i] = F((*this)(lambda[i]));
+        return s;
+    }
+
+    // ---- Per lane: the same values for a packet D of wavelengths (Packet<double>, core/simd.h),
+    // the same operations in the same order as operator() (the build does not contract a * b + c),
+    // so each lane equals the scalar value bit for bit. The kind is uniform (one branch per
+    // packet); a table lookup gathers per lane: the segment index first[k], then (rarely) the
+    // step past nodes inside that nm while any lane needs it, then x, v and slope of the segment.
+    // The index is kept in double (whole numbers) so that every mask is a mask of D.
+    template <typename D> D lanes(const D &lambda) const {
+        if (kind == Constant) return D(c[0]);
+        if (kind == Sigmoid) return D(scale) * sigmoid_lanes((D(c[0]) * lambda + D(c[1])) * lambda + D(c[2]));
+        using I = drjit::int32_array_t<D>;
+        D l = select(lambda >= D(kLambdaMin), lambda, D(kLambdaMin));  // also maps a NaN to 360
+        l = select(l <= D(kLambdaMax), l, D(kLambdaMax));
+        D j = D(drjit::gather<I>(first, I(l - D(kLambdaMin))));
+        // j + 2 < n needs no test: the last node is 830 >= l, so the step stops at j = n - 2.
+        for (;;) {
+            auto step = drjit::gather<D>(x, I(j) + 1) < l;
+            if (drjit::none(step)) break;
+            j = select(step, j + D(1), j);
+        }
+        I ju(j);
+        return drjit::gather<D>(slope, ju) * (l - drjit::gather<D>(x, ju)) + drjit::gather<D>(v, ju);
+    }
+    // SigmoidJH per lane (the same operations).
+    template <typename D> static D sigmoid_lanes(const D &x) {
+        D ax = abs(x);
+        D r = select(ax > D(1e150), D(1), ax / sqrt(D(1) + x * x));
+        return D(0.5) + D(0.5) * drjit::copysign(r, x);
+    }
+    // The parameter at a packet's wavelengths (lam[i]: wavelength i of every lane) as channel
+    // values of type C (Packet<float> or Packet<double>).
+    template <typename C, typename D> Spectrum4<C> at_lanes(const D (&lam)[kSpectralN]) const {
+        Spectrum4<C> s;
+        for (int i = 0; i < kSpectralN; ++i) s[i] = C(lanes(lam[i]));
         return s;
     }
 };
