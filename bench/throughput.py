@@ -420,47 +420,29 @@ class _MiLLVM:
         d = self.inputs[n][dt]
         wo, wi = d["wo"], d["wi_sph" if CONFIG[key][2] else "wi_up"]
         uc, u = d["uc"], d["u"]
-        if soa and op in ("eval", "pdf"):
-            wo3, wi3 = np.ascontiguousarray(wo.T), np.ascontiguousarray(wi.T)
-            if op == "eval":
-                def conv():
-                    si = dr.zeros(mi.SurfaceInteraction3f, n)
-                    si.wi = mi.Vector3f(wo3)
-                    r = bsdf.eval(ctx, si, mi.Vector3f(wi3)).numpy()
-                    dr.sync_thread()
-                    return r
-            else:
-                def conv():
-                    si = dr.zeros(mi.SurfaceInteraction3f, n)
-                    si.wi = mi.Vector3f(wo3)
-                    r = bsdf.pdf(ctx, si, mi.Vector3f(wi3)).numpy()
-                    dr.sync_thread()
-                    return r
+        if op in ("eval", "pdf"):
+            call = bsdf.eval if op == "eval" else bsdf.pdf
+            if soa:  # (3, N) arrays in, no axis flip; (3, N) out
+                wo_in, wi_in, to_v3, flip = np.ascontiguousarray(wo.T), np.ascontiguousarray(wi.T), mi.Vector3f, False
+            else:    # (N, 3) rows in; eval's (3, N) result returned as an (N, 3) view
+                wo_in, wi_in, to_v3, flip = wo, wi, V3, op == "eval"
+
+            def conv():
+                si = dr.zeros(mi.SurfaceInteraction3f, n)
+                si.wi = to_v3(wo_in)
+                r = call(ctx, si, to_v3(wi_in)).numpy()
+                dr.sync_thread()
+                return r.T if flip else r
             return conv
-        if op == "eval":
-            def conv():
-                si = dr.zeros(mi.SurfaceInteraction3f, n)
-                si.wi = V3(wo)
-                f = bsdf.eval(ctx, si, V3(wi))
-                r = f.numpy().T
-                dr.sync_thread()
-                return r
-        elif op == "pdf":
-            def conv():
-                si = dr.zeros(mi.SurfaceInteraction3f, n)
-                si.wi = V3(wo)
-                r = bsdf.pdf(ctx, si, V3(wi)).numpy()
-                dr.sync_thread()
-                return r
-        else:
-            def conv():
-                si = dr.zeros(mi.SurfaceInteraction3f, n)
-                si.wi = V3(wo)
-                bs, w = bsdf.sample(ctx, si, mi.Float(uc), mi.Point2f(u, flip_axes=True))
-                dr.eval(bs, w)
-                r = (bs.wo.numpy().T, bs.pdf.numpy(), bs.eta.numpy(), bs.sampled_type.numpy(), w.numpy().T)
-                dr.sync_thread()
-                return r
+
+        def conv():
+            si = dr.zeros(mi.SurfaceInteraction3f, n)
+            si.wi = V3(wo)
+            bs, w = bsdf.sample(ctx, si, mi.Float(uc), mi.Point2f(u, flip_axes=True))
+            dr.eval(bs, w)
+            r = (bs.wo.numpy().T, bs.pdf.numpy(), bs.eta.numpy(), bs.sampled_type.numpy(), w.numpy().T)
+            dr.sync_thread()
+            return r
         return conv
 
     def kernel_fn(self, n, key, op):

@@ -106,7 +106,8 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3,
         V denom = mfd.D_denom(wm, active) *
                   mfd.G_denom(cos_o, cos_i, mfd.smith_root(wo), mfd.smith_root(wi));
         Spectrum<V, NC> fr = fresnel_over(abs(dot(wo, wm)), denom);
-        return select(active, fr, Spectrum<V, NC>(V(0)));
+        for (int c = 0; c < NC; ++c) fr[c] = zero_unless(active, fr[c]);
+        return fr;
     }
 
     bool is_smooth() const { return mfd.effectively_smooth(); }

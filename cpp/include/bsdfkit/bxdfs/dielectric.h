@@ -87,8 +87,9 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
     // Reflection D G F / |4 cos_i cos_o| = F / (D_denom G_denom); transmission (Walter 2007
     // eq. 21) D G (1 - F) |wi.wm wo.wm| / (|cos_i cos_o| (wi.wm + wo.wm/etap)^2) =
     // 4 (1 - F) |wi.wm wo.wm| / (D_denom G_denom |h|^2 / etap^2) (core/microfacet.h;
-    // half_vector), Radiance mode dividing by etap^2, which cancels the etap^2. One division
-    // for the value: 3 divisions and 4 square roots per element in all.
+    // half_vector), Radiance mode dividing by etap^2, which cancels the etap^2. F and 1 - F are
+    // FrDielectricRatio's numerators over its denominator, which joins the value's one division:
+    // 2 divisions and 4 square roots per element in all.
     template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode mode) const {
         // Delta lobes evaluate to 0: folded into the mask (no early return).
         Vec3<V> wm;
@@ -96,14 +97,14 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
         Mask<V> active = half_vector(wo, wi, &wm, &etap, &len2) & Mask<V>(!is_smooth());
         V cos_o = CosTheta(wo), cos_i = CosTheta(wi);
         Mask<V> reflect = cos_i * cos_o > V(0);
-        V Fr, Ft;
+        V r, t, den;
         V wo_wm = dot(wo, wm);
-        FrDielectricRT(wo_wm, eta, &Fr, &Ft); // Ft = 1 - Fr without cancellation
+        FrDielectricRatio(wo_wm, eta, &r, &t, &den); // t = (1 - F) den without cancellation
         V dg = mfd.D_denom(wm, active) * mfd.G_denom(abs(cos_o), abs(cos_i), mfd.smith_root(wo), mfd.smith_root(wi));
-        V ft = V(4) * Ft * abs(dot(wi, wm) * wo_wm);
+        V ft = V(4) * t * abs(dot(wi, wm) * wo_wm);
         ft = mode == TransportMode::Radiance ? ft : ft * sqr(etap);
-        V v = select(reflect, Fr, ft) / (dg * select(reflect, V(1), len2));
-        return Spectrum<V>(select(active, v, V(0)));
+        V v = select(reflect, r, ft) / (den * dg * select(reflect, V(1), len2));
+        return Spectrum<V>(zero_unless(active, v));
     }
 
     template <typename V>
@@ -179,23 +180,24 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
     }
 
     // Reflection pr / (D_denom P (pr + pt)); transmission 4 |wo.wm| |wi.wm| etap^2 pt /
-    // (D_denom P |h|^2 (pr + pt)), P = 2 (cos_o + R_o): 3 divisions, 3 square roots.
+    // (D_denom P |h|^2 (pr + pt)), P = 2 (cos_o + R_o). The lobe probabilities are a ratio, so
+    // FrDielectricRatio's numerators serve without its denominator: 2 divisions, 3 square roots.
     template <typename V>
     V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
         Vec3<V> wm;
         V etap, len2;
         Mask<V> ok = half_vector(wo, wi, &wm, &etap, &len2) & Mask<V>(!is_smooth());
         Mask<V> reflect = CosTheta(wi) * CosTheta(wo) > V(0);
-        V R, T, pr, pt;
+        V r, t, den, pr, pt;
         V wo_wm = dot(wo, wm);
-        FrDielectricRT(wo_wm, eta, &R, &T);
-        lobe_probs(R, T, sample_flags, &pr, &pt);
+        FrDielectricRatio(wo_wm, eta, &r, &t, &den); // R : T = r : t
+        lobe_probs(r, t, sample_flags, &pr, &pt);
         V dd = mfd.D_denom(wm, ok);
         V num = select(reflect, pr, V(4) * abs(wo_wm * dot(wi, wm)) * sqr(etap) * pt);
-        V den = dd * mfd.reflection_pdf_denom(AbsCosTheta(wo), mfd.smith_root(wo)) * select(reflect, V(1), len2) *
-                (pr + pt);
+        V dn = dd * mfd.reflection_pdf_denom(AbsCosTheta(wo), mfd.smith_root(wo)) * select(reflect, V(1), len2) *
+               (pr + pt);
         ok &= ((pr + pt) > V(0)); // len2 > 0 is in half_vector's ok
-        return select(ok, num / den, V(0));
+        return zero_unless(ok, num / dn);
     }
 
     void regularize() { mfd.regularize(); }

@@ -12,10 +12,15 @@ namespace bsdfkit {
 // vanishing Jacobian): a value that is not a finite non-negative number becomes 0. The
 // models' own guards cover every regular case; tests compare those against references.
 template <typename F> inline F finite_or_zero(F v) {
-    // Two float selects rather than one select on (a && b): GCC 12's vectorizer cannot handle
-    // the boolean-valued COND_EXPRs that if-conversion makes of the && form.
-    v = select(v >= F(0), v, F(0));
-    return select(v <= F(std::numeric_limits<scalar_t<F>>::max()), v, F(0));
+    if constexpr (is_packet_v<F>) {
+        // One AND with both tests' lane mask (core/simd.h zero_unless): the same bits.
+        return zero_unless((v >= F(0)) & (v <= F(std::numeric_limits<scalar_t<F>>::max())), v);
+    } else {
+        // Two float selects rather than one select on (a && b): GCC 12's vectorizer cannot handle
+        // the boolean-valued COND_EXPRs that if-conversion makes of the && form.
+        v = select(v >= F(0), v, F(0));
+        return select(v <= F(std::numeric_limits<scalar_t<F>>::max()), v, F(0));
+    }
 }
 template <typename F, int N> inline Spectrum<F, N> finite_or_zero(const Spectrum<F, N> &s) {
     Spectrum<F, N> r;

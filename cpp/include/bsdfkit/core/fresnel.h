@@ -65,25 +65,25 @@ template <typename F> inline Cplx<F> csqrt(Cplx<F> z) {
 
 // Complex Fresnel for a conductor with index eta + i k, unpolarised (Born & Wolf; the same
 // value as pbrt-v4 FrComplex), in real arithmetic after Lagarde 2013, "Memo on Fresnel
-// equations": Rs = (t1 - t2) / (t1 + t2), Rp = Rs (t3 - t4) / (t3 + t4), F = (Rs + Rp) / 2,
-// written as num / den with ONE division ((t3 + t4) + (t3 - t4) = 2 t3). FrComplexRatio
-// returns num and den so that a kernel can fold den into its own single division. Two square
-// roots. eta and k are scalars or V.
+// equations": Rs = (t1 - t2) / (t1 + t2), Rp = Rs (t3 - t4) / (t3 + t4), so that
+// F = (Rs + Rp) / 2 = (t1 - t2) t3 / ((t1 + t2)(t3 + t4)) as num / den with ONE division.
+// FrComplexRatio returns num and den so that a kernel can fold den into its own single
+// division. Two square roots (|z| = a^2 + b^2 and 2a = sqrt(2 (|z| + t0))); eta and k are
+// scalars or V.
 template <typename F, typename E> inline void FrComplexRatio(F cos_i, E eta, E k, F *num, F *den) {
     cos_i = clamp(cos_i, F(0), F(1));
     F cos2 = cos_i * cos_i, sin2 = F(1) - cos2;
     E eta2 = eta * eta, k2 = k * k;
     F t0 = F(eta2 - k2) - sin2;
     F a2pb2 = sqrt(t0 * t0 + F(E(4) * eta2 * k2)); // a^2 + b^2
-    F a = safe_sqrt(F(0.5) * (a2pb2 + t0));
-    F t1 = a2pb2 + cos2, t2 = F(2) * a * cos_i;
+    F t2 = safe_sqrt(F(2) * (a2pb2 + t0)) * cos_i;  // 2 a cos_i
+    F t1 = a2pb2 + cos2;
     F t3 = a2pb2 * cos2 + sin2 * sin2, t4 = t2 * sin2;
-    // Both denominators vanish only for eta~ = 1 at grazing incidence, where Rs = Rp / Rs = 1.
-    Mask<F> ok_s = t1 + t2 > F(0), ok_p = t3 + t4 > F(0);
-    F ns = select(ok_s, t1 - t2, F(1)), ds = select(ok_s, t1 + t2, F(1));
-    F np = select(ok_p, t3 - t4, F(1)), dp = select(ok_p, t3 + t4, F(1));
-    *num = F(0.5) * ns * (dp + np); // = ns t3 where ok_p
-    *den = ds * dp;
+    // den = 0 only for eta~ = 1 at grazing incidence, where F = 1.
+    F d = (t1 + t2) * (t3 + t4);
+    Mask<F> ok = d > F(0);
+    *num = select(ok, (t1 - t2) * t3, F(1));
+    *den = select(ok, d, F(1));
 }
 template <typename F, typename E> inline F FrComplex(F cos_i, E eta, E k) {
     F num, den;

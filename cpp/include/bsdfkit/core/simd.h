@@ -71,7 +71,18 @@ inline PacketT<T, N> lerp(const PacketT<T, N> &t, const PacketT<T, N> &a, const 
     return (T(1) - t) * a + t * b;
 }
 template <typename T, size_t N> inline PacketT<T, N> safe_sqrt(const PacketT<T, N> &x) {
-    return drjit::sqrt(drjit::select(x > T(0), x, PacketT<T, N>(0)));
+    return drjit::sqrt(x & (x > T(0))); // = select(x > 0, x, 0), see zero_unless
+}
+
+// x where m is set, else +0: the same bits as select(m, x, 0). For packets an AND with the lane
+// mask (a compare's all-ones / all-zeros lanes), where GCC makes a blend with zero into an AND
+// only after re-deriving the mask from its sign bits (one more instruction per select).
+template <typename T, size_t N>
+inline PacketT<T, N> zero_unless(const drjit::mask_t<PacketT<T, N>> &m, const PacketT<T, N> &x) {
+    return x & m;
+}
+template <typename T, std::enable_if_t<!drjit::is_array_v<T>, int> = 0> inline T zero_unless(bool m, const T &x) {
+    return m ? x : T(0);
 }
 
 // Packet load / store of W consecutive scalars (unaligned).
