@@ -469,7 +469,7 @@ template <template <typename> class Model> struct PyModel {
     py::tuple sample_t(const py::array &wo, const py::array &uc, const py::array &u, int mode, int sf,
                      py::array &wi_out, py::array &f_out, py::array &pdf_out, py::array &flags_out,
                      py::array &eta_out, py::array &valid_out, py::array &prop_out) const {
-        int64_t no, nuc, nu, r;
+        int64_t no, nuc, nu;
         const F *po = checked<F>(wo, "wo", {3}, &no);
         const F *puc = checked<F>(uc, "uc", {}, &nuc);
         const F *pu = checked<F>(u, "u", {2}, &nu);
@@ -477,21 +477,8 @@ template <template <typename> class Model> struct PyModel {
         int64_t n = broadcast_rows(no, nuc, "wo", "uc");
         if (nuc != n) value_error("uc: wrong length");
         SampleOut<F> o;
-        o.wi = checked<F>(wi_out, "wi", {3}, &r, true); if (r != n) value_error("wi: wrong shape");
-        o.f = checked<F>(f_out, "f", {3}, &r, true); if (r != n) value_error("f: wrong shape");
-        o.pdf = checked<F>(pdf_out, "pdf", {}, &r, true); if (r != n) value_error("pdf: wrong shape");
-        o.flags = checked<uint8_t>(flags_out, "flags", {}, &r, true); if (r != n) value_error("flags: wrong shape");
-        o.eta = checked<F>(eta_out, "eta", {}, &r, true); if (r != n) value_error("eta: wrong shape");
-        o.valid = checked<bool>(valid_out, "valid", {}, &r, true); if (r != n) value_error("valid: wrong shape");
-        o.proportional = checked<bool>(prop_out, "pdf_is_proportional", {}, &r, true);
-        if (r != n) value_error("pdf_is_proportional: wrong shape");
-        // sample_batch's pointers are restrict: no output may overlap an input or another output.
-        {
-            const py::array *arrs[] = {&wo, &uc, &u, &wi_out, &f_out, &pdf_out, &flags_out, &eta_out, &valid_out, &prop_out};
-            for (int a = 3; a < 10; ++a)
-                for (int c = 0; c < a; ++c)
-                    if (overlaps(*arrs[a], *arrs[c])) value_error("sample: output arrays must not overlap the inputs or each other");
-        }
+        checked_sample_out<3, F>(n, o, wi_out, f_out, pdf_out, flags_out, eta_out, valid_out, prop_out);
+        check_sample_no_overlap({&wo, &uc, &u, &wi_out, &f_out, &pdf_out, &flags_out, &eta_out, &valid_out, &prop_out}, 3);
         TransportMode md = to_mode(mode);
         uint8_t s = to_sflags(sf);
         BadCounts bad;
