@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['CoatedConductor', 'CoatedConductorAnalytic', 'CoatedConductorAnalyticSpectral', 'CoatedDiffuse', 'CoatedDiffuseAnalytic', 'CoatedDiffuseAnalyticSpectral', 'Conductor', 'ConductorF82', 'ConductorF82Spectral', 'ConductorSchlick', 'ConductorSchlickSpectral', 'ConductorSpectral', 'Dielectric', 'DielectricSpectral', 'Diffuse', 'DiffuseSpectral', 'DiffuseTransmission', 'DiffuseTransmissionSpectral', 'FilamentCloth', 'FilamentDFG', 'FilamentStandard', 'FilamentStandardCoat', 'FilamentStandardCoatSheen', 'FilamentStandardCoatSheenSpectral', 'FilamentStandardCoatSpectral', 'FilamentStandardSheen', 'FilamentStandardSheenSpectral', 'FilamentStandardSpectral', 'Hair', 'HairFarField', 'MERLLinear', 'MERLNearest', 'MERLTable', 'Measured', 'MeasuredTable', 'NormalizedFresnel', 'NormalizedFresnelSpectral', 'Plastic', 'PlasticSpectral', 'RenderScene', 'SpectralParam', 'ThinDielectric', 'ThinDielectricSpectral', 'Warp2D', 'cached_bytes', 'conductor_fresnel', 'embree_version', 'filament_dfg_rows', 'filament_term', 'fresnel_diffuse_reflectance', 'fresnel_moment1', 'get_num_threads', 'hardware_concurrency', 'load_mesh', 'model_names', 'openimageio_version', 'read_image', 'release_memory', 'set_num_threads', 'write_image']
+__all__: list[str] = ['CoatedConductor', 'CoatedConductorAnalytic', 'CoatedConductorAnalyticSpectral', 'CoatedDiffuse', 'CoatedDiffuseAnalytic', 'CoatedDiffuseAnalyticSpectral', 'Conductor', 'ConductorF82', 'ConductorF82Spectral', 'ConductorSchlick', 'ConductorSchlickSpectral', 'ConductorSpectral', 'Dielectric', 'DielectricSpectral', 'Diffuse', 'DiffuseSpectral', 'DiffuseTransmission', 'DiffuseTransmissionSpectral', 'FilamentCloth', 'FilamentClothSpectral', 'FilamentDFG', 'FilamentStandard', 'FilamentStandardCoat', 'FilamentStandardCoatSheen', 'FilamentStandardCoatSheenSpectral', 'FilamentStandardCoatSpectral', 'FilamentStandardSheen', 'FilamentStandardSheenSpectral', 'FilamentStandardSpectral', 'Hair', 'HairFarField', 'HairFarFieldSpectral', 'HairSpectral', 'MERLLinear', 'MERLNearest', 'MERLTable', 'Measured', 'MeasuredTable', 'NormalizedFresnel', 'NormalizedFresnelSpectral', 'Plastic', 'PlasticSpectral', 'RenderScene', 'SpectralParam', 'ThinDielectric', 'ThinDielectricSpectral', 'Warp2D', 'cached_bytes', 'conductor_fresnel', 'embree_version', 'filament_dfg_rows', 'filament_term', 'fresnel_diffuse_reflectance', 'fresnel_moment1', 'get_num_threads', 'hardware_concurrency', 'load_mesh', 'model_names', 'openimageio_version', 'read_image', 'release_memory', 'set_num_threads', 'write_image']
 class FilamentDFG:
     def __eq__(self, arg0: typing.Any) -> bool:
         ...
@@ -1063,6 +1063,54 @@ class CoatedConductorAnalyticSpectral:
 class NormalizedFresnelSpectral:
     def __init__(self, eta: SpectralParam) -> None:
         ...
+    def albedo(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: typing.SupportsInt | typing.SupportsIndex, arg5: numpy.ndarray) -> tuple:
+        ...
+    def eval(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: numpy.ndarray, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> tuple:
+        ...
+    def pdf(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: numpy.ndarray, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: typing.SupportsInt | typing.SupportsIndex, arg5: numpy.ndarray) -> tuple:
+        ...
+    def sample(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: numpy.ndarray, arg3: numpy.ndarray, arg4: typing.SupportsInt | typing.SupportsIndex, arg5: typing.SupportsInt | typing.SupportsIndex, arg6: numpy.ndarray, arg7: numpy.ndarray, arg8: numpy.ndarray, arg9: numpy.ndarray, arg10: numpy.ndarray, arg11: numpy.ndarray, arg12: numpy.ndarray, arg13: numpy.ndarray) -> tuple:
+        ...
+    @property
+    def dispersive(self) -> bool:
+        ...
+class HairSpectral:
+    def __init__(self, arg0: SpectralParam, **kwargs) -> None:
+        """
+        Hair spectral kernel: sigma_a as SpectralParam, then the Hair keyword arguments (sigma_a, if given, is ignored).
+        """
+    def albedo(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: typing.SupportsInt | typing.SupportsIndex, arg5: numpy.ndarray) -> tuple:
+        ...
+    def eval(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: numpy.ndarray, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> tuple:
+        ...
+    def pdf(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: numpy.ndarray, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: typing.SupportsInt | typing.SupportsIndex, arg5: numpy.ndarray) -> tuple:
+        ...
+    def sample(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: numpy.ndarray, arg3: numpy.ndarray, arg4: typing.SupportsInt | typing.SupportsIndex, arg5: typing.SupportsInt | typing.SupportsIndex, arg6: numpy.ndarray, arg7: numpy.ndarray, arg8: numpy.ndarray, arg9: numpy.ndarray, arg10: numpy.ndarray, arg11: numpy.ndarray, arg12: numpy.ndarray, arg13: numpy.ndarray) -> tuple:
+        ...
+    @property
+    def dispersive(self) -> bool:
+        ...
+class HairFarFieldSpectral:
+    def __init__(self, arg0: SpectralParam, **kwargs) -> None:
+        """
+        HairFarField spectral kernel: sigma_a as SpectralParam, then the HairFarField keyword arguments (sigma_a, if given, is ignored).
+        """
+    def albedo(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: typing.SupportsInt | typing.SupportsIndex, arg5: numpy.ndarray) -> tuple:
+        ...
+    def eval(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: numpy.ndarray, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> tuple:
+        ...
+    def pdf(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: numpy.ndarray, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: typing.SupportsInt | typing.SupportsIndex, arg5: numpy.ndarray) -> tuple:
+        ...
+    def sample(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: numpy.ndarray, arg3: numpy.ndarray, arg4: typing.SupportsInt | typing.SupportsIndex, arg5: typing.SupportsInt | typing.SupportsIndex, arg6: numpy.ndarray, arg7: numpy.ndarray, arg8: numpy.ndarray, arg9: numpy.ndarray, arg10: numpy.ndarray, arg11: numpy.ndarray, arg12: numpy.ndarray, arg13: numpy.ndarray) -> tuple:
+        ...
+    @property
+    def dispersive(self) -> bool:
+        ...
+class FilamentClothSpectral:
+    def __init__(self, arg0: SpectralParam, arg1: SpectralParam, arg2: SpectralParam, arg3: bool, **kwargs) -> None:
+        """
+        FilamentCloth spectral kernel: (base_color, sheen_color, subsurface_color) as SpectralParam and sheen_from_base (sheen = sqrt(base) per wavelength), then the FilamentCloth keyword arguments.
+        """
     def albedo(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: typing.SupportsInt | typing.SupportsIndex, arg5: numpy.ndarray) -> tuple:
         ...
     def eval(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: numpy.ndarray, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: numpy.ndarray) -> tuple:
