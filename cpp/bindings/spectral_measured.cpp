@@ -23,8 +23,16 @@ namespace bsdfkit::py_bind {
 
 namespace {
 
-using PyMeasuredSpectra = std::shared_ptr<const MeasuredSpectraTable>;
-using PyMERLSpectral = std::shared_ptr<const MERLSpectralTable>;
+// A bound handle of a shared immutable table. (Not a bare std::shared_ptr: pybind11 reads a
+// shared_ptr<T> argument as the holder of a bound T, which these are not.)
+template <typename T> struct TableHandle {
+    std::shared_ptr<const T> p;
+    TableHandle(std::shared_ptr<const T> q) : p(std::move(q)) {}
+    const T *operator->() const { return p.get(); }
+    explicit operator bool() const { return bool(p); }
+};
+using PyMeasuredSpectra = TableHandle<MeasuredSpectraTable>;
+using PyMERLSpectral = TableHandle<MERLSpectralTable>;
 using Arr = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
 template <template <typename> class SM, bool Linear> void bind_merl(py::module_ &m, const char *name) {
