@@ -36,6 +36,19 @@ def any_model(request):
     return MODEL_CASES[request.param]()
 
 
+def random_wavelengths(rng, n):
+    """(n, 4) wavelengths from pbrt-v4's visible-wavelength sampling (bk.sample_wavelengths)."""
+    return bk.sample_wavelengths(rng.random(n))[0]
+
+
+@pytest.fixture(autouse=True)
+def _restore_threads():
+    """Every test leaves bk's thread count as it found it (thread-count tests set it)."""
+    n = bk.get_num_threads()
+    yield
+    bk.set_num_threads(n)
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)

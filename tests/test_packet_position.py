@@ -55,13 +55,6 @@ PACKET_MODELS = {
 }
 
 
-@pytest.fixture(autouse=True)
-def _restore_threads():
-    n = bk.get_num_threads()
-    yield
-    bk.set_num_threads(n)
-
-
 def _inputs(rng, n, dtype):
     # both hemispheres, a few exact horizon / pole / non-unit-free edge rows included
     wo, wi = random_dirs(rng, n), random_dirs(rng, n)

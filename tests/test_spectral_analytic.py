@@ -26,7 +26,7 @@ import bsdfkit as bk
 from bsdfkit.testing import hair_ref
 from bsdfkit.testing import mitsuba as ref
 from bsdfkit.testing import spectral_checks as checks
-from conftest import random_dirs
+from conftest import random_dirs, random_wavelengths as _lam
 
 IMP = bk.TransportMode.Importance
 RAD = bk.TransportMode.Radiance
@@ -35,17 +35,6 @@ R_SPEC = bk.Spectrum([360.0, 430.5, 520.0, 610.0, 700.0, 830.0], [0.05, 0.31, 0.
 KS_SPEC = bk.Spectrum([360.0, 500.0, 830.0], [0.7, 1.0, 0.85])
 ALB_SPEC = bk.Spectrum([360.0, 550.0, 830.0], [0.9, 0.2, 0.6])
 BK7 = bk.Spectrum.named("glass-BK7")
-
-
-@pytest.fixture(autouse=True)
-def _restore_threads():
-    n = bk.get_num_threads()
-    yield
-    bk.set_num_threads(n)
-
-
-def _lam(rng, n):
-    return bk.sample_wavelengths(rng.random(n))[0]
 
 
 def _au():

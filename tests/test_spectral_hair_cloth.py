@@ -25,7 +25,7 @@ from bsdfkit.spectral import uplift
 from bsdfkit.testing import drjit_filament as dfil
 from bsdfkit.testing import hair_ref
 from bsdfkit.testing import mitsuba as mref
-from conftest import random_dirs
+from conftest import random_dirs, random_wavelengths as _lam
 
 LAM4 = np.array([380.0, 455.5, 560.25, 700.0])
 #: pbrt-v4 HairBxDF::SigmaAFromConcentration's RGB constants (eumelanin, pheomelanin)
@@ -34,17 +34,6 @@ PHEOMELANIN = np.array([0.187, 0.4, 1.05])
 SIGMA_SPEC = bk.Spectrum([360.0, 450.0, 520.0, 610.0, 700.0, 830.0], [2.1, 1.4, 0.9, 0.55, 0.3, 0.2])
 BASE_SPEC = bk.Spectrum([360.0, 430.5, 520.0, 610.0, 700.0, 830.0], [0.05, 0.31, 0.62, 0.40, 0.90, 0.83])
 HAIR_KW = dict(eta=1.55, beta_m=0.3, beta_n=0.35, alpha=2.0)
-
-
-@pytest.fixture(autouse=True)
-def _restore_threads():
-    n = bk.get_num_threads()
-    yield
-    bk.set_num_threads(n)
-
-
-def _lam(rng, n):
-    return bk.sample_wavelengths(rng.random(n))[0]
 
 
 def _sigmoid(x):

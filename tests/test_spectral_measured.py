@@ -28,22 +28,11 @@ from bsdfkit.testing import mitsuba as ref
 from bsdfkit.testing import mitsuba_spectral as ms
 from bsdfkit.testing import spectral_checks
 from bsdfkit.testing.merl_ref import index_ref, linear_corners
-from conftest import random_dirs
+from conftest import random_dirs, random_wavelengths as _lam
 
 LUM = np.array([0.2126, 0.7152, 0.0722])
 LAM4 = np.array([380.0, 455.5, 560.25, 700.0])
 N = 12_000
-
-
-@pytest.fixture(autouse=True)
-def _restore_threads():
-    n = bk.get_num_threads()
-    yield
-    bk.set_num_threads(n)
-
-
-def _lam(rng, n):
-    return bk.sample_wavelengths(rng.random(n))[0]
 
 
 def _pairs(rng, n, zmin=0.05):

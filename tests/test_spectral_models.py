@@ -10,22 +10,11 @@ import bsdfkit as bk
 from bsdfkit.spectral import colorimetry, uplift
 from bsdfkit.testing import mitsuba as ref
 from bsdfkit.testing import spectral_checks as checks
-from conftest import random_dirs
+from conftest import random_dirs, random_wavelengths as _lam
 
 IMP = bk.TransportMode.Importance
 RAD = bk.TransportMode.Radiance
 LAM4 = np.array([380.0, 455.5, 560.25, 700.0])
-
-
-@pytest.fixture(autouse=True)
-def _restore_threads():
-    n = bk.get_num_threads()
-    yield
-    bk.set_num_threads(n)
-
-
-def _lam(rng, n):
-    return bk.sample_wavelengths(rng.random(n))[0]
 
 
 # ---- independent numpy float64 Fresnel (complex arithmetic, Born & Wolf) -------------------

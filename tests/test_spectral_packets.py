@@ -17,7 +17,6 @@ import numpy as np
 import pytest
 
 import bsdfkit as bk
-from bsdfkit import _core
 from bsdfkit.models._spectral import _spectral_core
 from conftest import random_dirs
 
@@ -45,13 +44,6 @@ MODELS = {
     "ThinDielectric-constant": lambda: bk.ThinDielectric(1.5),
     "ThinDielectric-index-matched": lambda: bk.ThinDielectric(1.0),
 }
-
-
-@pytest.fixture(autouse=True)
-def _restore_threads():
-    n = bk.get_num_threads()
-    yield
-    bk.set_num_threads(n)
 
 
 def _inputs(rng, n, dtype):
