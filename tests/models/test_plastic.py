@@ -12,12 +12,20 @@ Tolerances (p99.9 of |ours - mitsuba| / max(|mitsuba|, 1e-5 * the set's 99th per
   (eta < 1) float32 terms per entry, so its table entries carry ~1e-6..1e-5 relative rounding
   (measured: see the printed table error), and 1 / (1 - Fdr) amplifies the Fdr error by
   Fdr / (1 - Fdr) (< 1 for eta <= 2). The specular part is closed form (1e-5 as smooth).
+* rough coating with eta < 1 (the 16384-term tables): 5e-4 for f, 2e-3 for the pdf. How
+  Mitsuba's float32 sums round depends on the host's vector width: p99.9 1.7e-4 (f) and 7.3e-4
+  (pdf) on an Intel Sapphire Rapids host (AVX-512), < 5e-5 on AMD Zen 3 (AVX2), for the same
+  bsdfkit values. The pdf's lobe ratio (1 - T) w / ((1 - T) w + T (1 - w)) multiplies the
+  table's relative error by T / (1 - T) (~25 where T ~ 0.96). So every rough case is also checked
+  against the independent float64 Dr.Jit restatement (``testing/plastic_ref``, whose tables are
+  computed in float64): there the p99.9 is 1e-13 on both hosts, asserted at 1e-10.
 """
 import numpy as np
 import pytest
 
 import bsdfkit as bk
 from bsdfkit.testing import mitsuba as ref
+from bsdfkit.testing import plastic_ref
 
 N = 12_000  # pairs per parameter set
 
@@ -76,7 +84,7 @@ ROUGH = [bk.Plastic(0.5, 1.49, alpha=0.1, masking="separable"),
          bk.Plastic([0.2, 0.6, 1.0], 1.33, alpha=0.05, specular_reflectance=[0.8, 0.5, 1.0], masking="separable"),
          bk.Plastic(1.0, 2.0, alpha=0.6, nonlinear=True, masking="separable"),
          bk.Plastic(0.4, 1 / 1.3, alpha=0.2, masking="separable")]
-TOL_SMOOTH, TOL_ROUGH = 1e-5, 5e-5
+TOL_SMOOTH, TOL_ROUGH, TOL_ROUGH_INNER, TOL_ROUGH_INNER_PDF, TOL_F64 = 1e-5, 5e-5, 5e-4, 2e-3, 1e-10
 
 
 @pytest.mark.parametrize("model", SMOOTH + ROUGH, ids=repr)
@@ -85,15 +93,18 @@ def test_eval_pdf_match_mitsuba(model, lower, rng):
     wo, wi = _pairs(model, rng, lower)
     f_mi, p_mi = ref.eval_pdf(model, wo, wi)
     f, p = model.eval(wo, wi), model.pdf(wo, wi)
-    tol = TOL_SMOOTH if model.alpha == 0 else TOL_ROUGH
+    tol = TOL_SMOOTH if model.alpha == 0 else TOL_ROUGH if model.eta > 1 else TOL_ROUGH_INNER
     cos = np.abs(wi[:, 2:3])
     _check(f * cos, f_mi * cos, tol, f"{model!r} f cos")
+    if model.alpha > 0:  # Mitsuba's float32 tables aside: the float64 restatement (docstring)
+        _check(f * cos, np.asarray(plastic_ref.plastic_f(model, wo, wi)) * cos, TOL_F64, f"{model!r} f cos vs float64")
     # Mitsuba 3.9's roughplastic pdf() / eval_pdf() compute `active` (both cosines > 0) but
     # never apply it to the returned pdf: for wi across the surface it returns the unmasked
     # mixture density (the value is garbage there; sample() never produces such a wi). bsdfkit
     # returns 0, as plastic.cpp does: the pdf conventions coincide only on wo's side.
     same = wo[:, 2] * wi[:, 2] > 0
-    _check(p[same], p_mi[same], tol, f"{model!r} pdf")
+    tol_pdf = TOL_ROUGH_INNER_PDF if tol == TOL_ROUGH_INNER else tol
+    _check(p[same], p_mi[same], tol_pdf, f"{model!r} pdf")
     assert np.all(p[~same] == 0)
 
 
@@ -125,9 +136,11 @@ def test_sampling_matches_mitsuba(model, rng):
     close = np.zeros(n, bool)
     close[np.flatnonzero(same)[dw < 1e-5]] = True
     close &= ~lower  # a flipped diffuse sample is another (wo, wi) pair for the rough lobe's value
-    tol = TOL_SMOOTH if model.alpha == 0 else TOL_ROUGH
-    _check(s.weight[close], r["weight"][close], 10 * tol, f"{model!r} weight")
-    _check(s.pdf[close], r["pdf"][close], 10 * tol, f"{model!r} sample pdf")
+    tol = 10 * (TOL_SMOOTH if model.alpha == 0 else TOL_ROUGH)
+    if model.alpha > 0 and model.eta < 1:  # Mitsuba's host-dependent float32 tables (docstring)
+        tol = TOL_ROUGH_INNER_PDF
+    _check(s.weight[close], r["weight"][close], tol, f"{model!r} weight")
+    _check(s.pdf[close], r["pdf"][close], tol, f"{model!r} sample pdf")
 
 
 def test_fresnel_diffuse_reflectance_matches_mitsuba():
