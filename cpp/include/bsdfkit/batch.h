@@ -49,20 +49,22 @@ template <typename F, int S> inline Vec3<F> load3(const F *p, int64_t i) {
 // full packets: through register shuffles, below).
 template <typename F> inline constexpr int64_t kW = int64_t(kPacketWidth);
 
-// ---- Rows <-> packets for float32 by register shuffles (a blocked transpose): 16 rows of
-// (x, y, z) = 48 floats are 6 loads of 8, and each group of 8 rows (3 vectors a, b, c) becomes
-// x, y, z by two lane-preserving blends and one permutation per component (3 permutations and 6
-// blends per 8 rows; the reverse for a store). Pure data movement: the same packets as the
-// transposition through a stack buffer (load_lanes / store_lanes), bit for bit, in fewer
-// instructions (on Zen 3 with AVX2, 16-lane eval of a cheap model in cache: the rows store ~40 %
-// faster, the rows load ~10 %; float64 gained nothing, so it keeps the stack). Written in GCC's
-// generic vector extensions (__builtin_shuffle; the build's compiler), not in ISA intrinsics;
-// other compilers keep the stack transposition (clang's __builtin_shufflevector would serve,
-// untested here).
+// ---- Rows <-> packets by register shuffles (a blocked transpose). The rows are moved in groups
+// of G lanes, G = one vector register of F (AVX-512: 16 floats or 8 doubles; otherwise 8
+// floats): an (N, 3) group is 3 register loads, each component 2 two-source permutations
+// (vpermt2ps / vpermt2pd) away on AVX-512, or 2 blends and 1 permutation on AVX2; (N, 2) pairs
+// (the sample kernels' u) 1 permutation per component. Each component then passes through a
+// stack slot of exactly the group's width, so the packet load that follows is store-forwarded
+// (a zmm load spanning two ymm stores stalls ~15 cycles: 14 % of the float32 sample kernel on
+// a Sapphire Rapids host before this). Pure data movement: the same packets as the scalar
+// transposition through a stack buffer, bit for bit. Written in GCC's generic vector
+// extensions (__builtin_shuffle; the build's compiler), not in ISA intrinsics; other compilers
+// keep the scalar transposition. float64 on AVX2 keeps it too (the shuffles gained nothing on
+// Zen 3, session 6).
 #if defined(__GNUC__) && !defined(__clang__)
 #define BSDFKIT_SHUFFLE_ROWS 1
-#define BSDFKIT_SHUF2(a, b, ...) __builtin_shuffle(a, b, (detail_rows::v8i){__VA_ARGS__})
-#define BSDFKIT_SHUF1(a, ...) __builtin_shuffle(a, (detail_rows::v8i){__VA_ARGS__})
+#define BSDFKIT_SHUF2(T, a, b, ...) __builtin_shuffle(a, b, (T){__VA_ARGS__})
+#define BSDFKIT_SHUF1(T, a, ...) __builtin_shuffle(a, (T){__VA_ARGS__})
 #else
 #define BSDFKIT_SHUFFLE_ROWS 0
 #endif
@@ -70,38 +72,155 @@ template <typename F> inline constexpr int64_t kW = int64_t(kPacketWidth);
 namespace detail_rows {
 typedef float v8f __attribute__((vector_size(32)));
 typedef int v8i __attribute__((vector_size(32)));
-// Slots of the three vectors a, b, c (rows 0..7: a = x0 y0 z0 x1 y1 z1 x2 y2, ...) that hold x,
-// y, z: a {x: 0 3 6, y: 1 4 7, z: 2 5}, b {z: 0 3 6, x: 1 4 7, y: 2 5}, c {y: 0 3 6, z: 1 4 7,
-// x: 2 5}. The blends gather one component's slots (mx = x0 x3 x6 x1 x4 x7 x2 x5, my, mz); the
-// permutation puts them in order.
-inline void rows8_to_xyz(const float *q, v8f &x, v8f &y, v8f &z) {
+#if defined(__AVX512F__)
+typedef float v16f __attribute__((vector_size(64)));
+typedef int v16i __attribute__((vector_size(64)));
+typedef double v8d __attribute__((vector_size(64)));
+typedef long long v8l __attribute__((vector_size(64)));
+// Component k of row j sits at 3j + k of the group's 3G scalars (vectors a, b, c): gathered
+// from a and b first, then the lanes past 2G from c.
+inline void rows_to_xyz(const float *q, v16f &x, v16f &y, v16f &z) {
+    v16f a, b, c;
+    std::memcpy(&a, q, 64);
+    std::memcpy(&b, q + 16, 64);
+    std::memcpy(&c, q + 32, 64);
+    x = BSDFKIT_SHUF2(v16i, BSDFKIT_SHUF2(v16i, a, b, 0, 3, 6, 9, 12, 15, 18, 21, 24, 27, 30, 0, 0, 0, 0, 0), c,
+                      0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 17, 20, 23, 26, 29);
+    y = BSDFKIT_SHUF2(v16i, BSDFKIT_SHUF2(v16i, a, b, 1, 4, 7, 10, 13, 16, 19, 22, 25, 28, 31, 0, 0, 0, 0, 0), c,
+                      0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 18, 21, 24, 27, 30);
+    z = BSDFKIT_SHUF2(v16i, BSDFKIT_SHUF2(v16i, a, b, 2, 5, 8, 11, 14, 17, 20, 23, 26, 29, 0, 0, 0, 0, 0, 0), c,
+                      0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 16, 19, 22, 25, 28, 31);
+}
+inline void xyz_to_rows(float *q, v16f x, v16f y, v16f z) {
+    v16f a = BSDFKIT_SHUF2(v16i, BSDFKIT_SHUF2(v16i, x, y, 0, 16, 0, 1, 17, 0, 2, 18, 0, 3, 19, 0, 4, 20, 0, 5), z,
+                           0, 1, 16, 3, 4, 17, 6, 7, 18, 9, 10, 19, 12, 13, 20, 15);
+    v16f b = BSDFKIT_SHUF2(v16i, BSDFKIT_SHUF2(v16i, x, y, 21, 0, 6, 22, 0, 7, 23, 0, 8, 24, 0, 9, 25, 0, 10, 26), z,
+                           0, 21, 2, 3, 22, 5, 6, 23, 8, 9, 24, 11, 12, 25, 14, 15);
+    v16f c = BSDFKIT_SHUF2(v16i, BSDFKIT_SHUF2(v16i, x, y, 0, 11, 27, 0, 12, 28, 0, 13, 29, 0, 14, 30, 0, 15, 31, 0), z,
+                           26, 1, 2, 27, 4, 5, 28, 7, 8, 29, 10, 11, 30, 13, 14, 31);
+    std::memcpy(q, &a, 64);
+    std::memcpy(q + 16, &b, 64);
+    std::memcpy(q + 32, &c, 64);
+}
+inline void pairs_to_xy(const float *q, v16f &x, v16f &y) {
+    v16f a, b;
+    std::memcpy(&a, q, 64);
+    std::memcpy(&b, q + 16, 64);
+    x = BSDFKIT_SHUF2(v16i, a, b, 0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
+    y = BSDFKIT_SHUF2(v16i, a, b, 1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31);
+}
+inline void rows_to_xyz(const double *q, v8d &x, v8d &y, v8d &z) {
+    v8d a, b, c;
+    std::memcpy(&a, q, 64);
+    std::memcpy(&b, q + 8, 64);
+    std::memcpy(&c, q + 16, 64);
+    x = BSDFKIT_SHUF2(v8l, BSDFKIT_SHUF2(v8l, a, b, 0, 3, 6, 9, 12, 15, 0, 0), c, 0, 1, 2, 3, 4, 5, 10, 13);
+    y = BSDFKIT_SHUF2(v8l, BSDFKIT_SHUF2(v8l, a, b, 1, 4, 7, 10, 13, 0, 0, 0), c, 0, 1, 2, 3, 4, 8, 11, 14);
+    z = BSDFKIT_SHUF2(v8l, BSDFKIT_SHUF2(v8l, a, b, 2, 5, 8, 11, 14, 0, 0, 0), c, 0, 1, 2, 3, 4, 9, 12, 15);
+}
+inline void xyz_to_rows(double *q, v8d x, v8d y, v8d z) {
+    v8d a = BSDFKIT_SHUF2(v8l, BSDFKIT_SHUF2(v8l, x, y, 0, 8, 0, 1, 9, 0, 2, 10), z, 0, 1, 8, 3, 4, 9, 6, 7);
+    v8d b = BSDFKIT_SHUF2(v8l, BSDFKIT_SHUF2(v8l, x, y, 0, 3, 11, 0, 4, 12, 0, 5), z, 10, 1, 2, 11, 4, 5, 12, 7);
+    v8d c = BSDFKIT_SHUF2(v8l, BSDFKIT_SHUF2(v8l, x, y, 13, 0, 6, 14, 0, 7, 15, 0), z, 0, 13, 2, 3, 14, 5, 6, 15);
+    std::memcpy(q, &a, 64);
+    std::memcpy(q + 8, &b, 64);
+    std::memcpy(q + 16, &c, 64);
+}
+inline void pairs_to_xy(const double *q, v8d &x, v8d &y) {
+    v8d a, b;
+    std::memcpy(&a, q, 64);
+    std::memcpy(&b, q + 8, 64);
+    x = BSDFKIT_SHUF2(v8l, a, b, 0, 2, 4, 6, 8, 10, 12, 14);
+    y = BSDFKIT_SHUF2(v8l, a, b, 1, 3, 5, 7, 9, 11, 13, 15);
+}
+template <typename F> using group_t = std::conditional_t<std::is_same_v<F, float>, v16f, v8d>;
+template <typename F> inline constexpr bool kHasGroup = true;
+#else
+// AVX2 / SSE: float32 in groups of 8. Slots of the three vectors a, b, c (rows 0..7: a = x0 y0
+// z0 x1 y1 z1 x2 y2, ...) that hold x, y, z: a {x: 0 3 6, y: 1 4 7, z: 2 5}, b {z: 0 3 6, x: 1
+// 4 7, y: 2 5}, c {y: 0 3 6, z: 1 4 7, x: 2 5}. The blends gather one component's slots (mx =
+// x0 x3 x6 x1 x4 x7 x2 x5, my, mz); the permutation puts them in order.
+inline void rows_to_xyz(const float *q, v8f &x, v8f &y, v8f &z) {
     v8f a, b, c;
     std::memcpy(&a, q, 32);
     std::memcpy(&b, q + 8, 32);
     std::memcpy(&c, q + 16, 32);
-    v8f ab_x = BSDFKIT_SHUF2(a, b, 0, 9, 2, 3, 12, 5, 6, 15), ab_y = BSDFKIT_SHUF2(a, b, 0, 1, 10, 3, 4, 13, 6, 7),
-        ab_z = BSDFKIT_SHUF2(a, b, 8, 1, 2, 11, 4, 5, 14, 7);
-    v8f mx = BSDFKIT_SHUF2(ab_x, c, 0, 1, 10, 3, 4, 13, 6, 7), my = BSDFKIT_SHUF2(ab_y, c, 8, 1, 2, 11, 4, 5, 14, 7),
-        mz = BSDFKIT_SHUF2(ab_z, c, 0, 9, 2, 3, 12, 5, 6, 15);
-    x = BSDFKIT_SHUF1(mx, 0, 3, 6, 1, 4, 7, 2, 5);
-    y = BSDFKIT_SHUF1(my, 1, 4, 7, 2, 5, 0, 3, 6);
-    z = BSDFKIT_SHUF1(mz, 2, 5, 0, 3, 6, 1, 4, 7);
+    v8f ab_x = BSDFKIT_SHUF2(v8i, a, b, 0, 9, 2, 3, 12, 5, 6, 15), ab_y = BSDFKIT_SHUF2(v8i, a, b, 0, 1, 10, 3, 4, 13, 6, 7),
+        ab_z = BSDFKIT_SHUF2(v8i, a, b, 8, 1, 2, 11, 4, 5, 14, 7);
+    v8f mx = BSDFKIT_SHUF2(v8i, ab_x, c, 0, 1, 10, 3, 4, 13, 6, 7), my = BSDFKIT_SHUF2(v8i, ab_y, c, 8, 1, 2, 11, 4, 5, 14, 7),
+        mz = BSDFKIT_SHUF2(v8i, ab_z, c, 0, 9, 2, 3, 12, 5, 6, 15);
+    x = BSDFKIT_SHUF1(v8i, mx, 0, 3, 6, 1, 4, 7, 2, 5);
+    y = BSDFKIT_SHUF1(v8i, my, 1, 4, 7, 2, 5, 0, 3, 6);
+    z = BSDFKIT_SHUF1(v8i, mz, 2, 5, 0, 3, 6, 1, 4, 7);
 }
-inline void xyz_to_rows8(float *q, v8f x, v8f y, v8f z) {
-    v8f mx = BSDFKIT_SHUF1(x, 0, 3, 6, 1, 4, 7, 2, 5), my = BSDFKIT_SHUF1(y, 5, 0, 3, 6, 1, 4, 7, 2),
-        mz = BSDFKIT_SHUF1(z, 2, 5, 0, 3, 6, 1, 4, 7);
-    v8f a = BSDFKIT_SHUF2(BSDFKIT_SHUF2(mx, my, 0, 9, 2, 3, 12, 5, 6, 15), mz, 0, 1, 10, 3, 4, 13, 6, 7);
-    v8f b = BSDFKIT_SHUF2(BSDFKIT_SHUF2(mx, my, 0, 1, 10, 3, 4, 13, 6, 7), mz, 8, 1, 2, 11, 4, 5, 14, 7);
-    v8f c = BSDFKIT_SHUF2(BSDFKIT_SHUF2(mx, my, 8, 1, 2, 11, 4, 5, 14, 7), mz, 0, 9, 2, 3, 12, 5, 6, 15);
+inline void xyz_to_rows(float *q, v8f x, v8f y, v8f z) {
+    v8f mx = BSDFKIT_SHUF1(v8i, x, 0, 3, 6, 1, 4, 7, 2, 5), my = BSDFKIT_SHUF1(v8i, y, 5, 0, 3, 6, 1, 4, 7, 2),
+        mz = BSDFKIT_SHUF1(v8i, z, 2, 5, 0, 3, 6, 1, 4, 7);
+    v8f a = BSDFKIT_SHUF2(v8i, BSDFKIT_SHUF2(v8i, mx, my, 0, 9, 2, 3, 12, 5, 6, 15), mz, 0, 1, 10, 3, 4, 13, 6, 7);
+    v8f b = BSDFKIT_SHUF2(v8i, BSDFKIT_SHUF2(v8i, mx, my, 0, 1, 10, 3, 4, 13, 6, 7), mz, 8, 1, 2, 11, 4, 5, 14, 7);
+    v8f c = BSDFKIT_SHUF2(v8i, BSDFKIT_SHUF2(v8i, mx, my, 8, 1, 2, 11, 4, 5, 14, 7), mz, 0, 9, 2, 3, 12, 5, 6, 15);
     std::memcpy(q, &a, 32);
     std::memcpy(q + 8, &b, 32);
     std::memcpy(q + 16, &c, 32);
 }
+inline void pairs_to_xy(const float *q, v8f &x, v8f &y) {
+    v8f a, b;
+    std::memcpy(&a, q, 32);
+    std::memcpy(&b, q + 8, 32);
+    x = BSDFKIT_SHUF2(v8i, a, b, 0, 2, 4, 6, 8, 10, 12, 14);
+    y = BSDFKIT_SHUF2(v8i, a, b, 1, 3, 5, 7, 9, 11, 13, 15);
+}
+template <typename F> using group_t = v8f;
+template <typename F> inline constexpr bool kHasGroup = std::is_same_v<F, float>;
+#endif
 } // namespace detail_rows
 #endif
-// Whether rows of 3 floats move through the register shuffles: float32 packets of a multiple of 8.
+// Whether rows of 3 and pairs move through the register shuffles, and the group's lanes.
+#if BSDFKIT_SHUFFLE_ROWS
 template <typename F> inline constexpr bool kShuffleRows =
-    BSDFKIT_SHUFFLE_ROWS && std::is_same_v<F, float> && kPacketWidth % 8 == 0;
+    detail_rows::kHasGroup<F> && kPacketWidth % (sizeof(detail_rows::group_t<F>) / sizeof(F)) == 0;
+template <typename F> inline constexpr int64_t kGroup = int64_t(sizeof(detail_rows::group_t<F>) / sizeof(F));
+#else
+template <typename F> inline constexpr bool kShuffleRows = false;
+#endif
+#if BSDFKIT_SHUFFLE_ROWS
+// A full packet's rows (S = 3) or pairs (S = 2) from q, group by group straight into the
+// packets' lanes (a packet's lanes are contiguous), and the reverse for rows of 3. No stack
+// buffer in between: GCC expands a buffer-to-packet copy into ymm moves, and a zmm load of two
+// ymm stores is not store-forwarded (a ~15-cycle stall per packet on AVX-512).
+template <typename F> inline void group_into(Packet<F> &dst, int64_t g, const detail_rows::group_t<F> &v) {
+    std::memcpy(reinterpret_cast<char *>(&dst) + g * sizeof(F), &v, sizeof(v));
+}
+template <typename F> inline void rows_to_packets(const F *q, Packet<F> &x, Packet<F> &y, Packet<F> &z) {
+    using G = detail_rows::group_t<F>;
+    for (int64_t g = 0; g < kW<F>; g += kGroup<F>) {
+        G a, b, c;
+        detail_rows::rows_to_xyz(q + 3 * g, a, b, c);
+        group_into(x, g, a);
+        group_into(y, g, b);
+        group_into(z, g, c);
+    }
+}
+template <typename F> inline void pairs_to_packets(const F *q, Packet<F> &x, Packet<F> &y) {
+    using G = detail_rows::group_t<F>;
+    for (int64_t g = 0; g < kW<F>; g += kGroup<F>) {
+        G a, b;
+        detail_rows::pairs_to_xy(q + 2 * g, a, b);
+        group_into(x, g, a);
+        group_into(y, g, b);
+    }
+}
+template <typename F> inline void packets_to_rows(F *q, const Packet<F> &x, const Packet<F> &y, const Packet<F> &z) {
+    using G = detail_rows::group_t<F>;
+    for (int64_t g = 0; g < kW<F>; g += kGroup<F>) {
+        G a, b, c;
+        std::memcpy(&a, reinterpret_cast<const char *>(&x) + g * sizeof(F), sizeof(G));
+        std::memcpy(&b, reinterpret_cast<const char *>(&y) + g * sizeof(F), sizeof(G));
+        std::memcpy(&c, reinterpret_cast<const char *>(&z) + g * sizeof(F), sizeof(G));
+        detail_rows::xyz_to_rows(q + 3 * g, a, b, c);
+    }
+}
+#endif
 
 // Lanes [i, i + cnt) of an (N, S) array (S = 3 or 2; S = 0: one broadcast row of 3) as C
 // packets; lanes past cnt hold `pad`.
@@ -117,16 +236,10 @@ inline void load_lanes(const F *p, int64_t i, int64_t cnt, const F (&pad)[C], Pa
         alignas(64) F soa[C][W];
         const F *q = p + S * i;
 #if BSDFKIT_SHUFFLE_ROWS
-        if constexpr (S == 3 && kShuffleRows<F>) {
+        if constexpr ((S == 3 || S == 2) && kShuffleRows<F>) {
             if (cnt == W) {
-                for (int64_t g = 0; g < W; g += 8) {
-                    detail_rows::v8f x, y, z;
-                    detail_rows::rows8_to_xyz(q + 3 * g, x, y, z);
-                    std::memcpy(soa[0] + g, &x, 32);
-                    std::memcpy(soa[1] + g, &y, 32);
-                    std::memcpy(soa[2] + g, &z, 32);
-                }
-                for (int c = 0; c < C; ++c) out[c] = drjit::load_aligned<P>(soa[c]);
+                if constexpr (S == 3) rows_to_packets(q, out[0], out[1], out[2]);
+                else pairs_to_packets(q, out[0], out[1]);
                 return;
             }
         }
@@ -141,6 +254,15 @@ inline void load_lanes(const F *p, int64_t i, int64_t cnt, const F (&pad)[C], Pa
     }
 }
 template <int S, typename F> inline Vec3<Packet<F>> load3_lanes(const F *p, int64_t i, int64_t cnt) {
+#if BSDFKIT_SHUFFLE_ROWS
+    if constexpr (S == 3 && kShuffleRows<F>) {
+        if (cnt == kW<F>) {
+            Vec3<Packet<F>> r;
+            rows_to_packets(p + 3 * i, r.x, r.y, r.z);
+            return r;
+        }
+    }
+#endif
     static constexpr F pad[3] = {F(0), F(0), F(1)};
     Packet<F> v[3];
     load_lanes<S, 3>(p, i, cnt, pad, v);
@@ -157,23 +279,17 @@ template <typename F> inline Packet<F> load1_lanes(const F *p, int64_t i, int64_
 // Stores the first cnt lanes of C packets as rows [i, i + cnt) of an (N, C) array.
 template <int C, typename F> inline void store_lanes(F *p, int64_t i, int64_t cnt, const Packet<F> (&v)[C]) {
     constexpr int64_t W = kW<F>;
-    alignas(64) F soa[C][W];
-    for (int c = 0; c < C; ++c) drjit::store_aligned(soa[c], v[c]);
     F *q = p + C * i;
 #if BSDFKIT_SHUFFLE_ROWS
     if constexpr (C == 3 && kShuffleRows<F>) {
         if (cnt == W) {
-            for (int64_t g = 0; g < W; g += 8) {
-                detail_rows::v8f x, y, z;
-                std::memcpy(&x, soa[0] + g, 32);
-                std::memcpy(&y, soa[1] + g, 32);
-                std::memcpy(&z, soa[2] + g, 32);
-                detail_rows::xyz_to_rows8(q + 3 * g, x, y, z);
-            }
+            packets_to_rows(q, v[0], v[1], v[2]);
             return;
         }
     }
 #endif
+    alignas(64) F soa[C][W];
+    for (int c = 0; c < C; ++c) drjit::store_aligned(soa[c], v[c]);
     if (cnt == W) {
         for (int64_t j = 0; j < W; ++j)
             for (int c = 0; c < C; ++c) q[C * j + c] = soa[c][j];
@@ -407,15 +523,45 @@ inline void sample_chunk(const Model &m, const Sampler &smp, bool model_ok, int6
     *bo_out = bo;
 }
 
-// sample_chunk on the packet path: the same outputs and rules, kPacketWidth lanes at a time.
+// Lanes of a packet holding small non-negative integers (flags, 0/1) as bytes [i, i + cnt).
+// A full packet converts in registers (GCC's vector conversions: vcvttps2dq + vpmovdb on
+// AVX-512); a lane-by-lane loop there became scalar conversions.
+template <typename F> inline void store_bytes(uint8_t *p, int64_t i, int64_t cnt, const Packet<F> &v) {
+#if defined(__GNUC__) && !defined(__clang__)
+    if (cnt == kW<F>) {
+        typedef F vf __attribute__((vector_size(sizeof(F) * kPacketWidth)));
+        typedef int32_t vi __attribute__((vector_size(4 * kPacketWidth)));
+        typedef uint8_t vb __attribute__((vector_size(kPacketWidth)));
+        static_assert(sizeof(vf) == sizeof(Packet<F>), "store_bytes: packet layout");
+        vf x;
+        std::memcpy(&x, &v, sizeof(vf));
+        vb bytes = __builtin_convertvector(__builtin_convertvector(x, vi), vb);
+        std::memcpy(p + i, &bytes, sizeof(vb));
+        return;
+    }
+#endif
+    alignas(64) F t[kW<F>];
+    drjit::store_aligned(t, v);
+    for (int64_t j = 0; j < cnt; ++j) p[i + j] = uint8_t(int32_t(t[j]));
+}
+// Lanes outside [0, 1] or NaN (a NaN fails both comparisons); count_bad_uniforms per packet
+// (padding lanes hold 0).
+template <typename F> inline int64_t count_bad_lanes(const Packet<F> &v) {
+    return int64_t(drjit::count(!((v >= F(0)) & (v <= F(1)))));
+}
+
+// sample_chunk on the packet path: the same outputs and rules, kPacketWidth lanes at a time, in
+// one pass: the uniforms are checked on the loaded packets and the byte outputs (flags, valid,
+// pdf_is_proportional) written from registers (the scalar path's staging pass is not needed).
+// Returns the bad (wo, uc, u) counts.
 template <int SO, typename Model, typename F, typename Sampler>
 inline void sample_chunk_packet(const Model &m, const Sampler &smp, bool model_ok, int64_t b, int64_t e,
                                 const F *__restrict wo, const F *__restrict uc, const F *__restrict u,
                                 F *__restrict owi, F *__restrict of, F *__restrict opdf, F *__restrict oeta,
-                                F *__restrict stage, uint8_t *__restrict ofl, bool *__restrict ovalid,
-                                bool *__restrict oprop, int64_t *bo_out) {
+                                uint8_t *__restrict ofl, bool *__restrict ovalid, bool *__restrict oprop,
+                                int64_t (&bad_out)[3]) {
     using P = Packet<F>;
-    int64_t bo = 0;
+    int64_t bo = 0, buc = 0, bu = 0;
     const Mask<P> model_mask(model_ok);
     static constexpr F pad_u[2] = {F(0), F(0)};
     for (int64_t i = b; i < e; i += kW<F>) {
@@ -424,24 +570,24 @@ inline void sample_chunk_packet(const Model &m, const Sampler &smp, bool model_o
         bo += count_not_unit(o);
         P uv[2];
         load_lanes<2, 2>(u, i, cnt, pad_u, uv);
+        P c = load1_lanes(uc, i, cnt, F(0));
+        buc += count_bad_lanes(c);
+        bu += count_bad_lanes(uv[0]) + count_bad_lanes(uv[1]);
         // Uniforms on [0, 1) (OneMinusEpsilon), as in bsdf_sample.
-        BSDFSample<P> s = smp(m, o, clamp_uniform(load1_lanes(uc, i, cnt, F(0))),
-                              clamp_uniform(Point2<P>{uv[0], uv[1]}));
+        BSDFSample<P> s = smp(m, o, clamp_uniform(c), clamp_uniform(Point2<P>{uv[0], uv[1]}));
         Mask<P> ok = sample_accepted(s, o) & model_mask; // bsdf_sample's rule (core/bsdf.h)
+        P pdf = select(ok, s.pdf, P(0));
         store3_lanes(of, i, cnt, select(ok, s.f, Spectrum<P>(P(0))));
         store3_lanes(owi, i, cnt, select(ok, s.wi, kInvalidSampleWi<P>()));
-        store1_lanes(opdf, i, cnt, select(ok, s.pdf, P(0)));
+        store1_lanes(opdf, i, cnt, pdf);
         store1_lanes(oeta, i, cnt, select(ok, s.eta, P(1)));
-        P tag = s.flags + select(s.pdf_is_proportional, P(256), P(0)); // flags + 256 * proportional
-        store1_lanes(stage, i - b, cnt, select(ok, tag, P(0)));
+        store_bytes(ofl, i, cnt, select(ok, s.flags, P(0)));
+        store_bytes(reinterpret_cast<uint8_t *>(oprop), i, cnt, mask_to_float<P>(ok & s.pdf_is_proportional));
+        store_bytes(reinterpret_cast<uint8_t *>(ovalid), i, cnt, mask_to_float<P>(pdf > F(0)));
     }
-    for (int64_t i = b; i < e; ++i) {
-        int32_t t = int32_t(stage[i - b]);
-        ofl[i] = uint8_t(t & 255);
-        oprop[i] = (t >> 8) != 0;
-        ovalid[i] = opdf[i] > F(0);
-    }
-    *bo_out = SO == 0 ? (bo > 0 ? e - b : 0) : bo;
+    bad_out[0] = SO == 0 ? (bo > 0 ? e - b : 0) : bo;
+    bad_out[1] = buc;
+    bad_out[2] = bu;
 }
 
 template <int SO, typename Model, typename F, typename Sampler>
@@ -449,18 +595,23 @@ void sample_batch_loop(const Model &m, const Sampler &sampler, const F *wo, cons
                        uint8_t sf, const SampleOut<F> &out, int nthreads, BadCounts &bad) {
     const bool model_ok = (m.flags() & sf) != 0;
     parallel_chunks(n, nthreads, kChunk, [&, model_ok](int64_t b, int64_t e) __attribute__((flatten)) {
-        F stage[kChunk];
         LocalModel<Model> mloc = m;
-        int64_t bo = 0, buc = count_bad_uniforms(uc, b, e), bu = count_bad_uniforms(u, 2 * b, 2 * e);
-        if constexpr (is_vectorized<Model>::value)
-            sample_chunk_packet<SO>(mloc, sampler, model_ok, b, e, wo, uc, u, out.wi, out.f, out.pdf, out.eta, stage,
-                                    out.flags, out.valid, out.proportional, &bo);
-        else
+        if constexpr (is_vectorized<Model>::value) {
+            int64_t c[3];
+            sample_chunk_packet<SO>(mloc, sampler, model_ok, b, e, wo, uc, u, out.wi, out.f, out.pdf, out.eta,
+                                    out.flags, out.valid, out.proportional, c);
+            bad.wo += c[0];
+            bad.uc += c[1];
+            bad.u += c[2];
+        } else {
+            F stage[kChunk];
+            int64_t bo = 0, buc = count_bad_uniforms(uc, b, e), bu = count_bad_uniforms(u, 2 * b, 2 * e);
             sample_chunk<SO>(mloc, sampler, model_ok, b, e, wo, uc, u, out.wi, out.f, out.pdf, out.eta, stage,
                              out.flags, out.valid, out.proportional, &bo);
-        bad.wo += bo;
-        bad.uc += buc;
-        bad.u += bu;
+            bad.wo += bo;
+            bad.uc += buc;
+            bad.u += bu;
+        }
     });
 }
 
