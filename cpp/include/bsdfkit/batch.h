@@ -535,7 +535,18 @@ template <typename F> inline void store_bytes(uint8_t *p, int64_t i, int64_t cnt
         static_assert(sizeof(vf) == sizeof(Packet<F>), "store_bytes: packet layout");
         vf x;
         std::memcpy(&x, &v, sizeof(vf));
-        vb bytes = __builtin_convertvector(__builtin_convertvector(x, vi), vb);
+        vi ints = __builtin_convertvector(x, vi);
+#if defined(__AVX512BW__)
+        vb bytes = __builtin_convertvector(ints, vb); // vpmovdb
+#else
+        // the low byte of each int32 lane (the values are < 256): one byte shuffle, where
+        // GCC's narrowing conversion extracts lane by lane without vpmovdb
+        typedef uint8_t vq __attribute__((vector_size(4 * kPacketWidth)));
+        static_assert(kPacketWidth == 16, "store_bytes: the byte shuffle below is for 16 lanes");
+        vq raw;
+        std::memcpy(&raw, &ints, sizeof(vq));
+        vb bytes = __builtin_shufflevector(raw, raw, 0, 4, 8, 12, 16, 20, 24, 28, 32, 36, 40, 44, 48, 52, 56, 60);
+#endif
         std::memcpy(p + i, &bytes, sizeof(vb));
         return;
     }
