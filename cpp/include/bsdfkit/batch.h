@@ -8,6 +8,7 @@
 #include <cstring>
 #include <limits>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "core/bsdf.h"
@@ -135,6 +136,54 @@ inline void pairs_to_xy(const double *q, v8d &x, v8d &y) {
 }
 template <typename F> using group_t = std::conditional_t<std::is_same_v<F, float>, v16f, v8d>;
 template <typename F> inline constexpr bool kHasGroup = true;
+// Rows of 4 (the spectral kernels' wavelengths and f): component k of row j at 4j + k. Loads:
+// rows 0..L/2-1 from (a, b) and L/2..L-1 from (c, d), then the halves joined (3 permutations
+// per component); stores the reverse. Index vectors built at compile time from the rule.
+template <typename VI, typename Fn, size_t... J> constexpr VI make_index(Fn fn, std::index_sequence<J...>) {
+    return VI{fn(int(J))...};
+}
+template <typename V> struct IndexOf;
+template <> struct IndexOf<v16f> { using type = v16i; };
+template <> struct IndexOf<v8d> { using type = v8l; };
+template <typename V, typename E> inline void rows4_to_xyzw(const E *q, V (&o)[4]) {
+    using VI = typename IndexOf<V>::type;
+    constexpr int L = int(sizeof(V) / sizeof(E));
+    constexpr auto seq = std::make_index_sequence<size_t(L)>{};
+    V a, b, c, d;
+    std::memcpy(&a, q, sizeof(V));
+    std::memcpy(&b, q + L, sizeof(V));
+    std::memcpy(&c, q + 2 * L, sizeof(V));
+    std::memcpy(&d, q + 3 * L, sizeof(V));
+    constexpr VI join = make_index<VI>([](int e) { return e < L / 2 ? e : L + e - L / 2; }, seq);
+    constexpr VI k0 = make_index<VI>([](int e) { return e < L / 2 ? 4 * e : 0; }, seq);
+    constexpr VI k1 = make_index<VI>([](int e) { return e < L / 2 ? 4 * e + 1 : 0; }, seq);
+    constexpr VI k2 = make_index<VI>([](int e) { return e < L / 2 ? 4 * e + 2 : 0; }, seq);
+    constexpr VI k3 = make_index<VI>([](int e) { return e < L / 2 ? 4 * e + 3 : 0; }, seq);
+    o[0] = __builtin_shuffle(__builtin_shuffle(a, b, k0), __builtin_shuffle(c, d, k0), join);
+    o[1] = __builtin_shuffle(__builtin_shuffle(a, b, k1), __builtin_shuffle(c, d, k1), join);
+    o[2] = __builtin_shuffle(__builtin_shuffle(a, b, k2), __builtin_shuffle(c, d, k2), join);
+    o[3] = __builtin_shuffle(__builtin_shuffle(a, b, k3), __builtin_shuffle(c, d, k3), join);
+}
+template <typename V, typename E> inline void xyzw_to_rows4(E *q, const V (&v)[4]) {
+    using VI = typename IndexOf<V>::type;
+    constexpr int L = int(sizeof(V) / sizeof(E));
+    constexpr auto seq = std::make_index_sequence<size_t(L)>{};
+    // output vector r, lane e: row j = (r L + e) / 4, component k = e % 4 (L is a multiple of 4)
+    constexpr VI pick = make_index<VI>([](int e) { return e % 4 < 2 ? e : L + e; }, seq);
+#define BSDFKIT_ROWS4_OUT(r)                                                                               \
+    {                                                                                                      \
+        constexpr VI xy = make_index<VI>([](int e) { int j = (r * L + e) / 4, k = e % 4; return k == 0 ? j : k == 1 ? L + j : 0; }, seq); \
+        constexpr VI zw = make_index<VI>([](int e) { int j = (r * L + e) / 4, k = e % 4; return k == 2 ? j : k == 3 ? L + j : 0; }, seq); \
+        V out = __builtin_shuffle(__builtin_shuffle(v[0], v[1], xy), __builtin_shuffle(v[2], v[3], zw), pick); \
+        std::memcpy(q + r * L, &out, sizeof(V));                                                           \
+    }
+    BSDFKIT_ROWS4_OUT(0)
+    BSDFKIT_ROWS4_OUT(1)
+    BSDFKIT_ROWS4_OUT(2)
+    BSDFKIT_ROWS4_OUT(3)
+#undef BSDFKIT_ROWS4_OUT
+}
+template <typename F> inline constexpr bool kHasRows4 = true;
 #else
 // AVX2 / SSE: float32 in groups of 8. Slots of the three vectors a, b, c (rows 0..7: a = x0 y0
 // z0 x1 y1 z1 x2 y2, ...) that hold x, y, z: a {x: 0 3 6, y: 1 4 7, z: 2 5}, b {z: 0 3 6, x: 1
@@ -172,6 +221,9 @@ inline void pairs_to_xy(const float *q, v8f &x, v8f &y) {
 }
 template <typename F> using group_t = v8f;
 template <typename F> inline constexpr bool kHasGroup = std::is_same_v<F, float>;
+template <typename F> inline constexpr bool kHasRows4 = false; // AVX2: the stack transposition
+template <typename V, typename E> void rows4_to_xyzw(const E *q, V (&o)[4]);     // (AVX-512 only)
+template <typename V, typename E> void xyzw_to_rows4(E *q, const V (&v)[4]);
 #endif
 } // namespace detail_rows
 #endif
@@ -243,6 +295,16 @@ inline void load_lanes(const F *p, int64_t i, int64_t cnt, const F (&pad)[C], Pa
                 return;
             }
         }
+        if constexpr (S == 4 && kShuffleRows<F> && detail_rows::kHasRows4<F>) {
+            if (cnt == W) {
+                for (int64_t g = 0; g < W; g += kGroup<F>) {
+                    detail_rows::group_t<F> v[4];
+                    detail_rows::rows4_to_xyzw(q + 4 * g, v);
+                    for (int c = 0; c < 4; ++c) group_into(out[c], g, v[c]);
+                }
+                return;
+            }
+        }
 #endif
         if (cnt < W) {
             for (int64_t j = 0; j < S * W; ++j) tail[j] = j < S * cnt ? q[j] : pad[j % S];
@@ -284,6 +346,17 @@ template <int C, typename F> inline void store_lanes(F *p, int64_t i, int64_t cn
     if constexpr (C == 3 && kShuffleRows<F>) {
         if (cnt == W) {
             packets_to_rows(q, v[0], v[1], v[2]);
+            return;
+        }
+    }
+    if constexpr (C == 4 && kShuffleRows<F> && detail_rows::kHasRows4<F>) {
+        if (cnt == W) {
+            using G = detail_rows::group_t<F>;
+            for (int64_t g = 0; g < W; g += kGroup<F>) {
+                G x[4];
+                for (int c = 0; c < 4; ++c) std::memcpy(&x[c], reinterpret_cast<const char *>(&v[c]) + g * sizeof(F), sizeof(G));
+                detail_rows::xyzw_to_rows4(q + 4 * g, x);
+            }
             return;
         }
     }

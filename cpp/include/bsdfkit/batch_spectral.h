@@ -615,8 +615,9 @@ template <typename F> inline void store4_lanes(F *p, int64_t i, int64_t cnt, con
 }
 
 // sample on packets: the adapter returns the accepted sample (pbrt-v4's rules applied) and the
-// terminated mask; flags, pdf_is_proportional and terminated are staged as F (flags + 256 prop +
-// 512 terminated) and written as bytes in a second pass, as batch.h's sample_chunk_packet.
+// terminated mask; the uniforms are checked on the loaded packets and the byte outputs (flags,
+// pdf_is_proportional, terminated, valid) written from registers, as batch.h's
+// sample_chunk_packet.
 template <typename SM, typename F>
 void sample_spectral_packets(const SM &m, const F *wo, int64_t so, const F *uc, const F *u, const double *lam,
                              int64_t sl, int64_t n, TransportMode mode, uint8_t sf, const SpectralSampleOut<F> &out,
@@ -624,8 +625,7 @@ void sample_spectral_packets(const SM &m, const F *wo, int64_t so, const F *uc, 
     using P = Packet<F>;
     const Dirs<F> dwo = spectral_dirs(wo, so);
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
-        F stage[kChunk];
-        int64_t bo = 0, buc = count_bad_uniforms(uc, b, e), bu = count_bad_uniforms(u, 2 * b, 2 * e);
+        int64_t bo = 0, buc = 0, bu = 0;
         const SM mloc = m;
         static constexpr F pad_u[2] = {F(0), F(0)};
         for (int64_t i = b; i < e; i += kW<F>) {
@@ -634,23 +634,22 @@ void sample_spectral_packets(const SM &m, const F *wo, int64_t so, const F *uc, 
             bo += count_not_unit(o);
             P uv[2];
             load_lanes<2, 2>(u, i, cnt, pad_u, uv);
+            P c = load1_lanes(uc, i, cnt, F(0));
+            buc += count_bad_lanes(c);
+            bu += count_bad_lanes(uv[0]) + count_bad_lanes(uv[1]);
             LambdaLanes l;
             load_lambda_lanes(lam, sl, i, cnt, l, bad);
             Mask<P> term;
-            BSDFSample<P, 4> s = mloc.sample(o, load1_lanes(uc, i, cnt, F(0)), Point2<P>{uv[0], uv[1]}, l, mode, sf, &term);
+            BSDFSample<P, 4> s = mloc.sample(o, c, Point2<P>{uv[0], uv[1]}, l, mode, sf, &term);
             store4_lanes(out.f, i, cnt, s.f);
             store3_lanes(out.wi, i, cnt, s.wi);
             store1_lanes(out.pdf, i, cnt, s.pdf);
             store1_lanes(out.eta, i, cnt, s.eta);
-            P tag = s.flags + select(s.pdf_is_proportional, P(256), P(0)) + select(term, P(512), P(0));
-            store1_lanes(stage, i - b, cnt, tag);
-        }
-        for (int64_t i = b; i < e; ++i) {
-            int32_t t = int32_t(stage[i - b]);
-            out.flags[i] = uint8_t(t & 255);
-            out.proportional[i] = (t >> 8) & 1;
-            out.terminated[i] = (t >> 9) & 1;
-            out.valid[i] = out.pdf[i] > F(0);  // accepted samples have pdf > 0, rejected ones 0
+            store_bytes(out.flags, i, cnt, s.flags);
+            store_bytes(reinterpret_cast<uint8_t *>(out.proportional), i, cnt, mask_to_float<P>(s.pdf_is_proportional));
+            store_bytes(reinterpret_cast<uint8_t *>(out.terminated), i, cnt, mask_to_float<P>(term));
+            // accepted samples have pdf > 0, rejected ones 0
+            store_bytes(reinterpret_cast<uint8_t *>(out.valid), i, cnt, mask_to_float<P>(s.pdf > F(0)));
         }
         bad.wo += so == 0 ? (bo > 0 ? e - b : 0) : bo;
         bad.uc += buc;
