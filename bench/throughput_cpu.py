@@ -56,7 +56,7 @@ def side_bk(n, keys, ops, dtypes, threads=1):
         m = T.bk_model(key)
         for op in ops:
             for dt in dtypes:
-                kern, _ = T.bk_calls(m, op, inputs[dt], T.CONFIG[key][2])
+                kern = T.bk_calls(m, op, inputs[dt], T.CONFIG[key][2])["kernel"]  # out= / preallocated outputs
                 res[f"{key}/{op}/{dt}"] = cpu_best(kern)
     return {"results": res, "bsdfkit": bk.__file__}
 
