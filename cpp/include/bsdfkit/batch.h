@@ -54,10 +54,11 @@ template <typename F> inline constexpr int64_t kW = int64_t(kPacketWidth);
 // of G lanes, G = one vector register of F (AVX-512: 16 floats or 8 doubles; otherwise 8
 // floats): an (N, 3) group is 3 register loads, each component 2 two-source permutations
 // (vpermt2ps / vpermt2pd) away on AVX-512, or 2 blends and 1 permutation on AVX2; (N, 2) pairs
-// (the sample kernels' u) 1 permutation per component. Each component then passes through a
-// stack slot of exactly the group's width, so the packet load that follows is store-forwarded
-// (a zmm load spanning two ymm stores stalls ~15 cycles: 14 % of the float32 sample kernel on
-// a Sapphire Rapids host before this). Pure data movement: the same packets as the scalar
+// (the sample kernels' u) 1 permutation per component; rows of 4 (spectral) 3 on AVX-512. The
+// groups go straight into the packets' lanes (rows_to_packets below): the earlier 8-lane groups
+// went through a stack buffer, and on AVX-512 a zmm load spanning two ymm stores misses
+// store-forwarding (14-25 % of the float32 sample kernel on a Sapphire Rapids host, one
+// instruction). Pure data movement: the same packets as the scalar
 // transposition through a stack buffer, bit for bit. Written in GCC's generic vector
 // extensions (__builtin_shuffle; the build's compiler), not in ISA intrinsics; other compilers
 // keep the scalar transposition. float64 on AVX2 keeps it too (the shuffles gained nothing on
@@ -73,127 +74,107 @@ template <typename F> inline constexpr int64_t kW = int64_t(kPacketWidth);
 namespace detail_rows {
 typedef float v8f __attribute__((vector_size(32)));
 typedef int v8i __attribute__((vector_size(32)));
-#if defined(__AVX512F__)
-typedef float v16f __attribute__((vector_size(64)));
-typedef int v16i __attribute__((vector_size(64)));
-typedef double v8d __attribute__((vector_size(64)));
-typedef long long v8l __attribute__((vector_size(64)));
-// Component k of row j sits at 3j + k of the group's 3G scalars (vectors a, b, c): gathered
-// from a and b first, then the lanes past 2G from c.
-inline void rows_to_xyz(const float *q, v16f &x, v16f &y, v16f &z) {
-    v16f a, b, c;
-    std::memcpy(&a, q, 64);
-    std::memcpy(&b, q + 16, 64);
-    std::memcpy(&c, q + 32, 64);
-    x = BSDFKIT_SHUF2(v16i, BSDFKIT_SHUF2(v16i, a, b, 0, 3, 6, 9, 12, 15, 18, 21, 24, 27, 30, 0, 0, 0, 0, 0), c,
-                      0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 17, 20, 23, 26, 29);
-    y = BSDFKIT_SHUF2(v16i, BSDFKIT_SHUF2(v16i, a, b, 1, 4, 7, 10, 13, 16, 19, 22, 25, 28, 31, 0, 0, 0, 0, 0), c,
-                      0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 18, 21, 24, 27, 30);
-    z = BSDFKIT_SHUF2(v16i, BSDFKIT_SHUF2(v16i, a, b, 2, 5, 8, 11, 14, 17, 20, 23, 26, 29, 0, 0, 0, 0, 0, 0), c,
-                      0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 16, 19, 22, 25, 28, 31);
-}
-inline void xyz_to_rows(float *q, v16f x, v16f y, v16f z) {
-    v16f a = BSDFKIT_SHUF2(v16i, BSDFKIT_SHUF2(v16i, x, y, 0, 16, 0, 1, 17, 0, 2, 18, 0, 3, 19, 0, 4, 20, 0, 5), z,
-                           0, 1, 16, 3, 4, 17, 6, 7, 18, 9, 10, 19, 12, 13, 20, 15);
-    v16f b = BSDFKIT_SHUF2(v16i, BSDFKIT_SHUF2(v16i, x, y, 21, 0, 6, 22, 0, 7, 23, 0, 8, 24, 0, 9, 25, 0, 10, 26), z,
-                           0, 21, 2, 3, 22, 5, 6, 23, 8, 9, 24, 11, 12, 25, 14, 15);
-    v16f c = BSDFKIT_SHUF2(v16i, BSDFKIT_SHUF2(v16i, x, y, 0, 11, 27, 0, 12, 28, 0, 13, 29, 0, 14, 30, 0, 15, 31, 0), z,
-                           26, 1, 2, 27, 4, 5, 28, 7, 8, 29, 10, 11, 30, 13, 14, 31);
-    std::memcpy(q, &a, 64);
-    std::memcpy(q + 16, &b, 64);
-    std::memcpy(q + 32, &c, 64);
-}
-inline void pairs_to_xy(const float *q, v16f &x, v16f &y) {
-    v16f a, b;
-    std::memcpy(&a, q, 64);
-    std::memcpy(&b, q + 16, 64);
-    x = BSDFKIT_SHUF2(v16i, a, b, 0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
-    y = BSDFKIT_SHUF2(v16i, a, b, 1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31);
-}
-inline void rows_to_xyz(const double *q, v8d &x, v8d &y, v8d &z) {
-    v8d a, b, c;
-    std::memcpy(&a, q, 64);
-    std::memcpy(&b, q + 8, 64);
-    std::memcpy(&c, q + 16, 64);
-    x = BSDFKIT_SHUF2(v8l, BSDFKIT_SHUF2(v8l, a, b, 0, 3, 6, 9, 12, 15, 0, 0), c, 0, 1, 2, 3, 4, 5, 10, 13);
-    y = BSDFKIT_SHUF2(v8l, BSDFKIT_SHUF2(v8l, a, b, 1, 4, 7, 10, 13, 0, 0, 0), c, 0, 1, 2, 3, 4, 8, 11, 14);
-    z = BSDFKIT_SHUF2(v8l, BSDFKIT_SHUF2(v8l, a, b, 2, 5, 8, 11, 14, 0, 0, 0), c, 0, 1, 2, 3, 4, 9, 12, 15);
-}
-inline void xyz_to_rows(double *q, v8d x, v8d y, v8d z) {
-    v8d a = BSDFKIT_SHUF2(v8l, BSDFKIT_SHUF2(v8l, x, y, 0, 8, 0, 1, 9, 0, 2, 10), z, 0, 1, 8, 3, 4, 9, 6, 7);
-    v8d b = BSDFKIT_SHUF2(v8l, BSDFKIT_SHUF2(v8l, x, y, 0, 3, 11, 0, 4, 12, 0, 5), z, 10, 1, 2, 11, 4, 5, 12, 7);
-    v8d c = BSDFKIT_SHUF2(v8l, BSDFKIT_SHUF2(v8l, x, y, 13, 0, 6, 14, 0, 7, 15, 0), z, 0, 13, 2, 3, 14, 5, 6, 15);
-    std::memcpy(q, &a, 64);
-    std::memcpy(q + 8, &b, 64);
-    std::memcpy(q + 16, &c, 64);
-}
-inline void pairs_to_xy(const double *q, v8d &x, v8d &y) {
-    v8d a, b;
-    std::memcpy(&a, q, 64);
-    std::memcpy(&b, q + 8, 64);
-    x = BSDFKIT_SHUF2(v8l, a, b, 0, 2, 4, 6, 8, 10, 12, 14);
-    y = BSDFKIT_SHUF2(v8l, a, b, 1, 3, 5, 7, 9, 11, 13, 15);
-}
-template <typename F> using group_t = std::conditional_t<std::is_same_v<F, float>, v16f, v8d>;
-template <typename F> inline constexpr bool kHasGroup = true;
-// Rows of 4 (the spectral kernels' wavelengths and f): component k of row j at 4j + k. Loads:
-// rows 0..L/2-1 from (a, b) and L/2..L-1 from (c, d), then the halves joined (3 permutations
-// per component); stores the reverse. Index vectors built at compile time from the rule.
+template <typename V> struct IndexOf;  // the index vector of a shuffle of V
+template <> struct IndexOf<v8f> { using type = v8i; };
+// Index vectors built at compile time from a rule lane -> source slot (slots of the two
+// operands numbered 0..2L-1), so each layout below is written once for every width.
 template <typename VI, typename Fn, size_t... J> constexpr VI make_index(Fn fn, std::index_sequence<J...>) {
     return VI{fn(int(J))...};
 }
-template <typename V> struct IndexOf;
-template <> struct IndexOf<v16f> { using type = v16i; };
-template <> struct IndexOf<v8d> { using type = v8l; };
+template <typename V, typename E> inline constexpr int kLanes = int(sizeof(V) / sizeof(E));
+#define BSDFKIT_INDEX(V, E, rule) \
+    make_index<typename IndexOf<V>::type>([](int e) { return rule; }, std::make_index_sequence<size_t(kLanes<V, E>)>{})
+template <typename V, typename E> inline V load_vec(const E *q) {
+    V v;
+    std::memcpy(&v, q, sizeof(V));
+    return v;
+}
+
+// (N, 2) pairs: x = the even slots of (a, b), y = the odd ones; 1 permutation each.
+template <typename V, typename E> inline void pairs_to_xy(const E *q, V &x, V &y) {
+    constexpr int L = kLanes<V, E>;
+    V a = load_vec<V>(q), b = load_vec<V>(q + L);
+    x = __builtin_shuffle(a, b, BSDFKIT_INDEX(V, E, 2 * e));
+    y = __builtin_shuffle(a, b, BSDFKIT_INDEX(V, E, 2 * e + 1));
+}
+
+// Rows of 4 (the spectral kernels' wavelengths and f): component k of row j at 4j + k. Loads:
+// rows 0..L/2-1 from (a, b) and L/2..L-1 from (c, d), then the halves joined; stores the
+// reverse. 3 permutations per component (AVX-512 only: kHasRows4).
 template <typename V, typename E> inline void rows4_to_xyzw(const E *q, V (&o)[4]) {
-    using VI = typename IndexOf<V>::type;
-    constexpr int L = int(sizeof(V) / sizeof(E));
-    constexpr auto seq = std::make_index_sequence<size_t(L)>{};
-    V a, b, c, d;
-    std::memcpy(&a, q, sizeof(V));
-    std::memcpy(&b, q + L, sizeof(V));
-    std::memcpy(&c, q + 2 * L, sizeof(V));
-    std::memcpy(&d, q + 3 * L, sizeof(V));
-    constexpr VI join = make_index<VI>([](int e) { return e < L / 2 ? e : L + e - L / 2; }, seq);
-    constexpr VI k0 = make_index<VI>([](int e) { return e < L / 2 ? 4 * e : 0; }, seq);
-    constexpr VI k1 = make_index<VI>([](int e) { return e < L / 2 ? 4 * e + 1 : 0; }, seq);
-    constexpr VI k2 = make_index<VI>([](int e) { return e < L / 2 ? 4 * e + 2 : 0; }, seq);
-    constexpr VI k3 = make_index<VI>([](int e) { return e < L / 2 ? 4 * e + 3 : 0; }, seq);
+    constexpr int L = kLanes<V, E>;
+    V a = load_vec<V>(q), b = load_vec<V>(q + L), c = load_vec<V>(q + 2 * L), d = load_vec<V>(q + 3 * L);
+    constexpr auto join = BSDFKIT_INDEX(V, E, e < L / 2 ? e : L + e - L / 2);
+    constexpr auto k0 = BSDFKIT_INDEX(V, E, e < L / 2 ? 4 * e : 0);
+    constexpr auto k1 = BSDFKIT_INDEX(V, E, e < L / 2 ? 4 * e + 1 : 0);
+    constexpr auto k2 = BSDFKIT_INDEX(V, E, e < L / 2 ? 4 * e + 2 : 0);
+    constexpr auto k3 = BSDFKIT_INDEX(V, E, e < L / 2 ? 4 * e + 3 : 0);
     o[0] = __builtin_shuffle(__builtin_shuffle(a, b, k0), __builtin_shuffle(c, d, k0), join);
     o[1] = __builtin_shuffle(__builtin_shuffle(a, b, k1), __builtin_shuffle(c, d, k1), join);
     o[2] = __builtin_shuffle(__builtin_shuffle(a, b, k2), __builtin_shuffle(c, d, k2), join);
     o[3] = __builtin_shuffle(__builtin_shuffle(a, b, k3), __builtin_shuffle(c, d, k3), join);
 }
-template <typename V, typename E> inline void xyzw_to_rows4(E *q, const V (&v)[4]) {
-    using VI = typename IndexOf<V>::type;
-    constexpr int L = int(sizeof(V) / sizeof(E));
-    constexpr auto seq = std::make_index_sequence<size_t(L)>{};
-    // output vector r, lane e: row j = (r L + e) / 4, component k = e % 4 (L is a multiple of 4)
-    constexpr VI pick = make_index<VI>([](int e) { return e % 4 < 2 ? e : L + e; }, seq);
-#define BSDFKIT_ROWS4_OUT(r)                                                                               \
-    {                                                                                                      \
-        constexpr VI xy = make_index<VI>([](int e) { int j = (r * L + e) / 4, k = e % 4; return k == 0 ? j : k == 1 ? L + j : 0; }, seq); \
-        constexpr VI zw = make_index<VI>([](int e) { int j = (r * L + e) / 4, k = e % 4; return k == 2 ? j : k == 3 ? L + j : 0; }, seq); \
-        V out = __builtin_shuffle(__builtin_shuffle(v[0], v[1], xy), __builtin_shuffle(v[2], v[3], zw), pick); \
-        std::memcpy(q + r * L, &out, sizeof(V));                                                           \
-    }
-    BSDFKIT_ROWS4_OUT(0)
-    BSDFKIT_ROWS4_OUT(1)
-    BSDFKIT_ROWS4_OUT(2)
-    BSDFKIT_ROWS4_OUT(3)
-#undef BSDFKIT_ROWS4_OUT
+// Output vector r, lane e: row j = (r L + e) / 4, component k = e % 4 (L a multiple of 4).
+template <int R, typename V, typename E> inline V rows4_out(const V (&v)[4]) {
+    constexpr int L = kLanes<V, E>;
+    constexpr auto xy = BSDFKIT_INDEX(V, E, e % 4 == 0 ? (R * L + e) / 4 : e % 4 == 1 ? L + (R * L + e) / 4 : 0);
+    constexpr auto zw = BSDFKIT_INDEX(V, E, e % 4 == 2 ? (R * L + e) / 4 : e % 4 == 3 ? L + (R * L + e) / 4 : 0);
+    constexpr auto pick = BSDFKIT_INDEX(V, E, e % 4 < 2 ? e : L + e);
+    return __builtin_shuffle(__builtin_shuffle(v[0], v[1], xy), __builtin_shuffle(v[2], v[3], zw), pick);
 }
+template <typename V, typename E> inline void xyzw_to_rows4(E *q, const V (&v)[4]) {
+    constexpr int L = kLanes<V, E>;
+    const V o[4] = {rows4_out<0, V, E>(v), rows4_out<1, V, E>(v), rows4_out<2, V, E>(v), rows4_out<3, V, E>(v)};
+    for (int r = 0; r < 4; ++r) std::memcpy(q + r * L, &o[r], sizeof(V));
+}
+
+#if defined(__AVX512F__)
+typedef float v16f __attribute__((vector_size(64)));
+typedef int v16i __attribute__((vector_size(64)));
+typedef double v8d __attribute__((vector_size(64)));
+typedef long long v8l __attribute__((vector_size(64)));
+template <> struct IndexOf<v16f> { using type = v16i; };
+template <> struct IndexOf<v8d> { using type = v8l; };
+// Rows of 3 with two-source permutations (vpermt2ps / vpermt2pd): component k of row j sits at
+// 3j + k of the group's 3L scalars (a, b, c), gathered from (a, b) first, then the lanes past
+// 2L from c; the reverse for stores (2 permutations per component).
+template <int K, typename V, typename E> inline V rows3_component(const V &a, const V &b, const V &c) {
+    constexpr int L = kLanes<V, E>;
+    constexpr auto ab = BSDFKIT_INDEX(V, E, 3 * e + K < 2 * L ? 3 * e + K : 0);
+    constexpr auto abc = BSDFKIT_INDEX(V, E, 3 * e + K < 2 * L ? e : L + 3 * e + K - 2 * L);
+    return __builtin_shuffle(__builtin_shuffle(a, b, ab), c, abc);
+}
+template <typename V, typename E> inline void rows_to_xyz(const E *q, V &x, V &y, V &z) {
+    constexpr int L = kLanes<V, E>;
+    V a = load_vec<V>(q), b = load_vec<V>(q + L), c = load_vec<V>(q + 2 * L);
+    x = rows3_component<0, V, E>(a, b, c);
+    y = rows3_component<1, V, E>(a, b, c);
+    z = rows3_component<2, V, E>(a, b, c);
+}
+// Output vector r, lane e: row j = (r L + e) / 3, component k = (r L + e) % 3: x and y first,
+// then z.
+template <int R, typename V, typename E> inline V rows3_out(const V &x, const V &y, const V &z) {
+    constexpr int L = kLanes<V, E>;
+    constexpr auto xy = BSDFKIT_INDEX(V, E, (R * L + e) % 3 == 0 ? (R * L + e) / 3 : (R * L + e) % 3 == 1 ? L + (R * L + e) / 3 : 0);
+    constexpr auto xyz = BSDFKIT_INDEX(V, E, (R * L + e) % 3 == 2 ? L + (R * L + e) / 3 : e);
+    return __builtin_shuffle(__builtin_shuffle(x, y, xy), z, xyz);
+}
+template <typename V, typename E> inline void xyz_to_rows(E *q, const V &x, const V &y, const V &z) {
+    constexpr int L = kLanes<V, E>;
+    const V o[3] = {rows3_out<0, V, E>(x, y, z), rows3_out<1, V, E>(x, y, z), rows3_out<2, V, E>(x, y, z)};
+    for (int r = 0; r < 3; ++r) std::memcpy(q + r * L, &o[r], sizeof(V));
+}
+template <typename F> using group_t = std::conditional_t<std::is_same_v<F, float>, v16f, v8d>;
+template <typename F> inline constexpr bool kHasGroup = true;
 template <typename F> inline constexpr bool kHasRows4 = true;
 #else
-// AVX2 / SSE: float32 in groups of 8. Slots of the three vectors a, b, c (rows 0..7: a = x0 y0
-// z0 x1 y1 z1 x2 y2, ...) that hold x, y, z: a {x: 0 3 6, y: 1 4 7, z: 2 5}, b {z: 0 3 6, x: 1
-// 4 7, y: 2 5}, c {y: 0 3 6, z: 1 4 7, x: 2 5}. The blends gather one component's slots (mx =
-// x0 x3 x6 x1 x4 x7 x2 x5, my, mz); the permutation puts them in order.
+// AVX2 / SSE: float32 in groups of 8, rows of 3 by blends and one permutation per component
+// (AVX2 has no two-source permutation). Slots of the three vectors a, b, c (rows 0..7: a = x0
+// y0 z0 x1 y1 z1 x2 y2, ...) that hold x, y, z: a {x: 0 3 6, y: 1 4 7, z: 2 5}, b {z: 0 3 6,
+// x: 1 4 7, y: 2 5}, c {y: 0 3 6, z: 1 4 7, x: 2 5}. The blends gather one component's slots
+// (mx = x0 x3 x6 x1 x4 x7 x2 x5, my, mz); the permutation puts them in order.
 inline void rows_to_xyz(const float *q, v8f &x, v8f &y, v8f &z) {
-    v8f a, b, c;
-    std::memcpy(&a, q, 32);
-    std::memcpy(&b, q + 8, 32);
-    std::memcpy(&c, q + 16, 32);
+    v8f a = load_vec<v8f>(q), b = load_vec<v8f>(q + 8), c = load_vec<v8f>(q + 16);
     v8f ab_x = BSDFKIT_SHUF2(v8i, a, b, 0, 9, 2, 3, 12, 5, 6, 15), ab_y = BSDFKIT_SHUF2(v8i, a, b, 0, 1, 10, 3, 4, 13, 6, 7),
         ab_z = BSDFKIT_SHUF2(v8i, a, b, 8, 1, 2, 11, 4, 5, 14, 7);
     v8f mx = BSDFKIT_SHUF2(v8i, ab_x, c, 0, 1, 10, 3, 4, 13, 6, 7), my = BSDFKIT_SHUF2(v8i, ab_y, c, 8, 1, 2, 11, 4, 5, 14, 7),
@@ -212,19 +193,11 @@ inline void xyz_to_rows(float *q, v8f x, v8f y, v8f z) {
     std::memcpy(q + 8, &b, 32);
     std::memcpy(q + 16, &c, 32);
 }
-inline void pairs_to_xy(const float *q, v8f &x, v8f &y) {
-    v8f a, b;
-    std::memcpy(&a, q, 32);
-    std::memcpy(&b, q + 8, 32);
-    x = BSDFKIT_SHUF2(v8i, a, b, 0, 2, 4, 6, 8, 10, 12, 14);
-    y = BSDFKIT_SHUF2(v8i, a, b, 1, 3, 5, 7, 9, 11, 13, 15);
-}
 template <typename F> using group_t = v8f;
 template <typename F> inline constexpr bool kHasGroup = std::is_same_v<F, float>;
 template <typename F> inline constexpr bool kHasRows4 = false; // AVX2: the stack transposition
-template <typename V, typename E> void rows4_to_xyzw(const E *q, V (&o)[4]);     // (AVX-512 only)
-template <typename V, typename E> void xyzw_to_rows4(E *q, const V (&v)[4]);
 #endif
+#undef BSDFKIT_INDEX
 } // namespace detail_rows
 #endif
 // Whether rows of 3 and pairs move through the register shuffles, and the group's lanes.
