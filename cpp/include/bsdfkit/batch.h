@@ -202,9 +202,8 @@ template <typename F> inline constexpr bool kHasRows4 = false; // AVX2: the stac
 #endif
 // Whether rows of 3 and pairs move through the register shuffles, and the group's lanes.
 #if BSDFKIT_SHUFFLE_ROWS
-template <typename F> inline constexpr bool kShuffleRows =
-    detail_rows::kHasGroup<F> && kPacketWidth % (sizeof(detail_rows::group_t<F>) / sizeof(F)) == 0;
-template <typename F> inline constexpr int64_t kGroup = int64_t(sizeof(detail_rows::group_t<F>) / sizeof(F));
+template <typename F> inline constexpr int64_t kGroup = detail_rows::kLanes<detail_rows::group_t<F>, F>;
+template <typename F> inline constexpr bool kShuffleRows = detail_rows::kHasGroup<F> && kPacketWidth % kGroup<F> == 0;
 #else
 template <typename F> inline constexpr bool kShuffleRows = false;
 #endif
@@ -215,6 +214,11 @@ template <typename F> inline constexpr bool kShuffleRows = false;
 // ymm stores is not store-forwarded (a ~15-cycle stall per packet on AVX-512).
 template <typename F> inline void group_into(Packet<F> &dst, int64_t g, const detail_rows::group_t<F> &v) {
     std::memcpy(reinterpret_cast<char *>(&dst) + g * sizeof(F), &v, sizeof(v));
+}
+template <typename F> inline detail_rows::group_t<F> group_of(const Packet<F> &src, int64_t g) {
+    detail_rows::group_t<F> v;
+    std::memcpy(&v, reinterpret_cast<const char *>(&src) + g * sizeof(F), sizeof(v));
+    return v;
 }
 template <typename F> inline void rows_to_packets(const F *q, Packet<F> &x, Packet<F> &y, Packet<F> &z) {
     using G = detail_rows::group_t<F>;
@@ -236,14 +240,8 @@ template <typename F> inline void pairs_to_packets(const F *q, Packet<F> &x, Pac
     }
 }
 template <typename F> inline void packets_to_rows(F *q, const Packet<F> &x, const Packet<F> &y, const Packet<F> &z) {
-    using G = detail_rows::group_t<F>;
-    for (int64_t g = 0; g < kW<F>; g += kGroup<F>) {
-        G a, b, c;
-        std::memcpy(&a, reinterpret_cast<const char *>(&x) + g * sizeof(F), sizeof(G));
-        std::memcpy(&b, reinterpret_cast<const char *>(&y) + g * sizeof(F), sizeof(G));
-        std::memcpy(&c, reinterpret_cast<const char *>(&z) + g * sizeof(F), sizeof(G));
-        detail_rows::xyz_to_rows(q + 3 * g, a, b, c);
-    }
+    for (int64_t g = 0; g < kW<F>; g += kGroup<F>)
+        detail_rows::xyz_to_rows(q + 3 * g, group_of(x, g), group_of(y, g), group_of(z, g));
 }
 #endif
 
@@ -324,10 +322,9 @@ template <int C, typename F> inline void store_lanes(F *p, int64_t i, int64_t cn
     }
     if constexpr (C == 4 && kShuffleRows<F> && detail_rows::kHasRows4<F>) {
         if (cnt == W) {
-            using G = detail_rows::group_t<F>;
             for (int64_t g = 0; g < W; g += kGroup<F>) {
-                G x[4];
-                for (int c = 0; c < 4; ++c) std::memcpy(&x[c], reinterpret_cast<const char *>(&v[c]) + g * sizeof(F), sizeof(G));
+                const detail_rows::group_t<F> x[4] = {group_of(v[0], g), group_of(v[1], g), group_of(v[2], g),
+                                                      group_of(v[3], g)};
                 detail_rows::xyzw_to_rows4(q + 4 * g, x);
             }
             return;
@@ -607,6 +604,18 @@ template <typename F> inline int64_t count_bad_lanes(const Packet<F> &v) {
     return int64_t(drjit::count(!((v >= F(0)) & (v <= F(1)))));
 }
 
+// The sample kernels' uniforms of lanes [i, i + cnt) (uc, and u's pairs; padding 0), their
+// lanes outside [0, 1] or NaN added to *buc / *bu.
+template <typename F>
+inline void load_uniforms(const F *uc, const F *u, int64_t i, int64_t cnt, Packet<F> *c, Packet<F> (&uv)[2],
+                          int64_t *buc, int64_t *bu) {
+    static constexpr F pad_u[2] = {F(0), F(0)};
+    load_lanes<2, 2>(u, i, cnt, pad_u, uv);
+    *c = load1_lanes(uc, i, cnt, F(0));
+    *buc += count_bad_lanes(*c);
+    *bu += count_bad_lanes(uv[0]) + count_bad_lanes(uv[1]);
+}
+
 // sample_chunk on the packet path: the same outputs and rules, kPacketWidth lanes at a time, in
 // one pass: the uniforms are checked on the loaded packets and the byte outputs (flags, valid,
 // pdf_is_proportional) written from registers (the scalar path's staging pass is not needed).
@@ -620,16 +629,12 @@ inline void sample_chunk_packet(const Model &m, const Sampler &smp, bool model_o
     using P = Packet<F>;
     int64_t bo = 0, buc = 0, bu = 0;
     const Mask<P> model_mask(model_ok);
-    static constexpr F pad_u[2] = {F(0), F(0)};
     for (int64_t i = b; i < e; i += kW<F>) {
         int64_t cnt = std::min(kW<F>, e - i);
         Vec3<P> o = load3_lanes<SO>(wo, i, cnt);
         bo += count_not_unit(o);
-        P uv[2];
-        load_lanes<2, 2>(u, i, cnt, pad_u, uv);
-        P c = load1_lanes(uc, i, cnt, F(0));
-        buc += count_bad_lanes(c);
-        bu += count_bad_lanes(uv[0]) + count_bad_lanes(uv[1]);
+        P c, uv[2];
+        load_uniforms(uc, u, i, cnt, &c, uv, &buc, &bu);
         // Uniforms on [0, 1) (OneMinusEpsilon), as in bsdf_sample.
         BSDFSample<P> s = smp(m, o, clamp_uniform(c), clamp_uniform(Point2<P>{uv[0], uv[1]}));
         Mask<P> ok = sample_accepted(s, o) & model_mask; // bsdf_sample's rule (core/bsdf.h)

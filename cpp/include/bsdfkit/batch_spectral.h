@@ -627,16 +627,12 @@ void sample_spectral_packets(const SM &m, const F *wo, int64_t so, const F *uc, 
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
         int64_t bo = 0, buc = 0, bu = 0;
         const SM mloc = m;
-        static constexpr F pad_u[2] = {F(0), F(0)};
         for (int64_t i = b; i < e; i += kW<F>) {
             int64_t cnt = std::min(kW<F>, e - i);
             Vec3<P> o = load_dirs<kAnyLayout>(dwo, i, cnt);
             bo += count_not_unit(o);
-            P uv[2];
-            load_lanes<2, 2>(u, i, cnt, pad_u, uv);
-            P c = load1_lanes(uc, i, cnt, F(0));
-            buc += count_bad_lanes(c);
-            bu += count_bad_lanes(uv[0]) + count_bad_lanes(uv[1]);
+            P c, uv[2];
+            load_uniforms(uc, u, i, cnt, &c, uv, &buc, &bu);
             LambdaLanes l;
             load_lambda_lanes(lam, sl, i, cnt, l, bad);
             Mask<P> term;
