@@ -100,12 +100,21 @@ def _costs_for(model, configs, costs):
 
 #: Relative cost differences below this are measurement noise of the cost table: among the
 #: candidates within (1 + COST_RESOLUTION) x the cheapest cost, simplify takes the one that drops
-#: the most lobes, then the most accurate.
+#: the most lobes, then the one that changes the fewest knobs of the input (so that simplifying
+#: a simplified model returns it unchanged, rather than trading knobs at equal cost on float32
+#: rounding noise in the errors), then the most accurate.
 COST_RESOLUTION = 0.05
 
 
-def _pick(cands, costs, configs, err):
-    """Index of the chosen candidate and how it was ranked (see :func:`simplify`)."""
+def _n_changes(c, ref):
+    """Knobs whose setting differs between two configurations (moot ones not counted)."""
+    return sum(1 for k, lab in c.labels.items()
+               if lab is not None and ref.labels.get(k) is not None and c.index[k] != ref.index[k])
+
+
+def _pick(cands, costs, configs, err, ref=None):
+    """Index of the chosen candidate and how it was ranked (see :func:`simplify`); ref: the
+    input's configuration (ties in cost go to the fewest changes from it)."""
     if all(c is None for c in costs):
         def rank(i):   # most knobs at cheaper settings; ties: the most lobes dropped, then the closest
             r = configs[i].registry_rank
@@ -115,7 +124,8 @@ def _pick(cands, costs, configs, err):
     cmin = min(c.values())
     near = [i for i in cands if c[i] <= cmin * (1 + COST_RESOLUTION)]
     drops = {i: sum(v == "drop" for v in configs[i].labels.values()) for i in near}
-    best = min(near, key=lambda i: (-drops[i], err[i], configs[i].registry_rank))
+    moved = {i: 0 if ref is None else _n_changes(configs[i], ref) for i in near}
+    best = min(near, key=lambda i: (-drops[i], moved[i], err[i], configs[i].registry_rank))
     return best, "cost table" + (" (this configuration is missing: assumed as costly as the most accurate)"
                                  if costs[best] is None else "")
 

@@ -413,7 +413,8 @@ def simplify(model, tol, metric: str | None = None, directions=None, seed: int =
     "Cheapest" is ranked by the shipped cost table (bench/tradeoff.py), not by a timing taken
     now, so the result is deterministic for a given seed: among the configurations within tol
     that cost at most (1 + ``COST_RESOLUTION``) x the cheapest one, the one dropping the most
-    lobes, then the one closest to the input; configurations missing from the table count as
+    lobes, then the one changing the fewest knobs of the input (so a simplified model simplifies
+    to itself), then the one closest to the input; configurations missing from the table count as
     costing as much as the most accurate one, and a family without a table is ranked by registry
     order (most knobs at cheaper settings). ``tol = 0`` returns the input unchanged (float64).
     costs: a cost table in the :func:`knob_costs` format (e.g. ``bench/tradeoff.py`` run on
@@ -466,7 +467,7 @@ def simplify(model, tol, metric: str | None = None, directions=None, seed: int =
     none_within = not cands
     if none_within:   # stochastic input: even the most accurate configuration misses tol
         cands = [0]   # configurations()[0]: every knob at its most accurate setting
-    best, ranked_by = _pick(cands, costs, ev.configs, [e[col] for e in ev.errors])
+    best, ranked_by = _pick(cands, costs, ev.configs, [e[col] for e in ev.errors], ev.reference)
     cfg, err = ev.configs[best], ev.errors[best]
     # explanations: each knob's error alone (the input with only that knob changed)
     single = {}
