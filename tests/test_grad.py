@@ -115,7 +115,12 @@ def test_grad_against_drjit_ad(name, rng):
     # the value is eval's, bit for bit (the dual number's value path is the double arithmetic)
     np.testing.assert_array_equal(f, model.eval(wo, wi))
     f_ref, g_ref = ref(wo, wi)
-    np.testing.assert_allclose(f, f_ref, rtol=1e-10, atol=1e-300)
+    # Near a microfacet's critical angle cos_t = sqrt(1 - sin_t^2) cancels: the float64 value's
+    # condition number reaches ~1e8 there (measured: the dielectric eta 0.75 pair with cos_t
+    # 5.6e-5 is 6e-9 from its 50-digit value in both our and the reference's operation order).
+    # So: 1e-10 on all but 1 pair in 1000, 1e-7 on every pair.
+    f_err = np.abs(f - f_ref) / np.maximum(np.abs(f_ref), 1e-300)
+    assert np.quantile(f_err, 0.999) <= 1e-10 and f_err.max() <= 1e-7, (np.quantile(f_err, 0.999), f_err.max())
     assert np.count_nonzero(g_ref) > g_ref.size // 4 or "near-smooth" in name or "diffuse" in name
     err = _rel_err(g, g_ref)
     _record(name, "Dr.Jit AD", err)

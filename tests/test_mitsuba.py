@@ -125,7 +125,11 @@ def test_rough_dielectric_eval_pdf(model, lower, mode, rng):
     # 1.6e-4 (eta 2.4): tolerance 3e-4. The exact float64 check is test_correlated_dielectric_*
     # and the separable-masking f64 check below, against the independent Dr.Jit closed form.
     graze = (np.abs(wo[ok, 2]) < 1e-2) | (np.abs(wi[ok, 2]) < 1e-2)
-    tol = 3e-4 if lower else 3e-5
+    # Above: Mitsuba's float32 pdf of the sharp lobe (alpha 0.05) on importance-sampled pairs
+    # reaches p99.9 3.6e-5 (measured over rng seeds 0-5, with either visible-normal sampler
+    # drawing the pairs); our float64 values equal the float64 closed form to 1e-8
+    # (test_separable_dielectric_f64_against_drjit): tolerance 5e-5.
+    tol = 3e-4 if lower else 5e-5
     for sel, tol, tag in ((~graze, tol, ""), (graze, 5e-4, " grazing")):
         _check(f[ok][sel], f_mi[ok][sel], tol, f"{model!r} f{tag}", fcond[sel])
         _check(p[ok][sel], p_mi[ok][sel], tol, f"{model!r} pdf{tag}", pcond[sel])

@@ -75,7 +75,10 @@ def test_cheapest_model_comes_back_unchanged():
 
 def test_tradeoff_separates_noise_and_bias():
     model = bk.CoatedConductor.from_metal("Cu", conductor_alpha=0.3, interface_alpha=0.02, thickness=0.1)
-    t = bk.tradeoff(model, n=64, measure=False)
+    # 256 directions: the 1-sample noise of this sharp coat (alpha 0.02) is heavy-tailed, and over
+    # 64 directions the ratio below spread over 2.6-16.8 across seeds (3.8-15.2 before the
+    # spherical-cap sampler); over 256 it is 6.5-8.4 (measured, seeds 0-3)
+    t = bk.tradeoff(model, n=256, measure=False)
     assert {"rms_err", "noise", "bias"} <= set(t.columns) and t.stochastic
     rows = {(r["method"], r["n_samples"], r["max_depth"], r["dtype"], r["mis"], r["masking"]): r
             for r in t.to_records()}

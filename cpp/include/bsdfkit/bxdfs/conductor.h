@@ -83,29 +83,39 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3,
     // Fresnel / denom per channel with the fewest divisions: the exact term's own denominator
     // joins denom (one division per channel); the polynomial knobs share one reciprocal.
     template <typename V> Spectrum<V, NC> fresnel_over(V cos_i, V denom) const {
+        return fresnel_over_scaled(cos_i, V(1), denom);
+    }
+    // The same with cos_i |h| = c and len2 = |h|^2 for a half vector h that was never normalized,
+    // and denom_h = denom |h|^4 (D_denom with len2): F / denom = F |h|^4 / denom_h. The exact term
+    // is homogeneous in h (FrComplexRatioScaled); the polynomial knobs need the cosine itself.
+    template <typename V> Spectrum<V, NC> fresnel_over_scaled(V c, V len2, V denom_h) const {
         Spectrum<V, NC> r;
+        V l4 = sqr(len2);
         if constexpr (FR == ConductorFresnel::Exact) {
-            for (int c = 0; c < NC; ++c) {
+            for (int ch = 0; ch < NC; ++ch) {
                 V num, den;
-                FrComplexRatio(cos_i, eta[c], k[c], &num, &den);
-                r[c] = num / (den * denom);
+                FrComplexRatioScaled(c, len2, eta[ch], k[ch], &num, &den);
+                r[ch] = num * l4 / (den * denom_h);
             }
         } else {
-            r = fresnel(cos_i) * (V(1) / denom);
+            r = fresnel(c / sqrt(len2)) * (l4 / denom_h);
         }
         return r;
     }
 
-    // Torrance-Sparrow: f = D(wm) F(wo.wm) G(wo, wi) / (4 cos_o cos_i), wm = normalize(wo + wi),
-    // as F / (D_denom G_denom) (core/microfacet.h): Exact 4 divisions and 9 square roots per
-    // element (1 + 3 and 3 + 6), Schlick / F82 2 and 3.
+    // Torrance-Sparrow: f = D(wm) F(wo.wm) G(wo, wi) / (4 cos_o cos_i), wm = h / |h|, h = wo + wi,
+    // as F / (D_denom G_denom) (core/microfacet.h) written in h (D_denom with len2,
+    // fresnel_over_scaled), so h is never normalized: Exact 3 divisions and 8 square roots per
+    // element (3 + 0 and 2 + 6), Schlick / F82 2 and 3.
     template <typename V> Spectrum<V, NC> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
         V cos_o = AbsCosTheta(wo), cos_i = AbsCosTheta(wi);
         Mask<V> active = SameHemisphere(wo, wi) & Mask<V>(!mfd.effectively_smooth());
-        Vec3<V> wm = reflection_half_vector(wi, wo, active);
-        V denom = mfd.D_denom(wm, active) *
+        Vec3<V> h = wi + wo;
+        V len2 = length_squared(h);
+        active &= len2 > V(0);
+        V denom = mfd.D_denom(h, active, len2) *
                   mfd.G_denom(cos_o, cos_i, mfd.smith_root(wo), mfd.smith_root(wi));
-        Spectrum<V, NC> fr = fresnel_over(abs(dot(wo, wm)), denom);
+        Spectrum<V, NC> fr = fresnel_over_scaled(abs(dot(wo, h)), len2, denom);
         for (int c = 0; c < NC; ++c) fr[c] = zero_unless(active, fr[c]);
         return fr;
     }
@@ -152,14 +162,17 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3,
     }
 
     // Visible-normal density mapped through the reflection Jacobian 1 / (4 |wo.wm|):
-    // G1(wo) D(wm) / (4 cos_o) = 1 / (D_denom 2 (cos_o + R_o)). 2 divisions, 2 square roots.
+    // G1(wo) D(wm) / (4 cos_o) = 1 / (D_denom(wm) 2 (cos_o + R_o)) = |h|^4 / (D_denom(h) 2 (cos_o
+    // + R_o)) with h = wo + wi never normalized (D_denom with len2). 1 division, 1 square root.
     template <typename V>
     V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
         Mask<V> active = SameHemisphere(wo, wi) &
                          Mask<V>(((sample_flags & RT_Reflection) != 0) & !mfd.effectively_smooth());
-        Vec3<V> wm = reflection_half_vector(wo, wi, active);
-        V dd = mfd.D_denom(wm, active);
-        V p = V(1) / (dd * mfd.reflection_pdf_denom(AbsCosTheta(wo), mfd.smith_root(wo)));
+        Vec3<V> h = wo + wi;
+        V len2 = length_squared(h);
+        active &= len2 > V(0);
+        V dd = mfd.D_denom(h, active, len2);
+        V p = sqr(len2) / (dd * mfd.reflection_pdf_denom(AbsCosTheta(wo), mfd.smith_root(wo)));
         return select(active, p, V(0));
     }
 

@@ -59,14 +59,13 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
         restrict_lobes(R, T, sample_flags, pr, pt);
     }
 
-    // Generalized half vector of a pair, facing +z, and the relative IOR etap along wi.
-    // Returns false where pbrt-v4 returns 0: a horizon direction, a degenerate half vector,
-    // or a back-facing microfacet.
-    // *len2 = |wi etap + wo|^2, from which the transmission Jacobian's denominator follows
-    // without cancellation: (wi.wm + wo.wm / etap)^2 = (h.wm / etap)^2 = |h|^2 / etap^2.
-    // One division, one square root.
+    // Generalized half vector h = wi etap + wo of a pair, turned to face +z but NOT normalized
+    // (wm = h / |h|), *len2 = |h|^2, and the relative IOR etap along wi. Every term of f and
+    // pdf is homogeneous in h (FrDielectricRatioScaled, D_denom with len2), so the
+    // normalization's root and division are never needed. Returns false where pbrt-v4 returns
+    // 0: a horizon direction, a degenerate half vector, or a back-facing microfacet.
     template <typename V>
-    Mask<V> half_vector(const Vec3<V> &wo, const Vec3<V> &wi, Vec3<V> *wm, V *etap, V *len2_out) const {
+    Mask<V> half_vector(const Vec3<V> &wo, const Vec3<V> &wi, Vec3<V> *h_out, V *etap, V *len2_out) const {
         V cos_o = CosTheta(wo), cos_i = CosTheta(wi);
         Mask<V> reflect = cos_i * cos_o > V(0);
         V eta_side = select(cos_o > V(0), V(eta), V(F(1) / eta));
@@ -75,35 +74,35 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
         V len2 = length_squared(h);
         *len2_out = len2;
         Mask<V> ok = (cos_i != V(0)) & (cos_o != V(0)) & (len2 > V(0));
-        V inv_len = V(1) / sqrt(select(ok, len2, V(1)));
-        V sgn = select(h.z < V(0), -inv_len, inv_len); // normalize and face +z in one scale
-        h = h * sgn;
-        *wm = h;
+        h = select(h.z < V(0), -h, h);
+        *h_out = h;
         // Discard back-facing microfacets (Walter 2007 sec. 5.1)
         ok = ok & (dot(h, wi) * cos_i >= V(0)) & (dot(h, wo) * cos_o >= V(0));
         return ok;
     }
 
-    // Reflection D G F / |4 cos_i cos_o| = F / (D_denom G_denom); transmission (Walter 2007
-    // eq. 21) D G (1 - F) |wi.wm wo.wm| / (|cos_i cos_o| (wi.wm + wo.wm/etap)^2) =
-    // 4 (1 - F) |wi.wm wo.wm| / (D_denom G_denom |h|^2 / etap^2) (core/microfacet.h;
-    // half_vector), Radiance mode dividing by etap^2, which cancels the etap^2. F and 1 - F are
-    // FrDielectricRatio's numerators over its denominator, which joins the value's one division:
-    // 2 divisions and 4 square roots per element in all.
+    // With wm = h / |h|, L = |h|^2 and every term written in h (half_vector): reflection
+    // D G F / |4 cos_i cos_o| = F / (D_denom(wm) G_denom) = r L^2 / (den D_denom(h) G_denom);
+    // transmission (Walter 2007 eq. 21) D G (1 - F) |wi.wm wo.wm| / (|cos_i cos_o|
+    // (wi.wm + wo.wm/etap)^2) = 4 (1 - F) |wi.wm wo.wm| etap^2 / (D_denom(wm) G_denom L)
+    // = 4 t |wi.h wo.h| etap^2 / (den D_denom(h) G_denom) (core/microfacet.h), Radiance mode
+    // dividing by etap^2, which cancels it. r, t, den: FrDielectricRatioScaled's numerators and
+    // denominator at wo.h. 1 division and 3 square roots per element in all.
     template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode mode) const {
         // Delta lobes evaluate to 0: folded into the mask (no early return).
-        Vec3<V> wm;
+        Vec3<V> h;
         V etap, len2;
-        Mask<V> active = half_vector(wo, wi, &wm, &etap, &len2) & Mask<V>(!is_smooth());
+        Mask<V> active = half_vector(wo, wi, &h, &etap, &len2) & Mask<V>(!is_smooth());
         V cos_o = CosTheta(wo), cos_i = CosTheta(wi);
         Mask<V> reflect = cos_i * cos_o > V(0);
         V r, t, den;
-        V wo_wm = dot(wo, wm);
-        FrDielectricRatio(wo_wm, eta, &r, &t, &den); // t = (1 - F) den without cancellation
-        V dg = mfd.D_denom(wm, active) * mfd.G_denom(abs(cos_o), abs(cos_i), mfd.smith_root(wo), mfd.smith_root(wi));
-        V ft = V(4) * t * abs(dot(wi, wm) * wo_wm);
+        V wo_h = dot(wo, h);
+        FrDielectricRatioScaled(wo_h, len2, eta, &r, &t, &den); // t = (1 - F) den without cancellation
+        V dg = mfd.D_denom(h, active, len2) *
+               mfd.G_denom(abs(cos_o), abs(cos_i), mfd.smith_root(wo), mfd.smith_root(wi));
+        V ft = V(4) * t * abs(dot(wi, h) * wo_h);
         ft = mode == TransportMode::Radiance ? ft : ft * sqr(etap);
-        V v = select(reflect, r, ft) / (den * dg * select(reflect, V(1), len2));
+        V v = select(reflect, r * sqr(len2), ft) / (den * dg);
         return Spectrum<V>(zero_unless(active, v));
     }
 
@@ -179,23 +178,24 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
         return s;
     }
 
-    // Reflection pr / (D_denom P (pr + pt)); transmission 4 |wo.wm| |wi.wm| etap^2 pt /
-    // (D_denom P |h|^2 (pr + pt)), P = 2 (cos_o + R_o). The lobe probabilities are a ratio, so
-    // FrDielectricRatio's numerators serve without its denominator: 2 divisions, 3 square roots.
+    // Reflection pr / (D_denom(wm) P (pr + pt)) = pr L^2 / (D_denom(h) P (pr + pt));
+    // transmission 4 |wo.wm| |wi.wm| etap^2 pt / (D_denom(wm) P L (pr + pt)) =
+    // 4 |wo.h| |wi.h| etap^2 pt / (D_denom(h) P (pr + pt)), P = 2 (cos_o + R_o), h and L as in f.
+    // The lobe probabilities are a ratio, so FrDielectricRatioScaled's numerators serve without
+    // its denominator: 1 division, 2 square roots.
     template <typename V>
     V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
-        Vec3<V> wm;
+        Vec3<V> h;
         V etap, len2;
-        Mask<V> ok = half_vector(wo, wi, &wm, &etap, &len2) & Mask<V>(!is_smooth());
+        Mask<V> ok = half_vector(wo, wi, &h, &etap, &len2) & Mask<V>(!is_smooth());
         Mask<V> reflect = CosTheta(wi) * CosTheta(wo) > V(0);
         V r, t, den, pr, pt;
-        V wo_wm = dot(wo, wm);
-        FrDielectricRatio(wo_wm, eta, &r, &t, &den); // R : T = r : t
+        V wo_h = dot(wo, h);
+        FrDielectricRatioScaled(wo_h, len2, eta, &r, &t, &den); // R : T = r : t
         lobe_probs(r, t, sample_flags, &pr, &pt);
-        V dd = mfd.D_denom(wm, ok);
-        V num = select(reflect, pr, V(4) * abs(wo_wm * dot(wi, wm)) * sqr(etap) * pt);
-        V dn = dd * mfd.reflection_pdf_denom(AbsCosTheta(wo), mfd.smith_root(wo)) * select(reflect, V(1), len2) *
-               (pr + pt);
+        V dd = mfd.D_denom(h, ok, len2);
+        V num = select(reflect, pr * sqr(len2), V(4) * abs(wo_h * dot(wi, h)) * sqr(etap) * pt);
+        V dn = dd * mfd.reflection_pdf_denom(AbsCosTheta(wo), mfd.smith_root(wo)) * (pr + pt);
         ok &= ((pr + pt) > V(0)); // len2 > 0 is in half_vector's ok
         return zero_unless(ok, num / dn);
     }

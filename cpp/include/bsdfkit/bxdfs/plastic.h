@@ -333,43 +333,51 @@ template <typename F> struct PlasticBxDF {
         return to_lanes<V>(diffuse) * (to * ti / (den_o * den_i));
     }
 
-    // What the rough coating's f and pdf share at (o, i): the half vector, 1 / D and Smith's roots.
+    // What the rough coating's f and pdf share at (o, i): the half vector h = o + i, never
+    // normalized (wm = h / |h|; every term below is written in h), its |h|^4, 1 / D and Smith's roots.
     template <typename V> struct Coat {
         Mask<V> ok;      // the coating lobe is non-zero here (D > 0, o + i != 0)
-        V cos_oh, dd, root_o, root_i;
+        V c_oh;          // o.wm |h|
+        V len2, l4;      // |h|^2, |h|^4
+        V dd;            // D_denom(wm) |h|^4 (D_denom with len2)
+        V root_o, root_i;
     };
     template <typename V> Coat<V> coat(const Vec3<V> &o, const Vec3<V> &i) const {
         Coat<V> c;
-        c.ok = Mask<V>(true);
-        Vec3<V> wm = reflection_half_vector(o, i, c.ok);
-        c.dd = mfd.D_denom(wm, c.ok);
-        c.cos_oh = dot(o, wm);
+        Vec3<V> h = o + i;
+        c.len2 = length_squared(h);
+        c.l4 = sqr(c.len2);
+        c.ok = c.len2 > V(0);
+        c.dd = mfd.D_denom(h, c.ok, c.len2);
+        c.c_oh = dot(o, h);
         c.root_o = mfd.smith_root(o);
         c.root_i = mfd.smith_root(i);
         return c;
     }
 
     // Rough coating, o and i upper: diffuse T(cos_o) T(cos_i) (table) + Ks D F G / (4 cos_o cos_i)
-    // as Ks r / (den D_denom G_denom) (Fresnel numerator over its denominator; core/microfacet.h):
+    // as Ks r / (den D_denom(wm) G_denom) = Ks r |h|^4 / (den D_denom(h) G_denom) (the Fresnel
+    // numerator over its denominator, both in h: FrDielectricRatioScaled; core/microfacet.h):
     // 1 division.
     template <typename V>
     Spectrum<V> f_rough(const Vec3<V> &o, const Vec3<V> &i, V T_o, const Coat<V> &c) const {
         V r, t, den;
-        FrDielectricRatio(c.cos_oh, eta, &r, &t, &den);
-        V coat_v = r / (den * c.dd * mfd.G_denom(o.z, i.z, c.root_o, c.root_i));
+        FrDielectricRatioScaled(c.c_oh, c.len2, eta, &r, &t, &den);
+        V coat_v = r * c.l4 / (den * c.dd * mfd.G_denom(o.z, i.z, c.root_o, c.root_i));
         Spectrum<V> v = to_lanes<V>(diffuse) * (T_o * transmittance(i.z));
         return v + to_lanes<V>(Ks) * select(c.ok, coat_v, V(0));
     }
 
-    // Rough coating, o and i upper: the mixture density (1 - p) cos_i / pi + p / (D_denom
+    // Rough coating, o and i upper: the mixture density (1 - p) cos_i / pi + p / (D_denom(wm)
     // 2 (cos_o + root_o)) (visible normals through the reflection Jacobian), p = ps / (ps + pd),
-    // over one common denominator: 1 division.
+    // over one common denominator x = D_denom(h) 2 (cos_o + root_o) = D_denom(wm) 2 (...) |h|^4:
+    // 1 division.
     template <typename V> V pdf_rough(const Vec3<V> &o, const Vec3<V> &i, V T_o, const Coat<V> &c) const {
         V ps, pd;
         lobe_weights(V(1) - T_o, T_o, &ps, &pd);
         V x = select(c.ok, c.dd * mfd.reflection_pdf_denom(o.z, c.root_o), V(1));
         ps = select(c.ok, ps, V(0));
-        return (pd * CosineHemispherePDF(i.z) * x + ps) / ((ps + pd) * x);
+        return (pd * CosineHemispherePDF(i.z) * x + ps * c.l4) / ((ps + pd) * x);
     }
 
     // Two-sided: o, i mirrored into wo's hemisphere (the sign s applies to wi as well).

@@ -13,16 +13,21 @@ namespace bsdfkit {
 // denominator 2 a^2 b^2 serve both. eta is a scalar or V. FrDielectricRatio gives the two
 // numerators over that denominator (R = r / den, T = t / den; den = 1 where R = 1, T = 0), for
 // callers that fold den into a division of their own.
-template <typename F, typename E> inline void FrDielectricRatio(F cos_i, E eta_, F *r_num, F *t_num, F *den) {
-    cos_i = clamp(cos_i, F(-1), F(1));
+// FrDielectricRatioScaled takes the cosine times a length, c = cos_i |h|, and len2 = |h|^2 (a
+// half vector h that was never normalized): a, b, the numerators and den all scale by |h|^4, so
+// the ratios R and T do not change and the caller saves the normalization's root and division.
+template <typename F, typename E>
+inline void FrDielectricRatioScaled(F cos_i, F len2, E eta_, F *r_num, F *t_num, F *den) {
     Mask<F> inside = cos_i < F(0);
     F eta(eta_), inv_eta = F(E(1) / eta_); // a scalar division for a scalar eta
     F inv_etap = select(inside, eta, inv_eta);
     eta = select(inside, inv_eta, eta);
     cos_i = abs(cos_i);
-    F sin2_t = (F(1) - sqr(cos_i)) * sqr(inv_etap);
-    Mask<F> tir = sin2_t >= F(1);
-    F cos_t = safe_sqrt(F(1) - sin2_t);
+    // len2 sin^2 of the transmitted angle; cos^2 <= 1 (rounding past |h| clamped, a NaN kept)
+    F c2 = sqr(cos_i);
+    F sin2_t = (len2 - select(c2 > len2, len2, c2)) * sqr(inv_etap);
+    Mask<F> tir = sin2_t >= len2;
+    F cos_t = safe_sqrt(len2 - sin2_t);
     F a = eta * cos_i + cos_t, b = cos_i + eta * cos_t;     // parallel / perpendicular denominators
     F a2 = sqr(a), b2 = sqr(b);
     // a = b = 0 only at cos_i = 0 with cos_t = 0 (grazing TIR): then R = 1, T = 0.
@@ -31,6 +36,9 @@ template <typename F, typename E> inline void FrDielectricRatio(F cos_i, E eta_,
     *den = select(ok, F(2) * a2 * b2, F(1));
     *r_num = select(ok, sqr(pa) * b2 + sqr(pb) * a2, F(1));
     *t_num = select(ok, F(4) * eta * cos_i * cos_t * (a2 + b2), F(0));
+}
+template <typename F, typename E> inline void FrDielectricRatio(F cos_i, E eta, F *r_num, F *t_num, F *den) {
+    FrDielectricRatioScaled(clamp(cos_i, F(-1), F(1)), F(1), eta, r_num, t_num, den);
 }
 template <typename F, typename E> inline void FrDielectricRT(F cos_i, E eta, F *R, F *T) {
     F r, t, den;
@@ -70,13 +78,17 @@ template <typename F> inline Cplx<F> csqrt(Cplx<F> z) {
 // FrComplexRatio returns num and den so that a kernel can fold den into its own single
 // division. Two square roots (|z| = a^2 + b^2 and 2a = sqrt(2 (|z| + t0))); eta and k are
 // scalars or V.
-template <typename F, typename E> inline void FrComplexRatio(F cos_i, E eta, E k, F *num, F *den) {
-    cos_i = clamp(cos_i, F(0), F(1));
-    F cos2 = cos_i * cos_i, sin2 = F(1) - cos2;
+// FrComplexRatioScaled takes c = cos_i |h| >= 0 and len2 = |h|^2 for a half vector h that was
+// never normalized: t0, |z|, t1, t2 scale by |h|^2, t3, t4 by |h|^4, so num and den both by
+// |h|^6 and F does not change (as FrDielectricRatioScaled).
+template <typename F, typename E> inline void FrComplexRatioScaled(F c, F len2, E eta, E k, F *num, F *den) {
+    F cos2 = sqr(c);
+    cos2 = select(cos2 > len2, len2, cos2); // cos^2 <= 1 (rounding past |h|; a NaN kept)
+    F sin2 = len2 - cos2;
     E eta2 = eta * eta, k2 = k * k;
-    F t0 = F(eta2 - k2) - sin2;
-    F a2pb2 = sqrt(t0 * t0 + F(E(4) * eta2 * k2)); // a^2 + b^2
-    F t2 = safe_sqrt(F(2) * (a2pb2 + t0)) * cos_i;  // 2 a cos_i
+    F t0 = F(eta2 - k2) * len2 - sin2;
+    F a2pb2 = sqrt(t0 * t0 + F(E(4) * eta2 * k2) * sqr(len2)); // a^2 + b^2
+    F t2 = safe_sqrt(F(2) * (a2pb2 + t0)) * c;                  // 2 a cos_i
     F t1 = a2pb2 + cos2;
     F t3 = a2pb2 * cos2 + sin2 * sin2, t4 = t2 * sin2;
     // den = 0 only for eta~ = 1 at grazing incidence, where F = 1.
@@ -84,6 +96,9 @@ template <typename F, typename E> inline void FrComplexRatio(F cos_i, E eta, E k
     Mask<F> ok = d > F(0);
     *num = select(ok, (t1 - t2) * t3, F(1));
     *den = select(ok, d, F(1));
+}
+template <typename F, typename E> inline void FrComplexRatio(F cos_i, E eta, E k, F *num, F *den) {
+    FrComplexRatioScaled(clamp(cos_i, F(0), F(1)), F(1), eta, k, num, den);
 }
 template <typename F, typename E> inline F FrComplex(F cos_i, E eta, E k) {
     F num, den;

@@ -75,10 +75,12 @@ template <typename F> struct TrowbridgeReitz {
     // 1 / D(wm) for a unit wm: pi ax ay (cos^2 + (x/ax)^2 + (y/ay)^2)^2 (eq. 85 with
     // cos^4 (1 + tan^2 (...))^2 expanded; no phi, no tan). `active &=` D's safeguard (D = 0
     // where cos^4 < 1e-16, which includes the horizon).
-    template <typename V> V D_denom(const Vec3<V> &wm, Mask<V> &active) const {
+    // With len2 = |h|^2 for an h that was never normalized (wm = h / |h|), the same expression
+    // in h is D_denom(wm) |h|^4: the caller saves the normalization's root and division.
+    template <typename V> V D_denom(const Vec3<V> &wm, Mask<V> &active, V len2 = V(1)) const {
         using S = scalar_t<V>;
         V cos2 = Cos2Theta(wm);
-        active &= cos2 * cos2 >= V(1e-16);
+        active &= cos2 * cos2 >= V(1e-16) * sqr(len2);
         V q = cos2 + sqr(wm.x * V(S(1) / alpha_x)) + sqr(wm.y * V(S(1) / alpha_y));
         return V(Pi<S> * alpha_x * alpha_y) * sqr(q);
     }
@@ -97,19 +99,21 @@ template <typename F> struct TrowbridgeReitz {
     // reflection pdf's denominator without D, 2 (|cos| + R).
     template <typename V> V reflection_pdf_denom(V cos_o, V root_o) const { return V(2) * (cos_o + root_o); }
 
-    // Visible-normal sampling, hemisphere variant (Heitz 2018; pbrt-v4 Sample_wm).
+    // Visible-normal sampling by spherical caps (Dupuy & Benyoub 2023, "Sampling Visible GGX
+    // Normals with Spherical Caps"): in the stretched configuration the visible normals of the
+    // unit direction wh are h = c + wh with c uniform on the cap z > -wh.z of the unit sphere;
+    // unstretched and normalized, h is distributed as D_w (the same density as Heitz 2018's
+    // hemisphere method, pbrt-v4 Sample_wm, with 2 square roots and a division fewer).
+    // 1 - z = u.x (1 + wh.z) = a exactly, so sin^2 = a (2 - a) without cancellation at the pole.
     template <typename V> Vec3<V> Sample_wm(const Vec3<V> &w, Point2<V> u) const {
+        using S = scalar_t<V>;
         Vec3<V> wh = normalize(Vec3<V>(alpha_x * w.x, alpha_y * w.y, w.z));
         wh = select(wh.z < V(0), -wh, wh);
-        Mask<V> pole = wh.z >= V(0.99999);
-        Vec3<V> t1 = select(pole, Vec3<V>(V(1), V(0), V(0)), normalize(cross(Vec3<V>(V(0), V(0), V(1)), wh)));
-        Vec3<V> t2 = cross(wh, t1);
-        Point2<V> p = SampleUniformDiskPolar(u);
-        V h = sqrt(max_(V(0), V(1) - sqr(p.x)));
-        p.y = lerp((V(1) + wh.z) / V(2), h, p.y);
-        V pz = sqrt(max_(V(0), V(1) - sqr(p.x) - sqr(p.y)));
-        Vec3<V> nh = p.x * t1 + p.y * t2 + pz * wh;
-        return normalize(Vec3<V>(alpha_x * nh.x, alpha_y * nh.y, max_(V(1e-6), nh.z)));
+        V a = u.x * (V(1) + wh.z);
+        V sin_t = sqrt(max_(V(0), a * (V(2) - a))), sp, cp;
+        sincos_(V(2 * Pi<S>) * u.y, &sp, &cp);
+        Vec3<V> h(sin_t * cp + wh.x, sin_t * sp + wh.y, (V(1) - a) + wh.z);
+        return normalize(Vec3<V>(alpha_x * h.x, alpha_y * h.y, max_(V(1e-6), h.z)));
     }
 
     // Roughen near-specular lobes for path regularization (pbrt-v4 Regularize).
