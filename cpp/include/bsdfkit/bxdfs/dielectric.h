@@ -138,16 +138,17 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
 
     // Only the chosen lobe's value is computed. pdf = G1(wo) D / (4 cos_o) = 1 / (D_denom P)
     // for reflection, times 4 |wo.wm| |wi.wm| / (wi.wm + wo.wm / etap)^2 for transmission
-    // (the half-vector Jacobian), P = 2 (cos_o + R_o); f as in f(). 6 divisions (3 in
-    // Sample_wm, the lobe choice, f, pdf), 9 square roots per element.
+    // (the half-vector Jacobian), P = 2 (cos_o + R_o); f as in f(). The lobe probabilities are
+    // FrDielectricRatio's numerators r : t (= R : T), its denominator joins f's division:
+    // 4 divisions (2 in Sample_wm, f, pdf), 7 square roots per element.
     template <typename V>
     BSDFSample<V> sample_rough(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode mode, uint8_t sample_flags) const {
         BSDFSample<V> s;
         Vec3<V> wm = mfd.Sample_wm(wo, u);
         V wo_wm = dot(wo, wm);
-        V R, T, pr, pt;
-        FrDielectricRT(wo_wm, eta, &R, &T);
-        lobe_probs(R, T, sample_flags, &pr, &pt);
+        V r, t, den, pr, pt;
+        FrDielectricRatio(wo_wm, eta, &r, &t, &den); // R = r / den, T = t / den
+        lobe_probs(r, t, sample_flags, &pr, &pt);
         Mask<V> reflect = ChooseFirstLobe(uc, pr, pt);
         V cos_o = CosTheta(wo);
 
@@ -166,11 +167,11 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
         V wi_wm = dot(wi, wm);
         V jac_num = select(reflect, V(1), V(4) * abs(wo_wm * wi_wm));
         V jac_den = select(reflect, V(1), sqr(wi_wm + wo_wm * inv_etap));
-        V ft = mode == TransportMode::Radiance ? T * sqr(inv_etap) : T;
+        V ft = mode == TransportMode::Radiance ? t * sqr(inv_etap) : t;
         s.pdf = select(ok, select(reflect, pr, pt) * jac_num /
                                (dd * mfd.reflection_pdf_denom(abs_o, root_o) * jac_den * (pr + pt)), V(0));
         V gd = mfd.G_denom(abs_o, AbsCosTheta(wi), root_o, mfd.smith_root(wi));
-        s.f = Spectrum<V>(select(reflect, R, ft) * jac_num / (dd * gd * jac_den));
+        s.f = Spectrum<V>(select(reflect, r, ft) * jac_num / (den * dd * gd * jac_den));
         s.wi = wi;
         s.flags = lobe_flag<V>(GlossyReflection, !reflect);
         s.eta = select(reflect, V(1), etap);

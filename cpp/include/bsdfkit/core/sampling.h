@@ -18,8 +18,9 @@ template <typename F> inline Point2<F> clamp_uniform(Point2<F> u) { return {clam
 // Lobe choice between two lobes of (unnormalized) probabilities pr, pt with uc in [0, 1]: the
 // first is taken with probability pr / (pr + pt); a lobe of probability 0 is never taken and
 // the only nonzero lobe always is, at both ends of uc (uc = 1 with pt = 0 picks the first).
+// uc (pr + pt) < pr is pbrt-v4's uc < pr / (pr + pt) without the division (pr, pt >= 0 finite).
 template <typename F> inline Mask<F> ChooseFirstLobe(F uc, F pr, F pt) {
-    return (pr > F(0)) & ((pt <= F(0)) | (uc < pr / (pr + pt)));
+    return (pr > F(0)) & ((pt <= F(0)) | (uc * (pr + pt) < pr));
 }
 
 // Shirley & Chiu 1997 concentric map, (0,0) -> centre.
