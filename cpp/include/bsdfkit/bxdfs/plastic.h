@@ -312,7 +312,8 @@ template <typename F> struct PlasticBxDF {
     template <typename V> V transmittance(V cos) const {
         V x = cos * V(kPlasticTableRes - 1);
         V fi = min_(max_(floor(x), V(0)), V(kPlasticTableRes - 2));
-        return lerp(x - fi, gather_index(table, fi), gather_index(table + 1, fi));
+        static_assert(kPlasticTableRes == 64, "lookup64 reads a 64-entry table");
+        return lerp(x - fi, lookup64(table, fi), lookup64(table, fi + V(1)));
     }
 
     // Lobe-choice weights of the coating (ps) and the base (pd) for the coating's reflectance

@@ -63,6 +63,35 @@ template <typename T, typename V> inline V gather_index(const T *t, const V &x) 
     else return V(t[int(value_of(x))]);
 }
 
+// t[x] per lane for a 64-entry table and an integer-valued float index x in [0, 63]. For a
+// 16-lane float packet on AVX-512 the table sits in four registers and each half is read by one
+// two-register permutation (vpermi2ps, GCC vector extensions as batch.h's shuffles), bit 5 of
+// the index picking the half: no gather, the same values. Elsewhere: gather_index.
+template <typename T, typename V> inline V lookup64(const T *t, const V &x) {
+#if defined(__AVX512F__) && defined(__GNUC__)
+    if constexpr (is_packet_v<V> && std::is_same_v<T, float> && std::is_same_v<scalar_t<V>, float> &&
+                  drjit::size_v<V> == 16) {
+        typedef float v16sf __attribute__((vector_size(64)));
+        typedef int32_t v16si __attribute__((vector_size(64)));
+        v16sf t0, t1, t2, t3, lo, hi, r;
+        std::memcpy(&t0, t, 64);
+        std::memcpy(&t1, t + 16, 64);
+        std::memcpy(&t2, t + 32, 64);
+        std::memcpy(&t3, t + 48, 64);
+        drjit::int32_array_t<V> ii(x);
+        v16si i;
+        std::memcpy(&i, &ii, 64);
+        lo = __builtin_shuffle(t0, t1, i); // index mod 32
+        hi = __builtin_shuffle(t2, t3, i);
+        r = (i & 32) != 0 ? hi : lo;
+        V out;
+        std::memcpy(&out, &r, 64);
+        return out;
+    }
+#endif
+    return gather_index(t, x);
+}
+
 template <typename Float> inline constexpr Float Pi = Float(3.14159265358979323846);
 template <typename Float> inline constexpr Float InvPi = Float(0.31830988618379067154);
 template <typename Float> inline constexpr Float Inv2Pi = Float(0.15915494309189533577);
