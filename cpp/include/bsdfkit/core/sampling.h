@@ -38,13 +38,6 @@ template <typename F> inline Point2<F> SampleUniformDiskConcentric(Point2<F> u) 
     return {r * ct, r * st};
 }
 
-// r = sqrt(u0), phi = 2 pi u1.
-template <typename F> inline Point2<F> SampleUniformDiskPolar(Point2<F> u) {
-    F r = sqrt(u.x), phi = F(2 * Pi<scalar_t<F>>) * u.y, sp, cp;
-    sincos_(phi, &sp, &cp);
-    return {r * cp, r * sp};
-}
-
 // Malley's method: project the concentric disk up to the hemisphere.
 template <typename F> inline Vec3<F> SampleCosineHemisphere(Point2<F> u) {
     Point2<F> d = SampleUniformDiskConcentric(u);
