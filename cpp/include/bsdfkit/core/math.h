@@ -65,10 +65,10 @@ template <typename T, typename V> inline V gather_index(const T *t, const V &x) 
 
 // t[x] per lane for a 64-entry table and an integer-valued float index x in [0, 63]. For a
 // 16-lane float packet on AVX-512 the table sits in four registers and each half is read by one
-// two-register permutation (vpermi2ps, GCC vector extensions as batch.h's shuffles), bit 5 of
-// the index picking the half: no gather, the same values. Elsewhere: gather_index.
+// two-register permutation (vpermi2ps; GCC's vector extensions, as batch.h's shuffles, so GCC
+// only), bit 5 of the index picking the half: no gather, the same values. Else gather_index.
 template <typename T, typename V> inline V lookup64(const T *t, const V &x) {
-#if defined(__AVX512F__) && defined(__GNUC__)
+#if defined(__AVX512F__) && defined(__GNUC__) && !defined(__clang__)
     if constexpr (is_packet_v<V> && std::is_same_v<T, float> && std::is_same_v<scalar_t<V>, float> &&
                   drjit::size_v<V> == 16) {
         typedef float v16sf __attribute__((vector_size(64)));
