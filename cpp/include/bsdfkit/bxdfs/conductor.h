@@ -110,9 +110,8 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3,
     template <typename V> Spectrum<V, NC> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
         V cos_o = AbsCosTheta(wo), cos_i = AbsCosTheta(wi);
         Mask<V> active = SameHemisphere(wo, wi) & Mask<V>(!mfd.effectively_smooth());
-        Vec3<V> h = wi + wo;
-        V len2 = length_squared(h);
-        active &= len2 > V(0);
+        V len2;
+        Vec3<V> h = reflection_half_vector_h(wo, wi, active, &len2);
         V denom = mfd.D_denom(h, active, len2) *
                   mfd.G_denom(cos_o, cos_i, mfd.smith_root(wo), mfd.smith_root(wi));
         Spectrum<V, NC> fr = fresnel_over_scaled(abs(dot(wo, h)), len2, denom);
@@ -168,9 +167,8 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3,
     V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
         Mask<V> active = SameHemisphere(wo, wi) &
                          Mask<V>(((sample_flags & RT_Reflection) != 0) & !mfd.effectively_smooth());
-        Vec3<V> h = wo + wi;
-        V len2 = length_squared(h);
-        active &= len2 > V(0);
+        V len2;
+        Vec3<V> h = reflection_half_vector_h(wo, wi, active, &len2);
         V dd = mfd.D_denom(h, active, len2);
         V p = sqr(len2) / (dd * mfd.reflection_pdf_denom(AbsCosTheta(wo), mfd.smith_root(wo)));
         return select(active, p, V(0));

@@ -345,10 +345,9 @@ template <typename F> struct PlasticBxDF {
     };
     template <typename V> Coat<V> coat(const Vec3<V> &o, const Vec3<V> &i) const {
         Coat<V> c;
-        Vec3<V> h = o + i;
-        c.len2 = length_squared(h);
+        c.ok = Mask<V>(true);
+        Vec3<V> h = reflection_half_vector_h(o, i, c.ok, &c.len2);
         c.l4 = sqr(c.len2);
-        c.ok = c.len2 > V(0);
         c.dd = mfd.D_denom(h, c.ok, c.len2);
         c.c_oh = dot(o, h);
         c.root_o = mfd.smith_root(o);

@@ -27,12 +27,21 @@ template <typename F> inline F DeltaAbsCos(const Vec3<F> &w) {
 // Strict: a direction on the horizon is in neither hemisphere.
 template <typename F> inline Mask<F> SameHemisphere(const Vec3<F> &a, const Vec3<F> &b) { return a.z * b.z > F(0); }
 
+// The reflection half vector h = wo + wi NOT normalized (wm = h / |h|) and *len2 = |h|^2, for
+// kernels written in h (D_denom with len2, the ...Scaled Fresnel ratios). `active &= (h != 0)`.
+template <typename F>
+inline Vec3<F> reflection_half_vector_h(const Vec3<F> &wo, const Vec3<F> &wi, Mask<F> &active, F *len2) {
+    Vec3<F> h = wo + wi;
+    *len2 = length_squared(h);
+    active &= *len2 > F(0);
+    return h;
+}
+
 // The reflection half vector normalize(wo + wi) (Walter 2007 eq. 13). `active &= (wo + wi != 0)`;
 // where it ends up false the result is wo + wi unnormalized, for the caller's mask to discard.
 template <typename F> inline Vec3<F> reflection_half_vector(const Vec3<F> &wo, const Vec3<F> &wi, Mask<F> &active) {
-    Vec3<F> h = wo + wi;
-    F len2 = length_squared(h);
-    active &= len2 > F(0);
+    F len2;
+    Vec3<F> h = reflection_half_vector_h(wo, wi, active, &len2);
     return h / sqrt(select(active, len2, F(1)));
 }
 
