@@ -214,23 +214,19 @@ def bk_calls(m, op, d, transmissive):
     return {"kernel": lambda: core.sample(wo, uc, u, 0, 3, *bufs), "plain": lambda: m.sample(wo, uc, u)}
 
 
-def io_bytes(op, n, itemsize):
-    """Bytes the kernel reads + writes per call (inputs + outputs)."""
-    if op == "eval":
-        return n * itemsize * (3 + 3 + 3)
-    if op == "pdf":
-        return n * itemsize * (3 + 3 + 1)
-    # sample: wo, uc, u in; wi, f, pdf, eta out (+ flags, valid, pdf_is_proportional bytes)
-    return n * (itemsize * (3 + 1 + 2 + 3 + 3 + 1 + 1) + 3)
-
-
 def io_split(op, n, itemsize):
     """(bytes read, bytes written) per call: the kernel's inputs and outputs."""
     if op == "eval":
         return n * itemsize * 6, n * itemsize * 3
     if op == "pdf":
         return n * itemsize * 6, n * itemsize
+    # sample: wo, uc, u in; wi, f, pdf, eta out (+ flags, valid, pdf_is_proportional bytes)
     return n * itemsize * (3 + 1 + 2), n * (itemsize * (3 + 3 + 1 + 1) + 3)
+
+
+def io_bytes(op, n, itemsize):
+    """Bytes the kernel reads + writes per call (inputs + outputs)."""
+    return sum(io_split(op, n, itemsize))
 
 
 _COPY_CACHE = {}
