@@ -112,7 +112,7 @@ def _n_changes(c, ref):
                if lab is not None and ref.labels.get(k) is not None and c.index[k] != ref.index[k])
 
 
-def _pick(cands, costs, configs, err, ref=None):
+def _pick(cands, costs, configs, err, ref):
     """Index of the chosen candidate and how it was ranked (see :func:`simplify`); ref: the
     input's configuration (ties in cost go to the fewest changes from it)."""
     if all(c is None for c in costs):
@@ -124,7 +124,7 @@ def _pick(cands, costs, configs, err, ref=None):
     cmin = min(c.values())
     near = [i for i in cands if c[i] <= cmin * (1 + COST_RESOLUTION)]
     drops = {i: sum(v == "drop" for v in configs[i].labels.values()) for i in near}
-    moved = {i: 0 if ref is None else _n_changes(configs[i], ref) for i in near}
+    moved = {i: _n_changes(configs[i], ref) for i in near}
     best = min(near, key=lambda i: (-drops[i], moved[i], err[i], configs[i].registry_rank))
     return best, "cost table" + (" (this configuration is missing: assumed as costly as the most accurate)"
                                  if costs[best] is None else "")
