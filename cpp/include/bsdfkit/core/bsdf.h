@@ -13,8 +13,8 @@ namespace bsdfkit {
 // models' own guards cover every regular case; tests compare those against references.
 template <typename F> inline F finite_or_zero(F v) {
     if constexpr (is_packet_v<F>) {
-        // One AND with both tests' lane mask (core/simd.h zero_unless): the same bits.
-        return zero_unless((v >= F(0)) & (v <= F(std::numeric_limits<scalar_t<F>>::max())), v);
+        // one blend with zero on the failing lanes (core/simd.h not_finite_nonneg): the same bits
+        return drjit::select(not_finite_nonneg(v), F(0), v);
     } else {
         // Two float selects rather than one select on (a && b): GCC 12's vectorizer cannot handle
         // the boolean-valued COND_EXPRs that if-conversion makes of the && form.
@@ -34,6 +34,11 @@ template <typename F, int N> inline Mask<F> nonzero_mask(const Spectrum<F, N> &s
     return b;
 }
 template <typename F, int N> inline Mask<F> finite_nonneg_mask(const Spectrum<F, N> &s) {
+    if constexpr (is_packet_v<F>) {
+        Mask<F> bad = not_finite_nonneg(s[0]);
+        for (int i = 1; i < N; ++i) bad = bad | not_finite_nonneg(s[i]);
+        return !bad;
+    }
     const F big(std::numeric_limits<scalar_t<F>>::max());
     Mask<F> ok = (s[0] >= F(0)) & (s[0] <= big);
     for (int i = 1; i < N; ++i) ok = ok & (s[i] >= F(0)) & (s[i] <= big);
@@ -52,14 +57,27 @@ template <typename F> inline Vec3<F> kInvalidSampleWi() { return Vec3<F>(0, 0, 1
 
 template <typename Model, typename F>
 inline auto bsdf_f(const Model &m, const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode) {
-    auto v = finite_or_zero(m.f(wo, wi, mode));  // Spectrum<F, N>: N = 3 (RGB) or 4 (spectral)
-    return select(wo.z != F(0), v, decltype(v)(F(0)));
+    auto v = m.f(wo, wi, mode);  // Spectrum<F, N>: N = 3 (RGB) or 4 (spectral)
+    if constexpr (is_packet_v<F>) {
+        // one mask per channel, one blend with zero: finite_or_zero's lanes and wo.z = 0
+        Mask<F> side = wo.z == F(0);
+        for (int c = 0; c < decltype(v)::Size; ++c) v[c] = drjit::select(side | not_finite_nonneg(v[c]), F(0), v[c]);
+        return v;
+    } else {
+        v = finite_or_zero(v);
+        return select(wo.z != F(0), v, decltype(v)(F(0)));
+    }
 }
 
 template <typename Model, typename F>
 inline F bsdf_pdf(const Model &m, const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode, uint8_t sf) {
-    F p = finite_or_zero(m.pdf(wo, wi, mode, sf));
-    return select(wo.z != F(0), p, F(0));
+    F p = m.pdf(wo, wi, mode, sf);
+    if constexpr (is_packet_v<F>) {
+        return drjit::select((wo.z == F(0)) | not_finite_nonneg(p), F(0), p);
+    } else {
+        p = finite_or_zero(p);
+        return select(wo.z != F(0), p, F(0));
+    }
 }
 
 // pbrt-v4's BSDF-level rules on a BxDF's raw sample; model_ok: the model has a lobe in the

@@ -85,6 +85,31 @@ template <typename T, std::enable_if_t<!drjit::is_array_v<T>, int> = 0> inline T
     return m ? x : T(0);
 }
 
+// Lanes that fail (x >= 0) & (x <= max): NaN, +-inf and negative non-zero values (-0 passes,
+// as it does x >= 0). With AVX-512DQ one vfpclass per register (quiet/signalling NaN, +-inf,
+// negative finite: imm 0x99 | 0x40) instead of two compares and a mask AND; the same lanes.
+template <typename P, std::enable_if_t<drjit::is_array_v<P>, int> = 0>
+inline drjit::mask_t<P> not_finite_nonneg(const P &x) {
+    using T = drjit::scalar_t<P>;
+    constexpr size_t N = drjit::size_v<P>;
+#if defined(__AVX512DQ__)
+    if constexpr (std::is_same_v<T, float> && N == 16) {
+        drjit::mask_t<P> r;
+        r.k = _mm512_fpclass_ps_mask(x.m, 0xD9);
+        return r;
+    } else if constexpr (std::is_same_v<T, double> && N == 8) {
+        drjit::mask_t<P> r;
+        r.k = _mm512_fpclass_pd_mask(x.m, 0xD9);
+        return r;
+    } else if constexpr (std::is_same_v<T, double> && N == 16) {
+        return drjit::mask_t<P>(not_finite_nonneg(x.a1), not_finite_nonneg(x.a2));
+    } else
+#endif
+    {
+        return !((x >= T(0)) & (x <= std::numeric_limits<T>::max()));
+    }
+}
+
 // Packet load / store of W consecutive scalars (unaligned).
 template <typename V> inline V load_packet(const scalar_t<V> *p) { return drjit::load<V>(p); }
 template <typename V> inline void store_packet(scalar_t<V> *p, const V &v) { drjit::store(p, v); }
