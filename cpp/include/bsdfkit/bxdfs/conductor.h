@@ -108,6 +108,8 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3,
     // fresnel_over_scaled), so h is never normalized: Exact 3 divisions and 8 square roots per
     // element (3 + 0 and 2 + 6), Schlick / F82 2 and 3.
     template <typename V> Spectrum<V, NC> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
+        // a delta lobe evaluates to 0: a per-model (uniform) branch, not a lane mask
+        if (mfd.effectively_smooth()) return Spectrum<V, NC>(V(0));
         V cos_o = AbsCosTheta(wo), cos_i = AbsCosTheta(wi);
         Mask<V> active = SameHemisphere(wo, wi) & Mask<V>(!mfd.effectively_smooth());
         V len2;
@@ -165,6 +167,7 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3,
     // + R_o)) with h = wo + wi never normalized (D_denom with len2). 1 division, 1 square root.
     template <typename V>
     V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
+        if (mfd.effectively_smooth()) return V(0); // a delta lobe (as f)
         Mask<V> active = SameHemisphere(wo, wi) &
                          Mask<V>(((sample_flags & RT_Reflection) != 0) & !mfd.effectively_smooth());
         V len2;

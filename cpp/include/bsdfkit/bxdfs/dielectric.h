@@ -89,7 +89,8 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
     // dividing by etap^2, which cancels it. r, t, den: FrDielectricRatioScaled's numerators and
     // denominator at wo.h. 1 division and 3 square roots per element in all.
     template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode mode) const {
-        // Delta lobes evaluate to 0: folded into the mask (no early return).
+        // Delta lobes evaluate to 0: a per-model (uniform) branch, not a lane mask.
+        if (is_smooth()) return Spectrum<V>(V(0));
         Vec3<V> h;
         V etap, len2;
         Mask<V> active = half_vector(wo, wi, &h, &etap, &len2) & Mask<V>(!is_smooth());
@@ -186,6 +187,7 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
     // its denominator: 1 division, 2 square roots.
     template <typename V>
     V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
+        if (is_smooth()) return V(0); // delta lobes (as f)
         Vec3<V> h;
         V etap, len2;
         Mask<V> ok = half_vector(wo, wi, &h, &etap, &len2) & Mask<V>(!is_smooth());
