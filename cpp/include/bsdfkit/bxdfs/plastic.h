@@ -262,6 +262,7 @@ template <typename F> struct PlasticBxDF {
     bool smooth = true;
     bool has_diffuse = true;
     F table[kPlasticTableRes] = {};  // rough: T(cos) at cos = i / 63 (cos floored at 1e-6)
+    F slope[kPlasticTableRes] = {};  // table[i + 1] - table[i]; slope[63] = 0
 
     static bool is_rough(const Params &p) { return !(p.alpha < kSmoothAlpha); }
     // the alpha floor 1e-4 (a zero derivative below it; core/dual.h)
@@ -280,6 +281,8 @@ template <typename F> struct PlasticBxDF {
         S a = coat_alpha(p);
         m.mfd = TrowbridgeReitz<F>(F(a), F(a), p.masking);
         for (int i = 0; i < kPlasticTableRes; ++i) m.table[i] = F(tab.T[i]);
+        for (int i = 0; i + 1 < kPlasticTableRes; ++i) m.slope[i] = m.table[i + 1] - m.table[i];
+        m.slope[kPlasticTableRes - 1] = F(0);
         S fdr = m.smooth ? FresnelDiffuseReflectanceT(S(1.0 / p.eta)) : tab.fdr;
         S rmean(0.0), smean(0.0);
         m.has_diffuse = false;
@@ -307,13 +310,15 @@ template <typename F> struct PlasticBxDF {
     // (a uniform branch, the same for every lane).
     static constexpr bool Vectorized = true;
 
-    // Mitsuba's lerp_gather: linear interpolation of the table at cos in [0, 1] (the index is
-    // clamped to the table, so lanes the caller masks out, cos < 0 or NaN, read entry 0).
+    // Mitsuba's lerp_gather: linear interpolation of the table at cos in [0, 1], as the entry
+    // plus the fraction times its slope (one index for both reads; cos = 1 reads entry 63 and its
+    // slope 0). Lanes the caller masks out (cos < 0 or NaN) read some entry (lookup64x2).
     template <typename V> V transmittance(V cos) const {
         V x = cos * V(kPlasticTableRes - 1);
-        V fi = min_(max_(floor(x), V(0)), V(kPlasticTableRes - 2));
-        static_assert(kPlasticTableRes == 64, "lookup64 reads a 64-entry table");
-        return lerp(x - fi, lookup64(table, fi), lookup64(table, fi + V(1)));
+        V fi = floor(x), t, d;
+        static_assert(kPlasticTableRes == 64, "lookup64x2 reads 64-entry tables");
+        lookup64x2(table, slope, fi, &t, &d);
+        return t + (x - fi) * d;
     }
 
     // Lobe-choice weights of the coating (ps) and the base (pd) for the coating's reflectance
@@ -327,10 +332,12 @@ template <typename F> struct PlasticBxDF {
     }
 
     // Smooth coating, o and i upper: the base term diffuse T(cos_o) T(cos_i), T = 1 - F from the
-    // Fresnel numerators over one product of denominators (1 division).
+    // Fresnel numerators over one product of denominators (1 division). The smooth paths take
+    // the Fresnel terms of cosines above the surface (FrDielectricRatioAbove): lanes with a cosine
+    // <= 0 are masked by the caller.
     template <typename V> Spectrum<V> f_smooth(V to, V den_o, const Vec3<V> &i) const {
-        V ri, ti, den_i;
-        FrDielectricRatio(i.z, eta, &ri, &ti, &den_i);
+        V ti, den_i;
+        FrDielectricTransAbove(i.z, eta, &ti, &den_i);
         return to_lanes<V>(diffuse) * (to * ti / (den_o * den_i));
     }
 
@@ -362,7 +369,7 @@ template <typename F> struct PlasticBxDF {
     template <typename V>
     Spectrum<V> f_rough(const Vec3<V> &o, const Vec3<V> &i, V T_o, const Coat<V> &c) const {
         V r, t, den;
-        FrDielectricRatioScaled(c.c_oh, c.len2, eta, &r, &t, &den);
+        FrDielectricRatioScaledAbove(c.c_oh, c.len2, eta, &r, &t, &den); // o.h > 0 where c.ok
         V coat_v = r * c.l4 / (den * c.dd * mfd.G_denom(o.z, i.z, c.root_o, c.root_i));
         Spectrum<V> v = to_lanes<V>(diffuse) * (T_o * transmittance(i.z));
         return v + to_lanes<V>(Ks) * select(c.ok, coat_v, V(0));
@@ -387,8 +394,8 @@ template <typename F> struct PlasticBxDF {
         Mask<V> active = (o.z > V(0)) & (i.z > V(0));
         Spectrum<V> v;
         if (smooth) {
-            V ro, to, den_o;
-            FrDielectricRatio(o.z, eta, &ro, &to, &den_o);
+            V to, den_o;
+            FrDielectricTransAbove(o.z, eta, &to, &den_o);
             v = f_smooth(to, den_o, i);
         } else {
             v = f_rough(o, i, transmittance(o.z), coat(o, i));
@@ -404,7 +411,7 @@ template <typename F> struct PlasticBxDF {
         if (smooth) {
             // the base's share pd / (ps + pd) of the cosine lobe (F's denominator cancels)
             V ro, to, den_o, ps, pd;
-            FrDielectricRatio(o.z, eta, &ro, &to, &den_o);
+            FrDielectricRatioAbove(o.z, eta, &ro, &to, &den_o);
             lobe_weights(ro, to, &ps, &pd);
             p = pd * (V(1) / (ps + pd)) * CosineHemispherePDF(i.z);
         } else {
@@ -424,7 +431,7 @@ template <typename F> struct PlasticBxDF {
         if (smooth) {
             // delta reflection: f = Ks F / cos, discrete probability p; else the cosine lobe
             V ro, to, den_o, ps, pd;
-            FrDielectricRatio(o.z, eta, &ro, &to, &den_o);
+            FrDielectricRatioAbove(o.z, eta, &ro, &to, &den_o);
             lobe_weights(ro, to, &ps, &pd);
             V inv = V(1) / (ps + pd);
             V p_spec = ps * inv;

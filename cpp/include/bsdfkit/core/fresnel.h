@@ -40,6 +40,32 @@ inline void FrDielectricRatioScaled(F cos_i, F len2, E eta_, F *r_num, F *t_num,
 template <typename F, typename E> inline void FrDielectricRatio(F cos_i, E eta, F *r_num, F *t_num, F *den) {
     FrDielectricRatioScaled(clamp(cos_i, F(-1), F(1)), F(1), eta, r_num, t_num, den);
 }
+// FrDielectricRatioScaled for light arriving from outside, cos_i > 0 (a caller's mask drops the
+// other lanes), and a scalar eta: the same formulas with the inside flip, the clamp and the masks
+// folded away. Past the critical angle (eta < 1) cos_t = 0 gives t = 0 and r = den (R = 1) by the
+// formulas themselves, and cos_i > 0 keeps den > 0; a cos_i a rounding past |h| (or past 1 for a
+// direction of length 1 within the unit tolerance) makes cos_t a rounding past it, not a NaN.
+// 1 square root.
+template <typename F, typename E>
+inline void FrDielectricRatioScaledAbove(F cos_i, F len2, E eta, F *r_num, F *t_num, F *den) {
+    const E inv_eta2 = E(1) / (eta * eta); // a scalar division
+    F cos_t = safe_sqrt(len2 - (len2 - sqr(cos_i)) * F(inv_eta2));
+    F ec = F(eta) * cos_i, et = F(eta) * cos_t;
+    F a2 = sqr(ec + cos_t), b2 = sqr(cos_i + et);
+    *den = F(2) * a2 * b2;
+    *r_num = sqr(ec - cos_t) * b2 + sqr(cos_i - et) * a2;
+    *t_num = F(4) * ec * cos_t * (a2 + b2);
+}
+// FrDielectricRatio for cos_i > 0 (|h| = 1 above).
+template <typename F, typename E> inline void FrDielectricRatioAbove(F cos_i, E eta, F *r_num, F *t_num, F *den) {
+    FrDielectricRatioScaledAbove(cos_i, F(1), eta, r_num, t_num, den);
+}
+// Its transmittance numerator and denominator alone (T = t / den).
+template <typename F, typename E> inline void FrDielectricTransAbove(F cos_i, E eta, F *t_num, F *den) {
+    F r;
+    FrDielectricRatioAbove(cos_i, eta, &r, t_num, den); // r is dead code here
+}
+
 template <typename F, typename E> inline void FrDielectricRT(F cos_i, E eta, F *R, F *T) {
     F r, t, den;
     FrDielectricRatio(cos_i, eta, &r, &t, &den);

@@ -63,35 +63,6 @@ template <typename T, typename V> inline V gather_index(const T *t, const V &x) 
     else return V(t[int(value_of(x))]);
 }
 
-// t[x] per lane for a 64-entry table and an integer-valued float index x in [0, 63]. For a
-// 16-lane float packet on AVX-512 the table sits in four registers and each half is read by one
-// two-register permutation (vpermi2ps; GCC's vector extensions, as batch.h's shuffles, so GCC
-// only), bit 5 of the index picking the half: no gather, the same values. Else gather_index.
-template <typename T, typename V> inline V lookup64(const T *t, const V &x) {
-#if defined(__AVX512F__) && defined(__GNUC__) && !defined(__clang__)
-    if constexpr (is_packet_v<V> && std::is_same_v<T, float> && std::is_same_v<scalar_t<V>, float> &&
-                  drjit::size_v<V> == 16) {
-        typedef float v16sf __attribute__((vector_size(64)));
-        typedef int32_t v16si __attribute__((vector_size(64)));
-        v16sf t0, t1, t2, t3, lo, hi, r;
-        std::memcpy(&t0, t, 64);
-        std::memcpy(&t1, t + 16, 64);
-        std::memcpy(&t2, t + 32, 64);
-        std::memcpy(&t3, t + 48, 64);
-        drjit::int32_array_t<V> ii(x);
-        v16si i;
-        std::memcpy(&i, &ii, 64);
-        lo = __builtin_shuffle(t0, t1, i); // index mod 32
-        hi = __builtin_shuffle(t2, t3, i);
-        r = (i & 32) != 0 ? hi : lo;
-        V out;
-        std::memcpy(&out, &r, 64);
-        return out;
-    }
-#endif
-    return gather_index(t, x);
-}
-
 template <typename Float> inline constexpr Float Pi = Float(3.14159265358979323846);
 template <typename Float> inline constexpr Float InvPi = Float(0.31830988618379067154);
 template <typename Float> inline constexpr Float Inv2Pi = Float(0.15915494309189533577);
@@ -108,6 +79,42 @@ template <typename T> inline T lerp(T t, T a, T b) { return (1 - t) * a + t * b;
 template <typename T> inline T safe_sqrt(T x) { return sqrt(select(x > T(0), x, T(0))); }
 template <typename T> inline T safe_div(T a, T b) { return select(b != T(0), a / b, T(0)); }
 template <typename T> inline T copysign1(T mag, T sgn) { return select(sgn < T(0), -mag, mag); }
+
+// t[x] and d[x] per lane for two 64-entry tables (a table and its slopes) and one integer-valued
+// float index x. For a 16-lane float packet on AVX-512 each table sits in four registers and each
+// half is read by one two-register permutation (vpermi2ps; GCC's vector extensions, as batch.h's
+// shuffles, so GCC only), bit 5 of the index picking the half, the index conversion and the half
+// choice shared by both tables: no gather. Any index reads some entry there (its low 6 bits); the
+// gather path (gather_index) clamps x to [0, 63], so lanes a caller masks out (NaN, x < 0) never
+// read outside the tables. Both give t[x], d[x] for x in [0, 63].
+template <typename T, typename V> inline void lookup64x2(const T *t, const T *d, const V &x, V *a, V *b) {
+#if defined(__AVX512F__) && defined(__GNUC__) && !defined(__clang__)
+    if constexpr (is_packet_v<V> && std::is_same_v<T, float> && std::is_same_v<scalar_t<V>, float> &&
+                  drjit::size_v<V> == 16) {
+        typedef float v16sf __attribute__((vector_size(64)));
+        typedef int32_t v16si __attribute__((vector_size(64)));
+        drjit::int32_array_t<V> ii(x);
+        v16si i;
+        std::memcpy(&i, &ii, 64);
+        const v16si upper = (i & 32) != 0;
+        auto read = [&](const T *tab, V *out) {
+            v16sf t0, t1, t2, t3;
+            std::memcpy(&t0, tab, 64);
+            std::memcpy(&t1, tab + 16, 64);
+            std::memcpy(&t2, tab + 32, 64);
+            std::memcpy(&t3, tab + 48, 64);
+            v16sf r = upper ? __builtin_shuffle(t2, t3, i) : __builtin_shuffle(t0, t1, i);
+            std::memcpy(out, &r, 64);
+        };
+        read(t, a);
+        read(d, b);
+        return;
+    }
+#endif
+    V xi = min_(max_(x, V(0)), V(63));
+    *a = gather_index(t, xi);
+    *b = gather_index(d, xi);
+}
 
 // x^y per lane by the scalar libm pow: for packet results that must equal a scalar double
 // evaluation bit for bit (the Dual gradient path, core/dual.h, computes std::pow on its value).
