@@ -30,13 +30,22 @@ inline constexpr int PMax = 3;
 // forms (drjit/math.h, Cephes-derived, about 1 ulp).
 
 // Modified Bessel function of the first kind, order 0: sum_{i<10} x^{2i} / (4^i (i!)^2) (pbrt-v4 I0),
-// each term's factor 1 / (4 (i+1)^2) a constant (no division per term).
-template <typename F> inline F I0(F x) {
-    F x2 = x * x, val = F(0), term = F(1);
-    for (int i = 0; i < 10; ++i) {
-        val += term;
-        term *= x2 * F(1.0 / double(4 * (i + 1) * (i + 1)));
+// by Horner's rule in x^2 (the coefficients are constants: 9 multiplications and 9 additions).
+struct I0Coefficients {
+    double c[10];
+    constexpr I0Coefficients() : c{} {
+        double t = 1;
+        for (int i = 0; i < 10; ++i) {
+            c[i] = t;
+            t /= double(4 * (i + 1) * (i + 1));
+        }
     }
+};
+inline constexpr I0Coefficients kI0{};
+template <typename F> inline F I0(F x) {
+    using S = scalar_t<F>;
+    F x2 = x * x, val = F(S(kI0.c[9]));
+    for (int i = 8; i >= 0; --i) val = val * x2 + F(S(kI0.c[i]));
     return val;
 }
 
@@ -54,9 +63,17 @@ template <typename F> inline F LogI0(F x) {
 // Longitudinal scattering of d'Eon et al. 2011, eq. 7, in log space (pbrt-v4 Mp):
 // Mp = exp(LogI0(cos_i cos_o / v) - sin_i sin_o / v + log_norm), with log_norm = -ln(2 v sinh(1/v))
 // for v > 0.1 and pbrt-v4's -1/v + 0.6931 + ln(1/(2v)) for v <= 0.1 (no overflow for small v).
+// Where a <= 12 (LogI0 = log I0) it is I0(a) exp(log_norm - b): one exp, no log. The asymptotic
+// form runs only for a packet with a lane past 12 and serves only those lanes, so every lane's
+// value is the same whatever its neighbours. No new overflow: I0(12) < 2e4 and exp(log_norm - b)
+// <= 1 / (v (1 - exp(-2 / v))), about 1 / v + 1 / 2.
 template <typename F, typename S> inline F Mp(F cos_i, F cos_o, F sin_i, F sin_o, S inv_v, S log_norm) {
     F a = cos_i * cos_o * F(inv_v), b = sin_i * sin_o * F(inv_v);
-    return exp(LogI0(a) - b + F(log_norm));
+    F e = F(log_norm) - b;
+    Mask<F> big = a > F(12);
+    F m = I0(min_(a, F(12))) * exp(e);
+    if (any(big)) m = select(big, exp(LogI0(a) + e), m);
+    return m;
 }
 
 // Attenuation of each lobe (Marschner 2003 sec. 4.3; pbrt-v4 Ap): A0 = f, A1 = (1-f)^2 T,
