@@ -24,24 +24,32 @@ template <typename F> inline Mask<F> ChooseFirstLobe(F uc, F pr, F pt) {
 }
 
 // Shirley & Chiu 1997 concentric map, (0,0) -> centre.
-template <typename F> inline Point2<F> SampleUniformDiskConcentric(Point2<F> u) {
+// r2: the squared radius of the point (x^2 + y^2 = r^2), for callers that need it without
+// waiting for the angle (SampleCosineHemisphere).
+template <typename F> inline Point2<F> SampleUniformDiskConcentric(Point2<F> u, F *r2 = nullptr) {
     F ox = F(2) * u.x - F(1), oy = F(2) * u.y - F(1);
     Mask<F> first = abs(ox) > abs(oy);
     F r = select(first, ox, oy), num = select(first, oy, ox);
+    if (r2) *r2 = r * r;
     // den == 0 only at the centre (num == 0 too), where ratio = 0 as in safe_div. One division
     // of selected operands: two safe_divs let GCC's PRE build bool selects that do not vectorize.
     using S = scalar_t<F>;
     F ratio = num / select(r != F(0), r, F(1));
-    F theta = select(first, F(PiOver4<S>) * ratio, F(PiOver2<S>) - F(PiOver4<S>) * ratio);
-    F st, ct;
-    sincos_(theta, &st, &ct);
-    return {r * ct, r * st};
+    // theta = x = pi/4 ratio (first) or pi/2 - x: |x| <= pi/4 is already reduced, so the sine and
+    // cosine of x come straight from the polynomials (core/math.h sincos_poly), and
+    // (cos, sin)(pi/2 - x) = (sin, cos)(x): no range reduction on the sampler's critical path.
+    F s, c;
+    sincos_poly(F(PiOver4<S>) * ratio, &s, &c);
+    return {r * select(first, c, s), r * select(first, s, c)};
 }
 
 // Malley's method: project the concentric disk up to the hemisphere.
+// z = sqrt(1 - r^2) from the disk's radius, r^2 = x^2 + y^2 (pbrt-v4 and Mitsuba take it from x and
+// y): the square root then runs beside the angle's sincos instead of after it.
 template <typename F> inline Vec3<F> SampleCosineHemisphere(Point2<F> u) {
-    Point2<F> d = SampleUniformDiskConcentric(u);
-    F z = safe_sqrt(F(1) - d.x * d.x - d.y * d.y);
+    F r2;
+    Point2<F> d = SampleUniformDiskConcentric(u, &r2);
+    F z = safe_sqrt(F(1) - r2);
     return {d.x, d.y, z};
 }
 template <typename F> inline F CosineHemispherePDF(F cos_theta) { return cos_theta * F(InvPi<scalar_t<F>>); }
