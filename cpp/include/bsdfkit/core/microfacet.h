@@ -105,15 +105,20 @@ template <typename F> struct TrowbridgeReitz {
     // unstretched and normalized, h is distributed as D_w (the same density as Heitz 2018's
     // hemisphere method, pbrt-v4 Sample_wm, with 2 square roots and a division fewer).
     // 1 - z = u.x (1 + wh.z) = a exactly, so sin^2 = a (2 - a) without cancellation at the pole.
+    // Written in units of L = |v|, v the stretched w (wh = v / L), so that wh is never formed
+    // (no division on the sampler's critical path): b = a L = u.x (L + v.z), sin L = sqrt(b (2 L -
+    // b)), and h L = (sin L cos phi + v.x, sin L sin phi + v.y, (L - b) + v.z), whose unstretched
+    // direction is the same (h.z's floor 1e-6 becomes 1e-6 L).
     template <typename V> Vec3<V> Sample_wm(const Vec3<V> &w, Point2<V> u) const {
         using S = scalar_t<V>;
-        Vec3<V> wh = normalize(Vec3<V>(alpha_x * w.x, alpha_y * w.y, w.z));
-        wh = select(wh.z < V(0), -wh, wh);
-        V a = u.x * (V(1) + wh.z);
-        V sin_t = sqrt(max_(V(0), a * (V(2) - a))), sp, cp;
+        Vec3<V> v(alpha_x * w.x, alpha_y * w.y, w.z);
+        v = select(v.z < V(0), -v, v);
+        V L = sqrt(dot(v, v));
+        V b = u.x * (L + v.z);
+        V sin_l = sqrt(max_(V(0), b * (V(2) * L - b))), sp, cp;
         sincos_(V(2 * Pi<S>) * u.y, &sp, &cp);
-        Vec3<V> h(sin_t * cp + wh.x, sin_t * sp + wh.y, (V(1) - a) + wh.z);
-        return normalize(Vec3<V>(alpha_x * h.x, alpha_y * h.y, max_(V(1e-6), h.z)));
+        Vec3<V> h(sin_l * cp + v.x, sin_l * sp + v.y, (L - b) + v.z);
+        return normalize(Vec3<V>(alpha_x * h.x, alpha_y * h.y, max_(V(1e-6) * L, h.z)));
     }
 
     // Roughen near-specular lobes for path regularization (pbrt-v4 Regularize).
