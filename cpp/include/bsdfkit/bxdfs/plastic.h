@@ -81,6 +81,21 @@ inline void GaussLegendre(int n, double *x, double *w) {
 // stretch wo, draw a slope of the alpha = 1 distribution seen from cos(theta) with the
 // concentric-disk projection (sample_visible_11), rotate, unstretch. The same density as
 // pbrt-v4's Sample_wm (Heitz 2018), a different map from u to wm. wo.z > 0.
+// VisibleSlope11: Heitz & d'Eon 2014 slope sampling, Mitsuba's "simpler and exact" disk variant:
+// the slope is (sx, sy) / d (d > 0 on the visible side).
+template <typename V> inline void VisibleSlope11(V cos_t, V sin_t, Point2<V> u, V *sx, V *sy, V *d) {
+    Point2<V> p = SampleUniformDiskConcentric(u);
+    V s = V(0.5) * (V(1) + cos_t);
+    p.y = lerp(s, safe_sqrt(V(1) - p.x * p.x), p.y);
+    V pz = safe_sqrt(V(1) - p.x * p.x - p.y * p.y);
+    *d = sin_t * p.y + cos_t * pz;
+    *sx = cos_t * p.y - sin_t * pz;
+    *sy = p.x;
+}
+// Operation for operation as Mitsuba (normalized stretched wo, sin from cos, the slope divided by
+// d): the rough coating's tables (RoughInterfaceAlbedo), whose derivatives in alpha and eta are
+// checked against a Dr.Jit transcription of Mitsuba's code (tests/test_grad_plastic.py: a node
+// that moves by a rounding can cross the integrand's total-internal-reflection kink).
 template <typename V, typename A> inline Vec3<V> SampleVisibleGGXMitsuba(A alpha_, const Vec3<V> &wo, Point2<V> u) {
     using S = scalar_t<V>;
     V alpha(alpha_);
@@ -89,16 +104,36 @@ template <typename V, typename A> inline Vec3<V> SampleVisibleGGXMitsuba(A alpha
     Mask<V> pole = abs(sin2) <= V(S(2) * std::numeric_limits<S>::epsilon());
     V cos_phi = select(pole, V(1), clamp(wp.x * inv_sin, V(-1), V(1)));
     V sin_phi = select(pole, V(0), clamp(wp.y * inv_sin, V(-1), V(1)));
-    V cos_t = wp.z, sin_t = safe_sqrt(V(1) - cos_t * cos_t);
-    // Heitz & d'Eon 2014 slope sampling, Mitsuba's "simpler and exact" disk variant
-    Point2<V> p = SampleUniformDiskConcentric(u);
-    V s = V(0.5) * (V(1) + cos_t);
-    p.y = lerp(s, safe_sqrt(V(1) - p.x * p.x), p.y);
-    V pz = safe_sqrt(V(1) - p.x * p.x - p.y * p.y);
-    V norm = V(1) / (sin_t * p.y + cos_t * pz);
-    V sx = (cos_t * p.y - sin_t * pz) * norm, sy = p.x * norm;
+    V cos_t = wp.z, sin_t = safe_sqrt(V(1) - cos_t * cos_t), sx, sy, d;
+    VisibleSlope11(cos_t, sin_t, u, &sx, &sy, &d);
+    V norm = V(1) / d;
+    sx = sx * norm;
+    sy = sy * norm;
     V mx = (cos_phi * sx - sin_phi * sy) * alpha, my = (sin_phi * sx + cos_phi * sy) * alpha;
     return normalize(Vec3<V>(-mx, -my, V(1)));
+}
+// The same map for the sampler, written for a short critical path: with v the stretched wo and
+// q = v.x^2 + v.y^2, cos theta = v.z / |v|, sin theta = sqrt(q) / |v| and (cos phi, sin phi) =
+// (v.x, v.y) / sqrt(q) (no normalized wp: one root and division deep); the slope's 1 / d is a
+// common factor of the direction (-slope, 1), so d scales its z instead; and the direction is
+// returned unnormalized, |m|^2 in *len2_out.
+template <typename V, typename A>
+inline Vec3<V> SampleVisibleGGXMitsubaH(A alpha_, const Vec3<V> &wo, Point2<V> u, V *len2_out) {
+    using S = scalar_t<V>;
+    V alpha(alpha_);
+    Vec3<V> v(alpha * wo.x, alpha * wo.y, wo.z);
+    V q = v.x * v.x + v.y * v.y, len2 = q + v.z * v.z;
+    V inv_len = V(1) / sqrt(len2), rq = sqrt(q), inv_rq = V(1) / select(q > V(0), rq, V(1));
+    // Mitsuba's pole test |1 - cos^2| <= 2 eps on the normalized direction
+    Mask<V> pole = q <= V(S(2) * std::numeric_limits<S>::epsilon()) * len2;
+    V cos_phi = select(pole, V(1), clamp(v.x * inv_rq, V(-1), V(1)));
+    V sin_phi = select(pole, V(0), clamp(v.y * inv_rq, V(-1), V(1)));
+    V cos_t = v.z * inv_len, sin_t = rq * inv_len, sx, sy, d;
+    VisibleSlope11(cos_t, sin_t, u, &sx, &sy, &d);
+    V mx = (cos_phi * sx - sin_phi * sy) * alpha, my = (sin_phi * sx + cos_phi * sy) * alpha;
+    Vec3<V> m(-mx, -my, d);
+    *len2_out = dot(m, m);
+    return m;
 }
 
 // Smith G1 of GGX with Mitsuba's back-facing rule (0 when v.m and v.z differ in sign).
@@ -447,7 +482,10 @@ template <typename F> struct PlasticBxDF {
             V T_o = transmittance(o.z), ps, pd;
             lobe_weights(V(1) - T_o, T_o, &ps, &pd);
             spec = uc < ps / (ps + pd);
-            Vec3<V> ws = Reflect(o, SampleVisibleGGXMitsuba(mfd.alpha_x, o, u));
+            // the mirror direction about the sampled normal m, |m| != 1: 2 (o.m) m / |m|^2 - o
+            V m2;
+            Vec3<V> m = SampleVisibleGGXMitsubaH(mfd.alpha_x, o, u, &m2);
+            Vec3<V> ws = m * (V(2) * dot(o, m) / m2) - o;
             i = select(spec, ws, wd);
             Coat<V> c = coat(o, i);
             r.f = f_rough(o, i, T_o, c);
