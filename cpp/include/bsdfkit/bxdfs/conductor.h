@@ -143,19 +143,23 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3,
     }
 
     // Sample a visible normal on wo's side and mirror wo about it. pdf = 1 / (D_denom P) with
-    // P = 2 (cos_o + R_o), f = F / (D_denom G_denom) (core/microfacet.h).
+    // P = 2 (cos_o + R_o), f = F / (D_denom G_denom) (core/microfacet.h). Written in the sampled
+    // normal m = wm |m| unnormalized (Sample_wm_h), as f() is in h: the mirror direction
+    // 2 (wo.m) m / |m|^2 - wo, D_denom(m) = D_denom(wm) |m|^4, fresnel_over_scaled.
     template <typename V>
     BSDFSample<V, NC> sample_rough(const Vec3<V> &wo, V /*uc*/, Point2<V> u, TransportMode, uint8_t sample_flags) const {
         BSDFSample<V, NC> s;
-        Vec3<V> wm = mfd.Sample_wm(wo, u);
-        Vec3<V> wi = Reflect(wo, wm);
+        V len2;
+        Vec3<V> m = mfd.Sample_wm_h(wo, u, &len2);
+        V wo_m = dot(wo, m);
+        Vec3<V> wi = m * (V(2) * wo_m / len2) - wo;
         V cos_o = AbsCosTheta(wo), cos_i = AbsCosTheta(wi);
         // SameHemisphere is strict: cos_o > 0 and cos_i > 0.
         Mask<V> active = Mask<V>((sample_flags & RT_Reflection) != 0) & SameHemisphere(wo, wi);
-        V dd = mfd.D_denom(wm, active); // D = 0 there: f = pdf = 0, an invalid sample
+        V dd = mfd.D_denom(m, active, len2); // D = 0 there: f = pdf = 0, an invalid sample
         V root_o = mfd.smith_root(wo);
-        s.pdf = select(active, V(1) / (dd * mfd.reflection_pdf_denom(cos_o, root_o)), V(0));
-        s.f = fresnel_over(abs(dot(wo, wm)), dd * mfd.G_denom(cos_o, cos_i, root_o, mfd.smith_root(wi)));
+        s.pdf = select(active, sqr(len2) / (dd * mfd.reflection_pdf_denom(cos_o, root_o)), V(0));
+        s.f = fresnel_over_scaled(abs(wo_m), len2, dd * mfd.G_denom(cos_o, cos_i, root_o, mfd.smith_root(wi)));
         s.wi = wi;
         s.flags = GlossyReflection;
         s.valid = active;

@@ -112,13 +112,20 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
         return is_smooth() ? sample_smooth(wo, uc, mode, sample_flags) : sample_rough(wo, uc, u, mode, sample_flags);
     }
 
-    // 3 divisions (the Fresnel reciprocal, f, pdf), 2 square roots.
+    // 2 divisions (f, pdf; neither on the path to the lobe choice), 2 square roots. The lobe
+    // probabilities are FrDielectricRatio's numerators r : t (= R : T), its denominator joins
+    // f's division (as sample_rough).
     template <typename V>
     BSDFSample<V> sample_smooth(const Vec3<V> &wo, V uc, TransportMode mode, uint8_t sample_flags) const {
         BSDFSample<V> s;
-        // eta == 1 is a pure pass-through; force R = 0 rather than trusting rounding.
-        V R = keep_or_zero(FrDielectric(CosTheta(wo), eta), not_index_matched()), pr, pt;
-        lobe_probs(R, V(1) - R, sample_flags, &pr, &pt);
+        V r, t, den, pr, pt;
+        FrDielectricRatio(CosTheta(wo), eta, &r, &t, &den); // R = r / den, T = t / den
+        // eta == 1 is a pure pass-through: R = 0, T = 1 exactly rather than trusting rounding
+        if (!not_index_matched()) {
+            r = V(0);
+            t = den;
+        }
+        lobe_probs(r, t, sample_flags, &pr, &pt);
         Mask<V> reflect = ChooseFirstLobe(uc, pr, pt);
         // Specular reflection about +z, or refraction through the flat interface.
         Vec3<V> wr(-wo.x, -wo.y, wo.z), wt;
@@ -126,9 +133,8 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
         Mask<V> refr_ok = Refract(wo, Vec3<V>(V(0), V(0), V(1)), eta, &etap, &wt, &inv_etap);
         s.wi = select(reflect, wr, wt);
         V cos_i = DeltaAbsCos(s.wi);
-        V ft = V(1) - R;
-        ft = mode == TransportMode::Radiance ? ft * sqr(inv_etap) : ft;
-        s.f = Spectrum<V>(select(reflect, R, ft) / cos_i);
+        V ft = mode == TransportMode::Radiance ? t * sqr(inv_etap) : t;
+        s.f = Spectrum<V>(select(reflect, r, ft) / (den * cos_i));
         s.pdf = select(reflect, pr, pt) / (pr + pt);
         s.flags = lobe_flag<V>(SpecularReflection, !reflect);
         s.eta = select(reflect, V(1), etap);
@@ -140,39 +146,49 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
     // Only the chosen lobe's value is computed. pdf = G1(wo) D / (4 cos_o) = 1 / (D_denom P)
     // for reflection, times 4 |wo.wm| |wi.wm| / (wi.wm + wo.wm / etap)^2 for transmission
     // (the half-vector Jacobian), P = 2 (cos_o + R_o); f as in f(). The lobe probabilities are
-    // FrDielectricRatio's numerators r : t (= R : T), its denominator joins f's division:
-    // 4 divisions (2 in Sample_wm, f, pdf), 7 square roots per element.
+    // FrDielectricRatio's numerators r : t (= R : T), its denominator joins f's division.
+    // Written in the sampled normal m = wm |m| unnormalized (Sample_wm_h), as f() is in h:
+    // FrDielectricRatioScaled at wo.m with |m|^2 (its numerators and denominator scale alike),
+    // D_denom(m) = D_denom(wm) |m|^4, the Jacobian's ratio is of degree 0 in m, the mirror
+    // direction is 2 (wo.m) m / |m|^2 - wo and the refracted one -wo / etap + (|wo.m| / etap -
+    // cos_t |m|) n / |m|^2 (n = +-m toward wo; cos_t |m| from the Fresnel term): 3 divisions
+    // (|m|^2, f, pdf), 6 square roots per element.
     template <typename V>
     BSDFSample<V> sample_rough(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode mode, uint8_t sample_flags) const {
         BSDFSample<V> s;
-        Vec3<V> wm = mfd.Sample_wm(wo, u);
-        V wo_wm = dot(wo, wm);
-        V r, t, den, pr, pt;
-        FrDielectricRatio(wo_wm, eta, &r, &t, &den); // R = r / den, T = t / den
+        V len2;
+        Vec3<V> m = mfd.Sample_wm_h(wo, u, &len2);
+        V wo_m = dot(wo, m);
+        V r, t, den, pr, pt, cos_t;
+        FrDielectricRatioScaled(wo_m, len2, eta, &r, &t, &den, &cos_t); // R = r / den, T = t / den
         lobe_probs(r, t, sample_flags, &pr, &pt);
         Mask<V> reflect = ChooseFirstLobe(uc, pr, pt);
-        V cos_o = CosTheta(wo);
+        V cos_o = CosTheta(wo), inv_len2 = V(1) / len2;
 
-        // Reflection about the sampled normal, or refraction through it.
-        Vec3<V> wr = Reflect(wo, wm), wt;
-        V etap, inv_etap;
-        Mask<V> ok_t = Refract(wo, wm, eta, &etap, &wt, &inv_etap);
+        // Reflection about the sampled normal, or refraction through it (Refract in m's units).
+        Vec3<V> wr = m * (V(2) * wo_m * inv_len2) - wo;
+        Mask<V> inside = wo_m < V(0);
+        V inv_eta(F(1) / eta);
+        V etap = select(inside, inv_eta, V(eta)), inv_etap = select(inside, V(eta), inv_eta);
+        Mask<V> ok_t = cos_t > V(0); // not total internal reflection (nor a grazing wo.m = 0)
+        Vec3<V> n = select(inside, -m, m);
+        Vec3<V> wt = -wo * inv_etap + n * ((abs(wo_m) * inv_etap - cos_t) * inv_len2);
         // wt.z == 0 is left to the BSDF-level check on wi.z (bsdf_sample).
         Mask<V> ok = (reflect & SameHemisphere(wo, wr)) | (!reflect & ok_t & !SameHemisphere(wo, wt));
         ok &= ((pr + pt) > V(0)) & (cos_o != V(0));
         Vec3<V> wi = select(reflect, wr, wt);
 
-        V abs_o = abs(cos_o), root_o = mfd.smith_root(wo);
-        V dd = mfd.D_denom(wm, ok);
-        // Transmission: 4 |wo.wm| |wi.wm| / (wi.wm + wo.wm / etap)^2; reflection: 1.
-        V wi_wm = dot(wi, wm);
-        V jac_num = select(reflect, V(1), V(4) * abs(wo_wm * wi_wm));
-        V jac_den = select(reflect, V(1), sqr(wi_wm + wo_wm * inv_etap));
+        V abs_o = abs(cos_o), root_o = mfd.smith_root(wo), l4 = sqr(len2);
+        V dd = mfd.D_denom(m, ok, len2); // D_denom(wm) |m|^4
+        // Transmission: 4 |wo.m| |wi.m| / (wi.m + wo.m / etap)^2; reflection: 1.
+        V wi_m = dot(wi, m);
+        V jac_num = select(reflect, V(1), V(4) * abs(wo_m * wi_m));
+        V jac_den = select(reflect, V(1), sqr(wi_m + wo_m * inv_etap));
         V ft = mode == TransportMode::Radiance ? t * sqr(inv_etap) : t;
-        s.pdf = select(ok, select(reflect, pr, pt) * jac_num /
+        s.pdf = select(ok, select(reflect, pr, pt) * jac_num * l4 /
                                (dd * mfd.reflection_pdf_denom(abs_o, root_o) * jac_den * (pr + pt)), V(0));
         V gd = mfd.G_denom(abs_o, AbsCosTheta(wi), root_o, mfd.smith_root(wi));
-        s.f = Spectrum<V>(select(reflect, r, ft) * jac_num / (den * dd * gd * jac_den));
+        s.f = Spectrum<V>(select(reflect, r, ft) * jac_num * l4 / (den * dd * gd * jac_den));
         s.wi = wi;
         s.flags = lobe_flag<V>(GlossyReflection, !reflect);
         s.eta = select(reflect, V(1), etap);

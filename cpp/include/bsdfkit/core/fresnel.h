@@ -16,8 +16,10 @@ namespace bsdfkit {
 // FrDielectricRatioScaled takes the cosine times a length, c = cos_i |h|, and len2 = |h|^2 (a
 // half vector h that was never normalized): a, b, the numerators and den all scale by |h|^4, so
 // the ratios R and T do not change and the caller saves the normalization's root and division.
+// cos_t_out (optional): the transmitted cosine times |h| (>= 0; 0 under total internal
+// reflection), what Refract's homogeneous form needs.
 template <typename F, typename E>
-inline void FrDielectricRatioScaled(F cos_i, F len2, E eta_, F *r_num, F *t_num, F *den) {
+inline void FrDielectricRatioScaled(F cos_i, F len2, E eta_, F *r_num, F *t_num, F *den, F *cos_t_out = nullptr) {
     Mask<F> inside = cos_i < F(0);
     F eta(eta_), inv_eta = F(E(1) / eta_); // a scalar division for a scalar eta
     F inv_etap = select(inside, eta, inv_eta);
@@ -28,6 +30,7 @@ inline void FrDielectricRatioScaled(F cos_i, F len2, E eta_, F *r_num, F *t_num,
     F sin2_t = (len2 - select(c2 > len2, len2, c2)) * sqr(inv_etap);
     Mask<F> tir = sin2_t >= len2;
     F cos_t = safe_sqrt(len2 - sin2_t);
+    if (cos_t_out) *cos_t_out = cos_t;
     F a = eta * cos_i + cos_t, b = cos_i + eta * cos_t;     // parallel / perpendicular denominators
     F a2 = sqr(a), b2 = sqr(b);
     // a = b = 0 only at cos_i = 0 with cos_t = 0 (grazing TIR): then R = 1, T = 0.

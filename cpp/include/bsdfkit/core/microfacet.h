@@ -109,7 +109,14 @@ template <typename F> struct TrowbridgeReitz {
     // (no division on the sampler's critical path): b = a L = u.x (L + v.z), sin L = sqrt(b (2 L -
     // b)), and h L = (sin L cos phi + v.x, sin L sin phi + v.y, (L - b) + v.z), whose unstretched
     // direction is the same (h.z's floor 1e-6 becomes 1e-6 L).
+    // Sample_wm_h: the sampled normal unnormalized (wm = m / |m|), |m|^2 in *len2, for callers
+    // that write their terms homogeneous in it (Conductor, Dielectric: no root and division).
     template <typename V> Vec3<V> Sample_wm(const Vec3<V> &w, Point2<V> u) const {
+        V len2;
+        Vec3<V> m = Sample_wm_h(w, u, &len2);
+        return m / sqrt(len2);
+    }
+    template <typename V> Vec3<V> Sample_wm_h(const Vec3<V> &w, Point2<V> u, V *len2) const {
         using S = scalar_t<V>;
         Vec3<V> v(alpha_x * w.x, alpha_y * w.y, w.z);
         v = select(v.z < V(0), -v, v);
@@ -118,7 +125,9 @@ template <typename F> struct TrowbridgeReitz {
         V sin_l = sqrt(max_(V(0), b * (V(2) * L - b))), sp, cp;
         sincos_(V(2 * Pi<S>) * u.y, &sp, &cp);
         Vec3<V> h(sin_l * cp + v.x, sin_l * sp + v.y, (L - b) + v.z);
-        return normalize(Vec3<V>(alpha_x * h.x, alpha_y * h.y, max_(V(1e-6) * L, h.z)));
+        Vec3<V> m(alpha_x * h.x, alpha_y * h.y, max_(V(1e-6) * L, h.z));
+        *len2 = dot(m, m);
+        return m;
     }
 
     // Roughen near-specular lobes for path regularization (pbrt-v4 Regularize).
