@@ -361,6 +361,13 @@ template <typename F> struct PlasticBxDF {
     // when both vanish (a black material), so that p = 0.
     template <typename V> void lobe_weights(V r, V t, V *ps, V *pd) const {
         V a = r * V(spec_weight), b = t * V(F(1) - spec_weight);
+        // 0 < w < 1 (both lobes present): a + b >= min(w, 1 - w) (r + t) > 0 for every lane the
+        // caller keeps (r, t >= 0, not both 0), so the selects below change nothing
+        if (spec_weight > F(0) && spec_weight < F(1)) {
+            *ps = a;
+            *pd = b;
+            return;
+        }
         Mask<V> some = a + b > V(0);
         *ps = select(some, a, V(0));
         *pd = select(some, b, V(1));
@@ -422,10 +429,14 @@ template <typename F> struct PlasticBxDF {
         return (pd * CosineHemispherePDF(i.z) * x + ps * c.l4) / ((ps + pd) * x);
     }
 
-    // Two-sided: o, i mirrored into wo's hemisphere (the sign s applies to wi as well).
+    // Two-sided: o, i mirrored into wo's hemisphere (the sign s applies to wi as well). f and pdf
+    // flip only z (mirror_z): every term they take of x and y is even in the pair's common sign
+    // (|h|^2, D_denom's squares, o.h, Smith's roots), so the values are those of the full flip,
+    // bit for bit; the sampler flips all of wo (its azimuth matters) and maps wi back.
+    template <typename V> static Vec3<V> mirror_z(const Vec3<V> &w, V s) { return Vec3<V>(w.x, w.y, w.z * s); }
     template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
         V s = select(wo.z < V(0), V(-1), V(1));
-        Vec3<V> o = wo * s, i = wi * s;
+        Vec3<V> o = mirror_z(wo, s), i = mirror_z(wi, s);
         Mask<V> active = (o.z > V(0)) & (i.z > V(0));
         Spectrum<V> v;
         if (smooth) {
@@ -440,7 +451,7 @@ template <typename F> struct PlasticBxDF {
 
     template <typename V> V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
         V s = select(wo.z < V(0), V(-1), V(1));
-        Vec3<V> o = wo * s, i = wi * s;
+        Vec3<V> o = mirror_z(wo, s), i = mirror_z(wi, s);
         Mask<V> active = (o.z > V(0)) & (i.z > V(0)) & Mask<V>((sample_flags & RT_Reflection) != 0);
         V p;
         if (smooth) {
