@@ -111,7 +111,7 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3,
         // a delta lobe evaluates to 0: a per-model (uniform) branch, not a lane mask
         if (mfd.effectively_smooth()) return Spectrum<V, NC>(V(0));
         V cos_o = AbsCosTheta(wo), cos_i = AbsCosTheta(wi);
-        Mask<V> active = SameHemisphere(wo, wi) & Mask<V>(!mfd.effectively_smooth());
+        Mask<V> active = SameHemisphere(wo, wi);
         V len2;
         Vec3<V> h = reflection_half_vector_h(wo, wi, active, &len2);
         V denom = mfd.D_denom(h, active, len2) *
@@ -173,7 +173,7 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3,
     V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
         if (mfd.effectively_smooth()) return V(0); // a delta lobe (as f)
         Mask<V> active = SameHemisphere(wo, wi) &
-                         Mask<V>(((sample_flags & RT_Reflection) != 0) & !mfd.effectively_smooth());
+                         Mask<V>((sample_flags & RT_Reflection) != 0);
         V len2;
         Vec3<V> h = reflection_half_vector_h(wo, wi, active, &len2);
         V dd = mfd.D_denom(h, active, len2);

@@ -93,7 +93,7 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
         if (is_smooth()) return Spectrum<V>(V(0));
         Vec3<V> h;
         V etap, len2;
-        Mask<V> active = half_vector(wo, wi, &h, &etap, &len2) & Mask<V>(!is_smooth());
+        Mask<V> active = half_vector(wo, wi, &h, &etap, &len2);
         V cos_o = CosTheta(wo), cos_i = CosTheta(wi);
         Mask<V> reflect = cos_i * cos_o > V(0);
         V r, t, den;
@@ -206,7 +206,7 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
         if (is_smooth()) return V(0); // delta lobes (as f)
         Vec3<V> h;
         V etap, len2;
-        Mask<V> ok = half_vector(wo, wi, &h, &etap, &len2) & Mask<V>(!is_smooth());
+        Mask<V> ok = half_vector(wo, wi, &h, &etap, &len2);
         Mask<V> reflect = CosTheta(wi) * CosTheta(wo) > V(0);
         V r, t, den, pr, pt;
         V wo_h = dot(wo, h);
