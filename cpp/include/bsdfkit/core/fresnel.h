@@ -13,6 +13,18 @@ namespace bsdfkit {
 // denominator 2 a^2 b^2 serve both. eta is a scalar or V. FrDielectricRatio gives the two
 // numerators over that denominator (R = r / den, T = t / den; den = 1 where R = 1, T = 0), for
 // callers that fold den into a division of their own.
+// The Fresnel formulas themselves, from cos_i, cos_t >= 0 (both times the same length) and the
+// relative IOR eta on the incident side: the squared parallel / perpendicular denominators
+// a^2 = (eta cos_i + cos_t)^2, b^2 = (cos_i + eta cos_t)^2, and R = r / den, T = t / den.
+template <typename F> inline void FrDielectricNumerators(F cos_i, F cos_t, F eta, F *a2, F *b2, F *r, F *t, F *den) {
+    F a = eta * cos_i + cos_t, b = cos_i + eta * cos_t;
+    *a2 = sqr(a);
+    *b2 = sqr(b);
+    F pa = eta * cos_i - cos_t, pb = cos_i - eta * cos_t;
+    *den = F(2) * *a2 * *b2;
+    *r = sqr(pa) * *b2 + sqr(pb) * *a2;
+    *t = F(4) * eta * cos_i * cos_t * (*a2 + *b2);
+}
 // FrDielectricRatioScaled takes the cosine times a length, c = cos_i |h|, and len2 = |h|^2 (a
 // half vector h that was never normalized): a, b, the numerators and den all scale by |h|^4, so
 // the ratios R and T do not change and the caller saves the normalization's root and division.
@@ -31,14 +43,13 @@ inline void FrDielectricRatioScaled(F cos_i, F len2, E eta_, F *r_num, F *t_num,
     Mask<F> tir = sin2_t >= len2;
     F cos_t = safe_sqrt(len2 - sin2_t);
     if (cos_t_out) *cos_t_out = cos_t;
-    F a = eta * cos_i + cos_t, b = cos_i + eta * cos_t;     // parallel / perpendicular denominators
-    F a2 = sqr(a), b2 = sqr(b);
+    F a2, b2, r, t, d;
+    FrDielectricNumerators(cos_i, cos_t, eta, &a2, &b2, &r, &t, &d);
     // a = b = 0 only at cos_i = 0 with cos_t = 0 (grazing TIR): then R = 1, T = 0.
     Mask<F> ok = (a2 * b2 > F(0)) & !tir;
-    F pa = eta * cos_i - cos_t, pb = cos_i - eta * cos_t;
-    *den = select(ok, F(2) * a2 * b2, F(1));
-    *r_num = select(ok, sqr(pa) * b2 + sqr(pb) * a2, F(1));
-    *t_num = select(ok, F(4) * eta * cos_i * cos_t * (a2 + b2), F(0));
+    *den = select(ok, d, F(1));
+    *r_num = select(ok, r, F(1));
+    *t_num = select(ok, t, F(0));
 }
 template <typename F, typename E> inline void FrDielectricRatio(F cos_i, E eta, F *r_num, F *t_num, F *den) {
     FrDielectricRatioScaled(clamp(cos_i, F(-1), F(1)), F(1), eta, r_num, t_num, den);
@@ -52,12 +63,8 @@ template <typename F, typename E> inline void FrDielectricRatio(F cos_i, E eta, 
 template <typename F, typename E>
 inline void FrDielectricRatioScaledAbove(F cos_i, F len2, E eta, F *r_num, F *t_num, F *den) {
     const E inv_eta2 = E(1) / (eta * eta); // a scalar division
-    F cos_t = safe_sqrt(len2 - (len2 - sqr(cos_i)) * F(inv_eta2));
-    F ec = F(eta) * cos_i, et = F(eta) * cos_t;
-    F a2 = sqr(ec + cos_t), b2 = sqr(cos_i + et);
-    *den = F(2) * a2 * b2;
-    *r_num = sqr(ec - cos_t) * b2 + sqr(cos_i - et) * a2;
-    *t_num = F(4) * ec * cos_t * (a2 + b2);
+    F cos_t = safe_sqrt(len2 - (len2 - sqr(cos_i)) * F(inv_eta2)), a2, b2;
+    FrDielectricNumerators(cos_i, cos_t, F(eta), &a2, &b2, r_num, t_num, den);
 }
 // FrDielectricRatio for cos_i > 0 (|h| = 1 above).
 template <typename F, typename E> inline void FrDielectricRatioAbove(F cos_i, E eta, F *r_num, F *t_num, F *den) {
