@@ -11,10 +11,14 @@ namespace bsdfkit {
 // Last line of defence at the degenerate limits (both cosines underflowing, G -> 0 against a
 // vanishing Jacobian): a value that is not a finite non-negative number becomes 0. The
 // models' own guards cover every regular case; tests compare those against references.
+// Packets: finite_or_zero, and 0 where `zero` is set as well, in the same one blend with zero
+// (core/simd.h not_finite_nonneg: the same lanes as the scalar compares).
+template <typename F, std::enable_if_t<is_packet_v<F>, int> = 0> inline F finite_or_zero(F v, Mask<F> zero) {
+    return drjit::select(zero | not_finite_nonneg(v), F(0), v);
+}
 template <typename F> inline F finite_or_zero(F v) {
     if constexpr (is_packet_v<F>) {
-        // one blend with zero on the failing lanes (core/simd.h not_finite_nonneg): the same bits
-        return drjit::select(not_finite_nonneg(v), F(0), v);
+        return finite_or_zero(v, Mask<F>(false));
     } else {
         // Two float selects rather than one select on (a && b): GCC 12's vectorizer cannot handle
         // the boolean-valued COND_EXPRs that if-conversion makes of the && form.
@@ -59,9 +63,8 @@ template <typename Model, typename F>
 inline auto bsdf_f(const Model &m, const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode) {
     auto v = m.f(wo, wi, mode);  // Spectrum<F, N>: N = 3 (RGB) or 4 (spectral)
     if constexpr (is_packet_v<F>) {
-        // one mask per channel, one blend with zero: finite_or_zero's lanes and wo.z = 0
-        Mask<F> side = wo.z == F(0);
-        for (int c = 0; c < decltype(v)::Size; ++c) v[c] = drjit::select(side | not_finite_nonneg(v[c]), F(0), v[c]);
+        Mask<F> horizon = wo.z == F(0);
+        for (int c = 0; c < decltype(v)::Size; ++c) v[c] = finite_or_zero(v[c], horizon);
         return v;
     } else {
         v = finite_or_zero(v);
@@ -73,7 +76,7 @@ template <typename Model, typename F>
 inline F bsdf_pdf(const Model &m, const Vec3<F> &wo, const Vec3<F> &wi, TransportMode mode, uint8_t sf) {
     F p = m.pdf(wo, wi, mode, sf);
     if constexpr (is_packet_v<F>) {
-        return drjit::select((wo.z == F(0)) | not_finite_nonneg(p), F(0), p);
+        return finite_or_zero(p, wo.z == F(0));
     } else {
         p = finite_or_zero(p);
         return select(wo.z != F(0), p, F(0));
