@@ -1,5 +1,5 @@
-// Scene of the preview renderer: spheres, triangle meshes and fibres (round Catmull-Rom curves) in an
-// Embree 3 BVH, one material (or a checkerboard of two) per object, distant lighting and ray queries.
+// Scene of the preview renderer: spheres (Embree user geometry with the analytic intersection of
+// scene.cpp), triangle meshes and fibres (round Catmull-Rom curves) in an Embree 3 BVH, one material (or a checkerboard of two) per object, distant lighting and ray queries.
 //
 // Fibres. A curve hit at parameter u of a segment has the axis point c(u), the unit tangent T(u) and
 // the radius r(u) (Embree's own interpolation of the control points, rtcInterpolate1). Its frame:
@@ -22,6 +22,7 @@
 #include <embree3/rtcore.h>
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,12 @@ struct Object {
     std::vector<Float> vertices;     // mesh: x, y, z per vertex
     std::vector<uint32_t> indices;   // mesh: 3 per triangle, counter-clockwise seen from outside
     RTCGeometry geometry = nullptr;  // curves: retained for rtcInterpolate1 (released by ~Scene)
+};
+
+// A sphere as its Embree user geometry sees it (scene.cpp).
+struct SphereGeom {
+    Vec3f center;
+    Float radius;
 };
 
 // Surface point: position, outward geometric normal (for fibres: the frame's z, see above), a
@@ -92,6 +99,7 @@ public:
 
 private:
     void curve_hit(const Object &ob, const RTCRayHit &rh, Hit *hit) const;
+    std::vector<std::unique_ptr<SphereGeom>> spheres_;  // user data of the spheres' Embree geometries
     RTCDevice device_ = nullptr;
     RTCScene scene_ = nullptr;
     bool committed_ = false;
