@@ -238,10 +238,11 @@ struct Tracer {
     // ---- passes A and C ----
 
     // The environment passes of a bounce (see EnvRay). Surface hits draw their environment
-    // sample's uniforms first (every hit, as a one-path-at-a-time tracer would); the alias-table
-    // walk runs as a tight scalar loop (its cache misses overlap); the lat-long arithmetic and the
-    // texel lookups of escaped rays and of the samples run on packets (the tails padded, lanes
-    // independent), lane by lane the scalar functions of Environment.
+    // sample's uniforms first (every hit, as a one-path-at-a-time tracer would); then the
+    // alias-table walk, the lat-long arithmetic and the texel lookups of the samples, and those
+    // of escaped rays, run on packets (the tails padded, lanes independent; gathers let the
+    // table and texel cache misses of 16 lanes overlap), lane by lane the scalar functions of
+    // Environment.
     void environment_pass(Wave &w) const {
         const size_t nr = w.rays.size();
         const Environment &env = scene.env;
@@ -276,7 +277,6 @@ struct Tracer {
         }
         using I = Environment::IntOf<P>;
         alignas(64) Float a[4][kPacketWidth];
-        alignas(64) int32_t ti[kPacketWidth];
         // escaped rays: radiance and pdf of their direction
         const int nm = int(w.miss_rays.size());
         for (int i0 = 0; i0 < nm; i0 += kPW) {
@@ -297,24 +297,23 @@ struct Tracer {
                 e.pdf = a[3][j];
             }
         }
-        // surface hits: the cell of their environment sample (alias table, scalar)
-        for (int k : w.hit_rays) {
-            const Path &p = w.paths[size_t(w.ray_path[size_t(k)])];
-            EnvRay &e = w.env[size_t(k)];
-            env.sample_cell(p.env_u0, p.env_u1, &e.uu, &e.vv, &e.texel);
-        }
-        // ... and its direction, pdf and radiance
+        // surface hits: their environment sample (cell, direction, pdf, radiance)
+        using D = drjit::float64_array_t<P>;
+        alignas(64) double u0[kPacketWidth];
         const int nh = int(w.hit_rays.size());
         for (int i0 = 0; i0 < nh; i0 += kPW) {
             int cnt = std::min(kPW, nh - i0);
             for (int j = 0; j < kPW; ++j) {
-                const EnvRay &e = w.env[size_t(w.hit_rays[size_t(i0 + std::min(j, cnt - 1))])];
-                a[0][j] = e.uu, a[1][j] = e.vv, ti[j] = e.texel;
+                const Path &p = w.paths[size_t(w.ray_path[size_t(w.hit_rays[size_t(i0 + std::min(j, cnt - 1))])])];
+                u0[j] = p.env_u0;
+                a[1][j] = p.env_u1;
             }
+            P uu, vv;
+            I texel;
+            env.sample_cell(drjit::load_aligned<D>(u0), drjit::load_aligned<P>(a[1]), &uu, &vv, &texel);
             Vec3<P> wi;
             P pdf;
-            Spectrum<P> le = env.sample_finish(drjit::load_aligned<P>(a[0]), drjit::load_aligned<P>(a[1]),
-                                               drjit::load_aligned<I>(ti), &wi, &pdf);
+            Spectrum<P> le = env.sample_finish(uu, vv, texel, &wi, &pdf);
             alignas(64) Float o[7][kPacketWidth];
             for (int k = 0; k < 3; ++k) drjit::store_aligned(o[k], le[k]);
             drjit::store_aligned(o[3], wi.x);

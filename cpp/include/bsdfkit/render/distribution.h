@@ -3,6 +3,7 @@
 // distribution", 1991). The environment map samples its pixel cells with it.
 #pragma once
 #include <cstdint>
+#include <drjit/packet.h>
 #include <vector>
 
 namespace bsdfkit::render {
@@ -65,6 +66,23 @@ struct AliasTable {
         double r = keep ? frac / t : (frac - t) / (1.0 - t);
         *remainder = r < 1.0 ? (r > 0.0 ? r : 0.0) : 0x1.fffffffffffffp-1;
         return keep ? uint32_t(i) : e.alias;
+    }
+
+    // sample() on packets (D: a double packet, I: its int32 packet), lane by lane the same
+    // arithmetic: one division per lane (the one the scalar branch takes).
+    template <typename D, typename I> I sample(const D &u, D *remainder) const {
+        const int n = int(size());
+        D x = u * D(double(n));
+        I i = drjit::minimum(I(x), I(n - 1));  // x >= 0: the conversion truncates as size_t(x)
+        const void *base = static_cast<const void *>(entries.data());
+        using F = drjit::float32_array_t<D>;
+        D t = D(drjit::gather<F>(base, i * I(2)));  // Entry: threshold, alias
+        I alias = drjit::gather<I>(base, i * I(2) + I(1));
+        D frac = x - D(i);
+        auto keep = frac < t;
+        D r = drjit::select(keep, frac, frac - t) / drjit::select(keep, t, D(1.0) - t);
+        *remainder = drjit::select(r < D(1.0), drjit::select(r > D(0.0), r, D(0.0)), D(0x1.fffffffffffffp-1));
+        return drjit::select(keep, i, alias);
     }
 };
 

@@ -236,6 +236,22 @@ struct Environment {
         V puv = texel_at<V>((y * I(width + 1) + x) * I(4) + I(3)) * V(Float(width)) * V(Float(height));
         *pdf_out = select(st > V(0), puv / (V(Float(2) * Pi<Float> * Pi<Float>) * st), V(0));
     }
+    // sample_cell lane by lane (a lat-long map with a non-empty table). c / width as a double
+    // quotient truncated: exact for c < 2^31 (the remainder's gap 1/width is far above the
+    // quotient's rounding).
+    template <typename V>
+    void sample_cell(const drjit::float64_array_t<V> &u0, const V &u1, V *uu, V *vv, IntOf<V> *texel) const {
+        using I = IntOf<V>;
+        using D = drjit::float64_array_t<V>;
+        D rem;
+        I c = cells.template sample<D, I>(u0, &rem);
+        I y = I(D(c) / D(double(width)));
+        I x = c - y * I(width);
+        V a = (V(x) + V(rem)) / V(Float(width)), b = (V(y) + u1) / V(Float(height));
+        *uu = select(a < V(1), a, V(0x1.fffffep-1f));
+        *vv = select(b < V(1), b, V(0x1.fffffep-1f));
+        *texel = y * I(width + 1) + x;
+    }
     // sample_finish lane by lane (texel: stage 1's).
     template <typename V>
     Spectrum<V> sample_finish(const V &uu, const V &vv, const IntOf<V> &texel, Vec3<V> *wi, V *pdf_out) const {
