@@ -165,14 +165,11 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
         Mask<V> reflect = ChooseFirstLobe(uc, pr, pt);
         V cos_o = CosTheta(wo), inv_len2 = V(1) / len2;
 
-        // Reflection about the sampled normal, or refraction through it (Refract in m's units).
+        // Reflection about the sampled normal, or refraction through it (in m's units).
         Vec3<V> wr = m * (V(2) * wo_m * inv_len2) - wo;
-        Mask<V> inside = wo_m < V(0);
-        V inv_eta(F(1) / eta);
-        V etap = select(inside, inv_eta, V(eta)), inv_etap = select(inside, V(eta), inv_eta);
+        V etap, inv_etap;
+        Vec3<V> wt = RefractScaled(wo, m, wo_m, inv_len2, cos_t, eta, &etap, &inv_etap);
         Mask<V> ok_t = cos_t > V(0); // not total internal reflection (nor a grazing wo.m = 0)
-        Vec3<V> n = select(inside, -m, m);
-        Vec3<V> wt = -wo * inv_etap + n * ((abs(wo_m) * inv_etap - cos_t) * inv_len2);
         // wt.z == 0 is left to the BSDF-level check on wi.z (bsdf_sample).
         Mask<V> ok = (reflect & SameHemisphere(wo, wr)) | (!reflect & ok_t & !SameHemisphere(wo, wt));
         ok &= ((pr + pt) > V(0)) & (cos_o != V(0));

@@ -50,25 +50,35 @@ template <typename F> inline Vec3<F> Reflect(const Vec3<F> &wo, const Vec3<F> &n
     return -wo + F(2) * dot(wo, n) * n;
 }
 
-// Refraction of wi about n with relative IOR eta (inside/outside); handles wi below n by
+// Refraction through the normal m scaled by |m| (wm = m / |m|: a unit normal, or an unnormalized
+// sampled one) when the transmitted cosine is known in m's units, cos_t_m = cos_t |m| (e.g.
+// FrDielectricRatioScaled's): wt = -wi / etap + (|wi.m| / etap - cos_t_m) n / |m|^2, n = m turned
+// toward wi (pbrt-v4 Refract's direction; wi below m inverts eta). wi_m = wi . m, inv_len2 =
+// 1 / |m|^2. No square root; total internal reflection is the caller's (no cos_t_m).
+template <typename F, typename E>
+inline Vec3<F> RefractScaled(const Vec3<F> &wi, const Vec3<F> &m, F wi_m, F inv_len2, F cos_t_m, E eta_, F *etap,
+                             F *inv_etap) {
+    Mask<F> inside = wi_m < F(0);
+    F eta(eta_), inv_eta = F(E(1) / eta_);
+    *inv_etap = select(inside, eta, inv_eta);
+    *etap = select(inside, inv_eta, eta);
+    Vec3<F> n = select(inside, -m, m);
+    return -wi * *inv_etap + n * ((abs(wi_m) * *inv_etap - cos_t_m) * inv_len2);
+}
+
+// Refraction of wi about the unit n with relative IOR eta (inside/outside); handles wi below n by
 // inverting eta. Returns false on total internal reflection (pbrt-v4 Refract). eta is a scalar
 // or V; one reciprocal of eta serves the whole formula.
 template <typename F, typename E>
-inline Mask<F> Refract(const Vec3<F> &wi, Vec3<F> n, E eta_, F *etap, Vec3<F> *wt, F *inv_etap_out = nullptr) {
-    F cos_i = dot(n, wi);
-    Mask<F> inside = cos_i < F(0);
-    F eta(eta_), inv_eta_s = F(E(1) / eta_);
-    F inv_eta = select(inside, eta, inv_eta_s); // 1 / etap
-    eta = select(inside, inv_eta_s, eta);
-    cos_i = abs(cos_i);
-    n = select(inside, -n, n);
-    F sin2_i = max_(F(0), F(1) - sqr(cos_i));
+inline Mask<F> Refract(const Vec3<F> &wi, const Vec3<F> &n, E eta_, F *etap, Vec3<F> *wt, F *inv_etap_out = nullptr) {
+    F cos_i = dot(n, wi), inv_etap;
+    F inv_eta = select(cos_i < F(0), F(eta_), F(E(1) / eta_));  // 1 / etap (RefractScaled's)
+    F sin2_i = max_(F(0), F(1) - sqr(abs(cos_i)));
     F sin2_t = sin2_i * sqr(inv_eta);
     Mask<F> tir = sin2_t >= F(1);
     F cos_t = safe_sqrt(F(1) - sin2_t);
-    *wt = -wi * inv_eta + (cos_i * inv_eta - cos_t) * n;
-    *etap = eta;
-    if (inv_etap_out) *inv_etap_out = inv_eta;
+    *wt = RefractScaled(wi, n, cos_i, F(1), cos_t, eta_, etap, &inv_etap);
+    if (inv_etap_out) *inv_etap_out = inv_etap;
     return !tir;
 }
 
