@@ -13,6 +13,15 @@ def random_dirs(rng, n, hemisphere=None, dtype=np.float64):
     return v.astype(dtype)
 
 
+def fibonacci_sphere(n):
+    """n unit vectors spread evenly over the sphere (a spherical Fibonacci lattice), float64 (n, 3)."""
+    k = np.arange(n) + 0.5
+    z = 1 - 2 * k / n
+    phi = k * np.pi * (3 - np.sqrt(5))
+    r = np.sqrt(1 - z * z)
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z], -1)
+
+
 def grazing_dirs(rng, n, zs, sign=1.0):
     """Directions with |z| taken from zs (cycled) and random azimuth."""
     z = np.resize(np.asarray(zs, dtype=np.float64), n) * sign

@@ -11,6 +11,7 @@ import pytest
 
 import bsdfkit as bk
 from bsdfkit import render as R
+from conftest import fibonacci_sphere
 
 LUM = np.array([0.2126, 0.7152, 0.0722])
 X = np.array([1.0, 0.0, 0.0])
@@ -20,14 +21,6 @@ def fibre_scene(model, radius=0.1, env="white"):
     """One straight fibre along world x through the origin (radius ``radius``)."""
     pts = np.array([[-3.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [3.0, 0.0, 0.0]])
     return R.Scene(environment=env).add_curves(model, pts[None], radius)
-
-
-def fibonacci_sphere(n):
-    k = np.arange(n) + 0.5
-    z = 1 - 2 * k / n
-    phi = k * math.pi * (3 - math.sqrt(5))
-    r = np.sqrt(1 - z * z)
-    return np.stack([r * np.cos(phi), r * np.sin(phi), z], -1)
 
 
 def unit(v):

@@ -9,6 +9,7 @@ import pytest
 
 import bsdfkit as bk
 from bsdfkit import render as R
+from conftest import fibonacci_sphere
 
 C = np.array([0.3, 1.2, -0.4])
 RADIUS = 0.9
@@ -52,19 +53,11 @@ def check_hit(sc, o, d, tol=2e-5):
     assert np.allclose(hit["n"], n, atol=tol), (hit["n"], n)
 
 
-def fib(n):
-    k = np.arange(n) + 0.5
-    z = 1 - 2 * k / n
-    phi = k * math.pi * (3 - math.sqrt(5))
-    r = np.sqrt(1 - z * z)
-    return np.stack([r * np.cos(phi), r * np.sin(phi), z], -1)
-
-
 def test_rays_from_far_away_hit_where_the_geometry_says():
     sc = scene()
     rng = np.random.default_rng(3)
     for dist in (3.0, 50.0, 1e3):
-        for w in fib(24):
+        for w in fibonacci_sphere(24):
             o = C + dist * w
             # aim at a random point of the sphere's disc seen from o (some miss: |offset| up to 1.2 r)
             target = C + 1.2 * RADIUS * (rng.random(3) - 0.5)
@@ -74,7 +67,7 @@ def test_rays_from_far_away_hit_where_the_geometry_says():
 def test_rays_leaving_the_surface_do_not_hit_it_again_and_rays_entering_hit_the_far_side():
     sc = scene()
     rng = np.random.default_rng(4)
-    for n in fib(40):
+    for n in fibonacci_sphere(40):
         p = C + RADIUS * n
         eps = 1e-4 * max(np.abs(p).max(), 1.0)   # the renderer's spawn offset (scene.h)
         # outward ray from just outside: leaves the sphere, no hit
@@ -92,7 +85,7 @@ def test_rays_leaving_the_surface_do_not_hit_it_again_and_rays_entering_hit_the_
 
 def test_rays_from_the_centre_hit_at_one_radius():
     sc = scene()
-    for d in fib(30):
+    for d in fibonacci_sphere(30):
         hit = sc.debug_hit(C.tolist(), d.tolist(), WI)
         assert hit is not None
         assert np.allclose(hit["p"], C + RADIUS * d, atol=2e-6)

@@ -4,6 +4,7 @@
 #include "bsdfkit/render/camera.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -79,45 +80,44 @@ inline double sphere_root(const SphereGeom &ob, float ox, float oy, float oz, fl
 void sphere_bounds(const RTCBoundsFunctionArguments *args) {
     const SphereGeom &ob = *static_cast<const SphereGeom *>(args->geometryUserPtr);
     RTCBounds *b = args->bounds_o;
-    // one ulp-ish margin so that a root on the box's face is not culled
-    float r = ob.radius * (1.f + 1e-6f);
-    b->lower_x = ob.center.x - r, b->lower_y = ob.center.y - r, b->lower_z = ob.center.z - r;
-    b->upper_x = ob.center.x + r, b->upper_y = ob.center.y + r, b->upper_z = ob.center.z + r;
+    // c -/+ r in double, rounded outward to float: no root is culled by the box's rounding
+    const float lo = -std::numeric_limits<float>::infinity(), hi = std::numeric_limits<float>::infinity();
+    auto down = [&](float c) { return std::nextafter(float(double(c) - double(ob.radius)), lo); };
+    auto up = [&](float c) { return std::nextafter(float(double(c) + double(ob.radius)), hi); };
+    b->lower_x = down(ob.center.x), b->lower_y = down(ob.center.y), b->lower_z = down(ob.center.z);
+    b->upper_x = up(ob.center.x), b->upper_y = up(ob.center.y), b->upper_z = up(ob.center.z);
+}
+// hit(i, t) for each valid ray i of the N meeting the sphere in (tnear, tfar), t its nearest root.
+template <typename OnHit> void sphere_hits(const void *geom, const int *valid, RTCRayN *ray, unsigned N, OnHit hit) {
+    const SphereGeom &ob = *static_cast<const SphereGeom *>(geom);
+    for (unsigned i = 0; i < N; ++i) {
+        if (!valid[i]) continue;
+        double t = sphere_root(ob, RTCRayN_org_x(ray, N, i), RTCRayN_org_y(ray, N, i), RTCRayN_org_z(ray, N, i),
+                               RTCRayN_dir_x(ray, N, i), RTCRayN_dir_y(ray, N, i), RTCRayN_dir_z(ray, N, i),
+                               RTCRayN_tnear(ray, N, i), RTCRayN_tfar(ray, N, i));
+        if (t >= 0.0) hit(i, t);
+    }
 }
 void sphere_intersect(const RTCIntersectFunctionNArguments *args) {
-    const SphereGeom &ob = *static_cast<const SphereGeom *>(args->geometryUserPtr);
     const unsigned N = args->N;
     RTCRayN *ray = RTCRayHitN_RayN(args->rayhit, N);
     RTCHitN *hit = RTCRayHitN_HitN(args->rayhit, N);
-    for (unsigned i = 0; i < N; ++i) {
-        if (!args->valid[i]) continue;
-        float &tfar = RTCRayN_tfar(ray, N, i);
-        double t = sphere_root(ob, RTCRayN_org_x(ray, N, i), RTCRayN_org_y(ray, N, i), RTCRayN_org_z(ray, N, i),
-                               RTCRayN_dir_x(ray, N, i), RTCRayN_dir_y(ray, N, i), RTCRayN_dir_z(ray, N, i),
-                               RTCRayN_tnear(ray, N, i), tfar);
-        if (t < 0.0) continue;
-        float tf = float(t);
-        if (!(tf < tfar)) continue;
+    sphere_hits(args->geometryUserPtr, args->valid, ray, N, [&](unsigned i, double t) {
+        float tf = float(t), &tfar = RTCRayN_tfar(ray, N, i);
+        if (!(tf < tfar)) return;
         tfar = tf;
         RTCHitN_u(hit, N, i) = 0.f;
         RTCHitN_v(hit, N, i) = 0.f;
         RTCHitN_primID(hit, N, i) = args->primID;
         RTCHitN_geomID(hit, N, i) = args->geomID;
         RTCHitN_instID(hit, N, i, 0) = args->context->instID[0];
-    }
+    });
 }
 void sphere_occluded(const RTCOccludedFunctionNArguments *args) {
-    const SphereGeom &ob = *static_cast<const SphereGeom *>(args->geometryUserPtr);
     const unsigned N = args->N;
     RTCRayN *ray = args->ray;
-    for (unsigned i = 0; i < N; ++i) {
-        if (!args->valid[i]) continue;
-        float &tfar = RTCRayN_tfar(ray, N, i);
-        double t = sphere_root(ob, RTCRayN_org_x(ray, N, i), RTCRayN_org_y(ray, N, i), RTCRayN_org_z(ray, N, i),
-                               RTCRayN_dir_x(ray, N, i), RTCRayN_dir_y(ray, N, i), RTCRayN_dir_z(ray, N, i),
-                               RTCRayN_tnear(ray, N, i), tfar);
-        if (t >= 0.0) tfar = -std::numeric_limits<float>::infinity();
-    }
+    sphere_hits(args->geometryUserPtr, args->valid, ray, N,
+                [&](unsigned i, double) { RTCRayN_tfar(ray, N, i) = -std::numeric_limits<float>::infinity(); });
 }
 } // namespace
 
