@@ -380,6 +380,16 @@ template <typename F> struct PlasticBxDF {
     template <typename V> Spectrum<V> f_smooth(V to, V den_o, const Vec3<V> &i) const {
         V ti, den_i;
         FrDielectricTransAbove(i.z, eta, &ti, &den_i);
+        return f_smooth_base(to, ti, den_o, den_i);
+    }
+    // The same at a cosine-hemisphere sample whose sin^2 (the disk radius^2) is known: the
+    // sampler's transmitted root runs beside the sample's z root instead of after it.
+    template <typename V> Spectrum<V> f_smooth(V to, V den_o, V cos_i, V sin2_i) const {
+        V ri, ti, den_i;
+        FrDielectricRatioAboveSin2(cos_i, sin2_i, eta, &ri, &ti, &den_i); // ri is dead code here
+        return f_smooth_base(to, ti, den_o, den_i);
+    }
+    template <typename V> Spectrum<V> f_smooth_base(V to, V ti, V den_o, V den_i) const {
         return to_lanes<V>(diffuse) * (to * ti / (den_o * den_i));
     }
 
@@ -471,7 +481,8 @@ template <typename F> struct PlasticBxDF {
         BSDFSample<V> r;
         V s = select(wo.z < V(0), V(-1), V(1));
         Vec3<V> o = wo * s;
-        Vec3<V> wd = SampleCosineHemisphere(u);
+        V sin2_d;
+        Vec3<V> wd = SampleCosineHemisphere(u, &sin2_d);
         Vec3<V> i;
         Mask<V> spec;
         if (smooth) {
@@ -485,7 +496,7 @@ template <typename F> struct PlasticBxDF {
             Vec3<V> ws(-o.x, -o.y, o.z);
             i = select(spec, ws, wd);
             Spectrum<V> fs = to_lanes<V>(Ks) * (ro / (den_o * DeltaAbsCos(ws)));
-            r.f = select(spec, fs, f_smooth(to, den_o, wd));
+            r.f = select(spec, fs, f_smooth(to, den_o, wd.z, sin2_d));
             // as pdf(): the base's share times the cosine density
             r.pdf = select(spec, p_spec, pd * inv * CosineHemispherePDF(wd.z));
             r.flags = select_flag<V>(spec, SpecularReflection, DiffuseReflection);

@@ -66,6 +66,15 @@ inline void FrDielectricRatioScaledAbove(F cos_i, F len2, E eta, F *r_num, F *t_
     F cos_t = safe_sqrt(len2 - (len2 - sqr(cos_i)) * F(inv_eta2)), a2, b2;
     FrDielectricNumerators(cos_i, cos_t, F(eta), &a2, &b2, r_num, t_num, den);
 }
+// FrDielectricRatioAbove (|h| = 1) when sin^2 of the incident angle is known on its own (e.g. a
+// cosine-hemisphere sample's disk radius^2): the transmitted cosine's root then does not wait for
+// cos_i's. 1 square root.
+template <typename F, typename E>
+inline void FrDielectricRatioAboveSin2(F cos_i, F sin2_i, E eta, F *r_num, F *t_num, F *den) {
+    const E inv_eta2 = E(1) / (eta * eta); // a scalar division
+    F cos_t = safe_sqrt(F(1) - sin2_i * F(inv_eta2)), a2, b2;
+    FrDielectricNumerators(cos_i, cos_t, F(eta), &a2, &b2, r_num, t_num, den);
+}
 // FrDielectricRatio for cos_i > 0 (|h| = 1 above).
 template <typename F, typename E> inline void FrDielectricRatioAbove(F cos_i, E eta, F *r_num, F *t_num, F *den) {
     FrDielectricRatioScaledAbove(cos_i, F(1), eta, r_num, t_num, den);

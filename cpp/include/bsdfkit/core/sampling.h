@@ -46,9 +46,11 @@ template <typename F> inline Point2<F> SampleUniformDiskConcentric(Point2<F> u, 
 // Malley's method: project the concentric disk up to the hemisphere.
 // z = sqrt(1 - r^2) from the disk's radius, r^2 = x^2 + y^2 (pbrt-v4 and Mitsuba take it from x and
 // y): the square root then runs beside the angle's sincos instead of after it.
-template <typename F> inline Vec3<F> SampleCosineHemisphere(Point2<F> u) {
+// *sin2_out (optional): sin^2 of the sample's angle to z, the disk radius^2 (exact, no 1 - z^2).
+template <typename F> inline Vec3<F> SampleCosineHemisphere(Point2<F> u, F *sin2_out = nullptr) {
     F r2;
     Point2<F> d = SampleUniformDiskConcentric(u, &r2);
+    if (sin2_out) *sin2_out = r2;
     F z = safe_sqrt(F(1) - r2);
     return {d.x, d.y, z};
 }
