@@ -74,8 +74,6 @@ struct Vertex {
 // per-hit set-up (their table and texel cache misses then overlap): for a surface hit the
 // environment sample of its vertex, for an escaped ray the radiance and pdf of its direction.
 struct EnvRay {
-    Float uu, vv;
-    int texel;  // of the sampled cell (Environment::sample_cell)
     Vec3f wi;
     RGB le;
     Float pdf;
@@ -270,8 +268,7 @@ struct Tracer {
             for (int k : w.hit_rays) {
                 const Path &p = w.paths[size_t(w.ray_path[size_t(k)])];
                 EnvRay &e = w.env[size_t(k)];
-                env.sample_cell(p.env_u0, p.env_u1, &e.uu, &e.vv, &e.texel);
-                e.le = env.sample_finish(p.env_u0, p.env_u1, e.uu, e.vv, e.texel, &e.wi, &e.pdf);
+                e.le = env.sample(p.env_u0, p.env_u1, &e.wi, &e.pdf);
             }
             return;
         }

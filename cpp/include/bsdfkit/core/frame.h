@@ -50,6 +50,17 @@ template <typename F> inline Vec3<F> Reflect(const Vec3<F> &wo, const Vec3<F> &n
     return -wo + F(2) * dot(wo, n) * n;
 }
 
+// The relative IOR seen from the side of a direction with cosine c to the normal (pbrt-v4's
+// flip): etap = eta above (c >= 0), 1 / eta below, and its reciprocal; one scalar division for a
+// scalar eta. Returns c < 0.
+template <typename F, typename E> inline Mask<F> RelativeEta(F c, E eta_, F *etap, F *inv_etap) {
+    Mask<F> inside = c < F(0);
+    F eta(eta_), inv_eta = F(E(1) / eta_);
+    *inv_etap = select(inside, eta, inv_eta);
+    *etap = select(inside, inv_eta, eta);
+    return inside;
+}
+
 // Refraction through the normal m scaled by |m| (wm = m / |m|: a unit normal, or an unnormalized
 // sampled one) when the transmitted cosine is known in m's units, cos_t_m = cos_t |m| (e.g.
 // FrDielectricRatioScaled's): wt = -wi / etap + (|wi.m| / etap - cos_t_m) n / |m|^2, n = m turned
@@ -58,10 +69,7 @@ template <typename F> inline Vec3<F> Reflect(const Vec3<F> &wo, const Vec3<F> &n
 template <typename F, typename E>
 inline Vec3<F> RefractScaled(const Vec3<F> &wi, const Vec3<F> &m, F wi_m, F inv_len2, F cos_t_m, E eta_, F *etap,
                              F *inv_etap) {
-    Mask<F> inside = wi_m < F(0);
-    F eta(eta_), inv_eta = F(E(1) / eta_);
-    *inv_etap = select(inside, eta, inv_eta);
-    *etap = select(inside, inv_eta, eta);
+    Mask<F> inside = RelativeEta(wi_m, eta_, etap, inv_etap);
     Vec3<F> n = select(inside, -m, m);
     return -wi * *inv_etap + n * ((abs(wi_m) * *inv_etap - cos_t_m) * inv_len2);
 }
@@ -71,10 +79,10 @@ inline Vec3<F> RefractScaled(const Vec3<F> &wi, const Vec3<F> &m, F wi_m, F inv_
 // or V; one reciprocal of eta serves the whole formula.
 template <typename F, typename E>
 inline Mask<F> Refract(const Vec3<F> &wi, const Vec3<F> &n, E eta_, F *etap, Vec3<F> *wt, F *inv_etap_out = nullptr) {
-    F cos_i = dot(n, wi), inv_etap;
-    F inv_eta = select(cos_i < F(0), F(eta_), F(E(1) / eta_));  // 1 / etap (RefractScaled's)
-    F sin2_i = max_(F(0), F(1) - sqr(abs(cos_i)));
-    F sin2_t = sin2_i * sqr(inv_eta);
+    F cos_i = dot(n, wi), etap_, inv_etap;
+    RelativeEta(cos_i, eta_, &etap_, &inv_etap);  // as RefractScaled (the same values)
+    F sin2_i = max_(F(0), F(1) - sqr(cos_i));
+    F sin2_t = sin2_i * sqr(inv_etap);
     Mask<F> tir = sin2_t >= F(1);
     F cos_t = safe_sqrt(F(1) - sin2_t);
     *wt = RefractScaled(wi, n, cos_i, F(1), cos_t, eta_, etap, &inv_etap);

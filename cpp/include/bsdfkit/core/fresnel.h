@@ -1,5 +1,6 @@
 // Fresnel reflectance for dielectric and conductor interfaces (unpolarised light).
 #pragma once
+#include "frame.h"
 #include "math.h"
 #include "spectrum.h"
 
@@ -32,10 +33,8 @@ template <typename F> inline void FrDielectricNumerators(F cos_i, F cos_t, F eta
 // reflection), what Refract's homogeneous form needs.
 template <typename F, typename E>
 inline void FrDielectricRatioScaled(F cos_i, F len2, E eta_, F *r_num, F *t_num, F *den, F *cos_t_out = nullptr) {
-    Mask<F> inside = cos_i < F(0);
-    F eta(eta_), inv_eta = F(E(1) / eta_); // a scalar division for a scalar eta
-    F inv_etap = select(inside, eta, inv_eta);
-    eta = select(inside, inv_eta, eta);
+    F eta, inv_etap;
+    RelativeEta(cos_i, eta_, &eta, &inv_etap);
     cos_i = abs(cos_i);
     // len2 sin^2 of the transmitted angle; cos^2 <= 1 (rounding past |h| clamped, a NaN kept)
     F c2 = sqr(cos_i);

@@ -1,5 +1,6 @@
 // Scene of the preview renderer: spheres (Embree user geometry with the analytic intersection of
-// scene.cpp), triangle meshes and fibres (round Catmull-Rom curves) in an Embree 3 BVH, one material (or a checkerboard of two) per object, distant lighting and ray queries.
+// scene.cpp), triangle meshes and fibres (round Catmull-Rom curves) in an Embree 3 BVH, one
+// material (or a checkerboard of two) per object, distant lighting and ray queries.
 //
 // Fibres. A curve hit at parameter u of a segment has the axis point c(u), the unit tangent T(u) and
 // the radius r(u) (Embree's own interpolation of the control points, rtcInterpolate1). Its frame:
