@@ -353,7 +353,7 @@ template <typename F> struct PlasticBxDF {
         V fi = floor(x), t, d;
         static_assert(kPlasticTableRes == 64, "lookup64x2 reads 64-entry tables");
         lookup64x2(table, slope, fi, &t, &d);
-        return t + (x - fi) * d;
+        return mul_add(x - fi, d, t);
     }
 
     // Lobe-choice weights of the coating (ps) and the base (pd) for the coating's reflectance
@@ -423,8 +423,10 @@ template <typename F> struct PlasticBxDF {
         V r, t, den;
         FrDielectricRatioScaledAbove(c.c_oh, c.len2, eta, &r, &t, &den); // o.h > 0 where c.ok
         V coat_v = r * c.l4 / (den * c.dd * mfd.G_denom(o.z, i.z, c.root_o, c.root_i));
-        Spectrum<V> v = to_lanes<V>(diffuse) * (T_o * transmittance(i.z));
-        return v + to_lanes<V>(Ks) * select(c.ok, coat_v, V(0));
+        Spectrum<V> v = to_lanes<V>(diffuse) * (T_o * transmittance(i.z)), ks = to_lanes<V>(Ks);
+        V coat = select(c.ok, coat_v, V(0));
+        for (int k = 0; k < 3; ++k) v[k] = mul_add(ks[k], coat, v[k]);
+        return v;
     }
 
     // Rough coating, o and i upper: the mixture density (1 - p) cos_i / pi + p / (D_denom(wm)
@@ -436,7 +438,7 @@ template <typename F> struct PlasticBxDF {
         lobe_weights(V(1) - T_o, T_o, &ps, &pd);
         V x = select(c.ok, c.dd * mfd.reflection_pdf_denom(o.z, c.root_o), V(1));
         ps = select(c.ok, ps, V(0));
-        return (pd * CosineHemispherePDF(i.z) * x + ps * c.l4) / ((ps + pd) * x);
+        return mul_add(pd * CosineHemispherePDF(i.z), x, ps * c.l4) / ((ps + pd) * x);
     }
 
     // Two-sided: o, i mirrored into wo's hemisphere (the sign s applies to wi as well). f and pdf

@@ -234,6 +234,13 @@ template <typename T, int K> inline Dual<T, K> pow(T x, const Dual<T, K> &y) { r
 template <typename T, int K> inline Dual<T, K> fma(const Dual<T, K> &a, const Dual<T, K> &b, const Dual<T, K> &c) {
     return a * b + c;
 }
+// mul_add's dual form (core/math.h): the value fused as in plain code, so eval_grad's value is eval's.
+template <typename T, int K> inline Dual<T, K> fmadd(const Dual<T, K> &a, const Dual<T, K> &b, const Dual<T, K> &c) {
+    Dual<T, K> r;
+    r.v = mul_add(a.v, b.v, c.v);
+    for (int i = 0; i < K; ++i) r.d[i] = a.d[i] * b.v + a.v * b.d[i] + c.d[i];
+    return r;
+}
 template <typename T, int K> inline Dual<T, K> copysign(const Dual<T, K> &mag, const Dual<T, K> &sgn) {
     bool flip = std::signbit(mag.v) != std::signbit(sgn.v);
     return flip ? -mag : mag;

@@ -71,6 +71,17 @@ template <typename Float> inline constexpr Float PiOver4 = Float(0.7853981633974
 
 // (sqr, safe_sqrt, clamp and lerp have Dr.Jit namesakes; core/simd.h overloads them for packets.)
 template <typename T> inline T sqr(T x) { return x * x; }
+// a * b + c rounded once where the CPU has FMA (one instruction), else a * b + c: the same arithmetic
+// for scalars, packets (drjit::fmadd) and dual numbers (core/dual.h), so every instantiation of a
+// model keeps the same bits (the build forbids the compiler's own contraction, CMakeLists.txt).
+template <typename T> inline T mul_add(const T &a, const T &b, const T &c) {
+#if defined(__FMA__)
+    if constexpr (std::is_arithmetic_v<T>) return std::fma(a, b, c);
+    else return fmadd(a, b, c);
+#else
+    return a * b + c;
+#endif
+}
 // max/min as selects: operands are finite in every use, and selects vectorize.
 template <typename T> inline T max_(T a, T b) { return select(a > b, a, b); }
 template <typename T> inline T min_(T a, T b) { return select(a < b, a, b); }
@@ -216,7 +227,7 @@ template <typename Float> struct Vec3 {
 template <typename Float> struct is_lane_struct<Vec3<Float>> : std::true_type {};
 template <typename Float> inline Vec3<Float> operator*(Float s, const Vec3<Float> &v) { return v * s; }
 template <typename Float> inline Float dot(const Vec3<Float> &a, const Vec3<Float> &b) {
-    return a.x * b.x + a.y * b.y + a.z * b.z;
+    return mul_add(a.x, b.x, mul_add(a.y, b.y, a.z * b.z));
 }
 template <typename Float> inline Float absdot(const Vec3<Float> &a, const Vec3<Float> &b) {
     return abs(dot(a, b));

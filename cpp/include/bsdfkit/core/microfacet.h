@@ -81,18 +81,20 @@ template <typename F> struct TrowbridgeReitz {
         using S = scalar_t<V>;
         V cos2 = Cos2Theta(wm);
         active &= cos2 * cos2 >= V(1e-16) * sqr(len2);
-        V q = cos2 + sqr(wm.x * V(S(1) / alpha_x)) + sqr(wm.y * V(S(1) / alpha_y));
+        V qx = wm.x * V(S(1) / alpha_x), qy = wm.y * V(S(1) / alpha_y);
+        V q = mul_add(qx, qx, mul_add(qy, qy, cos2));
         return V(Pi<S> * alpha_x * alpha_y) * sqr(q);
     }
     // |cos| sqrt(1 + alpha^2 tan^2) = sqrt(cos^2 + (ax x)^2 + (ay y)^2), so that
     // 1 + Lambda(w) = (|cos| + root) / (2 |cos|) (eq. 86): finite down to cos = 0.
     template <typename V> V smith_root(const Vec3<V> &w) const {
-        return sqrt(Cos2Theta(w) + sqr(w.x * alpha_x) + sqr(w.y * alpha_y));
+        V ax = w.x * alpha_x, ay = w.y * alpha_y;
+        return sqrt(mul_add(ax, ax, mul_add(ay, ay, Cos2Theta(w))));
     }
     // G(wo, wi) / (4 cos_o cos_i) = 1 / G_denom: height-correlated 2 (cos_i R_o + cos_o R_i),
     // separable (cos_o + R_o)(cos_i + R_i), with R = smith_root.
     template <typename V> V G_denom(V cos_o, V cos_i, V root_o, V root_i) const {
-        return masking == Masking::Correlated ? V(2) * (cos_i * root_o + cos_o * root_i)
+        return masking == Masking::Correlated ? V(2) * mul_add(cos_i, root_o, cos_o * root_i)
                                               : (cos_o + root_o) * (cos_i + root_i);
     }
     // PDF(w, wm) / (4 |w.wm|) = G1(w) D(wm) / (4 |cos|) = 1 / (2 (|cos| + R) / D): the
