@@ -30,7 +30,7 @@ inline constexpr int PMax = 3;
 // forms (drjit/math.h, Cephes-derived, about 1 ulp).
 
 // Modified Bessel function of the first kind, order 0: sum_{i<10} x^{2i} / (4^i (i!)^2) (pbrt-v4 I0),
-// by Horner's rule in x^2 (the coefficients are constants: 9 multiplications and 9 additions).
+// by Horner's rule in x^2 (the coefficients are constants: 9 fused multiply-adds).
 struct I0Coefficients {
     double c[10];
     constexpr I0Coefficients() : c{} {
@@ -45,7 +45,7 @@ inline constexpr I0Coefficients kI0{};
 template <typename F> inline F I0(F x) {
     using S = scalar_t<F>;
     F x2 = x * x, val = F(S(kI0.c[9]));
-    for (int i = 8; i >= 0; --i) val = val * x2 + F(S(kI0.c[i]));
+    for (int i = 8; i >= 0; --i) val = mul_add(val, x2, F(S(kI0.c[i])));
     return val;
 }
 
@@ -110,7 +110,7 @@ template <typename F> inline F LogisticCDF(F x, F s) { return F(1) / (F(1) + exp
 // Wrap an angle into [-pi, pi].
 template <typename F> inline F WrapPi(F x) {
     using S = scalar_t<F>;
-    return x - F(S(2) * Pi<S>) * floor((x + F(Pi<S>)) * F(Inv2Pi<S>));
+    return mul_add(F(-S(2) * Pi<S>), floor((x + F(Pi<S>)) * F(Inv2Pi<S>)), x);
 }
 
 // Trimmed logistic on [-pi, pi] (Chiang 2016 eq. 11): Logistic / (CDF(pi) - CDF(-pi)).
@@ -268,9 +268,9 @@ template <typename F, int NC = 3> struct HairBxDF {
     // sin^2 theta_o) floored at eta 1e-30 (cos theta_t > 0 unless eta == 1 at grazing): 1 division.
     template <typename V>
     void refracted(const Offset<V> &g, V sin_o, V cos_o, V *gamma_t, Spectrum<V, NC> *T) const {
-        V inv_den = V(1) / max_(safe_sqrt(V(eta2) - sin_o * sin_o), V(F(1e-30) * eta));
+        V inv_den = V(1) / max_(safe_sqrt(mul_add(-sin_o, sin_o, V(eta2))), V(F(1e-30) * eta));
         V sin_gt = clamp(g.h * cos_o * inv_den, V(-1), V(1));
-        V cos_gt = safe_sqrt(V(1) - sin_gt * sin_gt);
+        V cos_gt = safe_sqrt(mul_add(-sin_gt, sin_gt, V(1)));
         *gamma_t = asin(sin_gt);
         V len = cos_gt * V(eta) * inv_den;
         for (int c = 0; c < NC; ++c) (*T)[c] = exp(-V(two_sigma_a[c]) * len);
@@ -278,8 +278,8 @@ template <typename F, int NC = 3> struct HairBxDF {
 
     // theta_o rotated by the lobe's cuticle tilt; cos is taken as |cos| (pbrt-v4).
     template <typename V, typename S> static void tilted(S st, S ct, V sin_o, V cos_o, V *sin_p, V *cos_p) {
-        *sin_p = sin_o * V(ct) + cos_o * V(st);
-        *cos_p = abs(cos_o * V(ct) - sin_o * V(st));
+        *sin_p = mul_add(sin_o, V(ct), cos_o * V(st));
+        *cos_p = abs(mul_add(cos_o, V(ct), -(sin_o * V(st))));
     }
 
     // Everything that depends on wo alone: theta_o, gamma_t, Ap and the lobe weights.
@@ -291,7 +291,7 @@ template <typename F, int NC = 3> struct HairBxDF {
     template <typename V> Outgoing<V> outgoing(const Offset<V> &g, const Vec3<V> &wo) const {
         Outgoing<V> o;
         o.sin_o = wo.x;
-        o.cos_o = safe_sqrt(V(1) - o.sin_o * o.sin_o);
+        o.cos_o = safe_sqrt(mul_add(-o.sin_o, o.sin_o, V(1)));
         Spectrum<V, NC> T;
         refracted(g, o.sin_o, o.cos_o, &o.gamma_t, &T);
         hair::Ap(o.cos_o, eta, g.cos_gamma_o, T, o.ap);
@@ -302,7 +302,7 @@ template <typename F, int NC = 3> struct HairBxDF {
     // Mp Np of every lobe for wi at azimuth difference dphi (the p >= 3 lobe: Mp / (2 pi)).
     template <typename V>
     void lobes(const Offset<V> &g, const Outgoing<V> &o, const Vec3<V> &wi, V dphi, V mn[P + 1]) const {
-        V sin_i = wi.x, cos_i = safe_sqrt(V(1) - sin_i * sin_i);
+        V sin_i = wi.x, cos_i = safe_sqrt(mul_add(-sin_i, sin_i, V(1)));
         F inv_s = F(1) / s;
         for (int p = 0; p < P; ++p) {
             V sp, cp;
@@ -337,8 +337,8 @@ template <typename F, int NC = 3> struct HairBxDF {
         Spectrum<V, NC> sum = o.ap[0] * mn[0];
         V p = o.w[0] * mn[0];
         for (int q = 1; q <= P; ++q) {
-            sum = sum + o.ap[q] * mn[q];
-            p += o.w[q] * mn[q];
+            for (int c = 0; c < NC; ++c) sum[c] = mul_add(o.ap[q][c], mn[q], sum[c]);
+            p = mul_add(o.w[q], mn[q], p);
         }
         V c = AbsCosTheta(wi);
         if (f) *f = sum * (V(1) / select(c > V(0), c, V(1)));
