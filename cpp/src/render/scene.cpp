@@ -143,6 +143,7 @@ std::string Scene::add_sphere(const Vec3f &center, Float radius, int mat_a, int 
     o.mat_a = mat_a;
     o.mat_b = mat_b;
     o.checker = checker;
+    o.inv_checker = checker > Float(0) ? Float(1) / checker : Float(0);
     objects.push_back(std::move(o));
     return embree_status(device_, "sphere");
 }
@@ -175,6 +176,7 @@ std::string Scene::add_mesh(const Float *vertices, int64_t nv, const uint32_t *i
     o.mat_a = mat_a;
     o.mat_b = mat_b;
     o.checker = checker;
+    o.inv_checker = checker > Float(0) ? Float(1) / checker : Float(0);
     objects.push_back(std::move(o));
     return embree_status(device_, "mesh");
 }
@@ -335,7 +337,7 @@ void Scene::hit_point(const RTCRayHit &rh, Hit *hit) const {
     }
     int mat = ob.mat_a;
     if (ob.checker > Float(0)) {
-        long cx = long(std::floor(hit->p.x / ob.checker)), cz = long(std::floor(hit->p.z / ob.checker));
+        long cx = long(std::floor(hit->p.x * ob.inv_checker)), cz = long(std::floor(hit->p.z * ob.inv_checker));
         mat = ((cx + cz) & 1) ? ob.mat_b : ob.mat_a;
     }
     hit->material = mat;

@@ -21,9 +21,12 @@ struct Camera {
     }
 
     // Primary ray direction through film position (fx, fy) in pixels, (0, 0) = top-left corner.
+    // The per-image scales are loop invariants of the caller's pixel loop (one division each per
+    // image, not per ray).
     Vec3f direction(Float fx, Float fy, int width, int height) const {
-        Float sx = (Float(2) * fx / Float(width) - Float(1)) * tan_half_fov;
-        Float sy = (Float(1) - Float(2) * fy / Float(height)) * tan_half_fov * Float(height) / Float(width);
+        const Float kx = Float(2) / Float(width), ky = Float(2) / Float(height);
+        Float sx = mul_add(fx, kx, Float(-1)) * tan_half_fov;
+        Float sy = mul_add(-fy, ky, Float(1)) * (tan_half_fov * Float(height) / Float(width));
         return normalize(forward + sx * right + sy * up);
     }
 };
@@ -52,7 +55,10 @@ struct Frame {
         }
     }
     Vec3f to_local(const Vec3f &v) const { return Vec3f(dot(v, s), dot(v, t), dot(v, n)); }
-    Vec3f to_world(const Vec3f &v) const { return s * v.x + t * v.y + n * v.z; }
+    Vec3f to_world(const Vec3f &v) const {
+        return {mul_add(s.x, v.x, mul_add(t.x, v.y, n.x * v.z)), mul_add(s.y, v.x, mul_add(t.y, v.y, n.y * v.z)),
+                mul_add(s.z, v.x, mul_add(t.z, v.y, n.z * v.z))};
+    }
 };
 
 } // namespace bsdfkit::render
