@@ -70,7 +70,7 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
         Mask<V> reflect = cos_i * cos_o > V(0);
         V eta_side = select(cos_o > V(0), V(eta), V(F(1) / eta));
         *etap = select(reflect, V(1), eta_side);
-        Vec3<V> h = wi * *etap + wo;
+        Vec3<V> h(mul_add(wi.x, *etap, wo.x), mul_add(wi.y, *etap, wo.y), mul_add(wi.z, *etap, wo.z));
         V len2 = length_squared(h);
         *len2_out = len2;
         Mask<V> ok = (cos_i != V(0)) & (cos_o != V(0)) & (len2 > V(0));
