@@ -101,8 +101,12 @@ def _interrupt(code, after="started", deadline=20.0):
     """Runs `code` in a subprocess, sends SIGINT once it prints `after` (+0.5 s), returns
     (stdout, seconds from SIGINT to exit)."""
     env = dict(os.environ, PYTHONUNBUFFERED="1")
+    # The child starts with SIGINT's default disposition: one inherited as ignored (a pytest-xdist
+    # worker can be left ignoring it) keeps Python from installing its handler, so the child would
+    # ignore the Ctrl-C under test and run to the deadline (seen in CI: 4 tests on one worker).
     p = subprocess.Popen([sys.executable, "-c", textwrap.dedent(code)], stdout=subprocess.PIPE,
-                         stderr=subprocess.STDOUT, text=True, env=env)
+                         stderr=subprocess.STDOUT, text=True, env=env,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         line = p.stdout.readline()
         assert after in line, line + p.stdout.read()
