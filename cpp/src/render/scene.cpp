@@ -142,7 +142,6 @@ std::string Scene::add_sphere(const Vec3f &center, Float radius, int mat_a, int 
     o.radius = radius;
     o.mat_a = mat_a;
     o.mat_b = mat_b;
-    o.checker = checker;
     o.inv_checker = checker > Float(0) ? Float(1) / checker : Float(0);
     objects.push_back(std::move(o));
     return embree_status(device_, "sphere");
@@ -175,7 +174,6 @@ std::string Scene::add_mesh(const Float *vertices, int64_t nv, const uint32_t *i
     o.indices.assign(indices, indices + nt * 3);
     o.mat_a = mat_a;
     o.mat_b = mat_b;
-    o.checker = checker;
     o.inv_checker = checker > Float(0) ? Float(1) / checker : Float(0);
     objects.push_back(std::move(o));
     return embree_status(device_, "mesh");
@@ -336,7 +334,7 @@ void Scene::hit_point(const RTCRayHit &rh, Hit *hit) const {
         hit->tangent = e1;
     }
     int mat = ob.mat_a;
-    if (ob.checker > Float(0)) {
+    if (ob.inv_checker > Float(0)) {
         long cx = long(std::floor(hit->p.x * ob.inv_checker)), cz = long(std::floor(hit->p.z * ob.inv_checker));
         mat = ((cx + cz) & 1) ? ob.mat_b : ob.mat_a;
     }

@@ -34,8 +34,7 @@ namespace bsdfkit::render {
 struct Object {
     enum class Kind : uint8_t { Sphere, Mesh, Curves } kind = Kind::Mesh;
     int mat_a = 0, mat_b = 0;
-    Float checker = 0;               // > 0: mat_a / mat_b alternate on squares of this size in world x, z
-    Float inv_checker = 0;           // 1 / checker (the squares' index is p * inv_checker, no division per hit)
+    Float inv_checker = 0;           // > 0: mat_a / mat_b alternate on squares of size 1 / inv_checker in world x, z
     Vec3f center{0, 0, 0};           // sphere
     Float radius = 1;                // sphere
     std::vector<Float> vertices;     // mesh: x, y, z per vertex
