@@ -219,3 +219,45 @@ def test_bad_parameter_types():
         bk.set_num_threads(1.5)
     with pytest.raises(ValueError, match="n"):
         bk.set_num_threads(0)
+
+
+def _unit_boundary_dirs(dtype, per_side=40):
+    """Directions (x, 0, 0) whose |w|^2 = x*x (one rounding, as the kernels' dot) straddles both
+    ends of the accepted range |w|^2 - 1 in [-1e-4, 1e-4], a few ulps apart, with the count of
+    the ones the rule rejects, computed here in the array's own dtype."""
+    tol = dtype(1e-4)
+    xs = []
+    for end in (dtype(1) - tol, dtype(1) + tol):
+        x = np.sqrt(end, dtype=dtype)
+        lo = hi = x
+        for _ in range(per_side):
+            lo, hi = np.nextafter(lo, dtype(0)), np.nextafter(hi, dtype(2))
+            xs += [lo, hi]
+        xs.append(x)
+    x = np.array(xs, dtype)
+    rejected = int(np.count_nonzero(~(np.abs(x * x - dtype(1)) <= tol)))
+    w = np.zeros((len(x), 3), dtype)
+    w[:, 0] = x
+    return w, rejected
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_unit_tolerance_boundary(any_model, dtype):
+    # The kernels test |w|^2 against a precomputed range (batch.h kUnitRange) instead of
+    # |(|w|^2 - 1)| <= 1e-4: both must reject exactly the same directions, on the packet path
+    # (full packets and the padded tail: 163 rows), the scalar path and the spectral kernels.
+    w, rejected = _unit_boundary_dirs(dtype)
+    assert 0 < rejected < len(w)
+    z = np.array([0, 0, 1], dtype)
+    calls = [("wi", lambda: any_model.eval(z, w)), ("wo", lambda: any_model.pdf(w, z)),
+             ("wo", lambda: any_model.sample(w, n=len(w), seed=1)),
+             ("wi", lambda: any_model.eval(z, w, wavelengths=np.full((len(w), 4), 550.0, dtype))),
+             ("wo", lambda: any_model.sample(w, n=len(w), seed=1, wavelengths=np.full((len(w), 4), 550.0, dtype)))]
+    for k, (name, call) in enumerate(calls):
+        try:
+            with pytest.raises(ValueError, match=rf"{name}: {rejected} direction\(s\) are not finite unit"):
+                call()
+        except NotImplementedError:
+            assert k >= 3  # only an RGB-only model's spectral mode may be missing
+    ok = w[np.abs(w[:, 0] * w[:, 0] - dtype(1)) <= dtype(1e-4)]
+    assert np.all(np.isfinite(any_model.eval(z, ok)))

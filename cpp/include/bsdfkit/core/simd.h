@@ -10,6 +10,7 @@
 // packets. Divide and sqrt are the exact IEEE ones in both forms (no rcp/rsqrt approximations).
 #pragma once
 #include <cstddef>
+#include <limits>
 #include <type_traits>
 
 #include <drjit/math.h>
