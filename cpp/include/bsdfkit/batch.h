@@ -460,12 +460,15 @@ void pair_packet_loop(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int6
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
         int64_t bo = 0, bi = 0;
         LocalModel<Model> mloc = m;
+        // A local copy of the store's closure too: the arguments it captures by value (out, mode,
+        // sample flags) then cannot alias the outputs, so their loads and the flag mask leave the loop.
+        const Store st = store;
         for (int64_t i = b; i < e; i += kW<F>) {
             int64_t cnt = std::min(kW<F>, e - i);
             Vec3<Packet<F>> o = load_dirs<SO>(wo, i, cnt), w = load_dirs<SI>(wi, i, cnt);
             bo += count_not_unit(o);
             bi += count_not_unit(w);
-            store(mloc, o, w, i, cnt);
+            st(mloc, o, w, i, cnt);
         }
         // A broadcast direction was counted once per packet lane: once per element is meant.
         bad.wo += is_one<SO>(wo) ? (bo > 0 ? e - b : 0) : bo;
@@ -480,7 +483,7 @@ void eval_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMo
                 BadCounts &bad) {
     if constexpr (is_vectorized<Model>::value) {
         pair_packet_loop<SO, SI>(m, dirs_of<SO>(wo), dirs_of<SI>(wi), n, nthreads, bad,
-                                 [&](const auto &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
+                                 [out, mode](const auto &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
                                      store3_lanes(out, i, cnt, bsdf_f(mm, o, w, mode));
                                  });
         return;
@@ -507,7 +510,7 @@ void pdf_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMod
                int nthreads, BadCounts &bad) {
     if constexpr (is_vectorized<Model>::value) {
         pair_packet_loop<SO, SI>(m, dirs_of<SO>(wo), dirs_of<SI>(wi), n, nthreads, bad,
-                                 [&](const auto &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
+                                 [out, mode, sf](const auto &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
                                      store1_lanes(out, i, cnt, bsdf_pdf(mm, o, w, mode, sf));
                                  });
         return;
@@ -535,7 +538,8 @@ void eval_batch_dirs(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64
                      int64_t out_plane, int nthreads, BadCounts &bad) {
     static_assert(is_vectorized<Model>::value, "eval_batch_dirs: a packet model (Vectorized = true)");
     pair_packet_loop<kAnyLayout, kAnyLayout>(
-        m, wo, wi, n, nthreads, bad, [&](const auto &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
+        m, wo, wi, n, nthreads, bad,
+        [out, out_plane, mode](const auto &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
             Spectrum<Packet<F>> v = bsdf_f(mm, o, w, mode);
             if (out_plane == 0) {
                 store3_lanes(out, i, cnt, v);
@@ -549,7 +553,7 @@ void pdf_batch_dirs(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_
                     F *out, int nthreads, BadCounts &bad) {
     static_assert(is_vectorized<Model>::value, "pdf_batch_dirs: a packet model (Vectorized = true)");
     pair_packet_loop<kAnyLayout, kAnyLayout>(
-        m, wo, wi, n, nthreads, bad, [&](const auto &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
+        m, wo, wi, n, nthreads, bad, [out, mode, sf](const auto &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
             store1_lanes(out, i, cnt, bsdf_pdf(mm, o, w, mode, sf));
         });
 }

@@ -152,7 +152,7 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3,
         V len2;
         Vec3<V> m = mfd.Sample_wm_h(wo, u, &len2);
         V wo_m = dot(wo, m);
-        Vec3<V> wi = m * (V(2) * wo_m / len2) - wo;
+        Vec3<V> wi = reflect_about_h(wo, m, wo_m, len2);
         V cos_o = AbsCosTheta(wo), cos_i = AbsCosTheta(wi);
         // SameHemisphere is strict: cos_o > 0 and cos_i > 0.
         Mask<V> active = Mask<V>((sample_flags & RT_Reflection) != 0) & SameHemisphere(wo, wi);

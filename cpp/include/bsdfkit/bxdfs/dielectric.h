@@ -166,7 +166,7 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
         V cos_o = CosTheta(wo), inv_len2 = V(1) / len2;
 
         // Reflection about the sampled normal, or refraction through it (in m's units).
-        Vec3<V> wr = m * (V(2) * wo_m * inv_len2) - wo;
+        Vec3<V> wr = m * (V(2) * wo_m * inv_len2) - wo; // reflect_about_h, the reciprocal shared with wt
         V etap, inv_etap;
         Vec3<V> wt = RefractScaled(wo, m, wo_m, inv_len2, cos_t, eta, &etap, &inv_etap);
         Mask<V> ok_t = cos_t > V(0); // not total internal reflection (nor a grazing wo.m = 0)

@@ -508,10 +508,10 @@ template <typename F> struct PlasticBxDF {
             V T_o = transmittance(o.z), ps, pd;
             lobe_weights(V(1) - T_o, T_o, &ps, &pd);
             spec = uc < ps / (ps + pd);
-            // the mirror direction about the sampled normal m, |m| != 1: 2 (o.m) m / |m|^2 - o
+            // the mirror direction about the sampled normal m, |m| != 1
             V m2;
             Vec3<V> m = SampleVisibleGGXMitsubaH(mfd.alpha_x, o, u, &m2);
-            Vec3<V> ws = m * (V(2) * dot(o, m) / m2) - o;
+            Vec3<V> ws = reflect_about_h(o, m, dot(o, m), m2);
             i = select(spec, ws, wd);
             Coat<V> c = coat(o, i);
             r.f = f_rough(o, i, T_o, c);

@@ -231,9 +231,6 @@ template <typename T, int K> inline Dual<T, K> pow(const Dual<T, K> &x, const Du
 }
 template <typename T, int K> inline Dual<T, K> pow(const Dual<T, K> &x, T y) { return pow(x, Dual<T, K>(y)); }
 template <typename T, int K> inline Dual<T, K> pow(T x, const Dual<T, K> &y) { return pow(Dual<T, K>(x), y); }
-template <typename T, int K> inline Dual<T, K> fma(const Dual<T, K> &a, const Dual<T, K> &b, const Dual<T, K> &c) {
-    return a * b + c;
-}
 // mul_add's dual form (core/math.h): the value fused as in plain code, so eval_grad's value is eval's.
 template <typename T, int K> inline Dual<T, K> fmadd(const Dual<T, K> &a, const Dual<T, K> &b, const Dual<T, K> &c) {
     Dual<T, K> r;

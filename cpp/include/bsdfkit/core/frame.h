@@ -37,6 +37,12 @@ inline Vec3<F> reflection_half_vector_h(const Vec3<F> &wo, const Vec3<F> &wi, Ma
     return h;
 }
 
+// The mirror of wo about a normal m that was never normalized (|m|^2 = len2, wo_m = wo.m):
+// 2 (wo.wm) wm - wo = 2 (wo.m) m / |m|^2 - wo (the samplers' reflection about Sample_wm_h's m).
+template <typename F> inline Vec3<F> reflect_about_h(const Vec3<F> &wo, const Vec3<F> &m, F wo_m, F len2) {
+    return m * (F(2) * wo_m / len2) - wo;
+}
+
 // The reflection half vector normalize(wo + wi) (Walter 2007 eq. 13). `active &= (wo + wi != 0)`;
 // where it ends up false the result is wo + wi unnormalized, for the caller's mask to discard.
 template <typename F> inline Vec3<F> reflection_half_vector(const Vec3<F> &wo, const Vec3<F> &wi, Mask<F> &active) {
