@@ -233,7 +233,7 @@ def io_bytes(op, n, itemsize):
 
 
 _COPY_CACHE = {}
-_STREAM_CACHE = {}
+_STREAM_BUFFERS = {}
 
 
 def stream_bound(rbytes, wbytes, repeats):
@@ -242,13 +242,16 @@ def stream_bound(rbytes, wbytes, repeats):
     threads each takes its half of both. Each thread repeats its passes for >= 20 ms and the time
     per pass is kept, so thread start-up does not count (numpy releases the GIL in both).
     (1 thread s, 2 threads s). Closer to a kernel's traffic than the copy bound (a copy reads and
-    writes every byte)."""
+    writes every byte). Measured afresh at every call (measure_cells times it beside each cell:
+    this host's memory bandwidth moves by 10-20 % with its neighbours' load), on buffers kept
+    per size."""
     key = (rbytes, wbytes)
-    if key in _STREAM_CACHE:
-        return _STREAM_CACHE[key]
-    src = np.ones(rbytes // 8 + 1, np.uint64)
-    dst = np.empty(wbytes // 8 + 1, np.uint64)
-    dst[:] = 0  # touch the pages
+    if key not in _STREAM_BUFFERS:
+        src = np.ones(rbytes // 8 + 1, np.uint64)
+        dst = np.empty(wbytes // 8 + 1, np.uint64)
+        dst[:] = 0  # touch the pages
+        _STREAM_BUFFERS[key] = (src, dst)
+    src, dst = _STREAM_BUFFERS[key]
 
     def part(a, b, k):
         for _ in range(k):
@@ -273,8 +276,7 @@ def stream_bound(rbytes, wbytes, repeats):
                 th.join()
             best = min(best, (time.perf_counter() - t) / k)
         res.append(best)
-    _STREAM_CACHE[key] = tuple(res)
-    return _STREAM_CACHE[key]
+    return tuple(res)
 
 
 def copy_bound(nbytes, repeats):
@@ -337,10 +339,11 @@ def wait_quiet(threshold=0.3, max_wait=15.0):
 
 
 def measure_cells(inputs, n, keys, ops, dtypes, threads, repeats, rounds, mi=None, mi_threads=(2, 1),
-                  plain_threads=(1, 2)):
+                  plain_threads=(1, 2), with_stream=True):
     """Times of every variant of every (key, op, dtype) cell. The bsdfkit and Mitsuba variants of
     one cell are measured back to back, `rounds` times interleaved, keeping the minimum, so a
-    change of machine load between cells does not bias the ratios."""
+    change of machine load between cells does not bias the ratios. with_stream: the cell's stream
+    bound too, in the same rounds (stream_1t / stream_2t)."""
     import bsdfkit as bk
     res = {}
     for key in keys:
@@ -368,6 +371,10 @@ def measure_cells(inputs, n, keys, ops, dtypes, threads, repeats, rounds, mi=Non
                                 if variant in calls[dt]:
                                     settle()
                                     keep(dt, f"{variant}_{nt}t", best_time(calls[dt][variant], repeats))
+                    if with_stream:
+                        s1, s2 = stream_bound(*io_split(op, n, np.dtype(dt).itemsize), repeats)
+                        keep(dt, "stream_1t", s1)
+                        keep(dt, "stream_2t", s2)
                 if mi is not None and mid is not None:
                     for dt in dtypes:
                         settle()
@@ -717,7 +724,7 @@ def build_rows(n, cells, keys, ops, dtypes, repeats, with_copy=True):
         for op in ops:
             for dt in dtypes:
                 c = cells[(key, op, dt)]
-                bt = {k: v for k, v in c.items() if not k.startswith("mi_") and k != "busy_cores"}
+                bt = {k: v for k, v in c.items() if not k.startswith(("mi_", "stream_")) and k != "busy_cores"}
                 mt = {k[3:]: v for k, v in c.items() if k.startswith("mi_")} or None
                 row = {"n": n, "key": key, "label": CONFIG[key][1], "op": op, "dtype": dt,
                        "delta_zero": (key, op) in DELTA_ZERO, "busy_cores_other": c.get("busy_cores"), "bk_time": bt,
@@ -728,7 +735,7 @@ def build_rows(n, cells, keys, ops, dtypes, repeats, with_copy=True):
                     c1, c2 = copy_bound(nb, repeats)
                     row["copy"] = {"bytes": nb, "time_1t": c1, "time_2t": c2, "rate_1t": n / c1, "rate_2t": n / c2}
                     rb, wb = io_split(op, n, np.dtype(dt).itemsize)
-                    s1, s2 = stream_bound(rb, wb, repeats)
+                    s1, s2 = (c["stream_1t"], c["stream_2t"]) if "stream_1t" in c else stream_bound(rb, wb, repeats)
                     row["stream"] = {"read_bytes": rb, "write_bytes": wb, "time_1t": s1, "time_2t": s2,
                                      "rate_1t": n / s1, "rate_2t": n / s2}
                 bkr, mir = row["bk_rate"], row["mi_rate"] or {}
@@ -1105,8 +1112,9 @@ def write_markdown(path, info, mi_info, main_rows, scaling_rows, scalar_runs, ag
       "figure calls the compiled `m._core.sample` with preallocated outputs.")
     w("- Memory (stream) bound: a read-only pass (`np.bitwise_or.reduce` over the input bytes as uint64) plus a "
       "write-only pass (`fill` of a buffer of the output bytes), each of 2 Python threads doing its half; "
-      "best of 1 and 2 threads. It is the time the kernel's bytes take to move at this machine's bandwidth, "
-      "so a kernel at t/stream ≈ 1 is memory-bound.")
+      "best of 1 and 2 threads, timed in each cell's own rounds beside its kernels (this host's bandwidth "
+      "moves with its neighbours' load). It is the time the kernel's bytes take to move at this machine's "
+      "bandwidth, so a kernel at t/stream ≈ 1 is memory-bound.")
     w("- Copy bound: `np.copyto` of a buffer as large as the kernel's inputs + outputs (eval: 2×(N,3) + (N,3); "
       "pdf: 2×(N,3) + (N,); sample: wo, uc, u + wi, f, pdf, eta, flags, valid, pdf_is_proportional). A copy "
       "reads and writes those bytes, so it moves more data than the kernel; t/copy < 1 is possible.")
@@ -1171,7 +1179,7 @@ def main():
         scaling_rows = []
         for n in n_scaling:
             c = measure_cells(inputs[n], n, scaling_keys, OPS, ["float32"], threads, args.repeats, args.rounds,
-                              mi, mi_threads=(2,), plain_threads=(2,))
+                              mi, mi_threads=(2,), plain_threads=(2,), with_stream=False)
             scaling_rows += build_rows(n, c, scaling_keys, OPS, ["float32"], args.repeats, with_copy=False)
         scaling_rows += [r for r in main_rows if r["key"] in scaling_keys and r["dtype"] == "float32"]
         print(f"[bench] scaling table done ({time.perf_counter() - t0:.0f} s)", flush=True)
