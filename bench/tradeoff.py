@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Speed versus accuracy of every knob configuration, per model family.
 
-    python bench/tradeoff.py            # N = 2^18 pairs per timing call, ~10 min
+    python bench/tradeoff.py            # N = 2^18 pairs per timing call; > 18 min with the stochastic layered family
     python bench/tradeoff.py --quick    # N = 2^15, one round: a smoke run (does not overwrite the costs)
 
 Writes bench/TRADEOFF.md (per model: the full table, the Pareto front and the headline speedups of
