@@ -383,6 +383,10 @@ static_assert(!unit_accepts(kUnitRange<float>.lo - std::numeric_limits<float>::e
                   unit_accepts(kUnitRange<float>.lo) && unit_accepts(kUnitRange<float>.hi) &&
                   !unit_accepts(kUnitRange<float>.hi + std::numeric_limits<float>::epsilon()),
               "kUnitRange: the range's ends");
+static_assert(!unit_accepts(kUnitRange<double>.lo - std::numeric_limits<double>::epsilon() / 2) &&
+                  unit_accepts(kUnitRange<double>.lo) && unit_accepts(kUnitRange<double>.hi) &&
+                  !unit_accepts(kUnitRange<double>.hi + std::numeric_limits<double>::epsilon()),
+              "kUnitRange: the range's ends");
 
 // The number of lanes where `pass` is false. Failures are rare, so the common case is one mask
 // test and a predicted branch (a per-packet mask-to-integer popcount cost 4 more instructions on
