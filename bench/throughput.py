@@ -853,7 +853,8 @@ def judge(value, target, need_rate, bound_rate, have_rate, div_rate=None):
 def row_targets(r, div=None):
     """The targets of one main-table row: {name: (verdict, text)}; div: divider_rates()."""
     br, mr = r["bk_rate"], r["mi_rate"] or {}
-    d1, d2 = ((lambda t: (divider_bound(r["key"], r["op"], r["dtype"], div, t) or 0) / 1e6 or None)(t) for t in (1, 2))
+    d1, d2 = (divider_bound(r["key"], r["op"], r["dtype"], div, t) for t in (1, 2))
+    d1, d2 = (d / 1e6 if d else None for d in (d1, d2))  # M/s, as the other rates here
     st = r.get("stream") or {}
     b2 = (st.get("rate_2t") or 0) / 1e6
     b1 = (st.get("rate_1t") or 0) / 1e6
