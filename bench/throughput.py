@@ -769,8 +769,6 @@ def build_rows(n, cells, keys, ops, dtypes, repeats, with_copy=True):
 # kernels hold more than one path (smooth and rough) are counted on the row's own path only.
 # Hair's float64 exp / log are Dr.Jit's rational approximations, hence more divisions than in float32.
 DIVIDER_OPS = {
-    ("diffuse", "eval"): {"float32": (0, 0), "float64": (0, 0)},
-    ("diffuse", "pdf"): {"float32": (0, 0), "float64": (0, 0)},
     ("cond_rough", "eval"): {"float32": (3, 8), "float64": (3, 8)},
     ("cond_rough", "pdf"): {"float32": (1, 1), "float64": (1, 1)},
     ("diel_rough", "eval"): {"float32": (1, 3), "float64": (1, 3)},

@@ -33,9 +33,11 @@ template <typename Fn> inline bool parallel_chunks(int64_t n, int nthreads, int6
 
 // A direction is accepted if it is finite and unit length to this tolerance on |w|^2.
 template <typename F> inline constexpr F kUnitTol = F(1e-4);
-template <typename F> inline int64_t not_unit(const Vec3<F> &w) {
-    return !(std::abs(dot(w, w) - F(1)) <= kUnitTol<F>);
+template <typename F> constexpr bool unit_accepts(F d) { // d = |w|^2; a NaN fails
+    F t = d - F(1);
+    return (t < F(0) ? -t : t) <= kUnitTol<F>;
 }
+template <typename F> inline int64_t not_unit(const Vec3<F> &w) { return !unit_accepts(dot(w, w)); }
 
 template <typename F, int S> inline Vec3<F> load3(const F *p, int64_t i) {
     return Vec3<F>(p[i * S], p[i * S + 1], p[i * S + 2]);
@@ -365,10 +367,6 @@ template <typename F> inline void store1_lanes(F *p, int64_t i, int64_t cnt, con
 template <typename F> struct UnitRange {
     F lo, hi;
 };
-template <typename F> constexpr bool unit_accepts(F d) {
-    F t = d - F(1);
-    return (t < F(0) ? -t : t) <= kUnitTol<F>;
-}
 template <typename F> constexpr UnitRange<F> make_unit_range() {
     constexpr F below = std::numeric_limits<F>::epsilon() / F(2), above = std::numeric_limits<F>::epsilon();
     F lo = F(1) - kUnitTol<F>, hi = F(1) + kUnitTol<F>;

@@ -427,7 +427,7 @@ template <typename F> struct PlasticBxDF {
         V coat_v = r * c.l4 / (den * c.dd * mfd.G_denom(o.z, i.z, c.root_o, c.root_i));
         Spectrum<V> v = to_lanes<V>(diffuse) * (T_o * transmittance<false>(i.z)), ks = to_lanes<V>(Ks);
         V coat = select(c.ok, coat_v, V(0));
-        for (int k = 0; k < 3; ++k) v[k] = mul_add(ks[k], coat, v[k]);
+        for (int k = 0; k < Spectrum<V>::Size; ++k) v[k] = mul_add(ks[k], coat, v[k]);
         return v;
     }
 
