@@ -327,8 +327,10 @@ struct Tracer {
     }
 
     // Pass A: an escaped ray adds the environment; a surface hit becomes a vertex (frame, wo,
-    // environment sample, the uniforms of its BSDF sample).
-    void setup(int pi, const RTCRayHit &rh, const EnvRay &er, Wave &w) const {
+    // environment sample, the uniforms of its BSDF sample). flatten (also on finish): GCC left
+    // dot, Frame::to_local and make_spawn_ray as calls in these loops; inlined, a render of
+    // bench/render.py's scene takes 11 % less time (same image bits).
+    __attribute__((flatten)) void setup(int pi, const RTCRayHit &rh, const EnvRay &er, Wave &w) const {
         Path &path = w.paths[size_t(pi)];
         Vec3f d(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
         if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
@@ -375,7 +377,7 @@ struct Tracer {
     }
 
     // Pass C: light-sample contributions (shadow rays) and the path's next ray.
-    void finish(Vertex &v, Wave &w) const {
+    __attribute__((flatten)) void finish(Vertex &v, Wave &w) const {
         const int pi = v.path;
         Path &path = w.paths[size_t(pi)];
         if (v.nonspecular) {
