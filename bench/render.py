@@ -233,7 +233,8 @@ environment sample computed for hits on specular-only objects or at max_depth (t
 drawn; 0 %); flatten on the environment pass, `Scene::hit_point` and the sphere callbacks (+2 %),
 on `shade_packets` (+3 %) and on a camera-ray function (0 %); `Frame` always inlined in the
 spectral tracer (0 %, spectral 3.0 s); the per-ray constant fields of Embree's packets set once
-(0 %); waves of 8 sample indices instead of 4 (+2 %); the next ray's direction not renormalized
+(0 %); Embree's stream calls (`rtcIntersect1M` / `rtcOccluded1M`, no packing) for the incoherent
+rays (+5 %); waves of 8 sample indices instead of 4 (+2 %); the next ray's direction not renormalized
 (0 %; pbrt-v4 and Mitsuba do not renormalize it either, but it changes the image).
 
 ## Session 11 (issue 17 item 5 still open)
