@@ -173,7 +173,7 @@ struct PyScene {
         scene->hit_point(rh, &h);
         Material scratch;
         const Material &m = material_at(*scene, h, &scratch);
-        Frame fr(h.n, h.tangent);
+        const Frame &fr = h.frame;
         Vec3f wo = fr.to_local(-d);
         int64_t k = wi.shape(0);
         py::array_t<double> wl({k, int64_t(3)}), fc({k, int64_t(3)});

@@ -49,8 +49,7 @@ struct Path {
 // A surface hit of one bounce, between the scalar set-up (pass A), the shading of its material
 // group (pass B: packets for models with a packet path) and the path update (pass C).
 struct Vertex {
-    Hit h;
-    Frame fr;
+    Hit h;           // h.frame: the shading frame
     Vec3f wo;        // local
     Vec3f wl;        // environment sample direction, local ((0, 0, 1) when there is none)
     Vec3f wi_env;    // the same, world
@@ -350,8 +349,7 @@ struct Tracer {
             return;
         }
         v.path = pi;
-        v.fr = Frame(v.h.n, v.h.tangent);
-        v.wo = v.fr.to_local(-d);
+        v.wo = v.h.frame.to_local(-d);
         v.nonspecular = has_nonspecular(flags);
         v.le = RGB(Float(0));
         v.p_l = 0;
@@ -365,9 +363,9 @@ struct Tracer {
                 v.le = er.le;
                 v.p_l = er.pdf;
                 v.wi_env = er.wi;
-                v.wl = v.fr.to_local(er.wi);
+                v.wl = v.h.frame.to_local(er.wi);
             }
-            if (scene.sun.enabled) v.wsun = v.fr.to_local(scene.sun.dir);
+            if (scene.sun.enabled) v.wsun = v.h.frame.to_local(scene.sun.dir);
         }
         v.uc = path.rng.next();
         Point2<Float> u = path.rng.next2();
@@ -397,7 +395,7 @@ struct Tracer {
         path.p_b = v.p_b;
         path.specular_bounce = (v.bs_flags & Specular) != 0;
         if ((v.bs_flags & Transmission) != 0) path.eta_scale *= sqr(v.bs_eta);
-        Vec3f nd = normalize(v.fr.to_world(v.bs_wi));
+        Vec3f nd = normalize(v.h.frame.to_world(v.bs_wi));
 
         // Russian roulette on the throughput without the radiance 1/eta^2 scaling.
         RGB rr = path.beta * path.eta_scale;

@@ -83,7 +83,7 @@ struct SpectralTracer {
         uint8_t flags = scene.flags[size_t(h.material)];
         if (flags == Unset) return;
         const SpectralMaterial &sm = spec.materials[size_t(h.material)];
-        Frame fr(h.n, h.tangent);
+        const Frame &fr = h.frame;
         Vec3f wo = fr.to_local(-d);
         std::visit(
             [&](const auto &m) {

@@ -147,6 +147,38 @@ std::string Scene::add_sphere(const Vec3f &center, Float radius, int mat_a, int 
     return embree_status(device_, "sphere");
 }
 
+// The shading frame of a triangle, in double (per triangle at add_mesh, not per hit: a hit then
+// needs no square root or division for it): n the unit geometric normal e1 x e2 ((0, 1, 0) for a
+// degenerate triangle), s the edge e1 = p1 - p0 made orthogonal to n (Gram-Schmidt), or
+// Frame::around(n)'s tangent where e1 is (nearly) along n or zero.
+static void triangle_frame(const Float *v, const uint32_t *ix, Float *out) {
+    double p[3][3];
+    for (int i = 0; i < 3; ++i)
+        for (int c = 0; c < 3; ++c) p[i][c] = double(v[3 * size_t(ix[i]) + size_t(c)]);
+    double e1[3], e2[3];
+    for (int c = 0; c < 3; ++c) e1[c] = p[1][c] - p[0][c], e2[c] = p[2][c] - p[0][c];
+    double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    double l2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    if (l2 > 0) {
+        double r = 1 / std::sqrt(l2);
+        for (double &x : n) x *= r;
+    } else {
+        n[0] = 0, n[1] = 1, n[2] = 0;
+    }
+    double d = n[0] * e1[0] + n[1] * e1[1] + n[2] * e1[2], t[3];
+    for (int c = 0; c < 3; ++c) t[c] = e1[c] - n[c] * d;
+    double t2 = t[0] * t[0] + t[1] * t[1] + t[2] * t[2], e2sq = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2];
+    const Vec3f nf{Float(n[0]), Float(n[1]), Float(n[2])};
+    Vec3f sf;
+    if (t2 > 1e-12 * e2sq && t2 > 0) {
+        double r = 1 / std::sqrt(t2);
+        sf = Vec3f(Float(t[0] * r), Float(t[1] * r), Float(t[2] * r));
+    } else {
+        sf = Frame::around(nf).s;
+    }
+    out[0] = nf.x, out[1] = nf.y, out[2] = nf.z, out[3] = sf.x, out[4] = sf.y, out[5] = sf.z;
+}
+
 std::string Scene::add_mesh(const Float *vertices, int64_t nv, const uint32_t *indices, int64_t nt, int mat_a,
                             int mat_b, Float checker) {
     if (!scene_) return "Embree: could not create a device";
@@ -172,6 +204,8 @@ std::string Scene::add_mesh(const Float *vertices, int64_t nv, const uint32_t *i
     o.kind = Object::Kind::Mesh;
     o.vertices.assign(vertices, vertices + nv * 3);
     o.indices.assign(indices, indices + nt * 3);
+    o.frames.resize(size_t(nt) * 6);
+    for (int64_t k = 0; k < nt; ++k) triangle_frame(vertices, indices + 3 * k, &o.frames[size_t(k) * 6]);
     o.mat_a = mat_a;
     o.mat_b = mat_b;
     o.inv_checker = checker > Float(0) ? Float(1) / checker : Float(0);
@@ -311,13 +345,16 @@ void Scene::hit_point(const RTCRayHit &rh, Hit *hit) const {
     if (ob.kind == Object::Kind::Sphere) {
         // Re-project the hit onto the sphere: o + t d carries the error of t.
         Vec3f p = o + d * rh.ray.tfar;
-        Vec3f n = p - ob.center;
-        Float l2 = length_squared(n);
-        n = l2 > Float(0) ? n / std::sqrt(l2) : Vec3f(0, 1, 0);
+        Vec3f m = p - ob.center;
+        Float l2 = length_squared(m), q2 = mul_add(m.x, m.x, m.z * m.z);
+        Vec3f n = l2 > Float(0) ? m / std::sqrt(l2) : Vec3f(0, 1, 0);
         hit->p = ob.center + n * ob.radius;
-        hit->n = n;
-        // dp/dphi of the lat-long parametrisation around +y (brushed along parallels).
-        hit->tangent = Vec3f(-n.z, 0, n.x);
+        // Tangent: dp/dphi of the lat-long parametrisation around +y (brushed along parallels),
+        // (-m.z, 0, m.x), orthogonal to m by construction: normalized from m directly, so its
+        // square root does not wait for n's (Gram-Schmidt would repeat both); the poles take
+        // Frame's basis, as the Gram-Schmidt frame did below the same threshold.
+        hit->frame = q2 > Float(1e-12) * l2 ? Frame::orthonormal(n, Vec3f(-m.z, 0, m.x) / std::sqrt(q2))
+                                            : Frame::around(n);
     } else {
         // Barycentric interpolation of the vertices is exact to rounding, unlike o + t d.
         const uint32_t *ix = &ob.indices[size_t(rh.hit.primID) * 3];
@@ -327,11 +364,8 @@ void Scene::hit_point(const RTCRayHit &rh, Hit *hit) const {
         Vec3f p2(v[3 * ix[2]], v[3 * ix[2] + 1], v[3 * ix[2] + 2]);
         Float b1 = rh.hit.u, b2 = rh.hit.v;
         hit->p = p0 * (Float(1) - b1 - b2) + p1 * b1 + p2 * b2;
-        Vec3f e1 = p1 - p0, e2 = p2 - p0;
-        Vec3f n = cross(e1, e2);
-        Float l2 = length_squared(n);
-        hit->n = l2 > Float(0) ? n / std::sqrt(l2) : Vec3f(0, 1, 0);
-        hit->tangent = e1;
+        const Float *f = &ob.frames[size_t(rh.hit.primID) * 6];
+        hit->frame = Frame::orthonormal(Vec3f(f[0], f[1], f[2]), Vec3f(f[3], f[4], f[5]));
     }
     int mat = ob.mat_a;
     if (ob.inv_checker > Float(0)) {
@@ -372,18 +406,17 @@ void Scene::curve_hit(const Object &ob, const RTCRayHit &rh, Hit *hit) const {
     hit->axis = c;
     hit->axis_dir = T;
     hit->radius = r;
-    hit->tangent = T;
     hit->material = ob.mat_a;
     hit->from_axis = is_hair_material(materials[size_t(ob.mat_a)]);
-    if (hit->from_axis) {
-        hit->n = z;
-    } else {
+    Vec3f n = z;
+    if (!hit->from_axis) {
         // the tube's outward normal at p (facing the ray when p is numerically on the axis)
         Vec3f q = p - c;
         q = q - T * dot(q, T);
         Float ql2 = length_squared(q);
-        hit->n = ql2 > Float(1e-20) * r * r ? q / std::sqrt(ql2) : z;
+        if (ql2 > Float(1e-20) * r * r) n = q / std::sqrt(ql2);
     }
+    hit->frame = Frame(n, T);
 }
 
 } // namespace bsdfkit::render

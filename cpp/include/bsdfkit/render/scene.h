@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "environment.h"
+#include "shading_frame.h"
 
 namespace bsdfkit::render {
 
@@ -39,6 +40,7 @@ struct Object {
     Float radius = 1;                // sphere
     std::vector<Float> vertices;     // mesh: x, y, z per vertex
     std::vector<uint32_t> indices;   // mesh: 3 per triangle, counter-clockwise seen from outside
+    std::vector<Float> frames;       // mesh: per triangle its shading frame's unit n, then s (6 floats)
     RTCGeometry geometry = nullptr;  // curves: retained for rtcInterpolate1 (released by ~Scene)
 };
 
@@ -48,11 +50,13 @@ struct SphereGeom {
     Float radius;
 };
 
-// Surface point: position, outward geometric normal (for fibres: the frame's z, see above), a
-// tangent and the material index. Fibre hits also carry the axis point, the unit fibre tangent,
-// the radius and the offset h across the fibre.
+// Surface point: position, shading frame (frame.n: the outward geometric normal, for fibres the
+// frame's z, see above; frame.s: the tangent made orthogonal to it) and the material index.
+// Fibre hits also carry the axis point, the unit fibre tangent, the radius and the offset h
+// across the fibre.
 struct Hit {
-    Vec3f p, n, tangent;
+    Vec3f p;
+    Frame frame;
     int material = 0;
     bool fibre = false;
     bool from_axis = false;  // rays leave from the fibre's axis (a hair material on a fibre)
@@ -158,7 +162,7 @@ inline Vec3f offset_ray_origin(const Vec3f &p, const Vec3f &n, const Vec3f &d) {
 // axis point with tnear past its own cylinder (see the header comment).
 inline void make_spawn_ray(RTCRay &r, const Hit &hit, const Vec3f &d, Float tfar) {
     if (!hit.from_axis) {
-        make_ray(r, offset_ray_origin(hit.p, hit.n, d), d, tfar);
+        make_ray(r, offset_ray_origin(hit.p, hit.frame.n, d), d, tfar);
         return;
     }
     make_ray(r, hit.axis, d, tfar);

@@ -57,6 +57,7 @@ int64_t trace_wave(const T &tracer, const Scene &scene, const Camera &camera, co
     w.paths.clear();
     w.rays.clear();
     w.ray_path.clear();
+    const Camera::Raster raster = camera.raster(W, st.height);
     for (int k = 0; k < ns; ++k)
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) {
@@ -65,7 +66,7 @@ int64_t trace_wave(const T &tracer, const Scene &scene, const Camera &camera, co
                 p.rng = SampleRng(st.seed, pix, uint64_t(s + k));
                 Point2<Float> j = p.rng.next2();  // box filter: uniform over the pixel
                 tracer.start(p);
-                Vec3f d = camera.direction(Float(x) + j.x, Float(y) + j.y, W, st.height);
+                Vec3f d = camera.direction(Float(x) + j.x, Float(y) + j.y, raster);
                 w.rays.emplace_back();
                 make_rayhit(w.rays.back(), camera.origin, d);
                 w.ray_path.push_back(int(w.paths.size()));
