@@ -42,8 +42,6 @@ struct Path {
     int depth;
     bool specular_bounce;
     SampleRng rng;
-    double env_u0;  // uniforms of this vertex's environment sample, drawn first (prepare)
-    Float env_u1;
 };
 
 // A surface hit of one bounce, between the scalar set-up (pass A), the shading of its material
@@ -82,7 +80,9 @@ struct EnvRay {
 struct Wave : WaveBase<Path, RGB> {
     std::vector<EnvRay> env;             // per ray: its environment sample (hits) or radiance (misses)
     std::vector<int> hit_rays, miss_rays;  // indices of the rays that hit a surface / escaped
-    std::vector<Vertex> verts;
+    std::vector<double> env_u0;  // per hit ray (hit_rays order, padded to packets): the uniforms of
+    std::vector<Float> env_u1;   // its environment sample, drawn first
+    ScratchVector<Vertex> verts;
     std::vector<int> vert_mat;      // material of each vertex
     std::vector<int> group_start, group_items;  // vertices grouped by material (counting sort)
 };
@@ -245,13 +245,15 @@ struct Tracer {
         const Environment &env = scene.env;
         w.hit_rays.clear();
         w.miss_rays.clear();
+        w.env_u0.clear();
+        w.env_u1.clear();
         for (size_t k = 0; k < nr; ++k) {
             if (w.rays[k].hit.geomID == RTC_INVALID_GEOMETRY_ID) {
                 w.miss_rays.push_back(int(k));
             } else {
                 Path &path = w.paths[size_t(w.ray_path[k])];
-                path.env_u0 = path.rng.next_double();
-                path.env_u1 = path.rng.next();
+                w.env_u0.push_back(path.rng.next_double());
+                w.env_u1.push_back(path.rng.next());
                 w.hit_rays.push_back(int(k));
             }
         }
@@ -264,10 +266,9 @@ struct Tracer {
                 w.env[size_t(k)].le = env.eval_uv(d, u, v);
                 w.env[size_t(k)].pdf = env.pdf_uv_dir(d, u, v);
             }
-            for (int k : w.hit_rays) {
-                const Path &p = w.paths[size_t(w.ray_path[size_t(k)])];
-                EnvRay &e = w.env[size_t(k)];
-                e.le = env.sample(p.env_u0, p.env_u1, &e.wi, &e.pdf);
+            for (size_t i = 0; i < w.hit_rays.size(); ++i) {
+                EnvRay &e = w.env[size_t(w.hit_rays[i])];
+                e.le = env.sample(w.env_u0[i], w.env_u1[i], &e.wi, &e.pdf);
             }
             return;
         }
@@ -295,18 +296,17 @@ struct Tracer {
         }
         // surface hits: their environment sample (cell, direction, pdf, radiance)
         using D = drjit::float64_array_t<P>;
-        alignas(64) double u0[kPacketWidth];
         const int nh = int(w.hit_rays.size());
+        if (nh > 0) {  // the tail padded with copies of the last hit's uniforms
+            w.env_u0.resize(size_t((nh + kPW - 1) / kPW * kPW), w.env_u0.back());
+            w.env_u1.resize(w.env_u0.size(), w.env_u1.back());
+        }
         for (int i0 = 0; i0 < nh; i0 += kPW) {
             int cnt = std::min(kPW, nh - i0);
-            for (int j = 0; j < kPW; ++j) {
-                const Path &p = w.paths[size_t(w.ray_path[size_t(w.hit_rays[size_t(i0 + std::min(j, cnt - 1))])])];
-                u0[j] = p.env_u0;
-                a[1][j] = p.env_u1;
-            }
             P uu, vv;
             I texel;
-            env.sample_cell(drjit::load_aligned<D>(u0), drjit::load_aligned<P>(a[1]), &uu, &vv, &texel);
+            env.sample_cell(drjit::load<D>(&w.env_u0[size_t(i0)]), drjit::load<P>(&w.env_u1[size_t(i0)]), &uu, &vv,
+                            &texel);
             Vec3<P> wi;
             P pdf;
             Spectrum<P> le = env.sample_finish(uu, vv, texel, &wi, &pdf);

@@ -22,6 +22,9 @@
 #include <atomic>
 #include <chrono>
 #include <functional>
+#include <memory>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "render.h"
@@ -34,6 +37,24 @@ namespace bsdfkit::render {
 inline constexpr int kTile = 16;
 inline constexpr int kWaveSamples = 4;
 
+// An allocator whose emplace_back() default-initializes (a trivial type, e.g. an Embree ray, is
+// left uninitialized instead of zeroed: the caller writes it next).
+template <typename T> struct DefaultInitAllocator : std::allocator<T> {
+    template <typename U> struct rebind {
+        using other = DefaultInitAllocator<U>;
+    };
+    DefaultInitAllocator() = default;
+    template <typename U> DefaultInitAllocator(const DefaultInitAllocator<U> &) noexcept {}
+    template <typename U> void construct(U *p) noexcept(std::is_nothrow_default_constructible_v<U>) {
+        ::new (static_cast<void *>(p)) U;
+    }
+    template <typename U, typename... A> void construct(U *p, A &&...a) {
+        ::new (static_cast<void *>(p)) U(std::forward<A>(a)...);
+    }
+};
+// A vector for per-bounce records that are written right after emplace_back().
+template <typename T> using ScratchVector = std::vector<T, DefaultInitAllocator<T>>;
+
 // The ray streams of one wave (one per thread, reused).
 template <typename Path, typename Contribution> struct WaveBase {
     struct Shadow {
@@ -41,9 +62,9 @@ template <typename Path, typename Contribution> struct WaveBase {
         Contribution contribution;  // added to the path's L when the shadow ray is unoccluded
     };
     std::vector<Path> paths;
-    std::vector<RTCRayHit> rays, next_rays;
+    ScratchVector<RTCRayHit> rays, next_rays;
     std::vector<int> ray_path, next_path;  // path of each ray
-    std::vector<RTCRay> shadow_rays;
+    ScratchVector<RTCRay> shadow_rays;
     std::vector<Shadow> shadows;
 };
 
