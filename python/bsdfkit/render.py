@@ -944,6 +944,9 @@ class _Progress:
             sys.stderr.flush()
 
 
+_WAVE_SAMPLES = 4  # sample indices per wave of the C++ tracer (render/wavefront.h kWaveSamples)
+
+
 def render(scene: Scene, *, envmap=None, width=256, height=256, spp=64, max_depth=8, seed=0, progress=True,
            interrupt="raise", return_stats=False, spectral=False):
     """Renders a :class:`Scene`; see :func:`preview` for the arguments.
@@ -976,7 +979,9 @@ def render(scene: Scene, *, envmap=None, width=256, height=256, spp=64, max_dept
     done, rays, nonfinite = 0, 0, 0
     bar = _Progress(progress, spp, f"render {width}x{height}{' spectral' if spectral else ''}")
     try:
-        k = 1
+        # passes of whole waves: the tracer traces 4 sample indices of a tile together
+        # (render/wavefront.h kWaveSamples); a pass of fewer leaves its packets part-empty
+        k = _WAVE_SAMPLES
         while done < spp:
             k = min(k, spp - done)
             np.copyto(scratch, acc)
@@ -990,6 +995,7 @@ def render(scene: Scene, *, envmap=None, width=256, height=256, spp=64, max_dept
             bar.update(done)
             # passes of ~0.25 s: responsive progress; the result does not depend on the split
             k = max(1, min(4 * k, int(k * 0.25 / max(dt, 1e-6))))
+            k = max(_WAVE_SAMPLES, k - k % _WAVE_SAMPLES)
     except KeyboardInterrupt as e:
         bar.close(" interrupted")
         partial = (acc / done).astype(np.float32) if done else None
