@@ -209,6 +209,39 @@ RR_NOTE = ("Russian roulette: ours starts at the second surface vertex with pbrt
            "the like-for-like ratio.")
 
 NOTES = """
+## Session 15 (issue 17 item 5 still open)
+
+**Shading frames without a per-hit dependency chain** (commit 586202f). A hit now carries its
+shading frame (render/shading_frame.h). Triangles take a frame computed per triangle in double
+when the mesh is added (the unit normal, and the edge p1 - p0 made orthogonal to it): no square
+root or division per hit, and more accurate, since the float Gram-Schmidt of a skinny triangle was
+off by 3e-5 (tests/test_render_frames.py checks both kinds of frame against float64). Spheres
+normalize the normal and the parallel tangent (-m.z, 0, m.x) from the unnormalized offset
+m = p - c side by side, not one after the other. The camera's per-image divisions moved out of
+the per-ray call (`Camera::Raster`). Profiling build, 1 thread, alternating fresh processes:
+0.92-0.98 s -> 0.83-0.91 s (-8 to -12 %). The paths' random choices change with the last bits
+(image mean 0.38476 -> 0.38493); the render tests against Mitsuba pass.
+
+**Smaller items, image bits identical:** per-bounce records (rays, shadow rays, vertices)
+default-initialized on `emplace_back` (no zeroing before they are written), and the environment
+samples' uniforms in contiguous per-hit arrays loaded as packets (no per-lane gather from the
+paths): about -1 to -3 % each. `render()`'s progressive passes come in whole waves of 4 sample
+indices (the first pass was 1 spp, leaving 3/4 of each wave's packets empty): about -1.4 %.
+
+With LTO (the installed wheel) the gain is smaller than in the profiling build (no LTO): the
+table above, RESULTS_PLACEHOLDER
+
+Tried and not kept: the camera directions on 16-lane packets in a pass of their own (+3 %, as in
+session 11); the environment's bilinear lookups as per-lane 4-channel loads instead of 12 gathers
+(0 %, bits identical); the sphere root dividing for the nearer root only unless it is out of range
+(0 %); the per-material counting sort in four interleaved streams (+3 %).
+
+**perf on these VMs points at latency, not at cost.** There are no hardware counters, so
+`cpu-clock` samples land on the instruction after a divide, square root or gather whether or not
+it limits the loop. The camera rays' normalization held 11 % of the wave loop's samples; deleting
+it (a wrong image, for timing only) saved nothing. The set-up's frame chains (also 10 % of the
+samples) did pay off. Before optimizing a hot spot, delete it and time the render.
+
 ## Session 14 (issue 17 item 5 still open)
 
 **Inlining.** `perf annotate` of the wave loop showed GCC 12 calling `dot`, `Frame::to_local` and

@@ -167,10 +167,10 @@ static void triangle_frame(const Float *v, const uint32_t *ix, Float *out) {
     }
     double d = n[0] * e1[0] + n[1] * e1[1] + n[2] * e1[2], t[3];
     for (int c = 0; c < 3; ++c) t[c] = e1[c] - n[c] * d;
-    double t2 = t[0] * t[0] + t[1] * t[1] + t[2] * t[2], e2sq = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2];
+    double t2 = t[0] * t[0] + t[1] * t[1] + t[2] * t[2], e1sq = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2];
     const Vec3f nf{Float(n[0]), Float(n[1]), Float(n[2])};
     Vec3f sf;
-    if (t2 > 1e-12 * e2sq && t2 > 0) {
+    if (t2 > 1e-12 * e1sq && t2 > 0) {
         double r = 1 / std::sqrt(t2);
         sf = Vec3f(Float(t[0] * r), Float(t[1] * r), Float(t[2] * r));
     } else {
