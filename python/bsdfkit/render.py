@@ -994,7 +994,7 @@ def render(scene: Scene, *, envmap=None, width=256, height=256, spp=64, max_dept
             nonfinite += nf
             bar.update(done)
             # passes of ~0.25 s: responsive progress; the result does not depend on the split
-            k = max(1, min(4 * k, int(k * 0.25 / max(dt, 1e-6))))
+            k = min(4 * k, int(k * 0.25 / max(dt, 1e-6)))
             k = max(_WAVE_SAMPLES, k - k % _WAVE_SAMPLES)
     except KeyboardInterrupt as e:
         bar.close(" interrupted")

@@ -152,29 +152,21 @@ std::string Scene::add_sphere(const Vec3f &center, Float radius, int mat_a, int 
 // degenerate triangle), s the edge e1 = p1 - p0 made orthogonal to n (Gram-Schmidt), or
 // Frame::around(n)'s tangent where e1 is (nearly) along n or zero.
 static void triangle_frame(const Float *v, const uint32_t *ix, Float *out) {
-    double p[3][3];
-    for (int i = 0; i < 3; ++i)
-        for (int c = 0; c < 3; ++c) p[i][c] = double(v[3 * size_t(ix[i]) + size_t(c)]);
-    double e1[3], e2[3];
-    for (int c = 0; c < 3; ++c) e1[c] = p[1][c] - p[0][c], e2[c] = p[2][c] - p[0][c];
-    double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-    double l2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-    if (l2 > 0) {
-        double r = 1 / std::sqrt(l2);
-        for (double &x : n) x *= r;
-    } else {
-        n[0] = 0, n[1] = 1, n[2] = 0;
-    }
-    double d = n[0] * e1[0] + n[1] * e1[1] + n[2] * e1[2], t[3];
-    for (int c = 0; c < 3; ++c) t[c] = e1[c] - n[c] * d;
-    double t2 = t[0] * t[0] + t[1] * t[1] + t[2] * t[2], e1sq = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2];
-    const Vec3f nf{Float(n[0]), Float(n[1]), Float(n[2])};
-    Vec3f sf;
-    if (t2 > 1e-12 * e1sq && t2 > 0) {
-        double r = 1 / std::sqrt(t2);
-        sf = Vec3f(Float(t[0] * r), Float(t[1] * r), Float(t[2] * r));
-    } else {
-        sf = Frame::around(nf).s;
+    using Vec3d = Vec3<double>;
+    auto vertex = [&](int i) {
+        const Float *q = v + 3 * size_t(ix[i]);
+        return Vec3d(q[0], q[1], q[2]);
+    };
+    const Vec3d p0 = vertex(0), e1 = vertex(1) - p0, e2 = vertex(2) - p0;
+    Vec3d n = cross(e1, e2);
+    n = length_squared(n) > 0 ? normalize(n) : Vec3d(0, 1, 0);
+    const Vec3d t = e1 - n * dot(n, e1);
+    const double t2 = length_squared(t);
+    const Vec3f nf(Float(n.x), Float(n.y), Float(n.z));
+    Vec3f sf = Frame::around(nf).s;
+    if (t2 > 1e-12 * length_squared(e1) && t2 > 0) {
+        const Vec3d s = t / std::sqrt(t2);
+        sf = Vec3f(Float(s.x), Float(s.y), Float(s.z));
     }
     out[0] = nf.x, out[1] = nf.y, out[2] = nf.z, out[3] = sf.x, out[4] = sf.y, out[5] = sf.z;
 }

@@ -1,7 +1,6 @@
 // Pinhole perspective camera (look-at form, world y-up).
 #pragma once
 #include "material.h"
-#include "shading_frame.h"
 
 namespace bsdfkit::render {
 
