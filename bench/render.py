@@ -229,7 +229,9 @@ paths): about -1 to -3 % each. `render()`'s progressive passes come in whole wav
 indices (the first pass was 1 spp, leaving 3/4 of each wave's packets empty): about -1.4 %.
 
 With LTO (the installed wheel) the gain is smaller than in the profiling build (no LTO): the
-table above, RESULTS_PLACEHOLDER
+table above (1.55x / 1.48x at 1 / 2 threads, one 1-thread render 0.75 s) against session 14's
+1.40x / 1.42x (0.85 s); a second run right after gave 1.38x / 1.48x, so the 1.5x target is met at
+1 thread in one run of two and missed by 1-2 % at 2 threads in both.
 
 Tried and not kept: the camera directions on 16-lane packets in a pass of their own (+3 %, as in
 session 11); the environment's bilinear lookups as per-lane 4-channel loads instead of 12 gathers
