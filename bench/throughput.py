@@ -775,8 +775,11 @@ DIVIDER_OPS = {
     ("diel_rough", "pdf"): {"float32": (1, 2), "float64": (1, 2)},
     ("roughplastic", "eval"): {"float32": (1, 3), "float64": (1, 3)},
     ("roughplastic", "pdf"): {"float32": (1, 1), "float64": (1, 1)},
-    ("hair", "eval"): {"float32": (10, 6), "float64": (23, 6)},
-    ("hair", "pdf"): {"float32": (10, 6), "float64": (23, 6)},
+    # hair: counted at the session 16 kernel (exp_finite, Mp without LogI0); the 4 lobes' asymptotic
+    # Mp branches (1 division and 1 square root each) are in the count, though on the bench's inputs
+    # only the TT lobe (v0 / 4) takes its branch: an upper bound on the divider work.
+    ("hair", "eval"): {"float32": (14, 10), "float64": (19, 8)},
+    ("hair", "pdf"): {"float32": (14, 10), "float64": (19, 8)},
 }
 
 

@@ -10,6 +10,9 @@
 #include <type_traits>
 #include <utility>
 #include <vector>
+#if defined(__SSE__)
+#include <immintrin.h> // _mm_getcsr / _mm_setcsr (DenormalsFlushed)
+#endif
 
 #include "core/bsdf.h"
 #include "core/bxdf.h"
@@ -448,6 +451,29 @@ template <int S, typename F> inline Dirs<F> dirs_of(const F *p) {
     return {p, S == 0 ? DirLayout::One : DirLayout::Rows, 0};
 }
 
+// Models that declare `static constexpr bool FlushDenormals = true` run their batch kernels with
+// the CPU's flush-to-zero and denormals-are-zero modes (x86 MXCSR FTZ | DAZ), set per chunk on the
+// thread that runs it and restored after: a denormal intermediate then costs nothing instead of a
+// microcode assist (~100+ cycles each on Intel). Only values below the smallest normal number
+// (1.2e-38 in float) change, to 0. Hair declares it: its lobes' exponentials reach the denormals
+// on ordinary pairs (narrow Mp tails times Np), and FTZ | DAZ made its eval kernel 14-21 % faster
+// with identical outputs on bench/throughput.py's inputs. A model that declares it must tolerate a
+// denormal operand read as 0 (no division by a value that can be denormal without a mask).
+template <typename M, typename = void> struct flushes_denormals : std::false_type {};
+template <typename M> struct flushes_denormals<M, std::enable_if_t<M::FlushDenormals>> : std::true_type {};
+
+template <bool On> struct DenormalsFlushed {};
+#if defined(__SSE__)
+template <> struct DenormalsFlushed<true> {
+    unsigned saved = _mm_getcsr();
+    DenormalsFlushed() { _mm_setcsr(saved | 0x8040u); } // FTZ (bit 15) | DAZ (bit 6)
+    ~DenormalsFlushed() { _mm_setcsr(saved); }
+    DenormalsFlushed(const DenormalsFlushed &) = delete;
+    DenormalsFlushed &operator=(const DenormalsFlushed &) = delete;
+};
+#endif
+template <typename M> using DenormalsFlushedFor = DenormalsFlushed<flushes_denormals<M>::value>;
+
 // A per-chunk local copy of the model's trivially copyable kernel (core/bxdf.h: the model, or
 // its `Kernel` base when it holds a shared table): its parameters then cannot alias the outputs,
 // so they stay in registers instead of being reloaded, and alias-checked, every iteration.
@@ -461,6 +487,7 @@ void pair_packet_loop(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int6
                       const Store &store) {
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
         int64_t bo = 0, bi = 0;
+        const DenormalsFlushedFor<Model> ftz;
         LocalModel<Model> mloc = m;
         // A local copy of the store's closure too: the arguments it captures by value (out, mode,
         // sample flags) then cannot alias the outputs, so their loads and the flag mask leave the loop.
@@ -492,6 +519,7 @@ void eval_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMo
     }
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
         int64_t bo = 0, bi = 0;
+        const DenormalsFlushedFor<Model> ftz;
         LocalModel<Model> mloc = m;
         for (int64_t i = b; i < e; ++i) {
             Vec3<F> o = load3<F, SO>(wo, i), w = load3<F, SI>(wi, i);
@@ -519,6 +547,7 @@ void pdf_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMod
     }
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
         int64_t bo = 0, bi = 0;
+        const DenormalsFlushedFor<Model> ftz;
         LocalModel<Model> mloc = m;
         for (int64_t i = b; i < e; ++i) {
             Vec3<F> o = load3<F, SO>(wo, i), w = load3<F, SI>(wi, i);
@@ -697,6 +726,7 @@ void sample_batch_loop(const Model &m, const Sampler &sampler, const F *wo, cons
                        uint8_t sf, const SampleOut<F> &out, int nthreads, BadCounts &bad) {
     const bool model_ok = (m.flags() & sf) != 0;
     parallel_chunks(n, nthreads, kChunk, [&, model_ok](int64_t b, int64_t e) __attribute__((flatten)) {
+        const DenormalsFlushedFor<Model> ftz;
         LocalModel<Model> mloc = m;
         if constexpr (is_vectorized<Model>::value) {
             int64_t c[3];
@@ -749,6 +779,7 @@ void albedo_batch(const Model &m, const F *wo, int64_t n_wo, int64_t n_samples, 
     std::vector<double> partial(size_t(n_wo * nblocks * 3), 0.0);
     parallel_chunks(n_wo * nblocks, nthreads, 1, [&](int64_t item, int64_t) {
         int64_t j = item / nblocks, blk = item % nblocks;
+        const DenormalsFlushedFor<Model> ftz;
         Vec3<F> o = load3<F, 3>(wo, j);
         if (blk == 0) bad.wo += not_unit(o);
         int64_t s0 = blk * block, s1 = std::min(n_samples, s0 + block);

@@ -626,6 +626,7 @@ void sample_spectral_packets(const SM &m, const F *wo, int64_t so, const F *uc, 
     const Dirs<F> dwo = spectral_dirs(wo, so);
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
         int64_t bo = 0, buc = 0, bu = 0;
+        const DenormalsFlushedFor<SM> ftz;
         const SM mloc = m;
         for (int64_t i = b; i < e; i += kW<F>) {
             int64_t cnt = std::min(kW<F>, e - i);
@@ -672,6 +673,7 @@ void eval_spectral_batch(const SM &m, const F *wo, int64_t so, const F *wi, int6
     }
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
         int64_t bo = 0, bi = 0, bl = 0;
+        const DenormalsFlushedFor<SM> ftz;
         const SM mloc = m;
         for (int64_t i = b; i < e; ++i) {
             Vec3<F> o(wo[i * so], wo[i * so + 1], wo[i * so + 2]), w(wi[i * si], wi[i * si + 1], wi[i * si + 2]);
@@ -706,6 +708,7 @@ void pdf_spectral_batch(const SM &m, const F *wo, int64_t so, const F *wi, int64
     }
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
         int64_t bo = 0, bi = 0, bl = 0;
+        const DenormalsFlushedFor<SM> ftz;
         const SM mloc = m;
         for (int64_t i = b; i < e; ++i) {
             Vec3<F> o(wo[i * so], wo[i * so + 1], wo[i * so + 2]), w(wi[i * si], wi[i * si + 1], wi[i * si + 2]);
@@ -734,6 +737,7 @@ void sample_spectral_batch(const SM &m, const F *wo, int64_t so, const F *uc, co
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
         int64_t bo = 0, bl = 0;
         int64_t buc = count_bad_uniforms(uc, b, e), bu = count_bad_uniforms(u, 2 * b, 2 * e);
+        const DenormalsFlushedFor<SM> ftz;
         const SM mloc = m;
         for (int64_t i = b; i < e; ++i) {
             Vec3<F> o(wo[i * so], wo[i * so + 1], wo[i * so + 2]);
@@ -774,6 +778,7 @@ void albedo_spectral_batch(const SM &m, const F *wo, int64_t n_wo, const double 
     const bool disp = m.dispersive();
     parallel_chunks(n_wo * nblocks, nthreads, 1, [&](int64_t item, int64_t) {
         int64_t j = item / nblocks, blk = item % nblocks;
+        const DenormalsFlushedFor<SM> ftz;
         Vec3<F> o = load3<F, 3>(wo, j);
         double l[kSpectralN];
         int64_t bl = load_lambda(lam, j, sl, l);

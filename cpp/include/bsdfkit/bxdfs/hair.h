@@ -27,7 +27,11 @@ inline constexpr int PMax = 3;
 
 // The helpers are written on the evaluation type F (a scalar or a packet, core/simd.h): exp, log,
 // asin and atan2 are unqualified, so scalars call libm (core/math.h) and packets Dr.Jit's vector
-// forms (drjit/math.h, Cephes-derived, about 1 ulp).
+// forms (drjit/math.h, Cephes-derived, about 1 ulp). Where an exponent is finite by construction
+// (beta_m, beta_n >= 0.01 bound 1 / v and 1 / s), exp_finite (core/simd.h) drops the packet exp's
+// overflow / underflow selects: 4 of ~17 instructions, 10 exps per element (the same bits where
+// the result is a normal float; T's exponent, -2 sigma_a len, is clamped at -104 first, as a huge
+// sigma_a times len could reach -inf).
 
 // Modified Bessel function of the first kind, order 0: sum_{i<10} x^{2i} / (4^i (i!)^2) (pbrt-v4 I0),
 // by Horner's rule in x^2 (the coefficients are constants: 9 fused multiply-adds).
@@ -61,19 +65,28 @@ template <typename F> inline F LogI0(F x) {
 }
 
 // Longitudinal scattering of d'Eon et al. 2011, eq. 7, in log space (pbrt-v4 Mp):
-// Mp = exp(LogI0(cos_i cos_o / v) - sin_i sin_o / v + log_norm), with log_norm = -ln(2 v sinh(1/v))
-// for v > 0.1 and pbrt-v4's -1/v + 0.6931 + ln(1/(2v)) for v <= 0.1 (no overflow for small v).
-// Where a <= 12 (LogI0 = log I0) it is I0(a) exp(log_norm - b): one exp, no log. The asymptotic
-// form runs only for a packet with a lane past 12 and serves only those lanes, so every lane's
-// value is the same whatever its neighbours. No new overflow: I0(12) < 2e4 and exp(log_norm - b)
-// <= 1 / (v (1 - exp(-2 / v))), about 1 / v + 1 / 2.
+// Mp = exp(LogI0(a) - b + log_norm), a = cos_i cos_o / v, b = sin_i sin_o / v, with log_norm =
+// -ln(2 v sinh(1/v)) for v > 0.1 and pbrt-v4's -1/v + 0.6931 + ln(1/(2v)) for v <= 0.1 (no overflow
+// for small v). Written with one exp and no log: where a <= 12 (LogI0 = log I0) it is
+// I0(a) exp(log_norm - b); past 12, LogI0's asymptotic form a + (ln(1/a) - ln(2 pi) + 1/(8a)) / 2
+// gives exp(a + 1/(16a) + log_norm - b) / sqrt(2 pi a), with 1/(16a) = (pi/8) r^2 for
+// r = 1 / sqrt(2 pi a). The asymptotic terms are computed only for a packet with a lane past 12
+// and serve only those lanes, so every lane's value is the same whatever its neighbours. No
+// overflow: I0(12) < 2e4, exp(log_norm - b) <= 1 / (v (1 - exp(-2 / v))), about 1 / v + 1 / 2,
+// and a - b + log_norm <= 1 / v + log_norm. (The TT lobe, v0 / 4, passes 12 on most pairs at
+// beta_m = 0.3: its log, second exp and I0 were ~9 % of the eval kernel.)
 template <typename F, typename S> inline F Mp(F cos_i, F cos_o, F sin_i, F sin_o, S inv_v, S log_norm) {
+    using T = scalar_t<F>;
     F a = cos_i * cos_o * F(inv_v), b = sin_i * sin_o * F(inv_v);
-    F e = F(log_norm) - b;
+    F arg = F(log_norm) - b;
     Mask<F> big = a > F(12);
-    F m = I0(min_(a, F(12))) * exp(e);
-    if (any(big)) m = select(big, exp(LogI0(a) + e), m);
-    return m;
+    F pre = I0(min_(a, F(12)));
+    if (any(big)) {
+        F r = F(1) / sqrt(F(T(2) * Pi<T>) * max_(a, F(12)));
+        pre = select(big, r, pre);
+        arg = select(big, arg + mul_add(F(T(0.125) * Pi<T>), r * r, a), arg);
+    }
+    return pre * exp_finite(arg);
 }
 
 // Attenuation of each lobe (Marschner 2003 sec. 4.3; pbrt-v4 Ap): A0 = f, A1 = (1-f)^2 T,
@@ -102,7 +115,7 @@ template <typename F> inline F Phi(F p, F gamma_o, F gamma_t) {
 
 // Logistic density of scale s (Chiang 2016 eq. 10), symmetric; inv_s = 1 / s.
 template <typename F, typename S> inline F Logistic(F x, S inv_s) {
-    F e = exp(-abs(x) * F(inv_s));
+    F e = exp_finite(-abs(x) * F(inv_s));
     return e * F(inv_s) / sqr(F(1) + e);
 }
 template <typename F> inline F LogisticCDF(F x, F s) { return F(1) / (F(1) + exp(-x / s)); }
@@ -256,6 +269,9 @@ template <typename F, int NC = 3> struct HairBxDF {
     // the evaluation type V (F, or a packet of F; core/simd.h). The offset h and its angles are
     // passed as an Offset<V>, so that the far-field fibre can give every lane its own node.
     static constexpr bool Vectorized = true;
+    // Mp's narrow tails times Np reach the denormals on ordinary pairs; the batch kernels run
+    // with FTZ | DAZ (batch.h, DenormalsFlushed). Every division is by a floored or masked value.
+    static constexpr bool FlushDenormals = true;
 
     template <typename V> struct Offset {
         V h, gamma_o, cos_gamma_o;
@@ -273,7 +289,8 @@ template <typename F, int NC = 3> struct HairBxDF {
         V cos_gt = safe_sqrt(mul_add(-sin_gt, sin_gt, V(1)));
         *gamma_t = asin(sin_gt);
         V len = cos_gt * V(eta) * inv_den;
-        for (int c = 0; c < NC; ++c) (*T)[c] = exp(-V(two_sigma_a[c]) * len);
+        // the exponent is finite (exp_finite) but for a huge sigma_a times len: e^-104 is 0 in float
+        for (int c = 0; c < NC; ++c) (*T)[c] = exp_finite(max_(-V(two_sigma_a[c]) * len, V(-104)));
     }
 
     // theta_o rotated by the lobe's cuticle tilt; cos is taken as |cos| (pbrt-v4).
@@ -482,6 +499,7 @@ template <typename F, int NC = 3> struct HairFarFieldBxDF {
 
     // On packets too (batch.h): the node loop is uniform; sampling gives each lane its own node.
     static constexpr bool Vectorized = true;
+    static constexpr bool FlushDenormals = true; // as HairBxDF
 
     template <typename V> typename Base::template Offset<V> node(int k) const {
         return {V(node_h[k]), V(node_gamma[k]), V(node_cos_gamma[k])};

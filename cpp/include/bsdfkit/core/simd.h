@@ -9,6 +9,7 @@
 // core/math.h brings std:: into bsdfkit), so argument-dependent lookup picks drjit:: for
 // packets. Divide and sqrt are the exact IEEE ones in both forms (no rcp/rsqrt approximations).
 #pragma once
+#include <cmath>
 #include <cstddef>
 #include <limits>
 #include <type_traits>
@@ -108,6 +109,27 @@ inline drjit::mask_t<P> not_finite_nonneg(const P &x) {
 #endif
     {
         return !((x >= T(0)) & (x <= std::numeric_limits<T>::max()));
+    }
+}
+
+// e^x for a finite x. For float packets: Dr.Jit's exp (the Cephes expf reduction and polynomial,
+// about 1 ulp: x = n ln2 + y with n = floor(x / ln2 + 1/2), e^y by its degree-7 polynomial, then
+// 2^n e^y by AVX-512's vscalef where the packet has it) without its two overflow / underflow
+// selects: for a finite x, 2^n e^y already rounds to +inf past x ~ 88.7 and to 0 (through the
+// denormals) below x ~ -103, so only +-inf and NaN arguments, which need them, differ. The same
+// bits as exp(x) for x in [-87.3, 88.3], which is Dr.Jit's own range check. Other types: exp(x).
+template <typename V> inline V exp_finite(const V &x) {
+    if constexpr (drjit::is_array_v<V> && std::is_same_v<drjit::scalar_t<V>, float>) {
+        V n = drjit::floor(drjit::fmadd(V(drjit::InvLogTwo<float>), x, V(0.5f)));
+        V y = drjit::fmadd(n, V(-0.693359375f), x);  // -ln 2 in two parts (Cephes C1, C2)
+        y = drjit::fmadd(n, V(2.12194440e-4f), y);
+        V z = drjit::estrin(y, 5.0000001201e-1, 1.6666665459e-1, 4.1665795894e-2, 8.3334519073e-3,
+                            1.3981999507e-3, 1.9875691500e-4);
+        z = drjit::fmadd(z, drjit::square(y), y + 1.f);
+        return drjit::ldexp(z, n);
+    } else {
+        using std::exp;
+        return exp(x);
     }
 }
 
