@@ -53,21 +53,10 @@ template <typename F> inline F I0(F x) {
     return val;
 }
 
-// log I0(x); for x > 12 the asymptotic x + (ln(1/x) - ln(2 pi) + 1/(8x)) / 2 (pbrt-v4 LogI0).
-// One log for both branches (its argument is selected).
-template <typename F> inline F LogI0(F x) {
-    using S = scalar_t<F>;
-    Mask<F> big = x > F(12);
-    F xs = min_(x, F(12)), xl = max_(x, F(12));
-    F L = log(select(big, F(S(2) * Pi<S>) * xl, I0(xs)));
-    F large = xl + F(0.5) * (F(0.125) / xl - L);
-    return select(big, large, L);
-}
-
 // Longitudinal scattering of d'Eon et al. 2011, eq. 7, in log space (pbrt-v4 Mp):
 // Mp = exp(LogI0(a) - b + log_norm), a = cos_i cos_o / v, b = sin_i sin_o / v, with log_norm =
 // -ln(2 v sinh(1/v)) for v > 0.1 and pbrt-v4's -1/v + 0.6931 + ln(1/(2v)) for v <= 0.1 (no overflow
-// for small v). Written with one exp and no log: where a <= 12 (LogI0 = log I0) it is
+// for small v). Written with one exp and no log: where a <= 12 (LogI0 = log I0, pbrt-v4 LogI0) it is
 // I0(a) exp(log_norm - b); past 12, LogI0's asymptotic form a + (ln(1/a) - ln(2 pi) + 1/(8a)) / 2
 // gives exp(a + 1/(16a) + log_norm - b) / sqrt(2 pi a), with 1/(16a) = (pi/8) r^2 for
 // r = 1 / sqrt(2 pi a). The asymptotic terms are computed only for a packet with a lane past 12
@@ -118,7 +107,6 @@ template <typename F, typename S> inline F Logistic(F x, S inv_s) {
     F e = exp_finite(-abs(x) * F(inv_s));
     return e * F(inv_s) / sqr(F(1) + e);
 }
-template <typename F> inline F LogisticCDF(F x, F s) { return F(1) / (F(1) + exp(-x / s)); }
 
 // Wrap an angle into [-pi, pi].
 template <typename F> inline F WrapPi(F x) {
