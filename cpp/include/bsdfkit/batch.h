@@ -10,9 +10,6 @@
 #include <type_traits>
 #include <utility>
 #include <vector>
-#if defined(__SSE__)
-#include <immintrin.h> // _mm_getcsr / _mm_setcsr (DenormalsFlushed)
-#endif
 
 #include "core/bsdf.h"
 #include "core/bxdf.h"
@@ -451,28 +448,7 @@ template <int S, typename F> inline Dirs<F> dirs_of(const F *p) {
     return {p, S == 0 ? DirLayout::One : DirLayout::Rows, 0};
 }
 
-// Models that declare `static constexpr bool FlushDenormals = true` run their batch kernels with
-// the CPU's flush-to-zero and denormals-are-zero modes (x86 MXCSR FTZ | DAZ), set per chunk on the
-// thread that runs it and restored after: a denormal intermediate then costs nothing instead of a
-// microcode assist (~100+ cycles each on Intel). Only values below the smallest normal number
-// (1.2e-38 in float) change, to 0. Hair declares it: its lobes' exponentials reach the denormals
-// on ordinary pairs (narrow Mp tails times Np), and FTZ | DAZ made its eval kernel 14-21 % faster
-// with identical outputs on bench/throughput.py's inputs. A model that declares it must tolerate a
-// denormal operand read as 0 (no division by a value that can be denormal without a mask).
-template <typename M, typename = void> struct flushes_denormals : std::false_type {};
-template <typename M> struct flushes_denormals<M, std::enable_if_t<M::FlushDenormals>> : std::true_type {};
-
-template <bool On> struct DenormalsFlushed {};
-#if defined(__SSE__)
-template <> struct DenormalsFlushed<true> {
-    unsigned saved = _mm_getcsr();
-    DenormalsFlushed() { _mm_setcsr(saved | 0x8040u); } // FTZ (bit 15) | DAZ (bit 6)
-    ~DenormalsFlushed() { _mm_setcsr(saved); }
-    DenormalsFlushed(const DenormalsFlushed &) = delete;
-    DenormalsFlushed &operator=(const DenormalsFlushed &) = delete;
-};
-#endif
-template <typename M> using DenormalsFlushedFor = DenormalsFlushed<flushes_denormals<M>::value>;
+// DenormalsFlushedFor<Model> (core/simd.h): FTZ | DAZ per chunk for models that declare FlushDenormals.
 
 // A per-chunk local copy of the model's trivially copyable kernel (core/bxdf.h: the model, or
 // its `Kernel` base when it holds a shared table): its parameters then cannot alias the outputs,

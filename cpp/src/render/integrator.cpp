@@ -212,6 +212,7 @@ struct Tracer {
     }
 
     template <typename M> void shade_group(const M &b, const int *items, int n, Wave &w) const {
+        const DenormalsFlushedFor<M> ftz; // Hair: FTZ | DAZ, as its batch kernels (core/simd.h)
         if constexpr (std::is_same_v<M, HairBxDF<Float>>) {
             // h comes from each fibre hit (material_at)
             for (int i = 0; i < n; ++i) {
