@@ -258,7 +258,7 @@ template <typename F, int NC = 3> struct HairBxDF {
     // passed as an Offset<V>, so that the far-field fibre can give every lane its own node.
     static constexpr bool Vectorized = true;
     // Mp's narrow tails times Np reach the denormals on ordinary pairs; the batch kernels run
-    // with FTZ | DAZ (batch.h, DenormalsFlushed). Every division is by a floored or masked value.
+    // with FTZ | DAZ (core/simd.h, DenormalsFlushed). Every division is by a floored or masked value.
     static constexpr bool FlushDenormals = true;
 
     template <typename V> struct Offset {
