@@ -115,14 +115,20 @@ inline drjit::mask_t<P> not_finite_nonneg(const P &x) {
     }
 }
 
-// e^x for a finite x. For float packets: Dr.Jit's exp (the Cephes expf reduction and polynomial,
-// about 1 ulp: x = n ln2 + y with n = floor(x / ln2 + 1/2), e^y by its degree-7 polynomial, then
-// 2^n e^y by AVX-512's vscalef where the packet has it) without its two overflow / underflow
-// selects: for a finite x, 2^n e^y already rounds to +inf past x ~ 88.7 and to 0 (through the
-// denormals) below x ~ -103, so only +-inf and NaN arguments, which need them, differ. The same
-// bits as exp(x) for x in [-87.3, 88.3], which is Dr.Jit's own range check. Other types: exp(x).
+// e^x for a finite x. For float packets with AVX-512: Dr.Jit's exp (the Cephes expf reduction and
+// polynomial, about 1 ulp: x = n ln2 + y with n = floor(x / ln2 + 1/2), e^y by its degree-7
+// polynomial, then 2^n e^y by vscalef) without its two overflow / underflow selects: for a finite
+// x, vscalef already rounds 2^n e^y to +inf past x ~ 88.7 and to 0 (through the denormals) below
+// x ~ -103, so only +-inf and NaN arguments, which need them, differ. The same bits as exp(x) for x
+// in [-87.3, 88.3]. Without AVX-512 (AVX2, e.g. Zen 3) Dr.Jit's ldexp builds 2^n from exponent
+// bits, which wrap for n < -127 (exp(-300) came out as 2e24): there, and for other types, exp(x).
 template <typename V> inline V exp_finite(const V &x) {
-    if constexpr (drjit::is_array_v<V> && std::is_same_v<drjit::scalar_t<V>, float>) {
+#if defined(__AVX512F__)
+    constexpr bool fast = drjit::is_array_v<V> && std::is_same_v<drjit::scalar_t<V>, float>;
+#else
+    constexpr bool fast = false;
+#endif
+    if constexpr (fast) {
         V n = drjit::floor(drjit::fmadd(V(drjit::InvLogTwo<float>), x, V(0.5f)));
         V y = drjit::fmadd(n, V(-0.693359375f), x);  // -ln 2 in two parts (Cephes C1, C2)
         y = drjit::fmadd(n, V(2.12194440e-4f), y);
@@ -136,10 +142,9 @@ template <typename V> inline V exp_finite(const V &x) {
     }
 }
 
-// Models that declare `static constexpr bool FlushDenormals = true` run their batch kernels (and the
-// preview renderer's shading of them) with
-// the CPU's flush-to-zero and denormals-are-zero modes (x86 MXCSR FTZ | DAZ), set per chunk on the
-// thread that runs it and restored after: a denormal intermediate then costs nothing instead of a
+// Models that declare `static constexpr bool FlushDenormals = true` run their batch kernels (and
+// the preview renderer's shading of them) with the CPU's flush-to-zero and denormals-are-zero
+// modes (x86 MXCSR FTZ | DAZ), set per chunk on the thread that runs it and restored after: a denormal intermediate then costs nothing instead of a
 // microcode assist (~100+ cycles each on Intel). Only values below the smallest normal number
 // (1.2e-38 in float) change, to 0. Hair declares it: its lobes' exponentials reach the denormals
 // on ordinary pairs (narrow Mp tails times Np), and FTZ | DAZ made its eval kernel 14-21 % faster
