@@ -21,7 +21,7 @@ def _dirs(n, seed=3):
 @pytest.mark.parametrize("call", ["eval", "pdf", "sample", "albedo", "spectral"])
 def test_hair_kernels_leave_denormals_enabled(threads, call):
     n = 100_000  # several chunks, so the pool's helper threads run some
-    wo, wi = _dirs(n)
+    wo, wi = (d.astype(np.float32) for d in _dirs(n))
     # spectral: a sigma_a spectrum of its own (an RGB one would build the uplift table first)
     hair = bk.Hair(bk.Spectrum.constant(0.5) if call == "spectral" else None, h=0.3, beta_m=0.1)
     # Diffuse(1e-38): f = R / pi = 3.18e-39 is a float32 denormal; with FTZ left on it would be 0
@@ -31,18 +31,18 @@ def test_hair_kernels_leave_denormals_enabled(threads, call):
     try:
         for _ in range(2):  # the helper threads run chunks of both calls
             if call == "eval":
-                hair.eval(wo.astype(np.float32), wi.astype(np.float32))
+                hair.eval(wo, wi)
             elif call == "pdf":
-                hair.pdf(wo.astype(np.float32), wi.astype(np.float32))
+                hair.pdf(wo, wi)
             elif call == "sample":
                 rng = np.random.default_rng(1)
-                hair.sample(wo.astype(np.float32), rng.random(n, dtype=np.float32), rng.random((n, 2), dtype=np.float32))
+                hair.sample(wo, rng.random(n, dtype=np.float32), rng.random((n, 2), dtype=np.float32))
             elif call == "albedo":
-                hair.albedo(wo[:64].astype(np.float32), n_samples=4096)
+                hair.albedo(wo[:64], n_samples=4096)
             else:
                 lam = np.full((n, 4), 550.0)
-                hair.eval(wo.astype(np.float32), wi.astype(np.float32), wavelengths=lam)
-            f = dark.eval(wo.astype(np.float32), wi.astype(np.float32))
+                hair.eval(wo, wi, wavelengths=lam)
+            f = dark.eval(wo, wi)
             expected = np.float32(np.float32(1e-38) / np.float32(np.pi))
             assert 0 < expected < np.finfo(np.float32).tiny  # a denormal
             np.testing.assert_allclose(f, expected, rtol=1e-3)
