@@ -448,11 +448,11 @@ template <int S, typename F> inline Dirs<F> dirs_of(const F *p) {
     return {p, S == 0 ? DirLayout::One : DirLayout::Rows, 0};
 }
 
-// DenormalsFlushedFor<Model> (core/simd.h): FTZ | DAZ per chunk for models that declare FlushDenormals.
-
 // A per-chunk local copy of the model's trivially copyable kernel (core/bxdf.h: the model, or
 // its `Kernel` base when it holds a shared table): its parameters then cannot alias the outputs,
 // so they stay in registers instead of being reloaded, and alias-checked, every iteration.
+// Beside it each chunk declares DenormalsFlushedFor<Model> (core/simd.h): FTZ | DAZ for the chunk
+// where the model declares FlushDenormals, nothing otherwise.
 template <typename Model> using LocalModel = const KernelOf_t<Model>;
 
 // The packet loop of eval and pdf: per chunk a local model, per packet the pair (wo, wi) loaded

@@ -171,7 +171,7 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
         Vec3<V> wt = RefractScaled(wo, m, wo_m, inv_len2, cos_t, eta, &etap, &inv_etap);
         Mask<V> ok_t = cos_t > V(0); // not total internal reflection (nor a grazing wo.m = 0)
         // wt.z == 0 is left to the BSDF-level check on wi.z (bsdf_sample).
-        Mask<V> ok = (reflect & SameHemisphere(wo, wr)) | (!reflect & ok_t & !SameHemisphere(wo, wt));
+        Mask<V> ok = (reflect & SameHemisphere(wo, wr)) | ((!reflect) & ok_t & (!SameHemisphere(wo, wt)));
         ok &= ((pr + pt) > V(0)) & (cos_o != V(0));
         Vec3<V> wi = select(reflect, wr, wt);
 

@@ -381,7 +381,7 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardKernel {
         Lobes<V> l = lobes(NoV);
         V c_diff = l.diffuse, c_cos = c_diff + l.sheen_cos, c_ggx = c_cos + l.ggx, c_coat = c_ggx + l.coat;
         Mask<V> pick_cos = uc < c_cos;
-        Mask<V> pick_ggx = !pick_cos & (uc < c_ggx);
+        Mask<V> pick_ggx = (!pick_cos) & (uc < c_ggx);
         Mask<V> pick_coat = Mask<V>(Coat) & !pick_cos & !pick_ggx & (uc < c_coat) & (l.coat > V(0));
         // One visible-normal sample for whichever GGX lobe was picked
         TrowbridgeReitz<V> d;
@@ -389,7 +389,7 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardKernel {
         d.alpha_y = select(pick_coat, V(coat.alpha_y), V(spec.alpha_y));
         Vec3<V> wi = Reflect(wo, d.Sample_wm(wo, u));
         if constexpr (Sheen) {
-            Mask<V> pick_charlie = !pick_cos & !pick_ggx & !pick_coat & (l.charlie > V(0));
+            Mask<V> pick_charlie = (!pick_cos) & (!pick_ggx) & (!pick_coat) & (l.charlie > V(0));
             wi = select(pick_charlie, Reflect(wo, SampleCharlie(V(sheen_alpha), u)), wi);
         }
         wi = select(pick_cos, SampleCosineHemisphere(u), wi);

@@ -106,7 +106,7 @@ template <typename F, typename Bottom> struct AnalyticLayeredBxDF {
     uint8_t flags() const {
         uint8_t f = Reflection;
         bool spec = top_smooth() | base_smooth;
-        bool glossy = !top_smooth() | (!base_diffuse & !base_smooth);
+        bool glossy = (!top_smooth()) | ((!base_diffuse) & (!base_smooth));
         bool diff = base_diffuse | has_albedo;
         if (spec) f |= Specular;
         if (glossy) f |= Glossy;
@@ -231,8 +231,8 @@ template <typename F, typename Bottom> struct AnalyticLayeredBxDF {
         Mask<V> coat = uc < pc;
         Mask<V> rest = pc < V(1);
         V ub = select(rest, (uc - pc) / select(rest, V(1) - pc, V(1)), V(0));
-        Mask<V> cosine = !coat & (ub < V(q_cos));
-        Mask<V> delta = (coat & Mask<V>(top_smooth())) | (!coat & !cosine & Mask<V>(base_smooth));
+        Mask<V> cosine = (!coat) & (ub < V(q_cos));
+        Mask<V> delta = (coat & Mask<V>(top_smooth())) | ((!coat) & (!cosine) & Mask<V>(base_smooth));
         Vec3<V> mirror(-o.x, -o.y, o.z);
         // every lobe's direction, then one per lane
         Vec3<V> i = SampleCosineHemisphere(u);

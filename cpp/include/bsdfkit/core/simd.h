@@ -153,7 +153,11 @@ template <typename V> inline V exp_finite(const V &x) {
 template <typename M, typename = void> struct flushes_denormals : std::false_type {};
 template <typename M> struct flushes_denormals<M, std::enable_if_t<M::FlushDenormals>> : std::true_type {};
 
-template <bool On> struct DenormalsFlushed {};
+// Off: nothing to do. The empty constructor makes the guard a non-trivial type, so a guard that is
+// only declared (`const DenormalsFlushedFor<M> ftz;`) is not an unused variable to -Wall.
+template <bool On> struct DenormalsFlushed {
+    DenormalsFlushed() {}
+};
 #if defined(__SSE__)
 template <> struct DenormalsFlushed<true> {
     unsigned saved = _mm_getcsr();
