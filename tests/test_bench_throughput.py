@@ -1,0 +1,58 @@
+"""bench/throughput.py's bookkeeping: merging repeated measurements of a cell and the steal share.
+
+The script itself is a benchmark (never run in the suite); these are its pure helpers, whose
+mistakes would silently change the committed table's verdicts."""
+import importlib.util
+import math
+import sys
+from pathlib import Path
+
+import pytest
+
+_PATH = Path(__file__).resolve().parents[1] / "bench" / "throughput.py"
+
+
+@pytest.fixture(scope="module")
+def tp():
+    sys.path.insert(0, str(_PATH.parent))  # the script imports bench/_machine.py as a sibling
+    try:
+        spec = importlib.util.spec_from_file_location("bench_throughput", _PATH)
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+    finally:
+        sys.path.remove(str(_PATH.parent))
+    return mod
+
+
+def test_merge_cells_keeps_each_variants_minimum(tp):
+    a = {("hair", "eval", "float32"): {"kernel_1t": 2.0, "kernel_2t": 1.5, "mi_kernel_2t": 1.0, "stream_2t": 0.3,
+                                       "busy_cores": 0.1, "steal": 0.02}}
+    b = {("hair", "eval", "float32"): {"kernel_1t": 1.8, "kernel_2t": 1.6, "mi_kernel_2t": 0.9, "stream_2t": 0.4,
+                                       "busy_cores": 0.25, "steal": 0.06}}
+    m = tp.merge_cells(a, b)[("hair", "eval", "float32")]
+    assert m["kernel_1t"] == 1.8 and m["kernel_2t"] == 1.5      # each side's own minimum
+    assert m["mi_kernel_2t"] == 0.9 and m["stream_2t"] == 0.3
+    assert m["busy_cores"] == 0.25                               # the worse load figure
+    assert m["steal"] == pytest.approx(0.04)
+    assert a[("hair", "eval", "float32")]["kernel_1t"] == 2.0     # inputs untouched
+
+
+def test_merge_cells_variant_only_in_one_pass(tp):
+    a = {("k", "pdf", "float64"): {"kernel_1t": 1.0, "steal": None}}
+    b = {("k", "pdf", "float64"): {"kernel_1t": 3.0, "plain_2t": 0.7, "steal": 0.1}}
+    m = tp.merge_cells(a, b)[("k", "pdf", "float64")]
+    assert m == {"kernel_1t": 1.0, "plain_2t": 0.7, "steal": 0.1}
+
+
+def test_steal_share(tp):
+    assert tp.steal_share((10, 1000), (60, 2000)) == pytest.approx(0.05)
+    assert tp.steal_share(None, (60, 2000)) is None
+    assert tp.steal_share((10, 1000), (10, 1000)) is None       # no time passed
+    t = tp.steal_ticks()
+    if t is not None:                                            # Linux: steal <= total jiffies
+        assert 0 <= t[0] <= t[1] and not math.isnan(t[0])
+
+
+def test_cell_info_is_not_a_timing(tp):
+    # build_rows must not turn a cell's load figures into bsdfkit "rates"
+    assert set(tp.CELL_INFO) == {"busy_cores", "steal"}
