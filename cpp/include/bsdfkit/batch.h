@@ -481,6 +481,28 @@ void pair_packet_loop(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int6
     });
 }
 
+// The per-element loop of eval and pdf for models without packet code (layered.h, measured.h and
+// merl.h say why they stay scalar): as pair_packet_loop, one element at a time; store(model, wo,
+// wi, i) computes and writes element i.
+template <int SO, int SI, typename Model, typename F, typename Store>
+void pair_scalar_loop(const Model &m, const F *wo, const F *wi, int64_t n, int nthreads, BadCounts &bad,
+                      const Store &store) {
+    parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
+        int64_t bo = 0, bi = 0;
+        const DenormalsFlushedFor<Model> ftz;
+        LocalModel<Model> mloc = m;
+        const Store st = store;
+        for (int64_t i = b; i < e; ++i) {
+            Vec3<F> o = load3<F, SO>(wo, i), w = load3<F, SI>(wi, i);
+            bo += not_unit(o);
+            bi += not_unit(w);
+            st(mloc, o, w, i);
+        }
+        bad.wo += bo;
+        bad.wi += bi;
+    });
+}
+
 // f(wo, wi) for N pairs; SO / SI are 3 for a full array, 0 for one broadcast direction.
 
 template <int SO, int SI, typename Model, typename F>
@@ -493,22 +515,13 @@ void eval_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMo
                                  });
         return;
     }
-    parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
-        int64_t bo = 0, bi = 0;
-        const DenormalsFlushedFor<Model> ftz;
-        LocalModel<Model> mloc = m;
-        for (int64_t i = b; i < e; ++i) {
-            Vec3<F> o = load3<F, SO>(wo, i), w = load3<F, SI>(wi, i);
-            bo += not_unit(o);
-            bi += not_unit(w);
-            Spectrum<F> v = bsdf_f(mloc, o, w, mode);
-            out[3 * i] = v[0];
-            out[3 * i + 1] = v[1];
-            out[3 * i + 2] = v[2];
-        }
-        bad.wo += bo;
-        bad.wi += bi;
-    });
+    pair_scalar_loop<SO, SI>(m, wo, wi, n, nthreads, bad,
+                             [out, mode](const auto &mm, const Vec3<F> &o, const Vec3<F> &w, int64_t i) {
+                                 Spectrum<F> v = bsdf_f(mm, o, w, mode);
+                                 out[3 * i] = v[0];
+                                 out[3 * i + 1] = v[1];
+                                 out[3 * i + 2] = v[2];
+                             });
 }
 
 template <int SO, int SI, typename Model, typename F>
@@ -521,19 +534,10 @@ void pdf_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMod
                                  });
         return;
     }
-    parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
-        int64_t bo = 0, bi = 0;
-        const DenormalsFlushedFor<Model> ftz;
-        LocalModel<Model> mloc = m;
-        for (int64_t i = b; i < e; ++i) {
-            Vec3<F> o = load3<F, SO>(wo, i), w = load3<F, SI>(wi, i);
-            bo += not_unit(o);
-            bi += not_unit(w);
-            out[i] = bsdf_pdf(mloc, o, w, mode, sf);
-        }
-        bad.wo += bo;
-        bad.wi += bi;
-    });
+    pair_scalar_loop<SO, SI>(m, wo, wi, n, nthreads, bad,
+                             [out, mode, sf](const auto &mm, const Vec3<F> &o, const Vec3<F> &w, int64_t i) {
+                                 out[i] = bsdf_pdf(mm, o, w, mode, sf);
+                             });
 }
 
 // eval / pdf on the packet path with the layouts chosen at run time (Dirs), for inputs that are

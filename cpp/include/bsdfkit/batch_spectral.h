@@ -654,6 +654,30 @@ void sample_spectral_packets(const SM &m, const F *wo, int64_t so, const F *uc, 
     });
 }
 
+// The per-element loop of spectral eval and pdf (the scalar adapters, and the packet adapters with
+// packets = false): per chunk a local model, per element the pair and its wavelengths loaded and
+// the bad inputs counted, then store(model, wo, wi, lambda, i) computes and writes element i.
+template <typename SM, typename F, typename Store>
+void spectral_pair_scalar_loop(const SM &m, const F *wo, int64_t so, const F *wi, int64_t si, const double *lam,
+                               int64_t sl, int64_t n, int nthreads, SpectralBadCounts &bad, const Store &store) {
+    parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
+        int64_t bo = 0, bi = 0, bl = 0;
+        const DenormalsFlushedFor<SM> ftz;
+        const SM mloc = m;
+        for (int64_t i = b; i < e; ++i) {
+            Vec3<F> o(wo[i * so], wo[i * so + 1], wo[i * so + 2]), w(wi[i * si], wi[i * si + 1], wi[i * si + 2]);
+            double l[kSpectralN];
+            bl += load_lambda(lam, i, sl, l);
+            bo += not_unit(o);
+            bi += not_unit(w);
+            store(mloc, o, w, l, i);
+        }
+        bad.wo += bo;
+        bad.wi += bi;
+        bad.lam += bl;
+    });
+}
+
 // packets = false keeps the scalar path (tests compare the two; tests/test_spectral_packets.py).
 template <typename SM, typename F>
 void eval_spectral_batch(const SM &m, const F *wo, int64_t so, const F *wi, int64_t si, const double *lam, int64_t sl,
@@ -671,23 +695,11 @@ void eval_spectral_batch(const SM &m, const F *wo, int64_t so, const F *wi, int6
             return;
         }
     }
-    parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
-        int64_t bo = 0, bi = 0, bl = 0;
-        const DenormalsFlushedFor<SM> ftz;
-        const SM mloc = m;
-        for (int64_t i = b; i < e; ++i) {
-            Vec3<F> o(wo[i * so], wo[i * so + 1], wo[i * so + 2]), w(wi[i * si], wi[i * si + 1], wi[i * si + 2]);
-            double l[kSpectralN];
-            bl += load_lambda(lam, i, sl, l);
-            bo += not_unit(o);
-            bi += not_unit(w);
-            Spectrum4<F> v = mloc.f(o, w, l, mode);
-            for (int c = 0; c < kSpectralN; ++c) out[kSpectralN * i + c] = v[c];
-        }
-        bad.wo += bo;
-        bad.wi += bi;
-        bad.lam += bl;
-    });
+    spectral_pair_scalar_loop(m, wo, so, wi, si, lam, sl, n, nthreads, bad,
+                              [&](const SM &mm, const Vec3<F> &o, const Vec3<F> &w, const double *l, int64_t i) {
+                                  Spectrum4<F> v = mm.f(o, w, l, mode);
+                                  for (int c = 0; c < kSpectralN; ++c) out[kSpectralN * i + c] = v[c];
+                              });
 }
 
 template <typename SM, typename F>
@@ -706,22 +718,10 @@ void pdf_spectral_batch(const SM &m, const F *wo, int64_t so, const F *wi, int64
             return;
         }
     }
-    parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
-        int64_t bo = 0, bi = 0, bl = 0;
-        const DenormalsFlushedFor<SM> ftz;
-        const SM mloc = m;
-        for (int64_t i = b; i < e; ++i) {
-            Vec3<F> o(wo[i * so], wo[i * so + 1], wo[i * so + 2]), w(wi[i * si], wi[i * si + 1], wi[i * si + 2]);
-            double l[kSpectralN];
-            bl += load_lambda(lam, i, sl, l);
-            bo += not_unit(o);
-            bi += not_unit(w);
-            out[i] = mloc.pdf(o, w, l, mode, sf);
-        }
-        bad.wo += bo;
-        bad.wi += bi;
-        bad.lam += bl;
-    });
+    spectral_pair_scalar_loop(m, wo, so, wi, si, lam, sl, n, nthreads, bad,
+                              [&](const SM &mm, const Vec3<F> &o, const Vec3<F> &w, const double *l, int64_t i) {
+                                  out[i] = mm.pdf(o, w, l, mode, sf);
+                              });
 }
 
 template <typename SM, typename F>
