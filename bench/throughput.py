@@ -373,7 +373,8 @@ def merge_cells(a, b):
             if name == "busy_cores":
                 c[name] = max(c.get(name) or 0, t or 0)
             elif name == "steal":
-                c[name] = (c[name] + t) / 2 if c.get(name) is not None and t is not None else (c.get(name) or t)
+                mine = c.get(name)
+                c[name] = t if mine is None else mine if t is None else (mine + t) / 2
             else:
                 c[name] = min(t, c.get(name, math.inf))
         out[k] = c

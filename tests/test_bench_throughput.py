@@ -42,6 +42,9 @@ def test_merge_cells_variant_only_in_one_pass(tp):
     b = {("k", "pdf", "float64"): {"kernel_1t": 3.0, "plain_2t": 0.7, "steal": 0.1}}
     m = tp.merge_cells(a, b)[("k", "pdf", "float64")]
     assert m == {"kernel_1t": 1.0, "plain_2t": 0.7, "steal": 0.1}
+    # a measured zero is a value, not a missing one
+    z = tp.merge_cells({"c": {"steal": 0.0}}, {"c": {"steal": None}})["c"]
+    assert z["steal"] == 0.0
 
 
 def test_steal_share(tp):
