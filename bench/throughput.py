@@ -308,9 +308,14 @@ def settle():
     time.sleep(0.005)
 
 
-def _cpu_times():
+def _cpu_jiffies():
+    """The all-CPU row of /proc/stat: user nice system idle iowait irq softirq steal ..."""
     with open("/proc/stat") as f:
-        v = [int(x) for x in f.readline().split()[1:]]
+        return [int(x) for x in f.readline().split()[1:]]
+
+
+def _cpu_times():
+    v = _cpu_jiffies()
     return sum(v[:8]), v[3] + v[4]  # total, idle + iowait
 
 
@@ -319,8 +324,7 @@ def steal_ticks():
     hypervisor ran something else while this VM's vCPUs wanted to run: contention that neither
     the load average nor busy_cores() sees."""
     try:
-        with open("/proc/stat") as f:
-            v = [int(x) for x in f.readline().split()[1:]]
+        v = _cpu_jiffies()
     except (OSError, ValueError):
         return None
     return (v[7], sum(v[:8])) if len(v) >= 8 else None
