@@ -143,13 +143,14 @@ template <typename V> inline V exp_finite(const V &x) {
 }
 
 // Models that declare `static constexpr bool FlushDenormals = true` run their batch kernels (and
-// the preview renderer's shading of them) with the CPU's flush-to-zero and denormals-are-zero
-// modes (x86 MXCSR FTZ | DAZ), set per chunk on the thread that runs it and restored after: a denormal intermediate then costs nothing instead of a
-// microcode assist (~100+ cycles each on Intel). Only values below the smallest normal number
-// (1.2e-38 in float) change, to 0. Hair declares it: its lobes' exponentials reach the denormals
-// on ordinary pairs (narrow Mp tails times Np), and FTZ | DAZ made its eval kernel 14-21 % faster
-// with identical outputs on bench/throughput.py's inputs. A model that declares it must tolerate a
-// denormal operand read as 0 (no division by a value that can be denormal without a mask).
+// the preview renderer's shading of them) with the CPU's flush-to-zero and denormals-are-zero modes
+// (x86 MXCSR FTZ | DAZ), set per chunk on the thread that runs it and restored after: a denormal
+// intermediate then costs nothing instead of a microcode assist (~100+ cycles each on Intel). Only
+// values below the smallest normal number (1.2e-38 in float) change, to 0. Hair declares it: its
+// lobes' exponentials reach the denormals on ordinary pairs (narrow Mp tails times Np), and FTZ |
+// DAZ made its eval kernel 14-21 % faster with identical outputs on bench/throughput.py's inputs. A
+// model that declares it must tolerate a denormal operand read as 0 (no division by a value that
+// can be denormal without a mask).
 template <typename M, typename = void> struct flushes_denormals : std::false_type {};
 template <typename M> struct flushes_denormals<M, std::enable_if_t<M::FlushDenormals>> : std::true_type {};
 
