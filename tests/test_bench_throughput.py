@@ -59,3 +59,32 @@ def test_steal_share(tp):
 def test_cell_info_is_not_a_timing(tp):
     # build_rows must not turn a cell's load figures into bsdfkit "rates"
     assert set(tp.CELL_INFO) == {"busy_cores", "steal"}
+
+
+def test_arith_times_stay_out_of_bsdfkit_rates(tp):
+    key = ("diffuse", "eval", "float32")
+    cell = {"kernel_1t": 2e-3, "kernel_2t": 1.2e-3, "stream_1t": 1e-3, "stream_2t": 6e-4,
+            "arith_1t": 0.011, "arith_2t": 0.0165, "busy_cores": 0.0, "steal": 0.0}
+    (row,) = tp.build_rows(1000, {key: cell}, ["diffuse"], ["eval"], ["float32"], 1, with_copy=False)
+    assert set(row["bk_time"]) == {"kernel_1t", "kernel_2t"}
+    assert row["arith"] == {"time_1t": 0.011, "time_2t": 0.0165}
+    assert tp.arith_scaling(row) == pytest.approx(2 * 0.011 / 0.0165)   # 1.333x
+    (bare,) = tp.build_rows(1000, {key: {"kernel_1t": 1.0}}, ["diffuse"], ["eval"], ["float32"], 1, with_copy=False)
+    assert bare["arith"] is None and tp.arith_scaling(bare) is None
+
+
+@pytest.mark.parametrize("sc, bk2, b2, host, verdict", [
+    (1.85, 100, 1000, None, "met"),        # the target itself
+    (1.5, 850, 1000, None, "bound"),       # 2 threads at 0.85 of the memory bound
+    (1.5, 100, 1000, None, "NOT met"),     # no bound, no probe
+    (1.25, 100, 1000, 1.35, "bound"),      # the host scaled 1.35x: 1.25 >= 0.9 * 1.35
+    (1.15, 100, 1000, 1.35, "NOT met"),    # below 0.9 of the host's own scaling
+    (1.7, 100, 1000, 2.05, "NOT met"),     # two free cores: the probe excuses nothing
+    (1.7, 100, 0, 1.85, "bound"),          # 1.7 >= 0.9 * 1.85, no memory bound measured
+])
+def test_judge_scaling(tp, sc, bk2, b2, host, verdict):
+    v, text = tp.judge_scaling(sc, bk2, b2, host)
+    assert v == verdict
+    assert f"{sc:.2f}×" in text
+    if host and verdict != "met":
+        assert f"{host:.2f}×" in text
