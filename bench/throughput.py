@@ -846,20 +846,26 @@ DIVIDER_OPS = {
 }
 
 
+def build_divider():
+    """Compiles bench/divider.cpp with the library's flags into a temporary directory (also the
+    arithmetic probe's program: ARITH["exe"]); returns its path. Raises if it cannot."""
+    import tempfile
+    import drjit
+    inc = [f"-I{HERE.parent / 'cpp' / 'include'}", "-isystem", str(Path(drjit.__file__).parent / "include")]
+    exe = Path(tempfile.mkdtemp(prefix="bsdfkit-divider-")) / "divider"
+    subprocess.run(["g++", "-std=c++17", "-O3", "-march=native", "-fno-math-errno", "-fno-trapping-math",
+                    "-ffp-contract=off", *inc, str(HERE / "divider.cpp"), "-o", str(exe), "-pthread"],
+                   check=True, capture_output=True, timeout=300)
+    ARITH["exe"] = exe
+    return exe
+
+
 def divider_rates():
     """The vector divide and square root throughput of this machine on the kernels' packet type
     (bench/divider.cpp, compiled here with the library's flags): {"1t": {op: elements/ns}, "2t":
     ...} (2t: two processes at once, summed), or None without a compiler."""
-    import tempfile
     try:
-        import drjit
-        inc = [f"-I{HERE.parent / 'cpp' / 'include'}", "-isystem", str(Path(drjit.__file__).parent / "include")]
-        tmp = Path(tempfile.mkdtemp(prefix="bsdfkit-divider-"))
-        exe = tmp / "divider"
-        subprocess.run(["g++", "-std=c++17", "-O3", "-march=native", "-fno-math-errno", "-fno-trapping-math",
-                        "-ffp-contract=off", *inc, str(HERE / "divider.cpp"), "-o", str(exe), "-pthread"],
-                       check=True, capture_output=True, timeout=300)
-        ARITH["exe"] = exe
+        exe = build_divider()
         wait_quiet()
         one = json.loads(subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout)
         wait_quiet()

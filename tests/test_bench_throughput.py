@@ -88,3 +88,12 @@ def test_judge_scaling(tp, sc, bk2, b2, host, verdict):
     assert f"{sc:.2f}×" in text
     if host and verdict != "met":
         assert f"{host:.2f}×" in text
+
+
+def test_arith_probe_runs(tp):
+    # builds bench/divider.cpp as the bench does and runs its `arith` mode: two positive times
+    # (no timing claim: the figures depend on the host)
+    pytest.importorskip("drjit")
+    assert tp.build_divider() == tp.ARITH["exe"]
+    t1, t2 = tp.arith_probe()
+    assert 0 < t1 < 10 and 0 < t2 < 10
