@@ -1,0 +1,72 @@
+"""bench/mca.py's loop extraction: the instructions between the llvm-mca markers in execution
+order (GCC rotates loops, so the end marker can come first in the text). A pure function of the
+assembly text; llvm-mca itself is not needed here."""
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+_PATH = Path(__file__).resolve().parents[1] / "bench" / "mca.py"
+
+
+@pytest.fixture(scope="module")
+def mca():
+    spec = importlib.util.spec_from_file_location("bench_mca", _PATH)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+# a rotated loop as GCC lays it out: the tail of the body (stores) first, then the begin marker,
+# a uniform branch to a cold block (.L7: 3 instructions) and back, and a jump to the tail
+ASM = """
+kernel:
+\tjmp\t.L9
+.L6:
+\tvmovups\t%zmm3, (%rsi)
+#APP
+\t# LLVM-MCA-END
+#NO_APP
+\taddq\t$16, %rcx
+\tjle\t.L10
+.L9:
+#APP
+\t# LLVM-MCA-BEGIN loop
+#NO_APP
+\tvmovups\t(%rdi), %zmm0
+\ttestb\t%r9b, %r9b
+\tjne\t.L7
+\tvmulps\t%zmm0, %zmm0, %zmm1
+.L8:
+\tvaddps\t%zmm1, %zmm0, %zmm3
+\tjmp\t.L6
+.L7:
+\tvaddps\t%zmm0, %zmm0, %zmm1
+\tvmulps\t%zmm1, %zmm1, %zmm1
+\tvsqrtps\t%zmm1, %zmm1
+\tjmp\t.L8
+.L10:
+\tret
+"""
+
+
+def test_longest_path_through_rotated_loop(mca):
+    body = mca.loop_body(ASM)
+    # the cold block is the longer side of the uniform branch; the jumps themselves are dropped
+    assert body == ["vmovups\t(%rdi), %zmm0", "testb\t%r9b, %r9b", "vaddps\t%zmm0, %zmm0, %zmm1",
+                    "vmulps\t%zmm1, %zmm1, %zmm1", "vsqrtps\t%zmm1, %zmm1", "vaddps\t%zmm1, %zmm0, %zmm3",
+                    "vmovups\t%zmm3, (%rsi)"]
+
+
+def test_take_chooses_the_side(mca):
+    fall = mca.loop_body(ASM, take=set())
+    assert "vsqrtps\t%zmm1, %zmm1" not in fall and "vmulps\t%zmm0, %zmm0, %zmm1" in fall
+    assert mca.loop_body(ASM, take={".L7"}) == mca.loop_body(ASM)
+
+
+def test_loop_between_markers_is_an_error(mca):
+    looping = ASM.replace("\tjmp\t.L6\n", "\tjmp\t.L9\n")  # back to the begin marker, never the end
+    with pytest.raises(ValueError, match="loop"):
+        mca.loop_body(looping)
+    with pytest.raises(ValueError, match="loop"):   # with no conditional branch on the way
+        mca.loop_body(looping, take=set())
