@@ -877,7 +877,7 @@ def divider_rates():
         return None
 
 
-ARITH = {"exe": None}  # bench/divider.cpp's build (divider_rates), also the arithmetic scaling probe
+ARITH = {"exe": None}  # bench/divider.cpp built by build_divider(): the divider rates and the arithmetic probe
 
 
 def arith_probe():
