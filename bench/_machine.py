@@ -1,6 +1,7 @@
 """The machine a benchmark ran on: CPU model, SIMD width, cores, load.
 
-One reader for every script in bench/ (each used to carry its own copy). Machines of this kind differ
+One reader for every script in bench/ (each used to carry its own copy), and the one g++ command
+line the scripts that compile C++ against the library's headers share (library_cxx). Machines of this kind differ
 (Intel with AVX-512, AMD Zen 3 with AVX2 only) and are shared, so a figure is quoted as a ratio
 measured in the same run, with these facts written next to it.
 """
@@ -8,6 +9,7 @@ from __future__ import annotations
 
 import os
 import platform
+from pathlib import Path
 
 _SIMD_FLAGS = ("avx2", "fma", "avx512f", "avx512vl")
 
@@ -48,3 +50,13 @@ def load() -> tuple[float, float, float]:
 def summary() -> str:
     """One line for a benchmark's header: CPU, ISA, cores, load."""
     return f"{cpu_model()} ({simd_isa()}), {os.cpu_count()} CPUs, load {load()[0]:.2f}"
+
+
+def library_cxx(src, out, march="native", extra=()) -> list[str]:
+    """g++ with the library's flags (-O3, no fast math, -ffp-contract=off) and include paths
+    (cpp/include, Dr.Jit's headers) compiling src to out; extra flags (e.g. -S, -pthread) last."""
+    import drjit  # lazily: only the scripts that compile need it
+
+    return ["g++", "-std=c++17", "-O3", f"-march={march}", "-fno-math-errno", "-fno-trapping-math",
+            "-ffp-contract=off", f"-I{Path(__file__).resolve().parent.parent / 'cpp' / 'include'}", "-isystem",
+            str(Path(drjit.__file__).parent / "include"), str(src), "-o", str(out), *extra]

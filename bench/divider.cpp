@@ -10,6 +10,7 @@
 // the second vCPU shares a physical core with another (SMT sibling, another guest's work) the
 // two-thread time is longer, and no kernel can scale better than 2 arith_1t / arith_2t.
 #include <bsdfkit/core/simd.h>
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>

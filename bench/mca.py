@@ -35,11 +35,9 @@ import sys
 import tempfile
 from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
-
 LANES = 16  # core/simd.h kPacketWidth (two ymm registers per packet on AVX2)
-# key: (header, C++ model type); the loop is the same for a model's smooth and rough cases, whose
-# uniform branch falls through to one of them (see --take)
+# key: (header, C++ model type); a model's smooth and rough cases share the loop, and loop_body
+# follows the costlier side of its uniform branch (or the side --take names)
 KERNELS = {
     "diffuse": ("diffuse.h", "DiffuseBxDF<float>"),
     "cond_rough": ("conductor.h", "ConductorBxDF<float>"),
@@ -144,14 +142,12 @@ def main():
     mca = find_mca()
     if not mca:
         sys.exit("llvm-mca not found (apt-get install llvm-19)")
-    import drjit
+    from _machine import library_cxx  # same directory
     work = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="bsdfkit-mca-"))
     work.mkdir(parents=True, exist_ok=True)
     src, asm, body = work / "kernel.cpp", work / "kernel.s", work / "body.s"
     src.write_text(source(args.key, args.op))
-    subprocess.run(["g++", "-std=c++17", "-O3", f"-march={args.march}", "-fno-math-errno", "-fno-trapping-math",
-                    "-ffp-contract=off", f"-I{HERE.parent / 'cpp' / 'include'}", "-isystem",
-                    str(Path(drjit.__file__).parent / "include"), "-S", str(src), "-o", str(asm)], check=True)
+    subprocess.run(library_cxx(src, asm, march=args.march, extra=["-S"]), check=True)
     ins = loop_body(asm.read_text(), {t for t in args.take.split(",") if t} if args.take else None)
     body.write_text("\n".join(ins) + "\n")
     out = subprocess.run([mca, f"-mcpu={args.mcpu}", "-iterations=300", "-instruction-info=false", str(body)],

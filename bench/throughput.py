@@ -68,7 +68,7 @@ from pathlib import Path
 
 import numpy as np
 
-from _machine import cpu_model, simd_flags  # same directory
+from _machine import cpu_model, library_cxx, simd_flags  # same directory
 
 HERE = Path(__file__).resolve().parent
 SEED = 20240611
@@ -850,12 +850,9 @@ def build_divider():
     """Compiles bench/divider.cpp with the library's flags into a temporary directory (also the
     arithmetic probe's program: ARITH["exe"]); returns its path. Raises if it cannot."""
     import tempfile
-    import drjit
-    inc = [f"-I{HERE.parent / 'cpp' / 'include'}", "-isystem", str(Path(drjit.__file__).parent / "include")]
     exe = Path(tempfile.mkdtemp(prefix="bsdfkit-divider-")) / "divider"
-    subprocess.run(["g++", "-std=c++17", "-O3", "-march=native", "-fno-math-errno", "-fno-trapping-math",
-                    "-ffp-contract=off", *inc, str(HERE / "divider.cpp"), "-o", str(exe), "-pthread"],
-                   check=True, capture_output=True, timeout=300)
+    subprocess.run(library_cxx(HERE / "divider.cpp", exe, extra=["-pthread"]), check=True, capture_output=True,
+                   timeout=300)
     ARITH["exe"] = exe
     return exe
 
