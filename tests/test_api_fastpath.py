@@ -141,6 +141,47 @@ def test_sample_out_argument(rng):
     np.testing.assert_array_equal(out.wi, n.wi)
 
 
+def test_sample_out_on_the_fast_path(rng):
+    # plain arrays and a SampleResult of plain arrays (not views of one block): the compiled entry
+    # writes into them and returns out; anything else leaves the call to the general path (None)
+    m = bk.Plastic(0.4, alpha=0.2)
+    n = 300
+    wo, uc, u = _dirs(rng, n).astype(np.float32), rng.random(n, dtype=np.float32), rng.random((n, 2), dtype=np.float32)
+    want = m.sample(wo, uc, u)
+
+    def fresh():
+        return bk.SampleResult(wi=np.full((n, 3), np.nan, np.float32), f=np.full((n, 3), np.nan, np.float32),
+                               pdf=np.full(n, np.nan, np.float32), flags=np.full(n, 255, np.uint8),
+                               eta=np.full(n, np.nan, np.float32), valid=np.zeros(n, bool),
+                               pdf_is_proportional=np.ones(n, bool))
+
+    out = fresh()
+    assert m._core.sample_fast(wo, uc, u, 0, 3, out) is out
+    for k in ("wi", "f", "pdf", "flags", "eta", "valid", "pdf_is_proportional"):
+        np.testing.assert_array_equal(getattr(out, k), getattr(want, k))
+    out = fresh()
+    assert m.sample(wo, uc, u, out=out) is out
+    np.testing.assert_array_equal(out.f, want.f)
+    # one broadcast direction
+    one = m.sample(wo[7], uc, u)
+    assert m.sample(wo[7], uc, u, out=out) is out
+    np.testing.assert_array_equal(out.wi, one.wi)
+    # outputs that do not fit: not taken by the compiled entry, worded by the general path
+    bad = fresh()
+    object.__setattr__(bad, "flags", np.zeros(n, np.int8))
+    assert m._core.sample_fast(wo, uc, u, 0, 3, bad) is None
+    with pytest.raises(TypeError, match="out.flags: dtype"):
+        m.sample(wo, uc, u, out=bad)
+    bad = fresh()
+    object.__setattr__(bad, "wi", np.zeros((3, n), np.float32).T)
+    assert m._core.sample_fast(wo, uc, u, 0, 3, bad) is None
+    with pytest.raises(ValueError, match="out.wi"):
+        m.sample(wo, uc, u, out=bad)
+    # bad uniforms raise on the compiled path too, naming the argument
+    with pytest.raises(ValueError, match="uc: 1 sample value"):
+        m.sample(wo, np.where(np.arange(n) == 5, np.float32(2), uc), u, out=fresh())
+
+
 def test_eval_out_on_the_fast_path(rng):
     m = bk.Diffuse(0.5)
     wo, wi = _dirs(rng, 10), _dirs(rng, 10)

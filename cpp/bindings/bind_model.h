@@ -13,6 +13,7 @@
 #include <pybind11/pybind11.h>
 
 #include <algorithm>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -212,6 +213,20 @@ inline bool plain_out(py::handle h, int type, const std::vector<py::ssize_t> &sh
     return std::equal(shape.begin(), shape.end(), o.shape);
 }
 
+// The data of a plain output for sample's out=: exactly a numpy.ndarray of npy type `type`,
+// C-contiguous, writeable, in native byte order, of exactly `shape`; else nullptr.
+inline void *plain_out_data(py::handle h, int type, const std::vector<py::ssize_t> &shape) {
+    auto &api = py::detail::npy_api::get();
+    if (Py_TYPE(h.ptr()) != api.PyArray_Type_) return nullptr;
+    auto *p = py::detail::array_proxy(h.ptr());
+    constexpr int need = py::detail::npy_api::NPY_ARRAY_C_CONTIGUOUS_ | py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+    auto *d = py::detail::array_descriptor_proxy(p->descr);
+    if ((p->flags & need) != need || d->type_num != type || !native_byte_order(d->byteorder) ||
+        p->nd != int(shape.size()) || !std::equal(shape.begin(), shape.end(), p->dimensions))
+        return nullptr;
+    return p->data;
+}
+
 // The packet kernels' view of a plain direction argument of a call over n pairs (batch.h Dirs).
 template <typename F> inline Dirs<F> dirs_of_plain(const Plain &a, int64_t n) {
     const F *p = static_cast<const F *>(a.data);
@@ -360,28 +375,70 @@ template <template <typename> class Model> struct PyModel {
                    : pair_plain<double, false>(o, i, *big, TransportMode(md), uint8_t(sf), out);
     }
 
+    // sample's out=: the seven arrays of a SampleResult (its fields, SampleResult order), each of
+    // this call's shape, dtype and C order and writeable, as the kernel's outputs; false when any is
+    // not (the Python layer then words the error).
+    template <typename F> static bool sample_out_of(py::handle res, const std::vector<py::ssize_t> &batch, SampleOut<F> &o) {
+        using api = py::detail::npy_api;
+        const int t = py::dtype::of<F>().num();
+        std::vector<py::ssize_t> b3(batch);
+        b3.push_back(3);
+        void *p[7];
+        static const char *const names[7] = {"wi", "f", "pdf", "flags", "eta", "valid", "pdf_is_proportional"};
+        const int types[7] = {t, t, t, api::NPY_UBYTE_, t, api::NPY_BOOL_, api::NPY_BOOL_};
+        for (int k = 0; k < 7; ++k) {
+            PyObject *a = PyObject_GetAttrString(res.ptr(), names[k]);
+            if (!a) { PyErr_Clear(); return false; }
+            p[k] = plain_out_data(a, types[k], k < 2 ? b3 : batch);
+            Py_DECREF(a);  // the SampleResult keeps the array alive
+            if (!p[k]) return false;
+        }
+        o.wi = static_cast<F *>(p[0]);
+        o.f = static_cast<F *>(p[1]);
+        o.pdf = static_cast<F *>(p[2]);
+        o.flags = static_cast<uint8_t *>(p[3]);
+        o.eta = static_cast<F *>(p[4]);
+        o.valid = static_cast<bool *>(p[5]);
+        o.proportional = static_cast<bool *>(p[6]);
+        return true;
+    }
+
+    // The outputs in a new SampleBlock (res None: returns its arrays) or in res's arrays (returns
+    // res; None when they do not fit: sample_out_of).
     template <typename F>
-    py::object sample_plain(const Plain &o, const Plain &c, const Plain &u, TransportMode md, uint8_t sf) const {
+    py::object sample_plain(const Plain &o, const Plain &c, const Plain &u, TransportMode md, uint8_t sf,
+                            py::handle res) const {
         int64_t n = c.rows;
-        SampleBlock<F> blk(batch_shape(c, 0, {}), n);
-        if (n == 0) return std::move(blk.arrays);
+        std::vector<py::ssize_t> batch = batch_shape(c, 0, {});
+        std::optional<SampleBlock<F>> blk;
+        SampleOut<F> out;
+        if (res.is_none()) {
+            blk.emplace(batch, n);
+            out = blk->out;
+        } else if (!sample_out_of<F>(res, batch, out)) {
+            return py::none();
+        }
+        py::object ret = blk ? py::object(blk->arrays) : py::reinterpret_borrow<py::object>(res);
+        if (n == 0) return ret;
         const F *po = static_cast<const F *>(o.data), *pc = static_cast<const F *>(c.data),
                 *pu = static_cast<const F *>(u.data);
         BadCounts bad;
         {
             py::gil_scoped_release release;
             const Model<F> &m = get<F>();
-            if (o.rows == n) sample_batch<3>(m, po, pc, pu, n, md, sf, blk.out, num_threads(), bad);
-            else sample_batch<0>(m, po, pc, pu, n, md, sf, blk.out, num_threads(), bad);
+            if (o.rows == n) sample_batch<3>(m, po, pc, pu, n, md, sf, out, num_threads(), bad);
+            else sample_batch<0>(m, po, pc, pu, n, md, sf, out, num_threads(), bad);
         }
         raise_if_interrupted();
         raise_bad(bad, false, true);
-        return std::move(blk.arrays);
+        return ret;
     }
 
     // uc of the batch shape, u of the batch shape + (2,), wo of the batch shape + (3,) or one
-    // direction. Returns the SampleResult fields (wi, f, pdf, flags, eta, valid, pdf_is_proportional).
-    py::object sample_fast(py::handle wo, py::handle uc, py::handle u, py::handle mode, py::handle sflags) const {
+    // direction. Returns the SampleResult fields (wi, f, pdf, flags, eta, valid, pdf_is_proportional),
+    // or, given out (a SampleResult whose arrays fit: sample_out_of), out after writing into it.
+    py::object sample_fast(py::handle wo, py::handle uc, py::handle u, py::handle mode, py::handle sflags,
+                           py::handle out) const {
         Plain o, c, w;
         const Plain *big;
         int md = small_int(mode, 0, 1), sf = small_int(sflags, 0, 3);
@@ -389,8 +446,9 @@ template <template <typename> class Model> struct PyModel {
             c.type != o.type || w.type != o.type || w.ndim != c.ndim + 1 || !std::equal(c.shape, c.shape + c.ndim, w.shape) ||
             !simple_batch(c, 0, o, 1, big) || big != &c)  // uc's shape is the batch (equal shapes: c)
             return py::none();
-        return o.type == py::detail::npy_api::NPY_FLOAT_ ? sample_plain<float>(o, c, w, TransportMode(md), uint8_t(sf))
-                                                         : sample_plain<double>(o, c, w, TransportMode(md), uint8_t(sf));
+        return o.type == py::detail::npy_api::NPY_FLOAT_
+                   ? sample_plain<float>(o, c, w, TransportMode(md), uint8_t(sf), out)
+                   : sample_plain<double>(o, c, w, TransportMode(md), uint8_t(sf), out);
     }
 
     template <typename F> py::object albedo_plain(const Plain &o, int64_t n_samples, uint64_t seed, TransportMode md) const {
@@ -535,7 +593,8 @@ py::class_<PyModel<Model>> bind_model(py::module_ &m, const char *name) {
         })
         .def("eval_fast", &P::eval_fast)
         .def("pdf_fast", &P::pdf_fast)
-        .def("sample_fast", &P::sample_fast)
+        .def("sample_fast", &P::sample_fast, py::arg("wo"), py::arg("uc"), py::arg("u"), py::arg("mode"),
+             py::arg("sflags"), py::arg("out") = py::none())
         .def("albedo_fast", &P::albedo_fast)
         .def_property_readonly("flags", [](const P &self) { return int(self.m64.flags()); });
     return c;

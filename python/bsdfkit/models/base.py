@@ -417,6 +417,10 @@ class BxDF:
             r = self._core.sample_fast(wo, uc, u, mode, sample_flags)
             if r is not None:
                 return _sample_result(r)
+        elif n is None and type(out) is SampleResult:
+            # out's arrays of this call's shapes and dtypes: written in place by the compiled path
+            if self._core.sample_fast(wo, uc, u, mode, sample_flags, out) is not None:
+                return out
         wo = as_dirs(wo, "wo")
         uc, u, dtype, batch = sample_uniforms(wo, uc, u, n, seed)
         md, sf = _mode(mode), _sflags(sample_flags)
