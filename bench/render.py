@@ -22,7 +22,8 @@ Timed:
   rays/s         ours only: camera + bounce + shadow rays counted by the renderer.
 Mitsuba runs in a subprocess per thread count (its own thread pool, dr.set_thread_count);
 rounds of ours and Mitsuba's alternate so load drift on a shared machine biases neither.
-Writes bench/RENDER.md and bench/render.json (or --out-dir).
+Writes bench/RENDER.md and bench/render.json (or --out-dir; --tag zen4: RENDER_zen4.md and
+render_zen4.json, for a run on another kind of host, whose ratios to Mitsuba differ).
 """
 from __future__ import annotations
 
@@ -191,7 +192,7 @@ def run(args):
                 "spectral_cost_min": float(min(cost)), "spectral_cost_max": float(max(cost)),
                 "image_mean_spectral": float(spec_img.mean())})
         print(json.dumps({threads: results["threads"][threads]}, indent=1), flush=True)
-        if threads == 2 and args.out_dir:
+        if threads == 2 and args.out_dir and not args.tag:  # a tagged run keeps the committed images
             from bsdfkit.io import write_image
             os.makedirs(args.out_dir, exist_ok=True)
             write_image(os.path.join(args.out_dir, "render_ours.png"), img)
@@ -399,9 +400,14 @@ smaller environment working set (e.g. a coarser sampling table than the radiance
 """
 
 
-def write_report(res, out_dir):
+def write_report(res, out_dir, tag=None):
+    """RENDER.md + render.json; with a tag (a run on another kind of host) RENDER_<tag>.md +
+    render_<tag>.json, whose notes point at RENDER.md's instead of repeating them."""
     out_dir = Path(out_dir)
-    (out_dir / "render.json").write_text(json.dumps(res, indent=1))
+    if tag is not None and (not tag or not all(c.isalnum() or c in "-_" for c in tag)):
+        raise SystemExit(f"--tag: letters, digits, '-' and '_' only, got {tag!r}")
+    sfx = f"_{tag}" if tag else ""
+    (out_dir / f"render{sfx}.json").write_text(json.dumps(res, indent=1))
     w, h, spp = res["width"], res["height"], res["spp"]
     lines = ["# Preview renderer speed: bsdfkit.render vs Mitsuba 3 `path` (llvm_ad_rgb)", "",
              f"Scene: the demo gallery of the first measurement ({len(res['configs'])} spheres, the models of "
@@ -450,8 +456,9 @@ def write_report(res, out_dir):
                   "sigmoids); the RGB tracer shades material groups on 16-lane packets. The image means differ "
                   "where the scene's colours differ: coloured reflectances multiply spectrally, not per RGB "
                   "channel, and the Au/Cu/Al conductors use their RGB eta/k uplifted.", ""]
-    lines += NOTES.splitlines()
-    (out_dir / "RENDER.md").write_text("\n".join(lines) + "\n")
+    lines += NOTES.splitlines() if not tag else [
+        "The sessions' notes on the renderer's speed (what was tried, kept and measured) are in RENDER.md."]
+    (out_dir / f"RENDER{sfx}.md").write_text("\n".join(lines) + "\n")
 
 
 def main():
@@ -463,6 +470,8 @@ def main():
     p.add_argument("--max-depth", type=int, default=8)
     p.add_argument("--rounds", type=int, default=4)
     p.add_argument("--out-dir", default=str(HERE))
+    p.add_argument("--tag", default=None, help="write RENDER_<tag>.md / render_<tag>.json (a run on another kind "
+                                               "of host, e.g. zen4) and keep the committed images")
     p.add_argument("--no-spectral", action="store_true", help="skip the spectral=True timing")
     p.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     p.add_argument("--threads", type=int, default=2, help=argparse.SUPPRESS)
@@ -477,8 +486,8 @@ def main():
         return
     res = run(args)
     if args.out_dir:
-        write_report(res, args.out_dir)
-        print(f"wrote {Path(args.out_dir) / 'RENDER.md'}")
+        write_report(res, args.out_dir, args.tag)
+        print(f"wrote {Path(args.out_dir) / ('RENDER_' + args.tag + '.md' if args.tag else 'RENDER.md')}")
 
 
 if __name__ == "__main__":

@@ -5,7 +5,9 @@
     python bench/throughput.py --quick    # smoke test, N = 1e5 (+ 1e3 / 1e4), ~40 s
     python bench/throughput.py --models cond_rough,diffuse   # a subset of the models
 
-Writes bench/RESULTS.md and bench/results.json (or --out-dir).
+Writes bench/RESULTS.md and bench/results.json (or --out-dir; --tag zen4: RESULTS_zen4.md and
+results_zen4.json, for a run on another kind of host: machines of this kind are Intel AVX-512 or
+AMD Zen 3 / Zen 4 hosts, and the ratios to Mitsuba differ between them).
 
 What is timed (every figure is the best of several repeats after a warm-up):
   bsdfkit  kernel  m.eval / m.pdf with a preallocated out= array; for sample the compiled
@@ -1285,10 +1287,23 @@ def remeasure_failing(main_rows, cells, inputs, n, threads, args, mi, div):
     return out
 
 
+def report_names(tag=None):
+    """(markdown, json) file names of a run: RESULTS.md / results.json, or with a tag (a host kind,
+    letters, digits, '-' and '_') RESULTS_<tag>.md / results_<tag>.json."""
+    if tag is None:
+        return "RESULTS.md", "results.json"
+    if not tag or not all(c.isalnum() or c in "-_" for c in tag):
+        raise SystemExit(f"--tag: letters, digits, '-' and '_' only, got {tag!r}")
+    return f"RESULTS_{tag}.md", f"results_{tag}.json"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="smaller N and fewer repeats (smoke test)")
     ap.add_argument("--out-dir", default=str(HERE), help="where RESULTS.md and results.json go")
+    ap.add_argument("--tag", default=None,
+                    help="name the reports RESULTS_<tag>.md / results_<tag>.json (a run on another kind of host, "
+                         "e.g. zen4, beside the committed RESULTS.md of another)")
     ap.add_argument("--repeats", type=int, default=None, help="repeats per measurement (default 3)")
     ap.add_argument("--rounds", type=int, default=None, help="interleaved rounds per cell (default 2, quick 1)")
     ap.add_argument("--no-mitsuba", action="store_true", help="bsdfkit and copy bound only")
@@ -1387,10 +1402,11 @@ def main():
                 "elapsed_s": elapsed},
             "configs": {c[0]: {"label": c[1], "transmissive": c[2], "mitsuba": c[3]} for c in CONFIGS},
             "main": main_rows, "scaling": scaling_rows, "mitsuba_scalar": scalar_runs, "agreement": agreement}
-    (out_dir / "results.json").write_text(json.dumps(data, indent=1) + "\n")
-    write_markdown(out_dir / "RESULTS.md", info, mi_info, main_rows, scaling_rows, scalar_runs, agreement, args,
+    md_name, json_name = report_names(args.tag)
+    (out_dir / json_name).write_text(json.dumps(data, indent=1) + "\n")
+    write_markdown(out_dir / md_name, info, mi_info, main_rows, scaling_rows, scalar_runs, agreement, args,
                    elapsed)
-    print(f"[bench] wrote {out_dir / 'RESULTS.md'} and results.json ({elapsed:.0f} s)", flush=True)
+    print(f"[bench] wrote {out_dir / md_name} and {json_name} ({elapsed:.0f} s)", flush=True)
 
 
 if __name__ == "__main__":

@@ -97,3 +97,11 @@ def test_arith_probe_runs(tp):
     assert tp.build_divider() == tp.ARITH["exe"]
     t1, t2 = tp.arith_probe()
     assert 0 < t1 < 10 and 0 < t2 < 10
+
+
+def test_report_names(tp):
+    assert tp.report_names() == ("RESULTS.md", "results.json")
+    assert tp.report_names("zen4") == ("RESULTS_zen4.md", "results_zen4.json")
+    for bad in ("", "../x", "a b"):
+        with pytest.raises(SystemExit, match="--tag"):
+            tp.report_names(bad)
