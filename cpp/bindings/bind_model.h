@@ -376,9 +376,11 @@ template <template <typename> class Model> struct PyModel {
     }
 
     // sample's out=: the seven arrays of a SampleResult (its fields, SampleResult order), each of
-    // this call's shape, dtype and C order and writeable, as the kernel's outputs; false when any is
-    // not (the Python layer then words the error).
-    template <typename F> static bool sample_out_of(py::handle res, const std::vector<py::ssize_t> &batch, SampleOut<F> &o) {
+    // this call's shape, dtype and C order and writeable, as the kernel's outputs, held in keep for
+    // the call; false when any is not (the Python layer then words the error).
+    template <typename F>
+    static bool sample_out_of(py::handle res, const std::vector<py::ssize_t> &batch, SampleOut<F> &o,
+                              py::object (&keep)[7]) {
         using api = py::detail::npy_api;
         const int t = py::dtype::of<F>().num();
         std::vector<py::ssize_t> b3(batch);
@@ -389,8 +391,8 @@ template <template <typename> class Model> struct PyModel {
         for (int k = 0; k < 7; ++k) {
             PyObject *a = PyObject_GetAttrString(res.ptr(), names[k]);
             if (!a) { PyErr_Clear(); return false; }
+            keep[k] = py::reinterpret_steal<py::object>(a);  // alive for the call, whatever res's fields become
             p[k] = plain_out_data(a, types[k], k < 2 ? b3 : batch);
-            Py_DECREF(a);  // the SampleResult keeps the array alive
             if (!p[k]) return false;
         }
         o.wi = static_cast<F *>(p[0]);
@@ -412,10 +414,11 @@ template <template <typename> class Model> struct PyModel {
         std::vector<py::ssize_t> batch = batch_shape(c, 0, {});
         std::optional<SampleBlock<F>> blk;
         SampleOut<F> out;
+        py::object keep[7];
         if (res.is_none()) {
             blk.emplace(batch, n);
             out = blk->out;
-        } else if (!sample_out_of<F>(res, batch, out)) {
+        } else if (!sample_out_of<F>(res, batch, out, keep)) {
             return py::none();
         }
         py::object ret = blk ? py::object(blk->arrays) : py::reinterpret_borrow<py::object>(res);
