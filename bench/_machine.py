@@ -1,8 +1,9 @@
 """The machine a benchmark ran on: CPU model, SIMD width, cores, load.
 
-One reader for every script in bench/ (each used to carry its own copy), and the one g++ command
-line the scripts that compile C++ against the library's headers share (library_cxx). Machines of this kind differ
-(Intel with AVX-512, AMD Zen 3 with AVX2 only) and are shared, so a figure is quoted as a ratio
+One reader for every script in bench/ (each used to carry its own copy), the one g++ command
+line the scripts that compile C++ against the library's headers share (library_cxx), and the
+reports' host tag (host_tag). Machines of this kind differ (Intel with AVX-512, AMD Zen 3 with
+AVX2 only, AMD Zen 4 with AVX-512) and are shared, so a figure is quoted as a ratio
 measured in the same run, with these facts written next to it.
 """
 from __future__ import annotations
@@ -60,3 +61,12 @@ def library_cxx(src, out, march="native", extra=()) -> list[str]:
     return ["g++", "-std=c++17", "-O3", f"-march={march}", "-fno-math-errno", "-fno-trapping-math",
             "-ffp-contract=off", f"-I{Path(__file__).resolve().parent.parent / 'cpp' / 'include'}", "-isystem",
             str(Path(drjit.__file__).parent / "include"), str(src), "-o", str(out), *extra]
+
+
+def host_tag(tag: str) -> str:
+    """A --tag naming a kind of host in report file names (RESULTS_<tag>.md): letters, digits,
+    '-' and '_'. An argparse type, so a bad tag stops the script before it measures anything."""
+    if not tag or not all(c.isalnum() or c in "-_" for c in tag):
+        import argparse  # lazily: only the scripts with a --tag need it
+        raise argparse.ArgumentTypeError(f"letters, digits, '-' and '_' only, got {tag!r}")
+    return tag

@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from _machine import cpu_model, simd_isa  # same directory
+from _machine import cpu_model, host_tag, simd_isa  # same directory
 
 HERE = Path(__file__).resolve().parent
 
@@ -401,11 +401,11 @@ smaller environment working set (e.g. a coarser sampling table than the radiance
 
 
 def write_report(res, out_dir, tag=None):
-    """RENDER.md + render.json; with a tag (a run on another kind of host) RENDER_<tag>.md +
-    render_<tag>.json, whose notes point at RENDER.md's instead of repeating them."""
+    """RENDER.md + render.json; with a tag (a run on another kind of host, _machine.host_tag)
+    RENDER_<tag>.md + render_<tag>.json, whose notes point at RENDER.md's instead of repeating
+    them. Returns the markdown file's path."""
     out_dir = Path(out_dir)
-    if tag is not None and (not tag or not all(c.isalnum() or c in "-_" for c in tag)):
-        raise SystemExit(f"--tag: letters, digits, '-' and '_' only, got {tag!r}")
+    out_dir.mkdir(parents=True, exist_ok=True)  # a tagged run writes no images, which made it before
     sfx = f"_{tag}" if tag else ""
     (out_dir / f"render{sfx}.json").write_text(json.dumps(res, indent=1))
     w, h, spp = res["width"], res["height"], res["spp"]
@@ -458,7 +458,9 @@ def write_report(res, out_dir, tag=None):
                   "channel, and the Au/Cu/Al conductors use their RGB eta/k uplifted.", ""]
     lines += NOTES.splitlines() if not tag else [
         "The sessions' notes on the renderer's speed (what was tried, kept and measured) are in RENDER.md."]
-    (out_dir / f"RENDER{sfx}.md").write_text("\n".join(lines) + "\n")
+    md = out_dir / f"RENDER{sfx}.md"
+    md.write_text("\n".join(lines) + "\n")
+    return md
 
 
 def main():
@@ -470,8 +472,9 @@ def main():
     p.add_argument("--max-depth", type=int, default=8)
     p.add_argument("--rounds", type=int, default=4)
     p.add_argument("--out-dir", default=str(HERE))
-    p.add_argument("--tag", default=None, help="write RENDER_<tag>.md / render_<tag>.json (a run on another kind "
-                                               "of host, e.g. zen4) and keep the committed images")
+    p.add_argument("--tag", default=None, type=host_tag,
+                   help="write RENDER_<tag>.md / render_<tag>.json (a run on another kind of host, e.g. zen4) "
+                        "and keep the committed images")
     p.add_argument("--no-spectral", action="store_true", help="skip the spectral=True timing")
     p.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     p.add_argument("--threads", type=int, default=2, help=argparse.SUPPRESS)
@@ -486,8 +489,7 @@ def main():
         return
     res = run(args)
     if args.out_dir:
-        write_report(res, args.out_dir, args.tag)
-        print(f"wrote {Path(args.out_dir) / ('RENDER_' + args.tag + '.md' if args.tag else 'RENDER.md')}")
+        print(f"wrote {write_report(res, args.out_dir, args.tag)}")
 
 
 if __name__ == "__main__":

@@ -102,6 +102,14 @@ def test_arith_probe_runs(tp):
 def test_report_names(tp):
     assert tp.report_names() == ("RESULTS.md", "results.json")
     assert tp.report_names("zen4") == ("RESULTS_zen4.md", "results_zen4.json")
-    for bad in ("", "../x", "a b"):
-        with pytest.raises(SystemExit, match="--tag"):
-            tp.report_names(bad)
+    assert tp.host_tag("zen4") == "zen4"
+
+
+@pytest.mark.parametrize("bad", ["", "../x", "a b"])
+def test_bad_tag_stops_before_measuring(tp, monkeypatch, capsys, bad):
+    # argparse rejects it (exit status 2) while parsing, before any cell is timed
+    monkeypatch.setattr(sys, "argv", ["throughput.py", "--tag", bad])
+    with pytest.raises(SystemExit) as e:
+        tp.main()
+    assert e.value.code == 2
+    assert "--tag" in capsys.readouterr().err
