@@ -662,7 +662,14 @@ inline void load_uniforms(const F *uc, const F *u, int64_t i, int64_t cnt, Packe
     load_lanes<2, 2>(u, i, cnt, pad_u, uv);
     *c = load1_lanes(uc, i, cnt, F(0));
     *buc += count_bad_lanes(*c);
-    *bu += count_bad_lanes(uv[0]) + count_bad_lanes(uv[1]);
+    if (cnt == kW<F>) {
+        // u's 2 kW scalars as they lie in memory, not the transposed pairs: the same count, and a
+        // sampler that ignores u (the smooth lobes) leaves the transposition dead.
+        using P = Packet<F>;
+        *bu += count_bad_lanes(drjit::load<P>(u + 2 * i)) + count_bad_lanes(drjit::load<P>(u + 2 * i + kW<F>));
+    } else {
+        *bu += count_bad_lanes(uv[0]) + count_bad_lanes(uv[1]);
+    }
 }
 
 // sample_chunk on the packet path: the same outputs and rules, kPacketWidth lanes at a time, in

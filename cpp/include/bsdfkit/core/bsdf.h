@@ -52,8 +52,20 @@ template <typename F, int N> inline Mask<F> finite_nonneg_mask(const Spectrum<F,
 // Whether a raw BxDF sample survives pbrt-v4's BSDF-level rules (the lobe-flag test against
 // sample_flags aside, which the batch kernel hoists out of its loop).
 template <typename F, int N> inline Mask<F> sample_accepted(const BSDFSample<F, N> &s, const Vec3<F> &wo) {
-    return s.valid & (wo.z != F(0)) & nonzero_mask(s.f) & (s.pdf > F(0)) & (s.wi.z != F(0)) &
-           finite_nonneg_mask(s.f) & (s.pdf <= F(std::numeric_limits<scalar_t<F>>::max()));
+    if constexpr (is_packet_v<F>) {
+        // The same lanes in fewer instructions (core/simd.h's class tests): pdf in (0, max], every
+        // f channel finite and >= 0, and then "some channel != 0" as their sum > 0 (a sum of
+        // non-negative values is > 0 iff one of them is; an overflow to +inf is > 0 as well;
+        // -0 + -0 is -0; under DAZ a denormal channel is 0 to both forms).
+        Mask<F> bad = not_finite_positive(s.pdf);
+        F sum = s.f[0];
+        for (int c = 0; c < N; ++c) bad = bad | not_finite_nonneg(s.f[c]);
+        for (int c = 1; c < N; ++c) sum = sum + s.f[c];
+        return s.valid & (wo.z != F(0)) & (s.wi.z != F(0)) & !bad & (sum > F(0));
+    } else {
+        return s.valid & (wo.z != F(0)) & nonzero_mask(s.f) & (s.pdf > F(0)) & (s.wi.z != F(0)) &
+               finite_nonneg_mask(s.f) & (s.pdf <= F(std::numeric_limits<scalar_t<F>>::max()));
+    }
 }
 
 // The direction an invalid sample carries (with f = pdf = 0): the shading normal +z.

@@ -115,6 +115,31 @@ inline drjit::mask_t<P> not_finite_nonneg(const P &x) {
     }
 }
 
+// Lanes that fail (x > 0) & (x <= max): NaN, +-0, +-inf and negative values (a sample's pdf).
+// With AVX-512DQ one vfpclass (not_finite_nonneg's classes and +0: imm 0xDF) instead of two
+// compares and a mask AND; the same lanes (a positive denormal passes both forms).
+template <typename P, std::enable_if_t<drjit::is_array_v<P>, int> = 0>
+inline drjit::mask_t<P> not_finite_positive(const P &x) {
+    using T = drjit::scalar_t<P>;
+    constexpr size_t N = drjit::size_v<P>;
+#if defined(__AVX512DQ__)
+    if constexpr (std::is_same_v<T, float> && N == 16) {
+        drjit::mask_t<P> r;
+        r.k = _mm512_fpclass_ps_mask(x.m, 0xDF);
+        return r;
+    } else if constexpr (std::is_same_v<T, double> && N == 8) {
+        drjit::mask_t<P> r;
+        r.k = _mm512_fpclass_pd_mask(x.m, 0xDF);
+        return r;
+    } else if constexpr (std::is_same_v<T, double> && N == 16) {
+        return drjit::mask_t<P>(not_finite_positive(x.a1), not_finite_positive(x.a2));
+    } else
+#endif
+    {
+        return !((x > T(0)) & (x <= std::numeric_limits<T>::max()));
+    }
+}
+
 // e^x for a finite x. For float packets with AVX-512: Dr.Jit's exp (the Cephes expf reduction and
 // polynomial, about 1 ulp: x = n ln2 + y with n = floor(x / ln2 + 1/2), e^y by its degree-7
 // polynomial, then 2^n e^y by vscalef) without its two overflow / underflow selects: for a finite
