@@ -448,6 +448,34 @@ template <int S, typename F> inline Dirs<F> dirs_of(const F *p) {
     return {p, S == 0 ? DirLayout::One : DirLayout::Rows, 0};
 }
 
+// ---- Software prefetch of the streamed inputs, kPrefetchAhead elements ahead of the packet
+// loop (within its chunk), every 64-byte line of the packet's rows (prefetcht0). A hint: it
+// never faults and changes no result. Measured on an AMD EPYC Zen 4 host (C++ harness over
+// these loops, N = 1e6, medians of 3 alternating runs, TSC cycles per packet of 16), where the
+// hardware prefetchers alone left the light kernels well below a plain read + write stream:
+// pdf 1 thread Diffuse 44 -> 30, Conductor rough 40 -> 37, Plastic smooth 48 -> 45; 2 threads
+// Diffuse 25 -> 15, Plastic smooth 25 -> 23; eval mostly within the noise (Plastic rough -6 %:
+// the 6 prefetches per packet are instructions too, in a compute-bound loop). Distance 128-384
+// tried (256 best), prefetch to L2 only (t1 / t2: slower), and one line per packet instead of
+// every line (slower than none).
+inline constexpr int64_t kPrefetchAhead = 256;
+// The 64-byte lines of [p, p + bytes).
+inline void prefetch_span(const void *p, size_t bytes) {
+    const char *c = static_cast<const char *>(p);
+    for (size_t o = 0; o < bytes; o += 64) __builtin_prefetch(c + o, 0, 3);
+}
+// The lanes [j, j + kW) of a direction array, as its layout stores them.
+template <int S, typename F> inline void prefetch_dirs(const Dirs<F> &d, int64_t j) {
+    constexpr size_t B = sizeof(F) * size_t(kW<F>);
+    if constexpr (S == 3) {
+        prefetch_span(d.p + 3 * j, 3 * B);
+    } else if constexpr (S == kAnyLayout) {
+        if (d.layout == DirLayout::Rows) prefetch_span(d.p + 3 * j, 3 * B);
+        else if (d.layout == DirLayout::Planes)
+            for (int c = 0; c < 3; ++c) prefetch_span(d.p + c * d.plane + j, B);
+    }
+}
+
 // A per-chunk local copy of the model's trivially copyable kernel (core/bxdf.h: the model, or
 // its `Kernel` base when it holds a shared table): its parameters then cannot alias the outputs,
 // so they stay in registers instead of being reloaded, and alias-checked, every iteration.
@@ -470,6 +498,10 @@ void pair_packet_loop(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int6
         const Store st = store;
         for (int64_t i = b; i < e; i += kW<F>) {
             int64_t cnt = std::min(kW<F>, e - i);
+            if (i + kPrefetchAhead + kW<F> <= e) {
+                prefetch_dirs<SO>(wo, i + kPrefetchAhead);
+                prefetch_dirs<SI>(wi, i + kPrefetchAhead);
+            }
             Vec3<Packet<F>> o = load_dirs<SO>(wo, i, cnt), w = load_dirs<SI>(wi, i, cnt);
             bo += count_not_unit(o);
             bi += count_not_unit(w);
@@ -687,6 +719,12 @@ inline void sample_chunk_packet(const Model &m, const Sampler &smp, bool model_o
     const Mask<P> model_mask(model_ok);
     for (int64_t i = b; i < e; i += kW<F>) {
         int64_t cnt = std::min(kW<F>, e - i);
+        if (i + kPrefetchAhead + kW<F> <= e) {
+            const int64_t j = i + kPrefetchAhead;
+            if constexpr (SO == 3) prefetch_span(wo + 3 * j, 3 * sizeof(F) * size_t(kW<F>));
+            prefetch_span(uc + j, sizeof(F) * size_t(kW<F>));
+            prefetch_span(u + 2 * j, 2 * sizeof(F) * size_t(kW<F>));
+        }
         Vec3<P> o = load3_lanes<SO>(wo, i, cnt);
         bo += count_not_unit(o);
         P c, uv[2];
