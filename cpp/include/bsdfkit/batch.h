@@ -459,6 +459,10 @@ template <int S, typename F> inline Dirs<F> dirs_of(const F *p) {
 // tried (256 best), prefetch to L2 only (t1 / t2: slower), and one line per packet instead of
 // every line (slower than none).
 inline constexpr int64_t kPrefetchAhead = 256;
+// Calls below this many elements keep their inputs in L2 (1 MiB per Zen 4 core: 65536 (N, 3)
+// float32 rows are 768 KiB per direction) and skip the prefetches, which there are only
+// instructions (0-6 % on the lightest in-cache kernels, bench/loop_ab.py --n 16384).
+inline constexpr int64_t kPrefetchMinN = int64_t(1) << 16;
 // The 64-byte lines of [p, p + bytes).
 inline void prefetch_span(const void *p, size_t bytes) {
     const char *c = static_cast<const char *>(p);
@@ -489,6 +493,7 @@ template <typename Model> using LocalModel = const KernelOf_t<Model>;
 template <int SO, int SI, typename Model, typename F, typename Store>
 void pair_packet_loop(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_t n, int nthreads, BadCounts &bad,
                       const Store &store) {
+    const bool prefetch = n >= kPrefetchMinN;
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
         int64_t bo = 0, bi = 0;
         const DenormalsFlushedFor<Model> ftz;
@@ -496,9 +501,10 @@ void pair_packet_loop(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int6
         // A local copy of the store's closure too: the arguments it captures by value (out, mode,
         // sample flags) then cannot alias the outputs, so their loads and the flag mask leave the loop.
         const Store st = store;
+        const int64_t pf_end = prefetch ? e : b;  // prefetch while i + kPrefetchAhead + kW <= pf_end
         for (int64_t i = b; i < e; i += kW<F>) {
             int64_t cnt = std::min(kW<F>, e - i);
-            if (i + kPrefetchAhead + kW<F> <= e) {
+            if (i + kPrefetchAhead + kW<F> <= pf_end) {
                 prefetch_dirs<SO>(wo, i + kPrefetchAhead);
                 prefetch_dirs<SI>(wi, i + kPrefetchAhead);
             }
@@ -713,13 +719,14 @@ inline void sample_chunk_packet(const Model &m, const Sampler &smp, bool model_o
                                 const F *__restrict wo, const F *__restrict uc, const F *__restrict u,
                                 F *__restrict owi, F *__restrict of, F *__restrict opdf, F *__restrict oeta,
                                 uint8_t *__restrict ofl, bool *__restrict ovalid, bool *__restrict oprop,
-                                int64_t (&bad_out)[3]) {
+                                bool prefetch, int64_t (&bad_out)[3]) {
     using P = Packet<F>;
     int64_t bo = 0, buc = 0, bu = 0;
     const Mask<P> model_mask(model_ok);
+    const int64_t pf_end = prefetch ? e : b;  // as pair_packet_loop
     for (int64_t i = b; i < e; i += kW<F>) {
         int64_t cnt = std::min(kW<F>, e - i);
-        if (i + kPrefetchAhead + kW<F> <= e) {
+        if (i + kPrefetchAhead + kW<F> <= pf_end) {
             const int64_t j = i + kPrefetchAhead;
             if constexpr (SO == 3) prefetch_span(wo + 3 * j, 3 * sizeof(F) * size_t(kW<F>));
             prefetch_span(uc + j, sizeof(F) * size_t(kW<F>));
@@ -756,7 +763,7 @@ void sample_batch_loop(const Model &m, const Sampler &sampler, const F *wo, cons
         if constexpr (is_vectorized<Model>::value) {
             int64_t c[3];
             sample_chunk_packet<SO>(mloc, sampler, model_ok, b, e, wo, uc, u, out.wi, out.f, out.pdf, out.eta,
-                                    out.flags, out.valid, out.proportional, c);
+                                    out.flags, out.valid, out.proportional, n >= kPrefetchMinN, c);
             bad.wo += c[0];
             bad.uc += c[1];
             bad.u += c[2];

@@ -1,0 +1,203 @@
+"""Cycles per packet of the batch kernels' own loops, and an A/B of two versions of the headers.
+
+    python bench/loop_ab.py                           # every model, eval / pdf / sample, N = 1e6
+    python bench/loop_ab.py --models diffuse,cond_r --ops pdf --threads 2
+    python bench/loop_ab.py --n 16384                 # in cache (L2): the arithmetic alone
+    python bench/loop_ab.py --base HEAD~1             # A = the headers of a revision, B = the tree's
+
+It writes a small C++ program that calls batch.h's eval_batch / pdf_batch / sample_batch (the
+library's kernels, (N, 3) rows in and out, the unit and uniform checks included, no Python) on
+fixed random unit directions and uniforms, and prints the best of `--reps` calls as TSC cycles per
+packet of 16 elements; compiled with the library's flags (_machine.library_cxx: g++ -O3
+-march=native -ffp-contract=off, Dr.Jit's packet headers). With --base it builds the same program
+a second time against `git archive <rev> cpp/include` and runs the two binaries alternately
+(`--rounds` times, fresh processes), printing the medians of A and B and their ratio: the way the
+sessions measured a kernel change before spending a wheel build on it (session 20's prefetch and
+sample-acceptance changes; CONTRIBUTING). TSC cycles tick at the nominal clock, not the core's:
+compare figures of one run, not across hosts.
+"""
+from __future__ import annotations
+
+import argparse
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(HERE))
+from _machine import library_cxx, summary  # noqa: E402
+
+LANES = 16  # core/simd.h kPacketWidth
+# key: C++ expression making the float32 model (its Params defaults but what is set here)
+MODELS = {
+    "diffuse": "DiffuseBxDF<float>::make({})",
+    "plastic_s": "PlasticBxDF<float>::make({})",
+    "plastic_r": "[] { PlasticParamsT<double> p; p.alpha = 0.3; return PlasticBxDF<float>::make(p); }()",
+    "cond_s": "ConductorBxDF<float>::make({})",
+    "cond_r": "[] { ConductorParamsT<double> p; p.alpha_x = p.alpha_y = 0.3; return ConductorBxDF<float>::make(p); }()",
+    "diel_s": "DielectricBxDF<float>::make({})",
+    "diel_r": "[] { DielectricParamsT<double> p; p.alpha_x = p.alpha_y = 0.3; return DielectricBxDF<float>::make(p); }()",
+    "thin": "ThinDielectricBxDF<float>::make({})",
+    "hair": "HairBxDF<float>::make({})",
+}
+OPS = ("eval", "pdf", "sample")
+
+
+def source(models, ops) -> str:
+    runs = "\n".join(f'    if (want("{k}")) run("{k}", {MODELS[k]}, ops);' for k in models)
+    return f"""#include <bsdfkit/bxdfs/all.h>
+#include <bsdfkit/batch.h>
+#include <x86intrin.h>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+using namespace bsdfkit;
+static int64_t N = 1000000;
+static int g_threads = 1, g_reps = 20;
+static const char *g_models = "";
+static bool want(const char *k) {{
+    std::string s = std::string(",") + g_models + ",";
+    return std::strlen(g_models) == 0 || s.find(std::string(",") + k + ",") != std::string::npos;
+}}
+template <class Fn> double best(Fn fn) {{
+    double b = 1e300;
+    for (int r = 0; r < g_reps; ++r) {{
+        unsigned long long t0 = __rdtsc();
+        fn();
+        b = std::min(b, double(__rdtsc() - t0));
+    }}
+    return b / (double(N) / {LANES});
+}}
+template <class Model> void run(const char *name, const Model &m, const std::string &ops) {{
+    using F = float;
+    std::mt19937 g(1);
+    std::normal_distribution<double> nd;
+    std::uniform_real_distribution<float> ud(0.f, 1.f);
+    std::vector<F> wo(3 * N), wi(3 * N), f(3 * N), swi(3 * N), pdf(N), eta(N), uc(N), u(2 * N);
+    std::vector<uint8_t> flags(N);
+    std::vector<char> valid(N), prop(N);
+    for (int64_t i = 0; i < N; ++i) {{
+        for (int side = 0; side < 2; ++side) {{
+            double x = nd(g), y = nd(g), z = nd(g);
+            if (side == 0) z = std::abs(z) + 0.05;  // wo above the surface
+            double l = std::sqrt(x * x + y * y + z * z);
+            F *w = side == 0 ? &wo[3 * i] : &wi[3 * i];
+            w[0] = F(x / l), w[1] = F(y / l), w[2] = F(z / l);
+        }}
+        uc[i] = ud(g), u[2 * i] = ud(g), u[2 * i + 1] = ud(g);
+    }}
+    BadCounts bad;
+    std::printf("%s", name);
+    if (ops.find("eval") != std::string::npos)
+        std::printf(" eval %.2f", best([&] {{ eval_batch<3, 3>(m, wo.data(), wi.data(), N, TransportMode::Radiance, f.data(), g_threads, bad); }}));
+    if (ops.find("pdf") != std::string::npos)
+        std::printf(" pdf %.2f", best([&] {{ pdf_batch<3, 3>(m, wo.data(), wi.data(), N, TransportMode::Radiance, 0xff, pdf.data(), g_threads, bad); }}));
+    if (ops.find("sample") != std::string::npos) {{
+        SampleOut<F> so{{swi.data(), f.data(), pdf.data(), eta.data(), flags.data(), (bool *)valid.data(), (bool *)prop.data()}};
+        std::printf(" sample %.2f", best([&] {{ sample_batch<3>(m, wo.data(), uc.data(), u.data(), N, TransportMode::Radiance, 0xff, so, g_threads, bad); }}));
+    }}
+    std::printf("\\n");
+    if (bad.wo + bad.wi + bad.uc + bad.u != 0) std::printf("unexpected bad inputs\\n");
+}}
+int main(int argc, char **argv) {{
+    if (argc > 1) N = std::atoll(argv[1]);
+    if (argc > 2) g_threads = std::atoi(argv[2]);
+    if (argc > 3) g_reps = std::atoi(argv[3]);
+    if (argc > 4) g_models = argv[4];
+    const std::string ops = "{",".join(ops)}";
+{runs}
+}}
+"""
+
+
+def build(src: Path, include_root: Path | None, out: Path) -> None:
+    """Compiles src with the library's flags; include_root replaces cpp/include (a revision's headers)."""
+    cmd = library_cxx(src, out, extra=["-pthread", "-fopenmp"])
+    if include_root is not None:
+        cmd = [c.replace(f"-I{ROOT / 'cpp' / 'include'}", f"-I{include_root}") for c in cmd]
+    subprocess.run(cmd, check=True)
+
+
+def parse(text: str) -> dict[tuple[str, str], float]:
+    """{(model, op): cycles per packet} from the program's lines ("diffuse eval 26.61 pdf 18.40")."""
+    res = {}
+    for line in text.splitlines():
+        parts = line.split()
+        if not parts or parts[0] not in MODELS:
+            continue
+        for op, val in zip(parts[1::2], parts[2::2]):
+            res[(parts[0], op)] = float(val)
+    return res
+
+
+def run(binary: Path, args) -> dict[tuple[str, str], float]:
+    out = subprocess.run([str(binary), str(args.n), str(args.threads), str(args.reps), ""],
+                         check=True, capture_output=True, text=True).stdout
+    return parse(out)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--models", default=",".join(MODELS), help="comma-separated subset of: " + ", ".join(MODELS))
+    ap.add_argument("--ops", default=",".join(OPS), help="comma-separated subset of: " + ", ".join(OPS))
+    ap.add_argument("--n", type=int, default=1_000_000, help="elements per call (default 1e6; 16384 stays in L2)")
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--reps", type=int, default=20, help="calls per measurement, the best kept (default 20)")
+    ap.add_argument("--base", default=None, help="a git revision: A/B its cpp/include (A) against the tree's (B)")
+    ap.add_argument("--rounds", type=int, default=3, help="alternating runs of A and B with --base (default 3)")
+    ap.add_argument("--keep", default=None, help="directory to keep the source and binaries in")
+    args = ap.parse_args(argv)
+    models = [m for m in args.models.split(",") if m]
+    ops = [o for o in args.ops.split(",") if o]
+    for m in models:
+        if m not in MODELS:
+            ap.error(f"--models: unknown model {m!r} (known: {', '.join(MODELS)})")
+    for o in ops:
+        if o not in OPS:
+            ap.error(f"--ops: unknown op {o!r} (known: {', '.join(OPS)})")
+    if args.n < LANES or args.threads < 1 or args.reps < 1 or args.rounds < 1:
+        ap.error(f"--n must be >= {LANES}; --threads, --reps and --rounds >= 1")
+
+    work = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="bsdfkit-loop-ab-"))
+    work.mkdir(parents=True, exist_ok=True)
+    src = work / "loops.cpp"
+    src.write_text(source(models, ops))
+    b_bin = work / "loops_b"
+    build(src, None, b_bin)
+    print(f"# {summary()}; N = {args.n}, {args.threads} thread(s), best of {args.reps} calls; TSC cycles per packet of {LANES}")
+    if args.base is None:
+        res = run(b_bin, args)
+        for (m, op), v in res.items():
+            print(f"{m:10s} {op:7s} {v:8.2f}")
+        return 0
+
+    base_inc = work / "base"
+    base_inc.mkdir(exist_ok=True)
+    archive = subprocess.run(["git", "-C", str(ROOT), "archive", args.base, "cpp/include"], check=True,
+                             capture_output=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(base_inc)], input=archive, check=True)
+    a_bin = work / "loops_a"
+    build(src, base_inc / "cpp" / "include", a_bin)
+    a_runs, b_runs = [], []
+    for _ in range(args.rounds):
+        a_runs.append(run(a_bin, args))
+        b_runs.append(run(b_bin, args))
+    print(f"# A = {args.base}, B = the working tree; medians of {args.rounds} alternating runs")
+    print(f"{'model':10s} {'op':7s} {'A':>8s} {'B':>8s}  A/B (> 1: B faster)")
+    for key in a_runs[0]:
+        a = statistics.median(r[key] for r in a_runs)
+        b = statistics.median(r[key] for r in b_runs)
+        print(f"{key[0]:10s} {key[1]:7s} {a:8.2f} {b:8.2f}  {a / b:.2f}x")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,60 @@
+"""bench/loop_ab.py: the harness over batch.h's loops builds, runs and reads its own output, and an
+A/B against a revision's headers runs both binaries (the figures themselves are timings: not
+asserted)."""
+import importlib.util
+import shutil
+import sys
+import subprocess
+from pathlib import Path
+
+import pytest
+
+_ROOT = Path(__file__).resolve().parents[1]
+_PATH = _ROOT / "bench" / "loop_ab.py"
+
+
+@pytest.fixture(scope="module")
+def loop_ab():
+    spec = importlib.util.spec_from_file_location("bench_loop_ab", _PATH)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_parse_reads_model_op_pairs(loop_ab):
+    text = "# header\ndiffuse eval 26.61 pdf 18.40 sample 92.30\ncond_r pdf 33.5\nnoise line\n"
+    assert loop_ab.parse(text) == {("diffuse", "eval"): 26.61, ("diffuse", "pdf"): 18.40,
+                                   ("diffuse", "sample"): 92.30, ("cond_r", "pdf"): 33.5}
+
+
+def test_source_holds_only_the_requested_models_and_ops(loop_ab):
+    src = loop_ab.source(["diffuse"], ["pdf"])
+    assert 'run("diffuse"' in src and 'run("cond_r"' not in src
+    assert 'const std::string ops = "pdf";' in src
+
+
+@pytest.mark.parametrize("bad", [["--models", "nope"], ["--ops", "albedo"], ["--n", "3"]])
+def test_bad_arguments_are_named(loop_ab, bad, capsys):
+    with pytest.raises(SystemExit) as e:
+        loop_ab.main(bad)
+    assert e.value.code == 2
+    assert bad[0] in capsys.readouterr().err
+
+
+@pytest.mark.skipif(shutil.which("g++") is None, reason="needs g++ (the library's compiler)")
+def test_builds_and_runs_one_kernel(loop_ab, tmp_path):
+    out = subprocess.run([sys.executable, str(_PATH), "--models", "diffuse", "--ops", "pdf", "--n", "4096",
+                          "--reps", "3", "--keep", str(tmp_path)], check=True, capture_output=True, text=True).stdout
+    rows = [l.split() for l in out.splitlines() if l.startswith("diffuse")]
+    assert len(rows) == 1 and rows[0][1] == "pdf" and float(rows[0][2]) > 0
+    assert "unexpected bad inputs" not in out
+
+
+@pytest.mark.skipif(shutil.which("g++") is None or not (_ROOT / ".git").exists(), reason="needs g++ and the git checkout")
+def test_ab_against_head_runs_both_sides(loop_ab, tmp_path):
+    out = subprocess.run([sys.executable, str(_PATH), "--models", "diffuse", "--ops", "eval", "--n", "4096", "--reps", "3",
+                          "--base", "HEAD", "--rounds", "1", "--keep", str(tmp_path)],
+                         check=True, capture_output=True, text=True).stdout
+    row = [l.split() for l in out.splitlines() if l.startswith("diffuse")][0]
+    assert row[1] == "eval" and float(row[2]) > 0 and float(row[3]) > 0 and row[4].endswith("x")
+    assert (tmp_path / "loops_a").exists() and (tmp_path / "loops_b").exists()
