@@ -90,54 +90,50 @@ template <typename T, std::enable_if_t<!drjit::is_array_v<T>, int> = 0> inline T
     return m ? x : T(0);
 }
 
-// Lanes that fail (x >= 0) & (x <= max): NaN, +-inf and negative non-zero values (-0 passes,
-// as it does x >= 0). With AVX-512DQ one vfpclass per register (quiet/signalling NaN, +-inf,
-// negative finite: imm 0x99 | 0x40) instead of two compares and a mask AND; the same lanes.
-template <typename P, std::enable_if_t<drjit::is_array_v<P>, int> = 0>
-inline drjit::mask_t<P> not_finite_nonneg(const P &x) {
+// Lanes of x in vfpclass's classes Imm (AVX-512DQ: one instruction per register, for float32
+// and float64 packets of one or two registers); other packets compute the same lanes by
+// `compares(x)`. Imm bits: 0x01 QNaN, 0x02 +0, 0x04 -0, 0x08 +inf, 0x10 -inf, 0x20 denormal,
+// 0x40 negative finite, 0x80 SNaN.
+template <int Imm, typename P, typename Compares> inline drjit::mask_t<P> in_fp_classes(const P &x, const Compares &compares) {
     using T = drjit::scalar_t<P>;
     constexpr size_t N = drjit::size_v<P>;
 #if defined(__AVX512DQ__)
     if constexpr (std::is_same_v<T, float> && N == 16) {
         drjit::mask_t<P> r;
-        r.k = _mm512_fpclass_ps_mask(x.m, 0xD9);
+        r.k = _mm512_fpclass_ps_mask(x.m, Imm);
         return r;
     } else if constexpr (std::is_same_v<T, double> && N == 8) {
         drjit::mask_t<P> r;
-        r.k = _mm512_fpclass_pd_mask(x.m, 0xD9);
+        r.k = _mm512_fpclass_pd_mask(x.m, Imm);
         return r;
     } else if constexpr (std::is_same_v<T, double> && N == 16) {
-        return drjit::mask_t<P>(not_finite_nonneg(x.a1), not_finite_nonneg(x.a2));
+        return drjit::mask_t<P>(in_fp_classes<Imm>(x.a1, compares), in_fp_classes<Imm>(x.a2, compares));
     } else
 #endif
     {
-        return !((x >= T(0)) & (x <= std::numeric_limits<T>::max()));
+        return compares(x);
     }
 }
 
-// Lanes that fail (x > 0) & (x <= max): NaN, +-0, +-inf and negative values (a sample's pdf).
-// With AVX-512DQ one vfpclass (not_finite_nonneg's classes and +0: imm 0xDF) instead of two
-// compares and a mask AND; the same lanes (a positive denormal passes both forms).
+// Lanes that fail (x >= 0) & (x <= max): NaN, +-inf and negative non-zero values (-0 passes,
+// as it does x >= 0): the classes NaN, +-inf, negative finite (0xD9) instead of two compares
+// and a mask AND; the same lanes.
+template <typename P, std::enable_if_t<drjit::is_array_v<P>, int> = 0>
+inline drjit::mask_t<P> not_finite_nonneg(const P &x) {
+    return in_fp_classes<0xD9>(x, [](const auto &v) {
+        using T = drjit::scalar_t<std::decay_t<decltype(v)>>;
+        return !((v >= T(0)) & (v <= std::numeric_limits<T>::max()));
+    });
+}
+
+// Lanes that fail (x > 0) & (x <= max): NaN, +-0, +-inf and negative values (a sample's pdf):
+// not_finite_nonneg's classes and +0 (0xDF); the same lanes (a positive denormal passes both).
 template <typename P, std::enable_if_t<drjit::is_array_v<P>, int> = 0>
 inline drjit::mask_t<P> not_finite_positive(const P &x) {
-    using T = drjit::scalar_t<P>;
-    constexpr size_t N = drjit::size_v<P>;
-#if defined(__AVX512DQ__)
-    if constexpr (std::is_same_v<T, float> && N == 16) {
-        drjit::mask_t<P> r;
-        r.k = _mm512_fpclass_ps_mask(x.m, 0xDF);
-        return r;
-    } else if constexpr (std::is_same_v<T, double> && N == 8) {
-        drjit::mask_t<P> r;
-        r.k = _mm512_fpclass_pd_mask(x.m, 0xDF);
-        return r;
-    } else if constexpr (std::is_same_v<T, double> && N == 16) {
-        return drjit::mask_t<P>(not_finite_positive(x.a1), not_finite_positive(x.a2));
-    } else
-#endif
-    {
-        return !((x > T(0)) & (x <= std::numeric_limits<T>::max()));
-    }
+    return in_fp_classes<0xDF>(x, [](const auto &v) {
+        using T = drjit::scalar_t<std::decay_t<decltype(v)>>;
+        return !((v > T(0)) & (v <= std::numeric_limits<T>::max()));
+    });
 }
 
 // e^x for a finite x. For float packets with AVX-512: Dr.Jit's exp (the Cephes expf reduction and
