@@ -1,13 +1,13 @@
 """bench/loop_ab.py: the harness over batch.h's loops builds, runs and reads its own output, and an
 A/B against a revision's headers runs both binaries (the figures themselves are timings: not
 asserted)."""
-import importlib.util
 import shutil
 import sys
 import subprocess
 from pathlib import Path
 
 import pytest
+from conftest import load_bench
 
 _ROOT = Path(__file__).resolve().parents[1]
 _PATH = _ROOT / "bench" / "loop_ab.py"
@@ -15,10 +15,7 @@ _PATH = _ROOT / "bench" / "loop_ab.py"
 
 @pytest.fixture(scope="module")
 def loop_ab():
-    spec = importlib.util.spec_from_file_location("bench_loop_ab", _PATH)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_bench("loop_ab.py")
 
 
 def test_parse_reads_model_op_pairs(loop_ab):

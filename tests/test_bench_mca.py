@@ -1,20 +1,14 @@
 """bench/mca.py's loop extraction: the instructions between the llvm-mca markers in execution
 order (GCC rotates loops, so the end marker can come first in the text). A pure function of the
 assembly text; llvm-mca itself is not needed here."""
-import importlib.util
-from pathlib import Path
 
 import pytest
-
-_PATH = Path(__file__).resolve().parents[1] / "bench" / "mca.py"
+from conftest import load_bench
 
 
 @pytest.fixture(scope="module")
 def mca():
-    spec = importlib.util.spec_from_file_location("bench_mca", _PATH)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_bench("mca.py")
 
 
 # a rotated loop as GCC lays it out: the tail of the body (stores) first, then the begin marker,

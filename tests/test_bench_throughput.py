@@ -2,26 +2,16 @@
 
 The script itself is a benchmark (never run in the suite); these are its pure helpers, whose
 mistakes would silently change the committed table's verdicts."""
-import importlib.util
 import math
 import sys
-from pathlib import Path
 
 import pytest
-
-_PATH = Path(__file__).resolve().parents[1] / "bench" / "throughput.py"
+from conftest import load_bench
 
 
 @pytest.fixture(scope="module")
 def tp():
-    sys.path.insert(0, str(_PATH.parent))  # the script imports bench/_machine.py as a sibling
-    try:
-        spec = importlib.util.spec_from_file_location("bench_throughput", _PATH)
-        mod = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(mod)
-    finally:
-        sys.path.remove(str(_PATH.parent))
-    return mod
+    return load_bench("throughput.py")
 
 
 def test_merge_cells_keeps_each_variants_minimum(tp):
