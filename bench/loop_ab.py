@@ -47,7 +47,7 @@ OPS = ("eval", "pdf", "sample")
 
 
 def source(models, ops) -> str:
-    runs = "\n".join(f'    if (want("{k}")) run("{k}", {MODELS[k]}, ops);' for k in models)
+    runs = "\n".join(f'    run("{k}", {MODELS[k]}, ops);' for k in models)
     return f"""#include <bsdfkit/bxdfs/all.h>
 #include <bsdfkit/batch.h>
 #include <x86intrin.h>
@@ -55,18 +55,12 @@ def source(models, ops) -> str:
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <random>
 #include <string>
 #include <vector>
 using namespace bsdfkit;
 static int64_t N = 1000000;
 static int g_threads = 1, g_reps = 20;
-static const char *g_models = "";
-static bool want(const char *k) {{
-    std::string s = std::string(",") + g_models + ",";
-    return std::strlen(g_models) == 0 || s.find(std::string(",") + k + ",") != std::string::npos;
-}}
 template <class Fn> double best(Fn fn) {{
     double b = 1e300;
     for (int r = 0; r < g_reps; ++r) {{
@@ -111,7 +105,6 @@ int main(int argc, char **argv) {{
     if (argc > 1) N = std::atoll(argv[1]);
     if (argc > 2) g_threads = std::atoi(argv[2]);
     if (argc > 3) g_reps = std::atoi(argv[3]);
-    if (argc > 4) g_models = argv[4];
     const std::string ops = "{",".join(ops)}";
 {runs}
 }}
@@ -139,7 +132,7 @@ def parse(text: str) -> dict[tuple[str, str], float]:
 
 
 def run(binary: Path, args) -> dict[tuple[str, str], float]:
-    out = subprocess.run([str(binary), str(args.n), str(args.threads), str(args.reps), ""],
+    out = subprocess.run([str(binary), str(args.n), str(args.threads), str(args.reps)],
                          check=True, capture_output=True, text=True).stdout
     return parse(out)
 

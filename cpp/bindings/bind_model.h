@@ -201,19 +201,7 @@ inline int small_int(py::handle h, int lo, int hi) {
     return (v < lo || v > hi) ? -1 : int(v);
 }
 
-// A plain output array of the given type and exact shape, writeable, or false. planes: set when
-// it is an (N, 3) Fortran-order array (accepted only when `planes` is given).
-inline bool plain_out(py::handle h, int type, const std::vector<py::ssize_t> &shape, bool *planes = nullptr) {
-    Plain o;
-    bool fortran = planes != nullptr && shape.size() == 2;
-    if (!plain(h, fortran ? 1 : 0, fortran ? shape[1] : 0, o, fortran) || o.type != type || !o.writeable ||
-        o.ndim != int(shape.size()))
-        return false;
-    if (planes) *planes = o.planes;
-    return std::equal(shape.begin(), shape.end(), o.shape);
-}
-
-// The data of a plain output for sample's out=: exactly a numpy.ndarray of npy type `type`,
+// The data of a plain output (eval / pdf / sample's out=): exactly a numpy.ndarray of npy type `type`,
 // C-contiguous, writeable, in native byte order, of exactly `shape`; else nullptr.
 inline void *plain_out_data(py::handle h, int type, const std::vector<py::ssize_t> &shape) {
     auto &api = py::detail::npy_api::get();
@@ -225,6 +213,20 @@ inline void *plain_out_data(py::handle h, int type, const std::vector<py::ssize_
         p->nd != int(shape.size()) || !std::equal(shape.begin(), shape.end(), p->dimensions))
         return nullptr;
     return p->data;
+}
+
+// A plain output array of the given type and exact shape, writeable, or false. planes: set when
+// it is an (N, 3) Fortran-order array (accepted only when `planes` is given); C order otherwise,
+// as plain_out_data.
+inline bool plain_out(py::handle h, int type, const std::vector<py::ssize_t> &shape, bool *planes = nullptr) {
+    if (planes == nullptr || shape.size() != 2) {
+        if (planes) *planes = false;
+        return plain_out_data(h, type, shape) != nullptr;
+    }
+    Plain o;
+    if (!plain(h, 1, shape[1], o, true) || o.type != type || !o.writeable || o.ndim != 2) return false;
+    *planes = o.planes;
+    return std::equal(shape.begin(), shape.end(), o.shape);
 }
 
 // The packet kernels' view of a plain direction argument of a call over n pairs (batch.h Dirs).

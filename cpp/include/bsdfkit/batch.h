@@ -728,7 +728,7 @@ inline void sample_chunk_packet(const Model &m, const Sampler &smp, bool model_o
         int64_t cnt = std::min(kW<F>, e - i);
         if (i + kPrefetchAhead + kW<F> <= pf_end) {
             const int64_t j = i + kPrefetchAhead;
-            if constexpr (SO == 3) prefetch_span(wo + 3 * j, 3 * sizeof(F) * size_t(kW<F>));
+            prefetch_dirs<SO>(dirs_of<SO>(wo), j);
             prefetch_span(uc + j, sizeof(F) * size_t(kW<F>));
             prefetch_span(u + 2 * j, 2 * sizeof(F) * size_t(kW<F>));
         }
