@@ -4,6 +4,7 @@
     python bench/loop_ab.py --models diffuse,cond_r --ops pdf --threads 2
     python bench/loop_ab.py --n 16384                 # in cache (L2): the arithmetic alone
     python bench/loop_ab.py --base HEAD~1             # A = the headers of a revision, B = the tree's
+    python bench/loop_ab.py --aligned                 # outputs on 64-byte lines (streaming stores)
 
 It writes a small C++ program that calls batch.h's eval_batch / pdf_batch / sample_batch (the
 library's kernels, (N, 3) rows in and out, the unit and uniform checks included, no Python) on
@@ -34,6 +35,7 @@ LANES = 16  # core/simd.h kPacketWidth
 # key: C++ expression making the float32 model (its Params defaults but what is set here)
 MODELS = {
     "diffuse": "DiffuseBxDF<float>::make({})",
+    "diffuse_t": "DiffuseTransmissionBxDF<float>::make({})",
     "plastic_s": "PlasticBxDF<float>::make({})",
     "plastic_r": "[] { PlasticParamsT<double> p; p.alpha = 0.3; return PlasticBxDF<float>::make(p); }()",
     "cond_s": "ConductorBxDF<float>::make({})",
@@ -46,8 +48,12 @@ MODELS = {
 OPS = ("eval", "pdf", "sample")
 
 
-def source(models, ops) -> str:
+def source(models, ops, aligned=False) -> str:
+    """The C++ program; aligned: every array starts on a 64-byte line (as bsdfkit's own result
+    arrays do, so a model that streams its outputs does so here; batch.h), else where std::vector
+    puts it (16 bytes past a page for these sizes, as numpy's arrays)."""
     runs = "\n".join(f'    run("{k}", {MODELS[k]}, ops);' for k in models)
+    alloc = "A64" if aligned else "std::allocator"
     return f"""#include <bsdfkit/bxdfs/all.h>
 #include <bsdfkit/batch.h>
 #include <x86intrin.h>
@@ -59,6 +65,16 @@ def source(models, ops) -> str:
 #include <string>
 #include <vector>
 using namespace bsdfkit;
+template <class T> struct A64 {{  // 64-byte aligned storage
+    using value_type = T;
+    A64() = default;
+    template <class U> A64(const A64<U> &) {{}}
+    T *allocate(size_t n) {{ return static_cast<T *>(std::aligned_alloc(64, (n * sizeof(T) + 63) / 64 * 64)); }}
+    void deallocate(T *p, size_t) {{ std::free(p); }}
+    template <class U> bool operator==(const A64<U> &) const {{ return true; }}
+    template <class U> bool operator!=(const A64<U> &) const {{ return false; }}
+}};
+template <class T> using Vec = std::vector<T, {alloc}<T>>;
 static int64_t N = 1000000;
 static int g_threads = 1, g_reps = 20;
 template <class Fn> double best(Fn fn) {{
@@ -75,9 +91,9 @@ template <class Model> void run(const char *name, const Model &m, const std::str
     std::mt19937 g(1);
     std::normal_distribution<double> nd;
     std::uniform_real_distribution<float> ud(0.f, 1.f);
-    std::vector<F> wo(3 * N), wi(3 * N), f(3 * N), swi(3 * N), pdf(N), eta(N), uc(N), u(2 * N);
-    std::vector<uint8_t> flags(N);
-    std::vector<char> valid(N), prop(N);
+    Vec<F> wo(3 * N), wi(3 * N), f(3 * N), swi(3 * N), pdf(N), eta(N), uc(N), u(2 * N);
+    Vec<uint8_t> flags(N);
+    Vec<char> valid(N), prop(N);
     for (int64_t i = 0; i < N; ++i) {{
         for (int side = 0; side < 2; ++side) {{
             double x = nd(g), y = nd(g), z = nd(g);
@@ -147,6 +163,8 @@ def main(argv=None) -> int:
     ap.add_argument("--base", default=None, help="a git revision: A/B its cpp/include (A) against the tree's (B)")
     ap.add_argument("--rounds", type=int, default=3, help="alternating runs of A and B with --base (default 3)")
     ap.add_argument("--keep", default=None, help="directory to keep the source and binaries in")
+    ap.add_argument("--aligned", action="store_true",
+                    help="arrays on 64-byte lines, as bsdfkit's results (where StreamOutputs models stream)")
     args = ap.parse_args(argv)
     models = [m for m in args.models.split(",") if m]
     ops = [o for o in args.ops.split(",") if o]
@@ -162,7 +180,7 @@ def main(argv=None) -> int:
     work = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="bsdfkit-loop-ab-"))
     work.mkdir(parents=True, exist_ok=True)
     src = work / "loops.cpp"
-    src.write_text(source(models, ops))
+    src.write_text(source(models, ops, args.aligned))
     b_bin = work / "loops_b"
     build(src, None, b_bin)
     print(f"# {summary()}; N = {args.n}, {args.threads} thread(s), best of {args.reps} calls; TSC cycles per packet of {LANES}")

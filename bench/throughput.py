@@ -11,7 +11,8 @@ AMD Zen 3 / Zen 4 hosts, and the ratios to Mitsuba differ between them).
 
 What is timed (every figure is the best of several repeats after a warm-up):
   bsdfkit  kernel  m.eval / m.pdf with a preallocated out= array; for sample the compiled
-                   kernel (m._core.sample) with preallocated outputs. At 1 and 2 threads.
+                   kernel (m._core.sample) with preallocated outputs (the arrays of an earlier
+                   plain call, as a user reusing a result passes them). At 1 and 2 threads.
            plain   m.eval(wo, wi) / m.pdf(wo, wi) / m.sample(wo, uc, u): output allocation and
                    the Python-side validation included.
   Mitsuba  conv    numpy (N,3) -> mi.Vector3f(flip_axes=True), SurfaceInteraction3f, the BSDF
@@ -204,26 +205,24 @@ def machine_info():
 
 # ------------------------------------------------------------------------------------ bsdfkit
 
-def sample_buffers(n, dtype):
-    return (np.empty((n, 3), dtype), np.empty((n, 3), dtype), np.empty(n, dtype), np.empty(n, np.uint8),
-            np.empty(n, dtype), np.empty(n, bool), np.empty(n, bool))
-
-
 def bk_calls(m, op, d, transmissive):
     """{variant: fn} for one model / op / dtype-input dict: "kernel" (preallocated outputs) and
     "plain"; for eval and pdf also "soa_kernel" and "soa_plain" (the directions as Fortran-order
-    (N, 3) arrays, i.e. three component planes; eval's out= Fortran-order too)."""
+    (N, 3) arrays, i.e. three component planes; eval's out= Fortran-order too). The kernel's
+    preallocated outputs are the arrays of one plain call, as a user reusing a result passes them
+    (64-byte aligned: a model that streams its outputs, batch.h, does so into them)."""
     wo, wi = d["wo"], d["wi_sph" if transmissive else "wi_up"]
     n, dtype = len(wo), wo.dtype
     if op in ("eval", "pdf"):
         wo_f, wi_f = np.asfortranarray(wo), np.asfortranarray(wi)
         fn = m.eval if op == "eval" else m.pdf
         shape = (n, 3) if op == "eval" else (n,)
-        out, out_f = np.empty(shape, dtype), np.empty(shape, dtype, order="F")
+        out, out_f = fn(wo, wi), np.empty(shape, dtype, order="F")
         return {"kernel": lambda: fn(wo, wi, out=out), "plain": lambda: fn(wo, wi),
                 "soa_kernel": lambda: fn(wo_f, wi_f, out=out_f), "soa_plain": lambda: fn(wo_f, wi_f)}
-    bufs = sample_buffers(n, dtype)
     uc, u = d["uc"], d["u"]
+    r = m.sample(wo, uc, u)
+    bufs = (r.wi, r.f, r.pdf, r.flags, r.eta, r.valid, r.pdf_is_proportional)  # the compiled call's order
     core = m._core  # the compiled kernel with preallocated outputs (what m.sample calls)
     return {"kernel": lambda: core.sample(wo, uc, u, 0, 3, *bufs), "plain": lambda: m.sample(wo, uc, u)}
 

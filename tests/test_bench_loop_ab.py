@@ -28,6 +28,8 @@ def test_source_holds_only_the_requested_models_and_ops(loop_ab):
     src = loop_ab.source(["diffuse"], ["pdf"])
     assert 'run("diffuse"' in src and 'run("cond_r"' not in src
     assert 'const std::string ops = "pdf";' in src
+    assert "using Vec = std::vector<T, std::allocator<T>>" in src
+    assert "using Vec = std::vector<T, A64<T>>" in loop_ab.source(["diffuse"], ["pdf"], aligned=True)
 
 
 @pytest.mark.parametrize("bad", [["--models", "nope"], ["--ops", "albedo"], ["--n", "3"]])
@@ -41,7 +43,8 @@ def test_bad_arguments_are_named(loop_ab, bad, capsys):
 @pytest.mark.skipif(shutil.which("g++") is None, reason="needs g++ (the library's compiler)")
 def test_builds_and_runs_one_kernel(loop_ab, tmp_path):
     out = subprocess.run([sys.executable, str(_PATH), "--models", "diffuse", "--ops", "pdf", "--n", "4096",
-                          "--reps", "3", "--keep", str(tmp_path)], check=True, capture_output=True, text=True).stdout
+                          "--reps", "3", "--aligned", "--keep", str(tmp_path)], check=True, capture_output=True,
+                         text=True).stdout
     rows = [l.split() for l in out.splitlines() if l.startswith("diffuse")]
     assert len(rows) == 1 and rows[0][1] == "pdf" and float(rows[0][2]) > 0
     assert "unexpected bad inputs" not in out

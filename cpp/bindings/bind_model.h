@@ -236,6 +236,19 @@ template <typename F> inline Dirs<F> dirs_of_plain(const Plain &a, int64_t n) {
     return {p, a.planes ? DirLayout::Planes : DirLayout::Rows, a.planes ? n : 0};
 }
 
+// A C-order result array of `shape` for eval / pdf: from 1 MiB on a view of a BlockCache block
+// (64-byte aligned, so that a kernel that streams its outputs can, batch.h; its pages kept warm
+// between calls, as the sample block's), else a numpy array.
+template <typename F> inline py::array result_array(const std::vector<py::ssize_t> &shape) {
+    size_t count = 1;
+    for (py::ssize_t s : shape) count *= size_t(s);
+    const size_t bytes = count * sizeof(F);
+    if (bytes < BlockCache::kMinBytes) return py::array_t<F>(shape);
+    void *data = nullptr;
+    py::capsule blk = cached_block(bytes, &data);  // 2 MiB aligned
+    return py::array(py::dtype::of<F>(), shape, data, blk);
+}
+
 // One allocation for the seven sample outputs, the arrays views of it (in this order: wi, f,
 // pdf, eta as F, 64-byte aligned; flags, valid, pdf_is_proportional as bytes). A small block is
 // a numpy array; from 1 MiB on it comes from BlockCache (block_cache.h), which keeps the pages of
@@ -312,7 +325,7 @@ template <template <typename> class Model> struct PyModel {
         if (out.is_none()) {
             out_planes = Eval && any_planes && (o.rows != n || o.planes) && (i.rows != n || i.planes) && n > 1;
             if (out_planes) res = py::array_t<F, py::array::f_style>(shape);
-            else res = py::array_t<F>(shape);
+            else res = result_array<F>(shape);
         } else if (plain_out(out, o.type, shape, Eval && packets ? &out_planes : nullptr)) {
             res = py::reinterpret_borrow<py::array>(out);
         } else {

@@ -10,6 +10,9 @@
 #include <type_traits>
 #include <utility>
 #include <vector>
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
 
 #include "core/bsdf.h"
 #include "core/bxdf.h"
@@ -480,6 +483,124 @@ template <int S, typename F> inline void prefetch_dirs(const Dirs<F> &d, int64_t
     }
 }
 
+// ---- Non-temporal stores of a large call's outputs. A plain store to a line that is not in
+// cache first reads it (read for ownership): a kernel whose outputs exceed the caches moves its
+// output bytes twice. A streaming store (vmovntps / vmovntpd) writes a whole 64-byte line
+// without reading it and leaves it out of the caches (and the call's inputs in them). From
+// kStreamMinBytes of a call's traffic (inputs + outputs) on, about half this host's 32 MiB
+// L3 (Zen 4): Diffuse pdf at N = 1e6 (28 MB) streamed gained 1.08-1.16x. Only whole, aligned
+// lines: an output array that starts on a line (bsdfkit's own result arrays do) has every full
+// packet's rows on whole lines, as chunks start at multiples of kChunk. Values are unchanged:
+// only how they are stored. AVX-512 with GCC's vector extensions (the register groups above)
+// only; elsewhere plain stores.
+// Only models that declare `static constexpr bool StreamOutputs = true` stream: the kernels
+// limited by memory traffic. Measured on Zen 4 (bench/loop_ab.py, N = 1e6, outputs on lines,
+// session 21): Diffuse eval 1.21-1.33x, sample 1.16-1.31x (1 / 2 threads); the delta lobes' eval (zeros)
+// 1.25-1.6x; but the arithmetic-bound kernels 0.87-0.99x (Hair eval 0.87x, in cache too with
+// streaming forced: not the memory), so streaming is not the default. Realigning unaligned
+// outputs in registers (one permutation per line, the previous packet's last group carried in
+// a register across the loop) gained as much on Diffuse eval but cost its sampler 7 %, so
+// unaligned outputs are stored plainly.
+#if BSDFKIT_SHUFFLE_ROWS && defined(__AVX512F__)
+#define BSDFKIT_STREAM_STORES 1
+#else
+#define BSDFKIT_STREAM_STORES 0
+#endif
+inline constexpr int64_t kStreamMinBytes = int64_t(16) << 20;
+// Whether a call that reads and writes `traffic` bytes in all streams its outputs.
+inline bool stream_outputs(int64_t traffic) { return BSDFKIT_STREAM_STORES && traffic >= kStreamMinBytes; }
+template <typename F> inline constexpr bool kStreams = BSDFKIT_STREAM_STORES && kShuffleRows<F>;
+template <typename M, typename = void> struct streams_outputs : std::false_type {};
+template <typename M> struct streams_outputs<M, std::enable_if_t<M::StreamOutputs>> : std::true_type {};
+inline bool on_line(const void *p) { return (reinterpret_cast<uintptr_t>(p) & 63) == 0; }
+
+#if BSDFKIT_STREAM_STORES
+// One whole line at q (64-byte aligned), streamed.
+template <typename F> inline void stream_line(F *q, const detail_rows::group_t<F> &v) {
+    if constexpr (std::is_same_v<F, float>) _mm512_stream_ps(q, (__m512)v);
+    else _mm512_stream_pd(q, (__m512d)v);
+}
+#endif
+
+// One float output of a packet loop, rows of C = 1 or 3 from p on. A chunk writes through
+// chunk(b)'s Writer, packet by packet: put(i, cnt, value). Stream = false: plain stores
+// (store_lanes / store1_lanes), exactly the code of a loop without streaming; the kernels
+// instantiate their loops both ways and pick one per call (a run-time choice inside one loop
+// cost up to 35 % in cache on the light kernels, and both loops inlined in one chunk function
+// 3-8 %; session 21). Stream = true streams a full packet's rows when p is on a line (Aligned:
+// the caller checked), else stores them plainly.
+template <typename F, int C, bool Stream, bool Aligned = false> struct RowsOut {
+    static_assert(C == 1 || C == 3, "RowsOut: rows of 1 or 3");
+    static constexpr bool kStream = Stream && kStreams<F>;
+    F *p;
+
+    class Writer {
+        F *const p_;     // a copy: it then cannot alias the outputs
+        const bool on_;  // kStream and p on a line
+    public:
+        explicit Writer(F *p) : p_(p), on_(kStream && (Aligned || on_line(p))) {}
+        void put(int64_t i, int64_t cnt, const Packet<F> (&v)[C]) const {
+#if BSDFKIT_STREAM_STORES
+            if constexpr (kStream) {
+                using G = detail_rows::group_t<F>;
+                constexpr int64_t L = kGroup<F>;
+                if (on_ && cnt == kW<F>) {  // the packet's rows fill whole lines: i is a multiple of kW
+                    F *q = p_ + C * i;
+                    for (int64_t g = 0; g < kW<F>; g += L) {
+                        if constexpr (C == 3) {
+                            const G x = group_of(v[0], g), y = group_of(v[1], g), z = group_of(v[2], g);
+                            stream_line(q + 3 * g, detail_rows::rows3_out<0, G, F>(x, y, z));
+                            stream_line(q + 3 * g + L, detail_rows::rows3_out<1, G, F>(x, y, z));
+                            stream_line(q + 3 * g + 2 * L, detail_rows::rows3_out<2, G, F>(x, y, z));
+                        } else {
+                            stream_line(q + g, group_of(v[0], g));
+                        }
+                    }
+                    return;
+                }
+            }
+#endif
+            if constexpr (C == 1) store1_lanes(p_, i, cnt, v[0]);
+            else store_lanes<C>(p_, i, cnt, v);
+        }
+        void put(int64_t i, int64_t cnt, const Spectrum<Packet<F>> &s) const {
+            static_assert(C == 3, "RowsOut: a spectrum is 3 channels");
+            const Packet<F> v[3] = {s[0], s[1], s[2]};
+            put(i, cnt, v);
+        }
+        void put(int64_t i, int64_t cnt, const Vec3<Packet<F>> &w) const {
+            static_assert(C == 3, "RowsOut: a direction is 3 channels");
+            const Packet<F> v[3] = {w.x, w.y, w.z};
+            put(i, cnt, v);
+        }
+        void put(int64_t i, int64_t cnt, const Packet<F> &x) const {
+            static_assert(C == 1, "RowsOut: one channel");
+            const Packet<F> v[1] = {x};
+            put(i, cnt, v);
+        }
+    };
+    Writer chunk(int64_t) const { return Writer(p); }
+};
+// Streaming stores are weakly ordered: a fence before a chunk's end is published to the
+// thread that waits for it (pool.h's completion count).
+template <bool Streamed> inline void stream_fence() {
+#if BSDFKIT_STREAM_STORES
+    if constexpr (Streamed) _mm_sfence();
+#endif
+}
+
+// An output that store(i, cnt, value) writes (plain stores), for pair_packet_loop.
+template <typename Store> struct StoreOut {
+    static constexpr bool kStream = false;
+    Store store;
+    struct Writer {
+        const Store st;  // a copy, as RowsOut's pointer
+        template <typename V> void put(int64_t i, int64_t cnt, const V &v) const { st(i, cnt, v); }
+    };
+    Writer chunk(int64_t) const { return Writer{store}; }
+};
+template <typename Store> inline StoreOut<Store> store_out(const Store &s) { return {s}; }
+
 // A per-chunk local copy of the model's trivially copyable kernel (core/bxdf.h: the model, or
 // its `Kernel` base when it holds a shared table): its parameters then cannot alias the outputs,
 // so they stay in registers instead of being reloaded, and alias-checked, every iteration.
@@ -488,19 +609,21 @@ template <int S, typename F> inline void prefetch_dirs(const Dirs<F> &d, int64_t
 template <typename Model> using LocalModel = const KernelOf_t<Model>;
 
 // The packet loop of eval and pdf: per chunk a local model, per packet the pair (wo, wi) loaded
-// and its non-unit directions counted, then store(model, wo, wi, i, cnt) computes and writes
-// lanes [i, i + cnt).
-template <int SO, int SI, typename Model, typename F, typename Store>
+// and its non-unit directions counted, then compute(model, wo, wi) written to lanes [i, i + cnt)
+// of `out` (a RowsOut, or store_out's plain stores). compute also gets (i, cnt): the spectral
+// kernels load their wavelengths with them.
+template <int SO, int SI, typename Model, typename F, typename Out, typename Compute>
 void pair_packet_loop(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_t n, int nthreads, BadCounts &bad,
-                      const Store &store) {
+                      const Out &out, const Compute &compute) {
     const bool prefetch = n >= kPrefetchMinN;
     parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) __attribute__((flatten)) {
         int64_t bo = 0, bi = 0;
         const DenormalsFlushedFor<Model> ftz;
         LocalModel<Model> mloc = m;
-        // A local copy of the store's closure too: the arguments it captures by value (out, mode,
-        // sample flags) then cannot alias the outputs, so their loads and the flag mask leave the loop.
-        const Store st = store;
+        // A local copy of the closure too: the arguments it captures by value (mode, sample
+        // flags) then cannot alias the outputs, so their loads and the flag mask leave the loop.
+        const Compute cp = compute;
+        const auto wr = out.chunk(b);
         const int64_t pf_end = prefetch ? e : b;  // prefetch while i + kPrefetchAhead + kW <= pf_end
         for (int64_t i = b; i < e; i += kW<F>) {
             int64_t cnt = std::min(kW<F>, e - i);
@@ -511,8 +634,9 @@ void pair_packet_loop(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int6
             Vec3<Packet<F>> o = load_dirs<SO>(wo, i, cnt), w = load_dirs<SI>(wi, i, cnt);
             bo += count_not_unit(o);
             bi += count_not_unit(w);
-            st(mloc, o, w, i, cnt);
+            wr.put(i, cnt, cp(mloc, o, w, i, cnt));
         }
+        stream_fence<Out::kStream>();
         // A broadcast direction was counted once per packet lane: once per element is meant.
         bad.wo += is_one<SO>(wo) ? (bo > 0 ? e - b : 0) : bo;
         bad.wi += is_one<SI>(wi) ? (bi > 0 ? e - b : 0) : bi;
@@ -541,16 +665,31 @@ void pair_scalar_loop(const Model &m, const F *wo, const F *wi, int64_t n, int n
     });
 }
 
+// pair_packet_loop writing rows of C to out; streamed (RowsOut<..., true>) in a call over two
+// full direction arrays whose bytes read and written reach kStreamMinBytes, out on a line.
+template <int SO, int SI, int C, typename Model, typename F, typename Compute>
+void pair_rows_loop(const Model &m, const F *wo, const F *wi, int64_t n, F *out, int nthreads, BadCounts &bad,
+                    const Compute &compute) {
+    const Dirs<F> dwo = dirs_of<SO>(wo), dwi = dirs_of<SI>(wi);
+    if constexpr (SO == 3 && SI == 3 && kStreams<F> && streams_outputs<Model>::value) {
+        if (stream_outputs((6 + C) * n * int64_t(sizeof(F))) && on_line(out)) {
+            pair_packet_loop<SO, SI>(m, dwo, dwi, n, nthreads, bad, RowsOut<F, C, true, true>{out}, compute);
+            return;
+        }
+    }
+    pair_packet_loop<SO, SI>(m, dwo, dwi, n, nthreads, bad, RowsOut<F, C, false>{out}, compute);
+}
+
 // f(wo, wi) for N pairs; SO / SI are 3 for a full array, 0 for one broadcast direction.
 
 template <int SO, int SI, typename Model, typename F>
 void eval_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMode mode, F *out, int nthreads,
                 BadCounts &bad) {
     if constexpr (is_vectorized<Model>::value) {
-        pair_packet_loop<SO, SI>(m, dirs_of<SO>(wo), dirs_of<SI>(wi), n, nthreads, bad,
-                                 [out, mode](const auto &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
-                                     store3_lanes(out, i, cnt, bsdf_f(mm, o, w, mode));
-                                 });
+        pair_rows_loop<SO, SI, 3>(m, wo, wi, n, out, nthreads, bad,
+                                  [mode](const auto &mm, const auto &o, const auto &w, int64_t, int64_t) {
+                                      return bsdf_f(mm, o, w, mode);
+                                  });
         return;
     }
     pair_scalar_loop<SO, SI>(m, wo, wi, n, nthreads, bad,
@@ -566,10 +705,10 @@ template <int SO, int SI, typename Model, typename F>
 void pdf_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMode mode, uint8_t sf, F *out,
                int nthreads, BadCounts &bad) {
     if constexpr (is_vectorized<Model>::value) {
-        pair_packet_loop<SO, SI>(m, dirs_of<SO>(wo), dirs_of<SI>(wi), n, nthreads, bad,
-                                 [out, mode, sf](const auto &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
-                                     store1_lanes(out, i, cnt, bsdf_pdf(mm, o, w, mode, sf));
-                                 });
+        pair_rows_loop<SO, SI, 1>(m, wo, wi, n, out, nthreads, bad,
+                                  [mode, sf](const auto &mm, const auto &o, const auto &w, int64_t, int64_t) {
+                                      return bsdf_pdf(mm, o, w, mode, sf);
+                                  });
         return;
     }
     pair_scalar_loop<SO, SI>(m, wo, wi, n, nthreads, bad,
@@ -581,30 +720,31 @@ void pdf_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMod
 // eval / pdf on the packet path with the layouts chosen at run time (Dirs), for inputs that are
 // not all rows: planes (SoA) read without transposition. eval writes f as rows (out_plane = 0)
 // or as three planes out_plane elements apart. The same model code and packets as
-// eval_batch / pdf_batch, so the values are bit-identical to theirs for any layout.
+// eval_batch / pdf_batch, so the values are bit-identical to theirs for any layout. Plain
+// stores (no streaming).
 template <typename Model, typename F>
 void eval_batch_dirs(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_t n, TransportMode mode, F *out,
                      int64_t out_plane, int nthreads, BadCounts &bad) {
     static_assert(is_vectorized<Model>::value, "eval_batch_dirs: a packet model (Vectorized = true)");
     pair_packet_loop<kAnyLayout, kAnyLayout>(
         m, wo, wi, n, nthreads, bad,
-        [out, out_plane, mode](const auto &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
-            Spectrum<Packet<F>> v = bsdf_f(mm, o, w, mode);
+        store_out([out, out_plane](int64_t i, int64_t cnt, const Spectrum<Packet<F>> &v) {
             if (out_plane == 0) {
                 store3_lanes(out, i, cnt, v);
             } else {
                 for (int c = 0; c < 3; ++c) store1_lanes(out + c * out_plane, i, cnt, v[c]);
             }
-        });
+        }),
+        [mode](const auto &mm, const auto &o, const auto &w, int64_t, int64_t) { return bsdf_f(mm, o, w, mode); });
 }
 template <typename Model, typename F>
 void pdf_batch_dirs(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_t n, TransportMode mode, uint8_t sf,
                     F *out, int nthreads, BadCounts &bad) {
     static_assert(is_vectorized<Model>::value, "pdf_batch_dirs: a packet model (Vectorized = true)");
     pair_packet_loop<kAnyLayout, kAnyLayout>(
-        m, wo, wi, n, nthreads, bad, [out, mode, sf](const auto &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
-            store1_lanes(out, i, cnt, bsdf_pdf(mm, o, w, mode, sf));
-        });
+        m, wo, wi, n, nthreads, bad,
+        store_out([out](int64_t i, int64_t cnt, const Packet<F> &v) { store1_lanes(out, i, cnt, v); }),
+        [mode, sf](const auto &mm, const auto &o, const auto &w, int64_t, int64_t) { return bsdf_pdf(mm, o, w, mode, sf); });
 }
 
 template <typename F> struct SampleOut {
@@ -714,7 +854,7 @@ inline void load_uniforms(const F *uc, const F *u, int64_t i, int64_t cnt, Packe
 // one pass: the uniforms are checked on the loaded packets and the byte outputs (flags, valid,
 // pdf_is_proportional) written from registers (the scalar path's staging pass is not needed).
 // Returns the bad (wo, uc, u) counts.
-template <int SO, typename Model, typename F, typename Sampler>
+template <int SO, bool Stream, typename Model, typename F, typename Sampler>
 inline void sample_chunk_packet(const Model &m, const Sampler &smp, bool model_ok, int64_t b, int64_t e,
                                 const F *__restrict wo, const F *__restrict uc, const F *__restrict u,
                                 F *__restrict owi, F *__restrict of, F *__restrict opdf, F *__restrict oeta,
@@ -724,6 +864,9 @@ inline void sample_chunk_packet(const Model &m, const Sampler &smp, bool model_o
     int64_t bo = 0, buc = 0, bu = 0;
     const Mask<P> model_mask(model_ok);
     const int64_t pf_end = prefetch ? e : b;  // as pair_packet_loop
+    // The float outputs through RowsOut (Stream: those on whole lines streamed); the bytes plain.
+    const auto w_wi = RowsOut<F, 3, Stream>{owi}.chunk(b), w_f = RowsOut<F, 3, Stream>{of}.chunk(b);
+    const auto w_pdf = RowsOut<F, 1, Stream>{opdf}.chunk(b), w_eta = RowsOut<F, 1, Stream>{oeta}.chunk(b);
     for (int64_t i = b; i < e; i += kW<F>) {
         int64_t cnt = std::min(kW<F>, e - i);
         if (i + kPrefetchAhead + kW<F> <= pf_end) {
@@ -740,30 +883,33 @@ inline void sample_chunk_packet(const Model &m, const Sampler &smp, bool model_o
         BSDFSample<P> s = smp(m, o, clamp_uniform(c), clamp_uniform(Point2<P>{uv[0], uv[1]}));
         Mask<P> ok = sample_accepted(s, o) & model_mask; // bsdf_sample's rule (core/bsdf.h)
         P pdf = select(ok, s.pdf, P(0));
-        store3_lanes(of, i, cnt, select(ok, s.f, Spectrum<P>(P(0))));
-        store3_lanes(owi, i, cnt, select(ok, s.wi, kInvalidSampleWi<P>()));
-        store1_lanes(opdf, i, cnt, pdf);
-        store1_lanes(oeta, i, cnt, select(ok, s.eta, P(1)));
+        w_f.put(i, cnt, select(ok, s.f, Spectrum<P>(P(0))));
+        w_wi.put(i, cnt, select(ok, s.wi, kInvalidSampleWi<P>()));
+        w_pdf.put(i, cnt, pdf);
+        w_eta.put(i, cnt, select(ok, s.eta, P(1)));
         store_bytes(ofl, i, cnt, select(ok, s.flags, P(0)));
         store_bytes(reinterpret_cast<uint8_t *>(oprop), i, cnt, mask_to_float<P>(ok & s.pdf_is_proportional));
         store_bytes(reinterpret_cast<uint8_t *>(ovalid), i, cnt, mask_to_float<P>(pdf > F(0)));
     }
+    stream_fence<Stream>();
     bad_out[0] = SO == 0 ? (bo > 0 ? e - b : 0) : bo;
     bad_out[1] = buc;
     bad_out[2] = bu;
 }
 
-template <int SO, typename Model, typename F, typename Sampler>
-void sample_batch_loop(const Model &m, const Sampler &sampler, const F *wo, const F *uc, const F *u, int64_t n,
-                       uint8_t sf, const SampleOut<F> &out, int nthreads, BadCounts &bad) {
-    const bool model_ok = (m.flags() & sf) != 0;
+// sample_batch's loop over chunks, the packet path streaming its outputs or not (Stream): one
+// instantiation per parallel_chunks call, as both loops inlined in one chunk function cost the
+// plain one 3-8 % in cache (session 21).
+template <int SO, bool Stream, typename Model, typename F, typename Sampler>
+void sample_chunks(const Model &m, const Sampler &sampler, const F *wo, const F *uc, const F *u, int64_t n,
+                   bool model_ok, const SampleOut<F> &out, int nthreads, BadCounts &bad) {
     parallel_chunks(n, nthreads, kChunk, [&, model_ok](int64_t b, int64_t e) __attribute__((flatten)) {
         const DenormalsFlushedFor<Model> ftz;
         LocalModel<Model> mloc = m;
         if constexpr (is_vectorized<Model>::value) {
             int64_t c[3];
-            sample_chunk_packet<SO>(mloc, sampler, model_ok, b, e, wo, uc, u, out.wi, out.f, out.pdf, out.eta,
-                                    out.flags, out.valid, out.proportional, n >= kPrefetchMinN, c);
+            sample_chunk_packet<SO, Stream>(mloc, sampler, model_ok, b, e, wo, uc, u, out.wi, out.f, out.pdf, out.eta,
+                                            out.flags, out.valid, out.proportional, n >= kPrefetchMinN, c);
             bad.wo += c[0];
             bad.uc += c[1];
             bad.u += c[2];
@@ -777,6 +923,22 @@ void sample_batch_loop(const Model &m, const Sampler &sampler, const F *wo, cons
             bad.u += bu;
         }
     });
+}
+
+template <int SO, typename Model, typename F, typename Sampler>
+void sample_batch_loop(const Model &m, const Sampler &sampler, const F *wo, const F *uc, const F *u, int64_t n,
+                       uint8_t sf, const SampleOut<F> &out, int nthreads, BadCounts &bad) {
+    const bool model_ok = (m.flags() & sf) != 0;
+    if constexpr (is_vectorized<Model>::value && SO == 3 && kStreams<F> && streams_outputs<Model>::value) {
+        // wo, uc, u in; wi, f, pdf, eta and three bytes out; streamed where a float output starts
+        // on a line (RowsOut checks each).
+        if (stream_outputs(n * (int64_t(sizeof(F)) * (3 + 3 + 8) + 3)) &&
+            (on_line(out.wi) || on_line(out.f) || on_line(out.pdf) || on_line(out.eta))) {
+            sample_chunks<SO, true>(m, sampler, wo, uc, u, n, model_ok, out, nthreads, bad);
+            return;
+        }
+    }
+    sample_chunks<SO, false>(m, sampler, wo, uc, u, n, model_ok, out, nthreads, bad);
 }
 
 template <int SO, typename Model, typename F>

@@ -687,10 +687,11 @@ void eval_spectral_batch(const SM &m, const F *wo, int64_t so, const F *wi, int6
         if (use_packets(m, packets)) {
             pair_packet_loop<kAnyLayout, kAnyLayout>(
                 m, spectral_dirs(wo, so), spectral_dirs(wi, si), n, nthreads, bad,
+                store_out([out](int64_t i, int64_t cnt, const auto &v) { store4_lanes(out, i, cnt, v); }),
                 [&](const SM &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
                     LambdaLanes l;
                     load_lambda_lanes(lam, sl, i, cnt, l, bad);
-                    store4_lanes(out, i, cnt, mm.f(o, w, l, mode));
+                    return mm.f(o, w, l, mode);
                 });
             return;
         }
@@ -710,10 +711,11 @@ void pdf_spectral_batch(const SM &m, const F *wo, int64_t so, const F *wi, int64
         if (use_packets(m, packets)) {
             pair_packet_loop<kAnyLayout, kAnyLayout>(
                 m, spectral_dirs(wo, so), spectral_dirs(wi, si), n, nthreads, bad,
+                store_out([out](int64_t i, int64_t cnt, const auto &v) { store1_lanes(out, i, cnt, v); }),
                 [&](const SM &mm, const auto &o, const auto &w, int64_t i, int64_t cnt) {
                     LambdaLanes l;
                     load_lambda_lanes(lam, sl, i, cnt, l, bad);
-                    store1_lanes(out, i, cnt, mm.pdf(o, w, l, mode, sf));
+                    return mm.pdf(o, w, l, mode, sf);
                 });
             return;
         }
