@@ -44,6 +44,7 @@ MODELS = {
     "diel_r": "[] { DielectricParamsT<double> p; p.alpha_x = p.alpha_y = 0.3; return DielectricBxDF<float>::make(p); }()",
     "thin": "ThinDielectricBxDF<float>::make({})",
     "hair": "HairBxDF<float>::make({})",
+    "nfresnel": "NormalizedFresnelBxDF<float>::make({})",
 }
 OPS = ("eval", "pdf", "sample")
 
