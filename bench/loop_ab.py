@@ -5,6 +5,7 @@
     python bench/loop_ab.py --n 16384                 # in cache (L2): the arithmetic alone
     python bench/loop_ab.py --base HEAD~1             # A = the headers of a revision, B = the tree's
     python bench/loop_ab.py --aligned                 # outputs on 64-byte lines (streaming stores)
+    python bench/loop_ab.py --march znver3            # the AVX2 build (on an AVX-512 host too)
 
 It writes a small C++ program that calls batch.h's eval_batch / pdf_batch / sample_batch (the
 library's kernels, (N, 3) rows in and out, the unit and uniform checks included, no Python) on
@@ -128,9 +129,10 @@ int main(int argc, char **argv) {{
 """
 
 
-def build(src: Path, include_root: Path | None, out: Path) -> None:
-    """Compiles src with the library's flags; include_root replaces cpp/include (a revision's headers)."""
-    cmd = library_cxx(src, out, extra=["-pthread", "-fopenmp"])
+def build(src: Path, include_root: Path | None, out: Path, march: str = "native") -> None:
+    """Compiles src with the library's flags (-march=march); include_root replaces cpp/include (a
+    revision's headers)."""
+    cmd = library_cxx(src, out, march=march, extra=["-pthread", "-fopenmp"])
     if include_root is not None:
         cmd = [c.replace(f"-I{ROOT / 'cpp' / 'include'}", f"-I{include_root}") for c in cmd]
     subprocess.run(cmd, check=True)
@@ -164,6 +166,8 @@ def main(argv=None) -> int:
     ap.add_argument("--base", default=None, help="a git revision: A/B its cpp/include (A) against the tree's (B)")
     ap.add_argument("--rounds", type=int, default=3, help="alternating runs of A and B with --base (default 3)")
     ap.add_argument("--keep", default=None, help="directory to keep the source and binaries in")
+    ap.add_argument("--march", default="native",
+                    help="g++ -march (default native; e.g. znver3: the AVX2 build on an AVX-512 host)")
     ap.add_argument("--aligned", action="store_true",
                     help="arrays on 64-byte lines, as bsdfkit's results (where StreamOutputs models stream)")
     args = ap.parse_args(argv)
@@ -183,8 +187,8 @@ def main(argv=None) -> int:
     src = work / "loops.cpp"
     src.write_text(source(models, ops, args.aligned))
     b_bin = work / "loops_b"
-    build(src, None, b_bin)
-    print(f"# {summary()}; N = {args.n}, {args.threads} thread(s), best of {args.reps} calls; TSC cycles per packet of {LANES}")
+    build(src, None, b_bin, args.march)
+    print(f"# {summary()}; -march={args.march}; N = {args.n}, {args.threads} thread(s), best of {args.reps} calls; TSC cycles per packet of {LANES}")
     if args.base is None:
         res = run(b_bin, args)
         for (m, op), v in res.items():
@@ -197,7 +201,7 @@ def main(argv=None) -> int:
                              capture_output=True).stdout
     subprocess.run(["tar", "-x", "-C", str(base_inc)], input=archive, check=True)
     a_bin = work / "loops_a"
-    build(src, base_inc / "cpp" / "include", a_bin)
+    build(src, base_inc / "cpp" / "include", a_bin, args.march)
     a_runs, b_runs = [], []
     for _ in range(args.rounds):
         a_runs.append(run(a_bin, args))

@@ -10,7 +10,7 @@
 #include <type_traits>
 #include <utility>
 #include <vector>
-#if defined(__AVX512F__)
+#if defined(__AVX2__)
 #include <immintrin.h>
 #endif
 
@@ -164,9 +164,16 @@ template <int R, typename V, typename E> inline V rows3_out(const V &x, const V 
     constexpr auto xyz = BSDFKIT_INDEX(V, E, (R * L + e) % 3 == 2 ? L + (R * L + e) / 3 : e);
     return __builtin_shuffle(__builtin_shuffle(x, y, xy), z, xyz);
 }
+// The three registers of rows a group's (x, y, z) make, in memory order.
+template <typename V, typename E> inline void xyz_to_row_groups(const V &x, const V &y, const V &z, V (&o)[3]) {
+    o[0] = rows3_out<0, V, E>(x, y, z);
+    o[1] = rows3_out<1, V, E>(x, y, z);
+    o[2] = rows3_out<2, V, E>(x, y, z);
+}
 template <typename V, typename E> inline void xyz_to_rows(E *q, const V &x, const V &y, const V &z) {
     constexpr int L = kLanes<V, E>;
-    const V o[3] = {rows3_out<0, V, E>(x, y, z), rows3_out<1, V, E>(x, y, z), rows3_out<2, V, E>(x, y, z)};
+    V o[3];
+    xyz_to_row_groups<V, E>(x, y, z, o);
     for (int r = 0; r < 3; ++r) std::memcpy(q + r * L, &o[r], sizeof(V));
 }
 template <typename F> using group_t = std::conditional_t<std::is_same_v<F, float>, v16f, v8d>;
@@ -188,15 +195,20 @@ inline void rows_to_xyz(const float *q, v8f &x, v8f &y, v8f &z) {
     y = BSDFKIT_SHUF1(v8i, my, 1, 4, 7, 2, 5, 0, 3, 6);
     z = BSDFKIT_SHUF1(v8i, mz, 2, 5, 0, 3, 6, 1, 4, 7);
 }
-inline void xyz_to_rows(float *q, v8f x, v8f y, v8f z) {
+template <typename V, typename E> inline void xyz_to_row_groups(const V &x, const V &y, const V &z, V (&o)[3]) {
+    static_assert(std::is_same_v<V, v8f>, "xyz_to_row_groups: AVX2 groups are 8 floats");
     v8f mx = BSDFKIT_SHUF1(v8i, x, 0, 3, 6, 1, 4, 7, 2, 5), my = BSDFKIT_SHUF1(v8i, y, 5, 0, 3, 6, 1, 4, 7, 2),
         mz = BSDFKIT_SHUF1(v8i, z, 2, 5, 0, 3, 6, 1, 4, 7);
-    v8f a = BSDFKIT_SHUF2(v8i, BSDFKIT_SHUF2(v8i, mx, my, 0, 9, 2, 3, 12, 5, 6, 15), mz, 0, 1, 10, 3, 4, 13, 6, 7);
-    v8f b = BSDFKIT_SHUF2(v8i, BSDFKIT_SHUF2(v8i, mx, my, 0, 1, 10, 3, 4, 13, 6, 7), mz, 8, 1, 2, 11, 4, 5, 14, 7);
-    v8f c = BSDFKIT_SHUF2(v8i, BSDFKIT_SHUF2(v8i, mx, my, 8, 1, 2, 11, 4, 5, 14, 7), mz, 0, 9, 2, 3, 12, 5, 6, 15);
-    std::memcpy(q, &a, 32);
-    std::memcpy(q + 8, &b, 32);
-    std::memcpy(q + 16, &c, 32);
+    o[0] = BSDFKIT_SHUF2(v8i, BSDFKIT_SHUF2(v8i, mx, my, 0, 9, 2, 3, 12, 5, 6, 15), mz, 0, 1, 10, 3, 4, 13, 6, 7);
+    o[1] = BSDFKIT_SHUF2(v8i, BSDFKIT_SHUF2(v8i, mx, my, 0, 1, 10, 3, 4, 13, 6, 7), mz, 8, 1, 2, 11, 4, 5, 14, 7);
+    o[2] = BSDFKIT_SHUF2(v8i, BSDFKIT_SHUF2(v8i, mx, my, 8, 1, 2, 11, 4, 5, 14, 7), mz, 0, 9, 2, 3, 12, 5, 6, 15);
+}
+inline void xyz_to_rows(float *q, v8f x, v8f y, v8f z) {
+    v8f o[3];
+    xyz_to_row_groups<v8f, float>(x, y, z, o);
+    std::memcpy(q, &o[0], 32);
+    std::memcpy(q + 8, &o[1], 32);
+    std::memcpy(q + 16, &o[2], 32);
 }
 template <typename F> using group_t = v8f;
 template <typename F> inline constexpr bool kHasGroup = std::is_same_v<F, float>;
@@ -491,17 +503,18 @@ template <int S, typename F> inline void prefetch_dirs(const Dirs<F> &d, int64_t
 // L3 (Zen 4): Diffuse pdf at N = 1e6 (28 MB) streamed gained 1.08-1.16x. Only whole, aligned
 // lines: an output array that starts on a line (bsdfkit's own result arrays do) has every full
 // packet's rows on whole lines, as chunks start at multiples of kChunk. Values are unchanged:
-// only how they are stored. AVX-512 with GCC's vector extensions (the register groups above)
-// only; elsewhere plain stores.
+// only how they are stored. AVX-512 and AVX2 float32 with GCC's vector extensions (the register
+// groups above); elsewhere plain stores.
 // Only models that declare `static constexpr bool StreamOutputs = true` stream: the kernels
 // limited by memory traffic. Measured on Zen 4 (bench/loop_ab.py, N = 1e6, outputs on lines,
 // session 21): Diffuse eval 1.21-1.33x, sample 1.16-1.31x (1 / 2 threads); the delta lobes' eval (zeros)
-// 1.25-1.6x; but the arithmetic-bound kernels 0.87-0.99x (Hair eval 0.87x, in cache too with
-// streaming forced: not the memory), so streaming is not the default. Realigning unaligned
+// 1.25-1.6x; but the arithmetic-bound kernels 0.87-0.99x (Hair eval 0.87-0.89x; in cache with
+// streaming forced 1.00x: the memory system's cost, not the instructions'), so streaming is not
+// the default. Realigning unaligned
 // outputs in registers (one permutation per line, the previous packet's last group carried in
 // a register across the loop) gained as much on Diffuse eval but cost its sampler 7 %, so
 // unaligned outputs are stored plainly.
-#if BSDFKIT_SHUFFLE_ROWS && defined(__AVX512F__)
+#if BSDFKIT_SHUFFLE_ROWS && (defined(__AVX512F__) || defined(__AVX2__))
 #define BSDFKIT_STREAM_STORES 1
 #else
 #define BSDFKIT_STREAM_STORES 0
@@ -510,15 +523,29 @@ inline constexpr int64_t kStreamMinBytes = int64_t(16) << 20;
 // Whether a call that reads and writes `traffic` bytes in all streams its outputs.
 inline bool stream_outputs(int64_t traffic) { return BSDFKIT_STREAM_STORES && traffic >= kStreamMinBytes; }
 template <typename F> inline constexpr bool kStreams = BSDFKIT_STREAM_STORES && kShuffleRows<F>;
+// The sample kernel streams on AVX-512 only: its AVX2 build ran 0.87-0.92x with streaming (Zen 4,
+// -march=znver3, N = 1e6; its eval / pdf 1.04-1.11x).
+#if defined(__AVX512F__)
+template <typename F> inline constexpr bool kStreamSamples = kStreams<F>;
+#else
+template <typename F> inline constexpr bool kStreamSamples = false;
+#endif
 template <typename M, typename = void> struct streams_outputs : std::false_type {};
 template <typename M> struct streams_outputs<M, std::enable_if_t<M::StreamOutputs>> : std::true_type {};
 inline bool on_line(const void *p) { return (reinterpret_cast<uintptr_t>(p) & 63) == 0; }
 
 #if BSDFKIT_STREAM_STORES
-// One whole line at q (64-byte aligned), streamed.
+// One register group at q (aligned to its size), streamed: a whole 64-byte line on AVX-512, half
+// of one on AVX2 (a packet's rows fill whole lines either way; the write-combining buffer joins
+// the halves).
 template <typename F> inline void stream_line(F *q, const detail_rows::group_t<F> &v) {
+#if defined(__AVX512F__)
     if constexpr (std::is_same_v<F, float>) _mm512_stream_ps(q, (__m512)v);
     else _mm512_stream_pd(q, (__m512d)v);
+#else
+    static_assert(std::is_same_v<F, float>, "stream_line: AVX2 groups are float32 (kShuffleRows)");
+    _mm256_stream_ps(q, (__m256)v);
+#endif
 }
 #endif
 
@@ -548,10 +575,9 @@ template <typename F, int C, bool Stream, bool Aligned = false> struct RowsOut {
                     F *q = p_ + C * i;
                     for (int64_t g = 0; g < kW<F>; g += L) {
                         if constexpr (C == 3) {
-                            const G x = group_of(v[0], g), y = group_of(v[1], g), z = group_of(v[2], g);
-                            stream_line(q + 3 * g, detail_rows::rows3_out<0, G, F>(x, y, z));
-                            stream_line(q + 3 * g + L, detail_rows::rows3_out<1, G, F>(x, y, z));
-                            stream_line(q + 3 * g + 2 * L, detail_rows::rows3_out<2, G, F>(x, y, z));
+                            G r[3];
+                            detail_rows::xyz_to_row_groups<G, F>(group_of(v[0], g), group_of(v[1], g), group_of(v[2], g), r);
+                            for (int k = 0; k < 3; ++k) stream_line(q + 3 * g + k * L, r[k]);
                         } else {
                             stream_line(q + g, group_of(v[0], g));
                         }
@@ -929,7 +955,7 @@ template <int SO, typename Model, typename F, typename Sampler>
 void sample_batch_loop(const Model &m, const Sampler &sampler, const F *wo, const F *uc, const F *u, int64_t n,
                        uint8_t sf, const SampleOut<F> &out, int nthreads, BadCounts &bad) {
     const bool model_ok = (m.flags() & sf) != 0;
-    if constexpr (is_vectorized<Model>::value && SO == 3 && kStreams<F> && streams_outputs<Model>::value) {
+    if constexpr (is_vectorized<Model>::value && SO == 3 && kStreamSamples<F> && streams_outputs<Model>::value) {
         // wo, uc, u in; wi, f, pdf, eta and three bytes out; streamed where a float output starts
         // on a line (RowsOut checks each).
         if (stream_outputs(n * (int64_t(sizeof(F)) * (3 + 3 + 8) + 3)) &&
