@@ -1,4 +1,5 @@
-"""sample's output block cache (cpp/bindings/block_cache.h): large blocks are reused after their
+"""The output block cache of sample (and of eval / pdf results, at the end; cpp/bindings/block_cache.h):
+large blocks are reused after their
 result is freed, never while any of its arrays is alive, and bk.release_memory gives them back.
 The reference for the values is the same call in slices small enough (< 1 MiB) to take numpy's
 own allocation: results are position independent, so the two must agree bit for bit."""
@@ -72,4 +73,29 @@ def test_at_most_two_blocks_are_kept():
     kept = bk._core.cached_bytes()
     # 2N + 4N elements at 67 B each (float64), each block rounded up to 2 MiB granules
     assert 6 * N * 67 <= kept <= 6 * N * 67 + 2 * (2 << 20), kept
+    bk.release_memory()
+
+
+@pytest.mark.parametrize("op", ["eval", "pdf"])
+def test_eval_pdf_results_are_cached_blocks_on_a_line(op):
+    # eval / pdf results from 1 MiB on come from the cache too (64-byte aligned: the memory-bound
+    # models stream into them, batch.h); a live result is never handed out again, a freed one is
+    m = bk.DiffuseTransmission(0.4, 0.3)
+    bk.release_memory()
+    fn = getattr(m, op)
+    n = 150_000                       # pdf: 1.2 MB (float64)
+    (wo, _, _), (wi, _, _) = inputs(8, n), inputs(9, n)
+    wi = wi * np.array([1, 1, -1])    # transmission pairs: non-zero f and pdf
+    ref = np.concatenate([fn(wo[i:i + 10_000], wi[i:i + 10_000]) for i in range(0, n, 10_000)])
+    a = fn(wo, wi)
+    assert a.nbytes >= 1 << 20 and a.ctypes.data % 64 == 0 and a.base is not None
+    b = fn(wi, wo)                    # a is alive: another block
+    np.testing.assert_array_equal(a, ref)
+    del b
+    gc.collect()
+    assert bk._core.cached_bytes() >= a.nbytes
+    c = fn(wo[::-1].copy(), wi[::-1].copy())  # reuses b's block
+    np.testing.assert_array_equal(a, ref)
+    np.testing.assert_array_equal(c, ref[::-1])
+    assert np.count_nonzero(ref) > n // 2
     bk.release_memory()

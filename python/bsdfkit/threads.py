@@ -24,8 +24,10 @@ def get_num_threads() -> int:
 def release_memory() -> int:
     """Frees the output blocks bsdfkit keeps for reuse and returns how many bytes it released.
 
-    ``sample`` at large N puts its seven outputs in one block; when the result is freed, the block
-    (at most two of them, 512 MiB in all) is kept so that the next call finds its pages already
-    mapped instead of faulting tens of MB in again (at N = 1e6 that cost more than the kernel).
+    ``sample`` at large N puts its seven outputs in one block, and ``eval`` / ``pdf`` results from
+    1 MiB on are blocks too (64-byte aligned: the memory-bound models stream into them); when a
+    result is freed, its block (at most two of them, 512 MiB in all) is kept so that the next call
+    finds its pages already mapped instead of faulting tens of MB in again (at N = 1e6 that cost
+    more than the kernel).
     Call this to give that memory back, e.g. before a memory-hungry step in the same process."""
     return int(_core.release_memory())
