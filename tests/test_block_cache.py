@@ -1,6 +1,6 @@
-"""The output block cache of sample (and of eval / pdf results, at the end; cpp/bindings/block_cache.h):
-large blocks are reused after their
-result is freed, never while any of its arrays is alive, and bk.release_memory gives them back.
+"""The output block cache (cpp/bindings/block_cache.h) of sample, and of eval / pdf results (the last
+test): large blocks are reused after their result is freed, never while any of its arrays is alive,
+and bk.release_memory gives them back.
 The reference for the values is the same call in slices small enough (< 1 MiB) to take numpy's
 own allocation: results are position independent, so the two must agree bit for bit."""
 import gc
