@@ -507,13 +507,16 @@ template <int S, typename F> inline void prefetch_dirs(const Dirs<F> &d, int64_t
 // groups above); elsewhere plain stores.
 // Only models that declare `static constexpr bool StreamOutputs = true` stream: the kernels
 // limited by memory traffic. Measured on Zen 4 (bench/loop_ab.py, N = 1e6, outputs on lines,
-// session 21): Diffuse eval 1.21-1.33x, sample 1.16-1.31x (1 / 2 threads); the delta lobes' eval (zeros)
-// 1.25-1.6x; but the arithmetic-bound kernels 0.87-0.99x (Hair eval 0.87-0.89x; in cache with
-// streaming forced 1.00x: the memory system's cost, not the instructions'), so streaming is not
-// the default. Realigning unaligned
-// outputs in registers (one permutation per line, the previous packet's last group carried in
-// a register across the loop) gained as much on Diffuse eval but cost its sampler 7 %, so
-// unaligned outputs are stored plainly.
+// session 21): Diffuse eval 1.21-1.33x, sample 1.16-1.31x (1 / 2 threads). With every model
+// streaming (a test build; the library's own out= on a line against off a line, in one process)
+// the delta lobes' eval (zeros) and the smooth samplers at 2 threads gained (1.03-1.48x) but
+// NormalizedFresnel eval ran 0.59-0.64x, rough Plastic eval 0.75-0.90x, Hair sample 0.93x: the
+// second instantiation of a heavy loop compiles or places differently (Hair eval's plain loop
+// itself runs at 364 or 406 cycles per packet depending on the program around it), so
+// streaming is not the default. Realigning unaligned outputs in registers (one permutation per
+// line, the previous packet's last group carried in a register across the loop) gained as much
+// on Diffuse eval but cost its sampler 7 % (four carries spilled), so unaligned outputs are
+// stored plainly.
 #if BSDFKIT_SHUFFLE_ROWS && (defined(__AVX512F__) || defined(__AVX2__))
 #define BSDFKIT_STREAM_STORES 1
 #else
