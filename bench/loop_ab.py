@@ -5,7 +5,7 @@
     python bench/loop_ab.py --n 16384                 # in cache (L2): the arithmetic alone
     python bench/loop_ab.py --base HEAD~1             # A = the headers of a revision, B = the tree's
     python bench/loop_ab.py --aligned                 # outputs on 64-byte lines (streaming stores)
-    python bench/loop_ab.py --march znver3            # the AVX2 build (on an AVX-512 host too)
+    python bench/loop_ab.py --march x86-64-v3         # an AVX2 build, on an AVX-512 host too
 
 It writes a small C++ program that calls batch.h's eval_batch / pdf_batch / sample_batch (the
 library's kernels, (N, 3) rows in and out, the unit and uniform checks included, no Python) on
@@ -167,7 +167,7 @@ def main(argv=None) -> int:
     ap.add_argument("--rounds", type=int, default=3, help="alternating runs of A and B with --base (default 3)")
     ap.add_argument("--keep", default=None, help="directory to keep the source and binaries in")
     ap.add_argument("--march", default="native",
-                    help="g++ -march (default native; e.g. znver3: the AVX2 build on an AVX-512 host)")
+                    help="g++ -march (default native; x86-64-v3: an AVX2 build on any AVX2 host; znver3 on AMD)")
     ap.add_argument("--aligned", action="store_true",
                     help="arrays on 64-byte lines, as bsdfkit's results (where StreamOutputs models stream)")
     args = ap.parse_args(argv)
