@@ -523,8 +523,9 @@ template <int S, typename F> inline void prefetch_dirs(const Dirs<F> &d, int64_t
 #define BSDFKIT_STREAM_STORES 0
 #endif
 inline constexpr int64_t kStreamMinBytes = int64_t(16) << 20;
-// Whether a call that reads and writes `traffic` bytes in all streams its outputs.
-inline bool stream_outputs(int64_t traffic) { return BSDFKIT_STREAM_STORES && traffic >= kStreamMinBytes; }
+// Whether a call that reads and writes `traffic` bytes in all is large enough to stream its
+// outputs (the model's trait streams_outputs is the other condition).
+inline bool big_enough_to_stream(int64_t traffic) { return BSDFKIT_STREAM_STORES && traffic >= kStreamMinBytes; }
 template <typename F> inline constexpr bool kStreams = BSDFKIT_STREAM_STORES && kShuffleRows<F>;
 // The sample kernel streams on AVX-512 only: its AVX2 build ran 0.87-0.92x with streaming (Zen 4,
 // -march=znver3, N = 1e6; its eval / pdf 1.04-1.11x).
@@ -552,8 +553,8 @@ template <typename F> inline void stream_line(F *q, const detail_rows::group_t<F
 }
 #endif
 
-// One float output of a packet loop, rows of C = 1 or 3 from p on. A chunk writes through
-// chunk(b)'s Writer, packet by packet: put(i, cnt, value). Stream = false: plain stores
+// One float output of a packet loop, rows of C = 1 or 3 from p on. Each chunk writes through a
+// writer() of its own (the pointer copied into the chunk), packet by packet: put(i, cnt, value). Stream = false: plain stores
 // (store_lanes / store1_lanes), exactly the code of a loop without streaming; the kernels
 // instantiate their loops both ways and pick one per call (a run-time choice inside one loop
 // cost up to 35 % in cache on the light kernels, and both loops inlined in one chunk function
@@ -608,7 +609,7 @@ template <typename F, int C, bool Stream, bool Aligned = false> struct RowsOut {
             put(i, cnt, v);
         }
     };
-    Writer chunk(int64_t) const { return Writer(p); }
+    Writer writer() const { return Writer(p); }
 };
 // Streaming stores are weakly ordered: a fence before a chunk's end is published to the
 // thread that waits for it (pool.h's completion count).
@@ -626,7 +627,7 @@ template <typename Store> struct StoreOut {
         const Store st;  // a copy, as RowsOut's pointer
         template <typename V> void put(int64_t i, int64_t cnt, const V &v) const { st(i, cnt, v); }
     };
-    Writer chunk(int64_t) const { return Writer{store}; }
+    Writer writer() const { return Writer{store}; }
 };
 template <typename Store> inline StoreOut<Store> store_out(const Store &s) { return {s}; }
 
@@ -652,7 +653,7 @@ void pair_packet_loop(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int6
         // A local copy of the closure too: the arguments it captures by value (mode, sample
         // flags) then cannot alias the outputs, so their loads and the flag mask leave the loop.
         const Compute cp = compute;
-        const auto wr = out.chunk(b);
+        const auto wr = out.writer();
         const int64_t pf_end = prefetch ? e : b;  // prefetch while i + kPrefetchAhead + kW <= pf_end
         for (int64_t i = b; i < e; i += kW<F>) {
             int64_t cnt = std::min(kW<F>, e - i);
@@ -701,7 +702,7 @@ void pair_rows_loop(const Model &m, const F *wo, const F *wi, int64_t n, F *out,
                     const Compute &compute) {
     const Dirs<F> dwo = dirs_of<SO>(wo), dwi = dirs_of<SI>(wi);
     if constexpr (SO == 3 && SI == 3 && kStreams<F> && streams_outputs<Model>::value) {
-        if (stream_outputs((6 + C) * n * int64_t(sizeof(F))) && on_line(out)) {
+        if (big_enough_to_stream((6 + C) * n * int64_t(sizeof(F))) && on_line(out)) {
             pair_packet_loop<SO, SI>(m, dwo, dwi, n, nthreads, bad, RowsOut<F, C, true, true>{out}, compute);
             return;
         }
@@ -894,8 +895,8 @@ inline void sample_chunk_packet(const Model &m, const Sampler &smp, bool model_o
     const Mask<P> model_mask(model_ok);
     const int64_t pf_end = prefetch ? e : b;  // as pair_packet_loop
     // The float outputs through RowsOut (Stream: those on whole lines streamed); the bytes plain.
-    const auto w_wi = RowsOut<F, 3, Stream>{owi}.chunk(b), w_f = RowsOut<F, 3, Stream>{of}.chunk(b);
-    const auto w_pdf = RowsOut<F, 1, Stream>{opdf}.chunk(b), w_eta = RowsOut<F, 1, Stream>{oeta}.chunk(b);
+    const auto w_wi = RowsOut<F, 3, Stream>{owi}.writer(), w_f = RowsOut<F, 3, Stream>{of}.writer();
+    const auto w_pdf = RowsOut<F, 1, Stream>{opdf}.writer(), w_eta = RowsOut<F, 1, Stream>{oeta}.writer();
     for (int64_t i = b; i < e; i += kW<F>) {
         int64_t cnt = std::min(kW<F>, e - i);
         if (i + kPrefetchAhead + kW<F> <= pf_end) {
@@ -961,7 +962,7 @@ void sample_batch_loop(const Model &m, const Sampler &sampler, const F *wo, cons
     if constexpr (is_vectorized<Model>::value && SO == 3 && kStreamSamples<F> && streams_outputs<Model>::value) {
         // wo, uc, u in; wi, f, pdf, eta and three bytes out; streamed where a float output starts
         // on a line (RowsOut checks each).
-        if (stream_outputs(n * (int64_t(sizeof(F)) * (3 + 3 + 8) + 3)) &&
+        if (big_enough_to_stream(n * (int64_t(sizeof(F)) * (3 + 3 + 8) + 3)) &&
             (on_line(out.wi) || on_line(out.f) || on_line(out.pdf) || on_line(out.eta))) {
             sample_chunks<SO, true>(m, sampler, wo, uc, u, n, model_ok, out, nthreads, bad);
             return;
