@@ -135,7 +135,10 @@ def build(src: Path, include_root: Path | None, out: Path, march: str = "native"
     cmd = library_cxx(src, out, march=march, extra=["-pthread", "-fopenmp"])
     if include_root is not None:
         cmd = [c.replace(f"-I{ROOT / 'cpp' / 'include'}", f"-I{include_root}") for c in cmd]
-    subprocess.run(cmd, check=True)
+    if subprocess.run(cmd).returncode != 0:
+        which = "the working tree's" if include_root is None else "the --base revision's"
+        sys.exit(f"loop_ab.py: g++ could not build the harness against {which} headers with -march={march} "
+                 "(its message above; --march takes what g++ -march does, e.g. native, x86-64-v3, znver3)")
 
 
 def parse(text: str) -> dict[tuple[str, str], float]:

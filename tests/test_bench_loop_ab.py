@@ -58,3 +58,11 @@ def test_ab_against_head_runs_both_sides(loop_ab, tmp_path):
     row = [l.split() for l in out.splitlines() if l.startswith("diffuse")][0]
     assert row[1] == "eval" and float(row[2]) > 0 and float(row[3]) > 0 and row[4].endswith("x")
     assert (tmp_path / "loops_a").exists() and (tmp_path / "loops_b").exists()
+
+
+@pytest.mark.skipif(shutil.which("g++") is None, reason="needs g++ (the library's compiler)")
+def test_bad_march_is_named(tmp_path):
+    r = subprocess.run([sys.executable, str(_PATH), "--models", "diffuse", "--ops", "pdf", "--n", "4096",
+                        "--march", "no-such-cpu", "--keep", str(tmp_path)], capture_output=True, text=True)
+    assert r.returncode != 0 and "Traceback" not in r.stderr
+    assert "-march=no-such-cpu" in r.stderr and "could not build" in r.stderr
