@@ -910,6 +910,10 @@ inline void sample_chunk_packet(const Model &m, const Sampler &smp, bool model_o
     using P = Packet<F>;
     int64_t bo = 0, buc = 0, bu = 0;
     const Mask<P> model_mask(model_ok);
+    // A local copy of the sampler closure (as pair_packet_loop's): the mode and sample flags it
+    // captures then cannot alias the byte outputs, so they are not reloaded (nor their masks
+    // rebuilt) after every packet's byte stores.
+    const Sampler sp = smp;
     const int64_t pf_end = prefetch ? e : b;  // as pair_packet_loop
     // The float outputs through RowsOut (Stream: those on whole lines streamed); the bytes plain.
     const auto w_wi = RowsOut<F, 3, Stream>{owi}.writer(), w_f = RowsOut<F, 3, Stream>{of}.writer();
@@ -927,7 +931,7 @@ inline void sample_chunk_packet(const Model &m, const Sampler &smp, bool model_o
         P c, uv[2];
         load_uniforms(uc, u, i, cnt, &c, uv, &buc, &bu);
         // Uniforms on [0, 1) (OneMinusEpsilon), as in bsdf_sample.
-        BSDFSample<P> s = smp(m, o, clamp_uniform(c), clamp_uniform(Point2<P>{uv[0], uv[1]}));
+        BSDFSample<P> s = sp(m, o, clamp_uniform(c), clamp_uniform(Point2<P>{uv[0], uv[1]}));
         Mask<P> ok = sample_accepted(s, o) & model_mask; // bsdf_sample's rule (core/bsdf.h)
         P pdf = select(ok, s.pdf, P(0));
         w_f.put(i, cnt, select(ok, s.f, Spectrum<P>(P(0))));
