@@ -272,9 +272,9 @@ template <typename F, int NC = 3> struct HairBxDF {
     // sin^2 theta_o) floored at eta 1e-30 (cos theta_t > 0 unless eta == 1 at grazing): 1 division.
     template <typename V>
     void refracted(const Offset<V> &g, V sin_o, V cos_o, V *gamma_t, Spectrum<V, NC> *T) const {
-        V inv_den = V(1) / max_(safe_sqrt(mul_add(-sin_o, sin_o, V(eta2))), V(F(1e-30) * eta));
+        V inv_den = V(1) / max_(safe_sqrt(neg_mul_add(sin_o, sin_o, V(eta2))), V(F(1e-30) * eta));
         V sin_gt = clamp(g.h * cos_o * inv_den, V(-1), V(1));
-        V cos_gt = safe_sqrt(mul_add(-sin_gt, sin_gt, V(1)));
+        V cos_gt = safe_sqrt(neg_mul_add(sin_gt, sin_gt, V(1)));
         *gamma_t = asin(sin_gt);
         V len = cos_gt * V(eta) * inv_den;
         // the exponent is finite (exp_finite) but for a huge sigma_a times len: e^-104 is 0 in float
@@ -284,7 +284,7 @@ template <typename F, int NC = 3> struct HairBxDF {
     // theta_o rotated by the lobe's cuticle tilt; cos is taken as |cos| (pbrt-v4).
     template <typename V, typename S> static void tilted(S st, S ct, V sin_o, V cos_o, V *sin_p, V *cos_p) {
         *sin_p = mul_add(sin_o, V(ct), cos_o * V(st));
-        *cos_p = abs(mul_add(cos_o, V(ct), -(sin_o * V(st))));
+        *cos_p = abs(mul_sub(cos_o, V(ct), sin_o * V(st)));
     }
 
     // Everything that depends on wo alone: theta_o, gamma_t, Ap and the lobe weights.
@@ -296,7 +296,7 @@ template <typename F, int NC = 3> struct HairBxDF {
     template <typename V> Outgoing<V> outgoing(const Offset<V> &g, const Vec3<V> &wo) const {
         Outgoing<V> o;
         o.sin_o = wo.x;
-        o.cos_o = safe_sqrt(mul_add(-o.sin_o, o.sin_o, V(1)));
+        o.cos_o = safe_sqrt(neg_mul_add(o.sin_o, o.sin_o, V(1)));
         Spectrum<V, NC> T;
         refracted(g, o.sin_o, o.cos_o, &o.gamma_t, &T);
         hair::Ap(o.cos_o, eta, g.cos_gamma_o, T, o.ap);
@@ -307,7 +307,7 @@ template <typename F, int NC = 3> struct HairBxDF {
     // Mp Np of every lobe for wi at azimuth difference dphi (the p >= 3 lobe: Mp / (2 pi)).
     template <typename V>
     void lobes(const Offset<V> &g, const Outgoing<V> &o, const Vec3<V> &wi, V dphi, V mn[P + 1]) const {
-        V sin_i = wi.x, cos_i = safe_sqrt(mul_add(-sin_i, sin_i, V(1)));
+        V sin_i = wi.x, cos_i = safe_sqrt(neg_mul_add(sin_i, sin_i, V(1)));
         F inv_s = F(1) / s;
         for (int p = 0; p < P; ++p) {
             V sp, cp;

@@ -21,7 +21,7 @@ template <typename F> inline void FrDielectricNumerators(F cos_i, F cos_t, F eta
     F a = mul_add(eta, cos_i, cos_t), b = mul_add(eta, cos_t, cos_i);
     *a2 = sqr(a);
     *b2 = sqr(b);
-    F pa = mul_add(eta, cos_i, -cos_t), pb = mul_add(-eta, cos_t, cos_i);
+    F pa = mul_sub(eta, cos_i, cos_t), pb = neg_mul_add(eta, cos_t, cos_i);
     *den = F(2) * *a2 * *b2;
     *r = mul_add(sqr(pa), *b2, sqr(pb) * *a2);
     *t = F(4) * eta * cos_i * cos_t * (*a2 + *b2);
@@ -62,8 +62,8 @@ template <typename F, typename E> inline void FrDielectricRatio(F cos_i, E eta, 
 template <typename F, typename E>
 inline void FrDielectricRatioScaledAbove(F cos_i, F len2, E eta, F *r_num, F *t_num, F *den) {
     const E inv_eta2 = E(1) / (eta * eta); // a scalar division
-    F sin2_i = mul_add(-cos_i, cos_i, len2); // len2 sin^2 of the incident angle
-    F cos_t = safe_sqrt(mul_add(-sin2_i, F(inv_eta2), len2)), a2, b2;
+    F sin2_i = neg_mul_add(cos_i, cos_i, len2); // len2 sin^2 of the incident angle
+    F cos_t = safe_sqrt(neg_mul_add(sin2_i, F(inv_eta2), len2)), a2, b2;
     FrDielectricNumerators(cos_i, cos_t, F(eta), &a2, &b2, r_num, t_num, den);
 }
 // FrDielectricRatioAbove (|h| = 1) when sin^2 of the incident angle is known on its own (e.g. a
@@ -72,7 +72,7 @@ inline void FrDielectricRatioScaledAbove(F cos_i, F len2, E eta, F *r_num, F *t_
 template <typename F, typename E>
 inline void FrDielectricRatioAboveSin2(F cos_i, F sin2_i, E eta, F *r_num, F *t_num, F *den) {
     const E inv_eta2 = E(1) / (eta * eta); // a scalar division
-    F cos_t = safe_sqrt(mul_add(-sin2_i, F(inv_eta2), F(1))), a2, b2;
+    F cos_t = safe_sqrt(neg_mul_add(sin2_i, F(inv_eta2), F(1))), a2, b2;
     FrDielectricNumerators(cos_i, cos_t, F(eta), &a2, &b2, r_num, t_num, den);
 }
 // FrDielectricRatio for cos_i > 0 (|h| = 1 above).
@@ -105,7 +105,7 @@ template <typename F> struct Cplx {
     F re, im;
 };
 template <typename F> inline Cplx<F> cmul(Cplx<F> a, Cplx<F> b) {
-    return {mul_add(a.re, b.re, -(a.im * b.im)), mul_add(a.re, b.im, a.im * b.re)};
+    return {mul_sub(a.re, b.re, a.im * b.im), mul_add(a.re, b.im, a.im * b.re)};
 }
 template <typename F> inline F cnorm(Cplx<F> a) { return mul_add(a.re, a.re, a.im * a.im); }
 // Principal square root: sqrt(a+ib) = (sqrt((|z|+a)/2), sign(b) sqrt((|z|-a)/2)).

@@ -82,6 +82,21 @@ template <typename T> inline T mul_add(const T &a, const T &b, const T &c) {
     return a * b + c;
 #endif
 }
+// c - a * b and a * b - c, rounded once: mul_add(-a, b, c) and mul_add(a, b, -c) bit for bit. On
+// packets one instruction each (vfnmadd / vfmsub): GCC does not fold a packet's sign flip (an xor
+// with the sign mask) into the FMA after it.
+template <typename T> inline T neg_mul_add(const T &a, const T &b, const T &c) {
+#if defined(__FMA__)
+    if constexpr (is_packet_v<T>) return fnmadd(a, b, c);
+#endif
+    return mul_add(T(-a), b, c);
+}
+template <typename T> inline T mul_sub(const T &a, const T &b, const T &c) {
+#if defined(__FMA__)
+    if constexpr (is_packet_v<T>) return fmsub(a, b, c);
+#endif
+    return mul_add(a, b, T(-c));
+}
 // max/min as selects: operands are finite in every use, and selects vectorize.
 template <typename T> inline T max_(T a, T b) { return select(a > b, a, b); }
 template <typename T> inline T min_(T a, T b) { return select(a < b, a, b); }
