@@ -348,8 +348,8 @@ template <typename F> struct PlasticBxDF {
     // Mitsuba's lerp_gather: linear interpolation of the table at cos in [0, 1], as the entry
     // plus the fraction times its slope (one index for both reads; cos = 1 reads entry 63 and its
     // slope 0). Lanes the caller masks out (cos < 0 or NaN) read some entry (lookup64x2).
-    // Permute64: float64 packets read the tables by permutations, else by gathers (f, with two
-    // lookups per element, is faster with gathers; core/math.h lookup64x2).
+    // Permute64: float64 packets read the tables by permutations (default), else by gathers
+    // (core/math.h lookup64x2 has the measurements of both).
     template <bool Permute64 = true, typename V> V transmittance(V cos) const {
         V x = cos * V(kPlasticTableRes - 1);
         V fi = floor(x), t, d;
@@ -425,7 +425,7 @@ template <typename F> struct PlasticBxDF {
         V r, t, den;
         FrDielectricRatioScaledAbove(c.c_oh, c.len2, eta, &r, &t, &den); // o.h > 0 where c.ok
         V coat_v = r * c.l4 / (den * c.dd * mfd.G_denom(o.z, i.z, c.root_o, c.root_i));
-        Spectrum<V> v = to_lanes<V>(diffuse) * (T_o * transmittance<false>(i.z)), ks = to_lanes<V>(Ks);
+        Spectrum<V> v = to_lanes<V>(diffuse) * (T_o * transmittance(i.z)), ks = to_lanes<V>(Ks);
         V coat = select(c.ok, coat_v, V(0));
         for (int k = 0; k < Spectrum<V>::Size; ++k) v[k] = mul_add(ks[k], coat, v[k]);
         return v;
@@ -458,7 +458,7 @@ template <typename F> struct PlasticBxDF {
             FrDielectricTransAbove(o.z, eta, &to, &den_o);
             v = f_smooth(to, den_o, i);
         } else {
-            v = f_rough(o, i, transmittance<false>(o.z), coat(o, i));
+            v = f_rough(o, i, transmittance(o.z), coat(o, i));
         }
         return select(active, v, Spectrum<V>(V(0)));
     }

@@ -139,9 +139,11 @@ inline void lookup64x2(const T *t, const T *d, const V &x, V *a, V *b) {
     }
     // float64 (Permute64): 64 entries are 8 registers; 4 two-source permutations (vpermt2pd, the
     // index's low 4 bits) and 3 selects on bits 4 and 5 per 8-lane half, instead of hardware
-    // gathers. Measured on a Sapphire Rapids host (in cache, 1 thread): the float64 rough Plastic
-    // pdf +10 % (one lookup per element); its eval (two lookups) -3 to -4 %, the permutations
-    // crowding the shuffle port while gathers run on the load ports, so the caller chooses.
+    // gathers. Measured in cache, 1 thread: on a Sapphire Rapids host the float64 rough Plastic
+    // pdf +10 % (one lookup per element), its eval (two lookups) -3 to -4 % (the permutations
+    // crowding the shuffle port while gathers run on the load ports); on an AMD Zen 4 host (its
+    // gathers ~1.3 cycles per element) the eval +18 % and the rough sampler +3 %. Every caller
+    // permutes (Permute64 = false, the gathers, is kept for measuring the choice again).
     if constexpr (Permute64 && is_packet_v<V> && std::is_same_v<T, double> && std::is_same_v<scalar_t<V>, double> &&
                   drjit::size_v<V> % 8 == 0) {
         typedef double v8df __attribute__((vector_size(64)));
