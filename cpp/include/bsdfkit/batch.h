@@ -507,7 +507,9 @@ template <int S, typename F> inline void prefetch_dirs(const Dirs<F> &d, int64_t
 // groups above); elsewhere plain stores.
 // Only models that declare `static constexpr bool StreamOutputs = true` stream: the kernels
 // limited by memory traffic. Measured on Zen 4 (bench/loop_ab.py, N = 1e6, outputs on lines,
-// session 21): Diffuse eval 1.21-1.33x, sample 1.16-1.31x (1 / 2 threads). With every model
+// session 21): Diffuse eval 1.21-1.33x, sample 1.16-1.31x (1 / 2 threads); the delta lobes'
+// eval (smooth Conductor and Dielectric, ThinDielectric; session 22, the installed library)
+// 1.23-1.50x, their pdf 0.96-1.09x, their samplers not (below). With every model
 // streaming (a test build; the library's own out= on a line against off a line, in one process)
 // the delta lobes' eval (zeros) and the smooth samplers at 2 threads gained (1.03-1.48x) but
 // NormalizedFresnel eval ran 0.59-0.64x, rough Plastic eval 0.75-0.90x, Hair sample 0.93x: the
