@@ -6,6 +6,7 @@
     python bench/loop_ab.py --base HEAD~1             # A = the headers of a revision, B = the tree's
     python bench/loop_ab.py --aligned                 # outputs on 64-byte lines (streaming stores)
     python bench/loop_ab.py --march x86-64-v3         # an AVX2 build, on an AVX-512 host too
+    python bench/loop_ab.py --dtype float64           # the float64 kernels (16 lanes of double)
 
 It writes a small C++ program that calls batch.h's eval_batch / pdf_batch / sample_batch (the
 library's kernels, (N, 3) rows in and out, the unit and uniform checks included, no Python) on
@@ -33,7 +34,8 @@ sys.path.insert(0, str(HERE))
 from _machine import library_cxx, summary  # noqa: E402
 
 LANES = 16  # core/simd.h kPacketWidth
-# key: C++ expression making the float32 model (its Params defaults but what is set here)
+# key: C++ expression making the float32 model (its Params defaults but what is set here; --dtype
+# float64 makes BxDF<double> instead)
 MODELS = {
     "diffuse": "DiffuseBxDF<float>::make({})",
     "diffuse_t": "DiffuseTransmissionBxDF<float>::make({})",
@@ -50,11 +52,16 @@ MODELS = {
 OPS = ("eval", "pdf", "sample")
 
 
-def source(models, ops, aligned=False) -> str:
+DTYPES = {"float32": "float", "float64": "double"}
+
+
+def source(models, ops, aligned=False, dtype="float32") -> str:
     """The C++ program; aligned: every array starts on a 64-byte line (as bsdfkit's own result
     arrays do, so a model that streams its outputs does so here; batch.h), else where std::vector
-    puts it (16 bytes past a page for these sizes, as numpy's arrays)."""
-    runs = "\n".join(f'    run("{k}", {MODELS[k]}, ops);' for k in models)
+    puts it (16 bytes past a page for these sizes, as numpy's arrays); dtype: the models' and
+    arrays' float type (float64: the 16-lane double packets of the float64 rows)."""
+    ct = DTYPES[dtype]
+    runs = "\n".join(f'    run("{k}", {MODELS[k].replace("BxDF<float>", f"BxDF<{ct}>")}, ops);' for k in models)
     alloc = "A64" if aligned else "std::allocator"
     return f"""#include <bsdfkit/bxdfs/all.h>
 #include <bsdfkit/batch.h>
@@ -89,10 +96,10 @@ template <class Fn> double best(Fn fn) {{
     return b / (double(N) / {LANES});
 }}
 template <class Model> void run(const char *name, const Model &m, const std::string &ops) {{
-    using F = float;
+    using F = {ct};
     std::mt19937 g(1);
     std::normal_distribution<double> nd;
-    std::uniform_real_distribution<float> ud(0.f, 1.f);
+    std::uniform_real_distribution<F> ud(F(0), F(1));
     Vec<F> wo(3 * N), wi(3 * N), f(3 * N), swi(3 * N), pdf(N), eta(N), uc(N), u(2 * N);
     Vec<uint8_t> flags(N);
     Vec<char> valid(N), prop(N);
@@ -171,6 +178,8 @@ def main(argv=None) -> int:
     ap.add_argument("--keep", default=None, help="directory to keep the source and binaries in")
     ap.add_argument("--march", default="native",
                     help="g++ -march (default native; x86-64-v3: an AVX2 build on any AVX2 host; znver3 on AMD)")
+    ap.add_argument("--dtype", default="float32", choices=sorted(DTYPES),
+                    help="the kernels' float type (default float32; float64: the float64 rows)")
     ap.add_argument("--aligned", action="store_true",
                     help="arrays on 64-byte lines, as bsdfkit's results (where StreamOutputs models stream)")
     args = ap.parse_args(argv)
@@ -188,10 +197,10 @@ def main(argv=None) -> int:
     work = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="bsdfkit-loop-ab-"))
     work.mkdir(parents=True, exist_ok=True)
     src = work / "loops.cpp"
-    src.write_text(source(models, ops, args.aligned))
+    src.write_text(source(models, ops, args.aligned, args.dtype))
     b_bin = work / "loops_b"
     build(src, None, b_bin, args.march)
-    print(f"# {summary()}; -march={args.march}; N = {args.n}, {args.threads} thread(s), best of {args.reps} calls; TSC cycles per packet of {LANES}")
+    print(f"# {summary()}; -march={args.march}; {args.dtype}; N = {args.n}, {args.threads} thread(s), best of {args.reps} calls; TSC cycles per packet of {LANES}")
     if args.base is None:
         res = run(b_bin, args)
         for (m, op), v in res.items():

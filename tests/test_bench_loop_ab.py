@@ -30,9 +30,16 @@ def test_source_holds_only_the_requested_models_and_ops(loop_ab):
     assert 'const std::string ops = "pdf";' in src
     assert "using Vec = std::vector<T, std::allocator<T>>" in src
     assert "using Vec = std::vector<T, A64<T>>" in loop_ab.source(["diffuse"], ["pdf"], aligned=True)
+    assert "using F = float;" in src and "DiffuseBxDF<float>::make" in src
 
 
-@pytest.mark.parametrize("bad", [["--models", "nope"], ["--ops", "albedo"], ["--n", "3"]])
+def test_source_float64_instantiates_double_models(loop_ab):
+    src = loop_ab.source(["plastic_r", "nfresnel"], ["eval"], dtype="float64")
+    assert "using F = double;" in src and "<float>" not in src
+    assert "PlasticBxDF<double>::make(p)" in src and "NormalizedFresnelBxDF<double>::make({})" in src
+
+
+@pytest.mark.parametrize("bad", [["--models", "nope"], ["--ops", "albedo"], ["--n", "3"], ["--dtype", "float16"]])
 def test_bad_arguments_are_named(loop_ab, bad, capsys):
     with pytest.raises(SystemExit) as e:
         loop_ab.main(bad)
