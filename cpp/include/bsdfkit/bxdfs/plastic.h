@@ -347,14 +347,13 @@ template <typename F> struct PlasticBxDF {
 
     // Mitsuba's lerp_gather: linear interpolation of the table at cos in [0, 1], as the entry
     // plus the fraction times its slope (one index for both reads; cos = 1 reads entry 63 and its
-    // slope 0). Lanes the caller masks out (cos < 0 or NaN) read some entry (lookup64x2).
-    // Permute64: float64 packets read the tables by permutations (default), else by gathers
-    // (core/math.h lookup64x2 has the measurements of both).
-    template <bool Permute64 = true, typename V> V transmittance(V cos) const {
+    // slope 0). Lanes the caller masks out (cos < 0 or NaN) read some entry (lookup64x2: packets
+    // read the tables by permutations, float64 too; core/math.h has the measurements).
+    template <typename V> V transmittance(V cos) const {
         V x = cos * V(kPlasticTableRes - 1);
         V fi = floor(x), t, d;
         static_assert(kPlasticTableRes == 64, "lookup64x2 reads 64-entry tables");
-        lookup64x2<Permute64>(table, slope, fi, &t, &d);
+        lookup64x2(table, slope, fi, &t, &d);
         return mul_add(x - fi, d, t);
     }
 

@@ -113,7 +113,7 @@ template <typename T> inline T copysign1(T mag, T sgn) { return select(sgn < T(0
 // choice shared by both tables: no gather. Any index reads some entry there (its low 6 bits); the
 // gather path (gather_index) clamps x to [0, 63], so lanes a caller masks out (NaN, x < 0) never
 // read outside the tables. Both give t[x], d[x] for x in [0, 63].
-template <bool Permute64 = true, typename T, typename V>
+template <typename T, typename V>
 inline void lookup64x2(const T *t, const T *d, const V &x, V *a, V *b) {
 #if defined(__AVX512F__) && defined(__GNUC__) && !defined(__clang__)
     if constexpr (is_packet_v<V> && std::is_same_v<T, float> && std::is_same_v<scalar_t<V>, float> &&
@@ -137,14 +137,13 @@ inline void lookup64x2(const T *t, const T *d, const V &x, V *a, V *b) {
         read(d, b);
         return;
     }
-    // float64 (Permute64): 64 entries are 8 registers; 4 two-source permutations (vpermt2pd, the
+    // float64: 64 entries are 8 registers; 4 two-source permutations (vpermt2pd, the
     // index's low 4 bits) and 3 selects on bits 4 and 5 per 8-lane half, instead of hardware
     // gathers. Measured in cache, 1 thread: on a Sapphire Rapids host the float64 rough Plastic
     // pdf +10 % (one lookup per element), its eval (two lookups) -3 to -4 % (the permutations
     // crowding the shuffle port while gathers run on the load ports); on an AMD Zen 4 host (its
-    // gathers ~1.3 cycles per element) the eval +18 % and the rough sampler +3 %. Every caller
-    // permutes (Permute64 = false, the gathers, is kept for measuring the choice again).
-    if constexpr (Permute64 && is_packet_v<V> && std::is_same_v<T, double> && std::is_same_v<scalar_t<V>, double> &&
+    // gathers ~1.3 cycles per element) the eval +18 % and the rough sampler +3 %: permutations.
+    if constexpr (is_packet_v<V> && std::is_same_v<T, double> && std::is_same_v<scalar_t<V>, double> &&
                   drjit::size_v<V> % 8 == 0) {
         typedef double v8df __attribute__((vector_size(64)));
         typedef long long v8di __attribute__((vector_size(64)));
