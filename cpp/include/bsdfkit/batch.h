@@ -573,12 +573,12 @@ template <typename F> inline void stream_line(F *q, const detail_rows::group_t<F
 #endif
 
 // One float output of a packet loop, rows of C = 1 or 3 from p on. Each chunk writes through a
-// writer() of its own (the pointer copied into the chunk), packet by packet: put(i, cnt, value). Stream = false: plain stores
-// (store_lanes / store1_lanes), exactly the code of a loop without streaming; the kernels
-// instantiate their loops both ways and pick one per call (a run-time choice inside one loop
-// cost up to 35 % in cache on the light kernels, and both loops inlined in one chunk function
-// 3-8 %; session 21). Stream = true streams a full packet's rows when p is on a line (Aligned:
-// the caller checked), else stores them plainly.
+// writer() of its own (the pointer copied into the chunk), packet by packet: put(i, cnt, value).
+// Stream = false: plain stores (store_lanes / store1_lanes), exactly the code of a loop without
+// streaming; the kernels instantiate their loops both ways and pick one per call (a run-time
+// choice inside one loop cost up to 35 % in cache on the light kernels, and both loops inlined
+// in one chunk function 3-8 %; session 21). Stream = true streams a full packet's rows when p is
+// on a line (Aligned: the caller checked), else stores them plainly.
 template <typename F, int C, bool Stream, bool Aligned = false> struct RowsOut {
     static_assert(C == 1 || C == 3, "RowsOut: rows of 1 or 3");
     static constexpr bool kStream = Stream && kStreams<F>;
