@@ -259,5 +259,36 @@ def test_unit_tolerance_boundary(any_model, dtype):
                 call()
         except NotImplementedError:
             assert k >= 3  # only an RGB-only model's spectral mode may be missing
-    ok = w[np.abs(w[:, 0] * w[:, 0] - dtype(1)) <= dtype(1e-4)]
+    # both directions of the pair rejected in the same packets (batch.h tests the pair's keys
+    # together and counts each only when that test fails): wo's count is the one reported
+    with pytest.raises(ValueError, match=rf"wo: {rejected} direction\(s\) are not finite unit"):
+        any_model.eval(w, w[::-1].copy())
+    with np.errstate(over="ignore", invalid="ignore"):
+        ok = w[np.abs(w[:, 0] * w[:, 0] - dtype(1)) <= dtype(1e-4)]
     assert np.all(np.isfinite(any_model.eval(z, ok)))
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_nonfinite_directions_raise_without_crashing(any_model, dtype):
+    # NaN / infinite / zero / huge directions in every entry point (RGB and spectral eval, pdf,
+    # sample, albedo) raise ValueError naming the argument, for every model: the table models
+    # (MERL, Measured) once indexed their tables with a NaN direction and crashed the interpreter
+    # (batch.h check_dir now hands the model the normal instead; the call still raises).
+    z = np.array([0, 0, 1], dtype)
+    bad = np.array([[np.nan, 0, 1], [0, -np.nan, 1], [np.inf, 0, 0], [0, 0, -np.inf], [0, 0, 0],
+                    [1e30, 1e30, 1e30], [np.finfo(dtype).max, 0, 0], [0.6, 0, np.nan]], dtype)
+    w = np.tile(np.array([0.6, 0, 0.8], dtype), (40, 1))
+    w[5:5 + len(bad)] = bad
+    lam = np.full((len(w), 4), 550.0, dtype)
+    calls = [("wi", lambda: any_model.eval(z, w)), ("wo", lambda: any_model.eval(w, z)),
+             ("wi", lambda: any_model.pdf(z, w)), ("wo", lambda: any_model.pdf(w, z)),
+             ("wo", lambda: any_model.sample(w, n=len(w), seed=3)), ("wo", lambda: any_model.albedo(bad, n_samples=64)),
+             ("wi", lambda: any_model.eval(z, w, wavelengths=lam)), ("wo", lambda: any_model.pdf(w, z, wavelengths=lam)),
+             ("wo", lambda: any_model.sample(w, n=len(w), seed=3, wavelengths=lam)),
+             ("wo", lambda: any_model.albedo(bad, n_samples=64, wavelengths=lam[:len(bad)]))]
+    for k, (name, call) in enumerate(calls):
+        try:
+            with pytest.raises(ValueError, match=rf"{name}: {len(bad)} direction\(s\) are not finite unit"):
+                call()
+        except NotImplementedError:
+            assert k >= 6  # only an RGB-only model's spectral mode may be missing

@@ -41,6 +41,15 @@ template <typename F> constexpr bool unit_accepts(F d) { // d = |w|^2; a NaN fai
     return (t < F(0) ? -t : t) <= kUnitTol<F>;
 }
 template <typename F> inline int64_t not_unit(const Vec3<F> &w) { return !unit_accepts(dot(w, w)); }
+// The scalar loops' check: a direction that fails not_unit is counted and replaced by the normal
+// (0, 0, 1) before the model sees it. The call then raises ValueError (bindings) and never returns
+// the value, but a table model (merl.h, measured.h) must not index its tables with a NaN or an
+// infinity first: MERL and Measured read out of bounds and crashed on them (session 23).
+template <typename F> inline int64_t check_dir(Vec3<F> *w) {
+    if (__builtin_expect(unit_accepts(dot(*w, *w)), 1)) return 0;
+    *w = Vec3<F>(F(0), F(0), F(1));
+    return 1;
+}
 
 template <typename F, int S> inline Vec3<F> load3(const F *p, int64_t i) {
     return Vec3<F>(p[i * S], p[i * S + 1], p[i * S + 2]);
@@ -705,8 +714,8 @@ void pair_scalar_loop(const Model &m, const F *wo, const F *wi, int64_t n, int n
         const Store st = store;
         for (int64_t i = b; i < e; ++i) {
             Vec3<F> o = load3<F, SO>(wo, i), w = load3<F, SI>(wi, i);
-            bo += not_unit(o);
-            bi += not_unit(w);
+            bo += check_dir(&o);
+            bi += check_dir(&w);
             st(mloc, o, w, i);
         }
         bad.wo += bo;
@@ -820,7 +829,7 @@ inline void sample_chunk(const Model &m, const Sampler &smp, bool model_ok, int6
     int64_t bo = 0;
     for (int64_t i = b; i < e; ++i) {
         Vec3<F> o = load3<F, SO>(wo, i);
-        bo += not_unit(o);
+        bo += check_dir(&o);
         // Uniforms on [0, 1) (OneMinusEpsilon), as in bsdf_sample.
         BSDFSample<F> s = smp(m, o, clamp_uniform(uc[i]), clamp_uniform(Point2<F>{u[2 * i], u[2 * i + 1]}));
         bool ok = sample_accepted(s, o) & model_ok;   // bsdf_sample's rule (core/bsdf.h)
@@ -1028,7 +1037,8 @@ void albedo_batch(const Model &m, const F *wo, int64_t n_wo, int64_t n_samples, 
         int64_t j = item / nblocks, blk = item % nblocks;
         const DenormalsFlushedFor<Model> ftz;
         Vec3<F> o = load3<F, 3>(wo, j);
-        if (blk == 0) bad.wo += not_unit(o);
+        int64_t bad_o = check_dir(&o);
+        if (blk == 0) bad.wo += bad_o;
         int64_t s0 = blk * block, s1 = std::min(n_samples, s0 + block);
         double acc[3] = {0, 0, 0};
         for (int64_t k = s0; k < s1; ++k) {

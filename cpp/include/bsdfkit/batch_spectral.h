@@ -668,8 +668,8 @@ void spectral_pair_scalar_loop(const SM &m, const F *wo, int64_t so, const F *wi
             Vec3<F> o(wo[i * so], wo[i * so + 1], wo[i * so + 2]), w(wi[i * si], wi[i * si + 1], wi[i * si + 2]);
             double l[kSpectralN];
             bl += load_lambda(lam, i, sl, l);
-            bo += not_unit(o);
-            bi += not_unit(w);
+            bo += check_dir(&o);
+            bi += check_dir(&w);
             store(mloc, o, w, l, i);
         }
         bad.wo += bo;
@@ -745,7 +745,7 @@ void sample_spectral_batch(const SM &m, const F *wo, int64_t so, const F *uc, co
             Vec3<F> o(wo[i * so], wo[i * so + 1], wo[i * so + 2]);
             double l[kSpectralN];
             bl += load_lambda(lam, i, sl, l);
-            bo += not_unit(o);
+            bo += check_dir(&o);
             bool term = false;
             BSDFSample<F, 4> s = mloc.sample(o, uc[i], Point2<F>{u[2 * i], u[2 * i + 1]}, l, mode, sf, &term);
             for (int c = 0; c < kSpectralN; ++c) out.f[kSpectralN * i + c] = s.f[c];
@@ -784,8 +784,9 @@ void albedo_spectral_batch(const SM &m, const F *wo, int64_t n_wo, const double 
         Vec3<F> o = load3<F, 3>(wo, j);
         double l[kSpectralN];
         int64_t bl = load_lambda(lam, j, sl, l);
+        int64_t bad_o = check_dir(&o);
         if (blk == 0) {
-            bad.wo += not_unit(o);
+            bad.wo += bad_o;
             bad.lam += bl;
         }
         int64_t s0 = blk * block, s1 = std::min(n_samples, s0 + block);
