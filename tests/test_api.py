@@ -234,8 +234,14 @@ def _unit_boundary_dirs(dtype, per_side=40):
             lo, hi = np.nextafter(lo, dtype(0)), np.nextafter(hi, dtype(2))
             xs += [lo, hi]
         xs.append(x)
+    # |w|^2 at the special values too: NaN of either sign, infinity (also by overflow), 0 and -0,
+    # a subnormal and 0 by underflow, exactly 1 from a negative x, the largest finite and 2
+    fi = np.finfo(dtype)
+    xs += [np.nan, -np.nan, np.inf, -np.inf, 0.0, -0.0, np.sqrt(fi.smallest_subnormal), fi.smallest_subnormal,
+           -1.0, np.sqrt(fi.max), fi.max, np.sqrt(dtype(2))]
     x = np.array(xs, dtype)
-    rejected = int(np.count_nonzero(~(np.abs(x * x - dtype(1)) <= tol)))
+    with np.errstate(over="ignore", invalid="ignore", under="ignore"):
+        rejected = int(np.count_nonzero(~(np.abs(x * x - dtype(1)) <= tol)))
     w = np.zeros((len(x), 3), dtype)
     w[:, 0] = x
     return w, rejected

@@ -417,10 +417,51 @@ template <typename M> inline int64_t count_failed(const M &pass) {
     if (__builtin_expect(drjit::all(pass), 1)) return 0;
     return int64_t(drjit::count(!pass));
 }
+// The packets' unit check on the bits of d = |w|^2 (I: the signed integer as wide as F). A
+// non-negative float's bits grow with it, so lo <= d <= hi exactly when bits(d) - bits(lo)
+// (wrapping) <= span = bits(hi) - bits(lo), and a negative d (sign bit set) or a NaN (exponent all
+// ones, above hi's) lands far above span. Shifted by 2^(w-1), that unsigned test is the signed
+// one key(d) = bits(d) - c <= limit (c = bits(lo) + 2^(w-1), limit = INT_MIN + span; Dr.Jit's
+// integer comparisons are signed): one subtraction and one comparison per direction, and one
+// comparison of the maximum key for a pair (eval / pdf), where the float range took two
+// comparisons and a mask and per direction.
+template <typename F> struct UnitKey {
+    using I = std::conditional_t<sizeof(F) == 4, int32_t, int64_t>;
+    using U = std::make_unsigned_t<I>;
+    static constexpr U sign = U(1) << (8 * sizeof(U) - 1);
+    static constexpr U lo_bits = __builtin_bit_cast(U, kUnitRange<F>.lo), hi_bits = __builtin_bit_cast(U, kUnitRange<F>.hi);
+    static constexpr I c = __builtin_bit_cast(I, U(lo_bits + sign));
+    static constexpr I limit = __builtin_bit_cast(I, U(sign + (hi_bits - lo_bits)));
+    // the scalar form of the packets' test, for the checks below
+    static constexpr bool accepts(F d) { return __builtin_bit_cast(I, U(__builtin_bit_cast(U, d) - U(c))) <= limit; }
+};
+template <typename F> constexpr bool unit_key_agrees(F d) { return UnitKey<F>::accepts(d) == unit_accepts(d); }
+template <typename F> constexpr bool unit_key_checks() {
+    constexpr F lo = kUnitRange<F>.lo, hi = kUnitRange<F>.hi, e = std::numeric_limits<F>::epsilon();
+    constexpr F inf = std::numeric_limits<F>::infinity();
+    return unit_key_agrees(lo) && unit_key_agrees(hi) && unit_key_agrees(F(lo - e / 2)) && unit_key_agrees(F(hi + e)) &&
+           unit_key_agrees(F(1)) && unit_key_agrees(F(0)) && unit_key_agrees(F(-0.0)) && unit_key_agrees(F(-1)) &&
+           unit_key_agrees(inf) && unit_key_agrees(-inf) && unit_key_agrees(std::numeric_limits<F>::quiet_NaN()) &&
+           unit_key_agrees(F(-std::numeric_limits<F>::quiet_NaN())) && unit_key_agrees(std::numeric_limits<F>::max()) &&
+           unit_key_agrees(std::numeric_limits<F>::denorm_min()) && unit_key_agrees(F(2)) && unit_key_agrees(F(0.5));
+}
+static_assert(unit_key_checks<float>() && unit_key_checks<double>(), "UnitKey: the bits test is not_unit's");
+template <typename F> using UnitKeys = Packet<typename UnitKey<F>::I>;
+template <typename F> inline UnitKeys<F> unit_key(const Vec3<Packet<F>> &w) {
+    return drjit::reinterpret_array<UnitKeys<F>>(dot(w, w)) - UnitKeys<F>(UnitKey<F>::c);
+}
+template <typename F> inline auto unit_key_ok(const UnitKeys<F> &k) { return k <= UnitKeys<F>(UnitKey<F>::limit); }
 // Lanes that fail not_unit (the padding is unit length).
 template <typename F> inline int64_t count_not_unit(const Vec3<Packet<F>> &w) {
-    Packet<F> d = dot(w, w);
-    return count_failed((d >= kUnitRange<F>.lo) & (d <= kUnitRange<F>.hi));
+    return count_failed(unit_key_ok<F>(unit_key(w)));
+}
+// The same for a pair: one test of both keys' maximum; only a packet that fails it counts each.
+template <typename F>
+inline void count_not_unit_pair(const Vec3<Packet<F>> &o, const Vec3<Packet<F>> &w, int64_t *bo, int64_t *bi) {
+    UnitKeys<F> ko = unit_key(o), ki = unit_key(w);
+    if (__builtin_expect(drjit::all(unit_key_ok<F>(drjit::maximum(ko, ki))), 1)) return;
+    *bo += count_failed(unit_key_ok<F>(ko));
+    *bi += count_failed(unit_key_ok<F>(ki));
 }
 
 struct BadCounts {
@@ -690,8 +731,7 @@ void pair_packet_loop(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int6
                 prefetch_dirs<SI>(wi, i + kPrefetchAhead);
             }
             Vec3<Packet<F>> o = load_dirs<SO>(wo, i, cnt), w = load_dirs<SI>(wi, i, cnt);
-            bo += count_not_unit(o);
-            bi += count_not_unit(w);
+            count_not_unit_pair(o, w, &bo, &bi);
             wr.put(i, cnt, cp(mloc, o, w, i, cnt));
         }
         stream_fence<Out::kStream>();
