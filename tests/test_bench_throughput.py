@@ -89,6 +89,25 @@ def test_arith_probe_runs(tp):
     assert 0 < t1 < 10 and 0 < t2 < 10
 
 
+def test_stream_bound_pass(tp, monkeypatch):
+    # `divider stream R W` covers exactly the kernel's bytes (rounded up to whole 64-byte lines)
+    # and stream_bound uses it; without the build, the numpy stand-in (named in the report)
+    pytest.importorskip("drjit")
+    import json
+    import subprocess
+    exe = tp.build_divider()
+    for rb, wb in ((24_000_000, 4_000_000), (3 * 4 * 1001, 7), (64, 0)):
+        out = json.loads(subprocess.run([str(exe), "stream", str(rb), str(wb)], check=True, capture_output=True,
+                                        text=True, timeout=120).stdout)
+        assert out["bytes_read"] == -(-rb // 64) * 64 and out["bytes_written"] == -(-wb // 64) * 64
+        assert 0 < out["stream_1t"] < 1 and 0 < out["stream_2t"] < 1
+    t1, t2 = tp.stream_bound(2_400_000, 400_000, 1)
+    assert tp.STREAM["method"] == "c++" and 0 < t1 < 1 and 0 < t2 < 1
+    monkeypatch.setitem(tp.ARITH, "exe", None)
+    t1, t2 = tp.stream_bound(2_400_000, 400_000, 1)
+    assert tp.STREAM["method"] == "numpy" and 0 < t1 < 1 and 0 < t2 < 1
+
+
 def test_report_names(tp):
     assert tp.report_names() == ("RESULTS.md", "results.json")
     assert tp.report_names("zen4") == ("RESULTS_zen4.md", "results_zen4.json")
