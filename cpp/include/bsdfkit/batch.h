@@ -386,8 +386,8 @@ template <typename F> inline void store1_lanes(F *p, int64_t i, int64_t cnt, con
 }
 // not_unit's accepted |w|^2 as a closed range [lo, hi] of F, exactly the values it accepts
 // (d - 1 is exact near 1, Sterbenz), found by stepping from 1 -+ kUnitTol one ulp at a time
-// (ulp 2^-p below 1, 2^-(p-1) above): the packet check is then two comparisons, not a
-// subtraction, an absolute value and a comparison.
+// (ulp 2^-p below 1, 2^-(p-1) above): the packets test it on the bits of |w|^2 (UnitKey below),
+// one comparison per direction instead of a subtraction, an absolute value and a comparison.
 template <typename F> struct UnitRange {
     F lo, hi;
 };
