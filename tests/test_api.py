@@ -298,3 +298,55 @@ def test_nonfinite_directions_raise_without_crashing(any_model, dtype):
                 call()
         except NotImplementedError:
             assert k >= 6  # only an RGB-only model's spectral mode may be missing
+
+
+def test_out_must_not_overlap_inputs():
+    # The kernels' output pointers are restrict and they write a packet's rows before reading the
+    # next packet's: out= sharing memory with an input raises instead of returning values computed
+    # from half-overwritten inputs (sample's fast path once returned pdf = 1 for an out= whose eta
+    # array was its pdf array). Both the bindings' fast path and the general path.
+    m = bk.Conductor.from_metal("Cu", alpha=0.3)
+    n = 64
+    buf = np.zeros(4 * n)
+    wo = buf[:3 * n].reshape(n, 3)
+    wo[:] = bk.direction(0.4, 0.3)
+    wi = np.tile(bk.direction(0.5, 2.0), (n, 1))
+    with pytest.raises(ValueError, match="out: must not overlap"):
+        m.eval(wo, wi, out=wo)                                  # fast path, exactly aliased
+    with pytest.raises(ValueError, match="out: must not overlap"):
+        m.eval(wo[1:], wi[1:], out=buf[:3 * n - 3].reshape(n - 1, 3))  # one row behind
+    with pytest.raises(ValueError, match="out: must not overlap"):
+        m.eval(wo, wi.astype(np.float32), out=wo)               # general path (mixed dtypes)
+    with pytest.raises(ValueError, match="out: must not overlap"):
+        m.pdf(wo, wi, out=buf[3 * n - n:3 * n])
+    with pytest.raises(ValueError, match="out: must not overlap"):
+        m.eval(wo, wi, out=buf[n:].reshape(n, 3))               # a third of a row per row ahead
+    lam = np.full((n, 4), 550.0)
+    with pytest.raises(ValueError, match="out: must not overlap"):
+        m.eval(wo, wi, wavelengths=lam, out=buf.reshape(n, 4))  # spectral: out (n, 4) over wo
+    with pytest.raises(ValueError, match="out: must not overlap"):
+        m.eval(wi, wi, wavelengths=lam, out=lam)                # spectral: out over the wavelengths
+    rng = np.random.default_rng(0)
+    uc, u = rng.random(32), rng.random((32, 2))
+    s = m.sample(bk.direction(0.7, 0.3), uc, u)
+    SR = type(s)
+    with pytest.raises(ValueError, match="must not overlap"):
+        m.sample(bk.direction(0.7, 0.3), uc, u, out=SR(wi=s.wi, f=s.f, pdf=s.pdf, flags=s.flags, eta=s.pdf,
+                                                       valid=s.valid, pdf_is_proportional=s.pdf_is_proportional))
+    with pytest.raises(ValueError, match="must not overlap"):
+        m.sample(bk.direction(0.7, 0.3), uc, u, out=SR(wi=s.wi, f=s.wi, pdf=s.pdf, flags=s.flags, eta=s.eta,
+                                                       valid=s.valid, pdf_is_proportional=s.pdf_is_proportional))
+    # disjoint arrays still work, into the arrays given, and equal the plain call
+    fields = ("wi", "f", "pdf", "flags", "eta", "valid", "pdf_is_proportional")
+    r = m.sample(bk.direction(0.7, 0.3), uc, u, out=SR(**{k: np.empty_like(getattr(s, k)) for k in fields}))
+    for k in fields:
+        np.testing.assert_array_equal(getattr(r, k), getattr(s, k))
+
+
+def test_size_limits_raise():
+    # sizes that would run for days or exhaust memory are refused up front
+    with pytest.raises(ValueError, match=r"n_theta \* n_phi"):
+        bk.hemisphere_grid(10 ** 9, 10 ** 9)
+    with pytest.raises(ValueError, match=r"max_depth \* n_samples"):
+        bk.CoatedDiffuse(0.5, max_depth=10 ** 5, n_samples=10 ** 5)
+    bk.CoatedDiffuse(0.5, max_depth=10 ** 4, n_samples=10 ** 4)  # 1e8 steps per pair: allowed

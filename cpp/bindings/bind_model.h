@@ -100,6 +100,13 @@ inline void check_sample_no_overlap(std::initializer_list<const py::array *> arr
             if (overlaps(*a[i], *a[c])) value_error("sample: output arrays must not overlap the inputs or each other");
 }
 
+// eval's and pdf's out= may not share memory with wo or wi: the kernels' pointers are restrict
+// and they write a packet's rows before reading the next packet's (an out= one row past wo's
+// start read rows the kernel had already overwritten).
+inline void check_out_no_overlap(const py::array &out, const py::array &wo, const py::array &wi) {
+    if (overlaps(out, wo) || overlaps(out, wi)) value_error("out: must not overlap wo or wi");
+}
+
 inline int64_t broadcast_rows(int64_t a, int64_t b, const char *na, const char *nb) {
     if (a != b && a != 1 && b != 1)
         value_error(std::string(na) + " and " + nb + " have incompatible lengths");
@@ -328,6 +335,7 @@ template <template <typename> class Model> struct PyModel {
             else res = result_array<F>(shape);
         } else if (plain_out(out, o.type, shape, Eval && packets ? &out_planes : nullptr)) {
             res = py::reinterpret_borrow<py::array>(out);
+            check_out_no_overlap(res, py::reinterpret_borrow<py::array>(o.obj), py::reinterpret_borrow<py::array>(i.obj));
         } else {
             return py::none();
         }
@@ -435,6 +443,14 @@ template <template <typename> class Model> struct PyModel {
             out = blk->out;
         } else if (!sample_out_of<F>(res, batch, out, keep)) {
             return py::none();
+        } else {
+            // the kernel's pointers are restrict (batch.h): the same check as the general path
+            // (an out= whose pdf array was also its eta array came back with wrong values before)
+            auto arr = [](PyObject *a) { return py::reinterpret_borrow<py::array>(a); };
+            py::array a[10] = {arr(o.obj), arr(c.obj), arr(u.obj), arr(keep[0].ptr()), arr(keep[1].ptr()),
+                               arr(keep[2].ptr()), arr(keep[3].ptr()), arr(keep[4].ptr()), arr(keep[5].ptr()),
+                               arr(keep[6].ptr())};
+            check_sample_no_overlap({&a[0], &a[1], &a[2], &a[3], &a[4], &a[5], &a[6], &a[7], &a[8], &a[9]}, 3);
         }
         py::object ret = blk ? py::object(blk->arrays) : py::reinterpret_borrow<py::object>(res);
         if (n == 0) return ret;
@@ -503,6 +519,7 @@ template <template <typename> class Model> struct PyModel {
         F *pout = checked<F>(out, "out", {3}, &nout, true);
         int64_t n = broadcast_rows(no, ni, "wo", "wi");
         if (nout != n) value_error("out: wrong shape");
+        check_out_no_overlap(out, wo, wi);
         TransportMode md = to_mode(mode);
         BadCounts bad;
         {
@@ -525,6 +542,7 @@ template <template <typename> class Model> struct PyModel {
         F *pout = checked<F>(out, "out", {}, &nout, true);
         int64_t n = broadcast_rows(no, ni, "wo", "wi");
         if (nout != n) value_error("out: wrong shape");
+        check_out_no_overlap(out, wo, wi);
         TransportMode md = to_mode(mode);
         uint8_t s = to_sflags(sf);
         BadCounts bad;

@@ -21,6 +21,8 @@ def hemisphere_grid(n_theta: int, n_phi: int, *, sphere: bool = False) -> np.nda
     for v, name in ((n_theta, "n_theta"), (n_phi, "n_phi")):
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
             raise ValueError(f"{name}: must be a positive integer, got {v!r}")
+    if int(n_theta) * int(n_phi) > 2 ** 28:  # 268 M directions, 6.4 GB of float64 (and as much in temporaries)
+        raise ValueError(f"n_theta * n_phi: must be <= 2**28 directions, got {int(n_theta) * int(n_phi):.3g}")
     top = np.pi if sphere else np.pi / 2
     theta = (np.arange(n_theta) + 0.5) * top / n_theta
     phi = (np.arange(n_phi) + 0.5) * 2 * np.pi / n_phi

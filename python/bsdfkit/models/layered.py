@@ -90,6 +90,11 @@ def _layer(thickness, albedo, g, max_depth, n_samples, seed, mis, method="stocha
         raise ValueError(f"seed: must be < 2**31, got {sd}")
     if md > 1_000_000 or ns > 1_000_000:
         raise ValueError("max_depth, n_samples: must be <= 1e6")
+    # one direction pair runs up to n_samples walks of max_depth steps on one thread, between two
+    # of the pool's interrupt checks: 1e4 x 1e4 takes ~1 s there, 1e6 x 1e6 would take days
+    if md * ns > 100_000_000:
+        raise ValueError(f"max_depth * n_samples: must be <= 1e8 (random-walk steps per direction pair), "
+                         f"got {md} * {ns} = {md * ns:.3g}")
     if mis not in _MIS:
         raise ValueError(f"mis: must be one of {list(_MIS)}, got {mis!r}")
     if method not in _METHODS:
