@@ -44,6 +44,24 @@ def test_sampled_interpolates_and_clamps():
     assert s(np.float32(450)) == 2.0
 
 
+def test_blackbody_extreme_temperatures():
+    # Planck's ratio to its peak at temperatures where the direct formula over- or underflows
+    # (a NaN spectrum before): finite, in [0, 1], and tending to 0 over the visible range both
+    # for T -> 0 (no emission there) and for T -> inf (the peak's value grows as T^5, the visible
+    # part as T: Rayleigh-Jeans); the log form matches the direct one where both are finite.
+    lam = np.array([360.0, 555.0, 830.0])
+    for T in (1e-300, 1e-3, 1e35, 1e300, 1.7e308):
+        v = Spectrum.blackbody(T)(lam)
+        assert np.all(np.isfinite(v)) and np.all((v >= 0) & (v <= 1)), (T, v)
+    assert np.all(Spectrum.blackbody(1e-300)(lam) == 0) and np.all(Spectrum.blackbody(1e300)(lam) < 1e-300)
+    from bsdfkit.spectral.spectrum import _planck_ratio_log
+    for T in (2000.0, 6500.0, 1e6):
+        np.testing.assert_allclose(_planck_ratio_log(lam, T), Spectrum.blackbody(T)(lam), rtol=1e-12)
+    # 1e20 K, 1e35 K: the T^-4 law of the visible part once the peak is far in the UV
+    r = Spectrum.blackbody(1e35)(lam) / Spectrum.blackbody(1e20)(lam)
+    np.testing.assert_allclose(r, 1e-60, rtol=1e-9)
+
+
 def test_constant_blackbody():
     c = Spectrum.constant(0.25)
     np.testing.assert_array_equal(c([360, 555, 830]), 0.25)

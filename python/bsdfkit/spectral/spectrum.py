@@ -50,6 +50,25 @@ def _planck(lam_nm, T):
         return (2 * _H * _C * _C) / (l ** 5 * np.expm1((_H * _C) / (l * _KB * T)))
 
 
+def _planck_ratio_log(lam_nm, T):
+    """Planck's law over its peak value, B(lam, T) / B(lam_max, T), in logarithms: the form for
+    temperatures where the direct ratio over- or underflows (T near 0 or beyond ~1e30 K), where it
+    tends to 0 across the visible range. lam_max = b / T (Wien), so x_max = hc / (lam_max k T)
+    does not depend on T."""
+    l = lam_nm * 1e-9
+    with np.errstate(divide="ignore", over="ignore"):
+        x = (_H * _C) / (l * _KB * T)  # inf where l k T underflows (T near 0): the value is 0 there
+    x_max = (_H * _C) / (_WIEN * _KB)
+
+    def log_expm1(y):
+        with np.errstate(divide="ignore", over="ignore"):
+            return np.where(y > 30, y + np.log1p(-np.exp(-np.minimum(y, 700.0))), np.log(np.expm1(np.minimum(y, 30.0))))
+
+    with np.errstate(divide="ignore"):
+        r = 5 * (np.log(_WIEN / T) - np.log(l)) + log_expm1(np.float64(x_max)) - log_expm1(x)
+    return np.exp(r)
+
+
 class Spectrum:
     """A spectrum: a function of wavelength (nm) given as
 
@@ -216,7 +235,12 @@ class Spectrum:
             return np.full(lam.shape, d[0])
         if k == "blackbody":
             T = d[0]
-            return _planck(lam, T) / _planck(np.float64(_WIEN / T * 1e9), T)
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+                v = _planck(lam, T) / _planck(np.float64(_WIEN / T * 1e9), T)
+            bad = ~np.isfinite(v)
+            if np.any(bad):  # extreme T (the peak's radiance or a term over- or underflows): in logs
+                v = np.where(bad, _planck_ratio_log(np.asarray(lam, np.float64), T), v)
+            return v
         rgb, kind, coeffs, scale, _ = d
         v = scale * uplift.eval_coefficients(coeffs, lam)
         if kind == "illuminant":
