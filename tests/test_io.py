@@ -57,3 +57,12 @@ def test_versions():
     major = int(bk._core.embree_version().split(".")[0])
     assert major == 3
     assert bk._core.openimageio_version().startswith("2.")
+
+
+def test_write_image_exposure_checked(tmp_path):
+    img = np.full((2, 3, 3), 0.5, np.float32)
+    for bad in (np.nan, np.inf, -np.inf):
+        with pytest.raises(ValueError, match="exposure"):
+            io.write_image(tmp_path / "c.png", img, exposure=bad)
+    with pytest.raises(TypeError, match="exposure"):
+        io.write_image(tmp_path / "c.png", img, exposure="bright")

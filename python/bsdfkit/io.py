@@ -1,6 +1,7 @@
 """Image input/output through OpenImageIO (EXR/HDR linear float; PNG/JPEG 8-bit sRGB)."""
 from __future__ import annotations
 
+import math
 import os
 
 import numpy as np
@@ -46,6 +47,12 @@ def write_image(path, img, *, exposure: float = 0.0) -> None:
     EXR/HDR keep linear float values; PNG/JPEG get 2**exposure scaling, the sRGB transfer
     curve and 8-bit quantisation (alpha is left linear)."""
     path = os.fspath(path)
+    try:
+        exposure = float(exposure)
+    except (TypeError, ValueError):
+        raise TypeError(f"exposure: expected a real number, got {exposure!r}") from None
+    if not math.isfinite(exposure):
+        raise ValueError(f"exposure: must be finite, got {exposure}")
     a = np.asarray(img)
     if a.dtype.kind not in "fiu":
         raise TypeError(f"img: expected a real numeric array, got dtype {a.dtype}")
