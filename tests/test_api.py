@@ -314,13 +314,13 @@ def test_out_must_not_overlap_inputs():
     with pytest.raises(ValueError, match="out: must not overlap"):
         m.eval(wo, wi, out=wo)                                  # fast path, exactly aliased
     with pytest.raises(ValueError, match="out: must not overlap"):
-        m.eval(wo[1:], wi[1:], out=buf[:3 * n - 3].reshape(n - 1, 3))  # one row behind
+        m.eval(wo[1:], wi[1:], out=buf[:3 * n - 3].reshape(n - 1, 3))  # one row behind (refused too)
     with pytest.raises(ValueError, match="out: must not overlap"):
         m.eval(wo, wi.astype(np.float32), out=wo)               # general path (mixed dtypes)
     with pytest.raises(ValueError, match="out: must not overlap"):
         m.pdf(wo, wi, out=buf[3 * n - n:3 * n])
     with pytest.raises(ValueError, match="out: must not overlap"):
-        m.eval(wo, wi, out=buf[n:].reshape(n, 3))               # a third of a row per row ahead
+        m.eval(wo, wi, out=buf[n:].reshape(n, 3))               # ahead: a packet's rows land on later inputs
     lam = np.full((n, 4), 550.0)
     with pytest.raises(ValueError, match="out: must not overlap"):
         m.eval(wo, wi, wavelengths=lam, out=buf.reshape(n, 4))  # spectral: out (n, 4) over wo
