@@ -344,9 +344,30 @@ def test_out_must_not_overlap_inputs():
 
 
 def test_size_limits_raise():
-    # sizes that would run for days or exhaust memory are refused up front
+    # sizes that would run for days or exhaust memory (or threads) are refused up front, naming
+    # the argument (2**63 samples and 2**31 threads once failed inside pybind's argument casts)
+    for n in (1025, 2 ** 31, 10 ** 6):
+        with pytest.raises(ValueError, match=r"n: number of threads must be in \[1, 1024\]"):
+            bk.set_num_threads(n)
+    m = bk.Diffuse(0.5)
+    for ns in (2 ** 40 + 1, 2 ** 62, 2 ** 63, 2 ** 70):
+        with pytest.raises(ValueError, match="n_samples: must be <="):
+            m.albedo(bk.direction(0.3), n_samples=ns)
+        with pytest.raises(ValueError, match="n_samples: must be <="):
+            m.albedo(bk.direction(0.3), n_samples=ns, wavelengths=[[450.0, 500, 550, 600]])
     with pytest.raises(ValueError, match=r"n_theta \* n_phi"):
         bk.hemisphere_grid(10 ** 9, 10 ** 9)
     with pytest.raises(ValueError, match=r"max_depth \* n_samples"):
         bk.CoatedDiffuse(0.5, max_depth=10 ** 5, n_samples=10 ** 5)
     bk.CoatedDiffuse(0.5, max_depth=10 ** 4, n_samples=10 ** 4)  # 1e8 steps per pair: allowed
+
+
+def test_sample_flags_out_of_range():
+    # IntFlag takes -1 as ~0 (All): out-of-range values are refused, as the compiled path does
+    m = bk.Diffuse(0.5)
+    z = bk.direction(0.2)
+    for sf in (-1, 4, 255):
+        with pytest.raises(ValueError, match="sample_flags"):
+            m.pdf(z, z, sample_flags=sf)
+        with pytest.raises(ValueError, match="sample_flags"):
+            m.sample(z, n=4, sample_flags=sf)

@@ -521,3 +521,10 @@ def test_exports():
     for name in ("from_mitsuba", "from_pbrt", "parse_pbrt_materials"):
         assert name in bk.__all__
     assert re.search(r"masking=\"?separable", bk.from_mitsuba.__doc__)
+
+
+def test_from_pbrt_binary_file_names_it(tmp_path):
+    p = tmp_path / "scene.pbrt"
+    p.write_bytes(bytes(range(256)) * 4)
+    with pytest.raises(ValueError, match="not a pbrt-v4 scene file"):
+        bk.from_pbrt(p)

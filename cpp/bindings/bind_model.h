@@ -507,7 +507,7 @@ template <template <typename> class Model> struct PyModel {
             return py::none();
         long long n = PyLong_AsLongLong(n_samples.ptr()), sd = PyLong_AsLongLong(seed.ptr());
         if (PyErr_Occurred()) { PyErr_Clear(); return py::none(); }  // beyond 64 bits: the general path
-        if (n < 1 || sd < 0) return py::none();
+        if (n < 1 || n > (int64_t(1) << 40) || sd < 0) return py::none();  // the Python layer words the error
         return o.type == py::detail::npy_api::NPY_FLOAT_ ? albedo_plain<float>(o, n, uint64_t(sd), TransportMode(md))
                                                          : albedo_plain<double>(o, n, uint64_t(sd), TransportMode(md));
     }

@@ -106,12 +106,19 @@ def c_buffer(out: np.ndarray) -> np.ndarray:
     return out if out.flags.c_contiguous else np.empty(out.shape, dtype=out.dtype)
 
 
-def check_int(x, name: str, lo: int) -> int:
+def check_int(x, name: str, lo: int, hi: int | None = None) -> int:
     if isinstance(x, bool) or not isinstance(x, numbers.Integral):
         raise TypeError(f"{name}: expected an integer, got {type(x).__name__}")
     if x < lo:
         raise ValueError(f"{name}: must be >= {lo}, got {x}")
+    if hi is not None and x > hi:
+        raise ValueError(f"{name}: must be <= {hi}, got {x}")
     return int(x)
+
+
+# albedo's n_samples: 2**40 samples per direction run for hours already; beyond 2**63 the C++
+# side cannot even take the number
+MAX_ALBEDO_SAMPLES = 2 ** 40
 
 
 def sample_uniforms(wo: np.ndarray, uc, u, n, seed, names: tuple = (), shapes: tuple = ()):

@@ -8,11 +8,18 @@ from . import _core
 __all__ = ["set_num_threads", "get_num_threads", "release_memory"]
 
 
+# The pool keeps up to n - 1 helper threads alive: far more than any machine's cores would only
+# exhaust the process's threads (set_num_threads(10**6) was accepted, 2**31 failed in pybind).
+MAX_THREADS = 1024
+
+
 def set_num_threads(n: int) -> None:
     """Number of worker threads for the array kernels (default: all cores). Results do not
     depend on it: every element is computed independently and reductions use fixed blocks."""
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
         raise TypeError(f"n: expected an integer, got {type(n).__name__}")
+    if not 1 <= n <= MAX_THREADS:
+        raise ValueError(f"n: number of threads must be in [1, {MAX_THREADS}], got {n}")
     _core.set_num_threads(int(n))
 
 

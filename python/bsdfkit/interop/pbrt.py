@@ -393,12 +393,15 @@ def _parse_statements(st, text, path, depth, where):
 def _read_scene_file(path) -> str:
     """A pbrt scene file's text (``.gz`` files decompressed, as pbrt-v4 reads them)."""
     p = os.fspath(path)
-    if p.endswith(".gz"):
-        import gzip
-        with gzip.open(p, "rt", encoding="utf-8") as fh:
+    try:
+        if p.endswith(".gz"):
+            import gzip
+            with gzip.open(p, "rt", encoding="utf-8") as fh:
+                return fh.read()
+        with open(p, encoding="utf-8") as fh:
             return fh.read()
-    with open(p, encoding="utf-8") as fh:
-        return fh.read()
+    except UnicodeDecodeError as e:  # a binary file (e.g. a .pbrt.gz without the suffix, a PLY)
+        raise ValueError(f"{p}: not a pbrt-v4 scene file (not UTF-8 text at byte {e.start})") from None
 
 
 def _pfail(rec, msg):

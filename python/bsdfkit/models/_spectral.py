@@ -18,7 +18,7 @@ from collections import OrderedDict
 import numpy as np
 
 from .. import _core
-from .._arrays import (as_dirs, broadcast_batch, check_int, check_out, flatten_to, kernel_dtype,
+from .._arrays import (MAX_ALBEDO_SAMPLES, as_dirs, broadcast_batch, check_int, check_out, flatten_to, kernel_dtype,
                        sample_uniforms)
 from ..spectral.spectrum import Spectrum
 
@@ -274,7 +274,7 @@ def sample(model, wo, uc, u, n, seed, wavelengths, mode, sample_flags, out):
 def albedo(model, wo, wavelengths, n_samples, seed, mode):
     core = _spectral_core(model)
     wo, lam = as_dirs(wo, "wo"), check_wavelengths(wavelengths)
-    n_samples = check_int(n_samples, "n_samples", 1)
+    n_samples = check_int(n_samples, "n_samples", 1, MAX_ALBEDO_SAMPLES)
     seed = check_int(seed, "seed", 0)
     batch = broadcast_batch(("wo", "wavelengths"), wo.shape[:-1], lam.shape[:-1])
     dtype = kernel_dtype(wo)

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._arrays import (as_dirs, broadcast_batch, c_buffer, check_int, check_out, flatten_to, kernel_dtype,
+from .._arrays import (MAX_ALBEDO_SAMPLES, as_dirs, broadcast_batch, c_buffer, check_int, check_out, flatten_to, kernel_dtype,
                        planes_order, sample_uniforms)
 from .._dask import dask_eval, is_dask_array
 from .._enums import BxDFFlags, ReflTrans, TransportMode
@@ -222,6 +222,8 @@ def _sflags(sf) -> int:
         v = int(ReflTrans(sf))
     except (ValueError, TypeError):
         raise ValueError(f"sample_flags: must be a ReflTrans, got {sf!r}") from None
+    if not 0 <= int(sf) <= int(ReflTrans.All):  # IntFlag takes -1 as ~0, i.e. All
+        raise ValueError(f"sample_flags: must be a ReflTrans (0..{int(ReflTrans.All)}), got {sf!r}")
     return v
 
 
@@ -448,7 +450,7 @@ class BxDF:
         if r is not None:
             return r
         wo = as_dirs(wo, "wo")
-        n_samples = check_int(n_samples, "n_samples", 1)
+        n_samples = check_int(n_samples, "n_samples", 1, MAX_ALBEDO_SAMPLES)
         seed = check_int(seed, "seed", 0)
         batch, dtype = wo.shape[:-1], kernel_dtype(wo)
         out = np.empty(batch + (3,), dtype)
