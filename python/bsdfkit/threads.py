@@ -14,8 +14,8 @@ MAX_THREADS = 1024
 
 
 def set_num_threads(n: int) -> None:
-    """Number of worker threads for the array kernels (default: all cores). Results do not
-    depend on it: every element is computed independently and reductions use fixed blocks."""
+    """Number of worker threads for the array kernels (default: all cores; 1 to 1024). Results
+    do not depend on it: every element is computed independently and reductions use fixed blocks."""
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
         raise TypeError(f"n: expected an integer, got {type(n).__name__}")
     if not 1 <= n <= MAX_THREADS:
