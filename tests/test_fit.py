@@ -89,6 +89,13 @@ def test_fit_errors():
         bk.fit(t, bk.Conductor, fixed={"colour": 1})
     with pytest.raises(ValueError, match="starts"):
         bk.fit(t, bk.Conductor, starts=0)
+    # weights that fit nothing, or that do not match the pairs fitted, are refused (all-zero
+    # weights once returned the starting model as a converged fit; a wrong length, a bare
+    # numpy broadcast error)
+    with pytest.raises(ValueError, match="weights: all zero"):
+        bk.fit(t, bk.Conductor, weights=0.0)
+    with pytest.raises(ValueError, match="weights: shape"):
+        bk.fit(t, bk.Conductor, weights=np.ones(7))
 
 
 def test_simplify_families_measured_to_analytic(tmp_path):

@@ -245,10 +245,19 @@ def fit(target, family, params=None, init=None, fixed=None, directions=None, los
     floor = FLOOR_FRACTION * float(np.mean(y_t))
     if not floor > 0:
         raise ValueError("target: f |cos| is zero on every pair; nothing to fit")
-    w = np.ones_like(y_t) if weights is None else np.broadcast_to(np.asarray(weights, np.float64)[..., None]
-                                                                  if np.ndim(weights) == 1 else weights, y_t.shape)
+    if weights is None:
+        w = np.ones_like(y_t)
+    else:
+        wa = np.asarray(weights, np.float64)
+        try:
+            w = np.broadcast_to(wa[..., None] if wa.ndim == 1 else wa, y_t.shape)
+        except ValueError:
+            raise ValueError(f"weights: shape {wa.shape} does not match the {len(y_t)} direction pairs fitted "
+                             f"(give (N,) or (N, 3) weights for the directions used)") from None
     if not (np.all(np.isfinite(w)) and np.all(w >= 0)):
         raise ValueError("weights: must be finite and >= 0")
+    if not np.any(w > 0):
+        raise ValueError("weights: all zero; nothing would be fitted")
     res_fn, dres_fn = _residuals(loss, y_t, floor, w)
     base = dict(m0._params)
     # a parameter left to a default derived from others (None, e.g. FilamentCloth's sheen_color =
