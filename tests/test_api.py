@@ -247,6 +247,17 @@ def _unit_boundary_dirs(dtype, per_side=40):
     return w, rejected
 
 
+def _expect_bad_directions(calls, count, first_spectral):
+    """Each (name, call) raises the kernels' ValueError naming `name` and `count` directions; calls
+    from index first_spectral on are spectral, which an RGB-only model may not implement."""
+    for k, (name, call) in enumerate(calls):
+        try:
+            with pytest.raises(ValueError, match=rf"{name}: {count} direction\(s\) are not finite unit"):
+                call()
+        except NotImplementedError:
+            assert k >= first_spectral  # only an RGB-only model's spectral mode may be missing
+
+
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
 def test_unit_tolerance_boundary(any_model, dtype):
     # The kernels test |w|^2 against a precomputed range (batch.h kUnitRange) instead of
@@ -259,12 +270,7 @@ def test_unit_tolerance_boundary(any_model, dtype):
              ("wo", lambda: any_model.sample(w, n=len(w), seed=1)),
              ("wi", lambda: any_model.eval(z, w, wavelengths=np.full((len(w), 4), 550.0, dtype))),
              ("wo", lambda: any_model.sample(w, n=len(w), seed=1, wavelengths=np.full((len(w), 4), 550.0, dtype)))]
-    for k, (name, call) in enumerate(calls):
-        try:
-            with pytest.raises(ValueError, match=rf"{name}: {rejected} direction\(s\) are not finite unit"):
-                call()
-        except NotImplementedError:
-            assert k >= 3  # only an RGB-only model's spectral mode may be missing
+    _expect_bad_directions(calls, rejected, first_spectral=3)
     # both directions of the pair rejected in the same packets (batch.h tests the pair's keys
     # together and counts each only when that test fails): wo's count is the one reported
     with pytest.raises(ValueError, match=rf"wo: {rejected} direction\(s\) are not finite unit"):
@@ -292,12 +298,7 @@ def test_nonfinite_directions_raise_without_crashing(any_model, dtype):
              ("wi", lambda: any_model.eval(z, w, wavelengths=lam)), ("wo", lambda: any_model.pdf(w, z, wavelengths=lam)),
              ("wo", lambda: any_model.sample(w, n=len(w), seed=3, wavelengths=lam)),
              ("wo", lambda: any_model.albedo(bad, n_samples=64, wavelengths=lam[:len(bad)]))]
-    for k, (name, call) in enumerate(calls):
-        try:
-            with pytest.raises(ValueError, match=rf"{name}: {len(bad)} direction\(s\) are not finite unit"):
-                call()
-        except NotImplementedError:
-            assert k >= 6  # only an RGB-only model's spectral mode may be missing
+    _expect_bad_directions(calls, len(bad), first_spectral=6)
 
 
 def test_out_must_not_overlap_inputs():

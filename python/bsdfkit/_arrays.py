@@ -106,6 +106,16 @@ def c_buffer(out: np.ndarray) -> np.ndarray:
     return out if out.flags.c_contiguous else np.empty(out.shape, dtype=out.dtype)
 
 
+def check_real(x, name: str) -> float:
+    """A finite real scalar (bool, strings and arrays refused), as float."""
+    if isinstance(x, bool) or not isinstance(x, (numbers.Real, np.floating, np.integer)):
+        raise TypeError(f"{name}: expected a real number, got {type(x).__name__}")
+    v = float(x)
+    if not math.isfinite(v):
+        raise ValueError(f"{name}: must be finite, got {v}")
+    return v
+
+
 def check_int(x, name: str, lo: int, hi: int | None = None) -> int:
     if isinstance(x, bool) or not isinstance(x, numbers.Integral):
         raise TypeError(f"{name}: expected an integer, got {type(x).__name__}")

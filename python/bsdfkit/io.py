@@ -1,12 +1,12 @@
 """Image input/output through OpenImageIO (EXR/HDR linear float; PNG/JPEG 8-bit sRGB)."""
 from __future__ import annotations
 
-import math
 import os
 
 import numpy as np
 
 from . import _core
+from ._arrays import check_real
 
 __all__ = ["read_image", "write_image", "linear_to_srgb", "srgb_to_linear"]
 
@@ -47,12 +47,7 @@ def write_image(path, img, *, exposure: float = 0.0) -> None:
     EXR/HDR keep linear float values; PNG/JPEG get 2**exposure scaling, the sRGB transfer
     curve and 8-bit quantisation (alpha is left linear)."""
     path = os.fspath(path)
-    try:
-        exposure = float(exposure)
-    except (TypeError, ValueError):
-        raise TypeError(f"exposure: expected a real number, got {exposure!r}") from None
-    if not math.isfinite(exposure):
-        raise ValueError(f"exposure: must be finite, got {exposure}")
+    exposure = check_real(exposure, "exposure")
     a = np.asarray(img)
     if a.dtype.kind not in "fiu":
         raise TypeError(f"img: expected a real numeric array, got dtype {a.dtype}")

@@ -1,11 +1,9 @@
 """``Spectrum``: an immutable spectral value (a function of wavelength in nm) for model parameters."""
 from __future__ import annotations
 
-import math
-import numbers
-
 import numpy as np
 
+from .._arrays import check_real
 from . import colorimetry, named as _named, uplift
 
 __all__ = ["Spectrum"]
@@ -18,13 +16,7 @@ _KB = 1.380649e-23
 _WIEN = 2.897771955e-3       # Wien's displacement constant b, m K
 
 
-def _real(x, name):
-    if isinstance(x, bool) or not isinstance(x, (numbers.Real, np.floating, np.integer)):
-        raise TypeError(f"{name}: expected a real number, got {type(x).__name__}")
-    v = float(x)
-    if not math.isfinite(v):
-        raise ValueError(f"{name}: must be finite, got {v}")
-    return v
+_real = check_real
 
 
 def _array_1d(x, name):
