@@ -299,6 +299,11 @@ def test_nonfinite_directions_raise_without_crashing(any_model, dtype):
              ("wo", lambda: any_model.sample(w, n=len(w), seed=3, wavelengths=lam)),
              ("wo", lambda: any_model.albedo(bad, n_samples=64, wavelengths=lam[:len(bad)]))]
     _expect_bad_directions(calls, len(bad), first_spectral=6)
+    try:  # the gradient kernels (models_grad.cpp) check the same way
+        with pytest.raises(ValueError, match=rf"wi: {len(bad)} direction\(s\) are not finite unit"):
+            any_model.eval_grad(z, w)
+    except TypeError as e:
+        assert "no gradient kernel" in str(e)
 
 
 def test_out_must_not_overlap_inputs():

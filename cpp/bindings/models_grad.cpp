@@ -85,8 +85,8 @@ void grad_batch(const Model &m, const double *wo, const double *wi, int64_t n, T
         LocalModel<Model> mloc = m;
         for (int64_t i = b; i < e; ++i) {
             Vec3<double> o = load3<double, SO>(wo, i), w = load3<double, SI>(wi, i);
-            bo += not_unit(o);
-            bi += not_unit(w);
+            bo += check_dir(&o);
+            bi += check_dir(&w);
             Spectrum<D> v = bsdf_f(mloc, Vec3<D>(o.x, o.y, o.z), Vec3<D>(w.x, w.y, w.z), mode);
             for (int c = 0; c < 3; ++c) {
                 out_f[3 * i + c] = v[c].v;
