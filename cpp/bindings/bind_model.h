@@ -100,11 +100,13 @@ inline void check_sample_no_overlap(std::initializer_list<const py::array *> arr
             if (overlaps(*a[i], *a[c])) value_error("sample: output arrays must not overlap the inputs or each other");
 }
 
-// eval's and pdf's out= may not share memory with wo or wi: the kernels' pointers are restrict
-// and they write a packet's rows before reading the next packet's (an out= one row past wo's
-// start read rows the kernel had already overwritten).
-inline void check_out_no_overlap(const py::array &out, const py::array &wo, const py::array &wi) {
+// eval's and pdf's out= may not share memory with wo or wi (nor, spectral, the wavelengths): the
+// kernels' pointers are restrict and they write a packet's rows before reading the next packet's
+// (an out= one row past wo's start read rows the kernel had already overwritten).
+inline void check_out_no_overlap(const py::array &out, const py::array &wo, const py::array &wi,
+                                 const py::array *lam = nullptr) {
     if (overlaps(out, wo) || overlaps(out, wi)) value_error("out: must not overlap wo or wi");
+    if (lam && overlaps(out, *lam)) value_error("out: must not overlap wavelengths");
 }
 
 inline int64_t broadcast_rows(int64_t a, int64_t b, const char *na, const char *nb) {
@@ -507,7 +509,8 @@ template <template <typename> class Model> struct PyModel {
             return py::none();
         long long n = PyLong_AsLongLong(n_samples.ptr()), sd = PyLong_AsLongLong(seed.ptr());
         if (PyErr_Occurred()) { PyErr_Clear(); return py::none(); }  // beyond 64 bits: the general path
-        if (n < 1 || n > (int64_t(1) << 40) || sd < 0) return py::none();  // the Python layer words the error
+        // beyond _arrays.MAX_ALBEDO_SAMPLES (2**40; its twin) the Python layer words the error
+        if (n < 1 || n > (int64_t(1) << 40) || sd < 0) return py::none();
         return o.type == py::detail::npy_api::NPY_FLOAT_ ? albedo_plain<float>(o, n, uint64_t(sd), TransportMode(md))
                                                          : albedo_plain<double>(o, n, uint64_t(sd), TransportMode(md));
     }

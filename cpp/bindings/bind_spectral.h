@@ -60,8 +60,7 @@ template <template <typename> class SM> struct PySpectral {
         F *po = checked<F>(out, "out", {4}, &n, true);
         const F *pwo = rows<F>(wo, "wo", 3, n, &so), *pwi = rows<F>(wi, "wi", 3, n, &si);
         const double *pl = rows<double>(lam, "wavelengths", 4, n, &sl);
-        check_out_no_overlap(out, wo, wi);
-        if (overlaps(out, lam)) value_error("out: must not overlap wavelengths");
+        check_out_no_overlap(out, wo, wi, &lam);
         TransportMode md = to_mode(mode);
         SpectralBadCounts bad;
         {
@@ -79,8 +78,7 @@ template <template <typename> class SM> struct PySpectral {
         F *po = checked<F>(out, "out", {}, &n, true);
         const F *pwo = rows<F>(wo, "wo", 3, n, &so), *pwi = rows<F>(wi, "wi", 3, n, &si);
         const double *pl = rows<double>(lam, "wavelengths", 4, n, &sl);
-        check_out_no_overlap(out, wo, wi);
-        if (overlaps(out, lam)) value_error("out: must not overlap wavelengths");
+        check_out_no_overlap(out, wo, wi, &lam);
         TransportMode md = to_mode(mode);
         uint8_t s = to_sflags(sf);
         SpectralBadCounts bad;

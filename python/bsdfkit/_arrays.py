@@ -127,7 +127,7 @@ def check_int(x, name: str, lo: int, hi: int | None = None) -> int:
 
 
 # albedo's n_samples: 2**40 samples per direction run for hours already; beyond 2**63 the C++
-# side cannot even take the number
+# side cannot even take the number. Its twin: bind_model.h albedo_fast defers above it.
 MAX_ALBEDO_SAMPLES = 2 ** 40
 
 

@@ -40,8 +40,7 @@ template <typename F> constexpr bool unit_accepts(F d) { // d = |w|^2; a NaN fai
     F t = d - F(1);
     return (t < F(0) ? -t : t) <= kUnitTol<F>;
 }
-template <typename F> inline int64_t not_unit(const Vec3<F> &w) { return !unit_accepts(dot(w, w)); }
-// The scalar loops' check: a direction that fails not_unit is counted and replaced by the normal
+// The scalar loops' check: a direction that unit_accepts refuses is counted and replaced by the normal
 // (0, 0, 1) before the model sees it. The call then raises ValueError (bindings) and never returns
 // the value, but a table model (merl.h, measured.h) must not index its tables with a NaN or an
 // infinity first: MERL and Measured read out of bounds and crashed on them (session 23).
@@ -384,7 +383,7 @@ template <typename F> inline void store1_lanes(F *p, int64_t i, int64_t cnt, con
         for (int64_t j = 0; j < cnt; ++j) p[i + j] = t[j];
     }
 }
-// not_unit's accepted |w|^2 as a closed range [lo, hi] of F, exactly the values it accepts
+// unit_accepts' accepted |w|^2 as a closed range [lo, hi] of F, exactly the values it accepts
 // (d - 1 is exact near 1, Sterbenz), found by stepping from 1 -+ kUnitTol one ulp at a time
 // (ulp 2^-p below 1, 2^-(p-1) above): the packets test it on the bits of |w|^2 (UnitKey below),
 // one comparison per direction instead of a subtraction, an absolute value and a comparison.
@@ -445,13 +444,13 @@ template <typename F> constexpr bool unit_key_checks() {
            unit_key_agrees(F(-std::numeric_limits<F>::quiet_NaN())) && unit_key_agrees(std::numeric_limits<F>::max()) &&
            unit_key_agrees(std::numeric_limits<F>::denorm_min()) && unit_key_agrees(F(2)) && unit_key_agrees(F(0.5));
 }
-static_assert(unit_key_checks<float>() && unit_key_checks<double>(), "UnitKey: the bits test is not_unit's");
+static_assert(unit_key_checks<float>() && unit_key_checks<double>(), "UnitKey: the bits test is unit_accepts'");
 template <typename F> using UnitKeys = Packet<typename UnitKey<F>::I>;
 template <typename F> inline UnitKeys<F> unit_key(const Vec3<Packet<F>> &w) {
     return drjit::reinterpret_array<UnitKeys<F>>(dot(w, w)) - UnitKeys<F>(UnitKey<F>::c);
 }
 template <typename F> inline auto unit_key_ok(const UnitKeys<F> &k) { return k <= UnitKeys<F>(UnitKey<F>::limit); }
-// Lanes that fail not_unit (the padding is unit length).
+// Lanes that unit_accepts refuses (the padding is unit length).
 template <typename F> inline int64_t count_not_unit(const Vec3<Packet<F>> &w) {
     return count_failed(unit_key_ok<F>(unit_key(w)));
 }

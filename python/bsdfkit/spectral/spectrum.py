@@ -16,9 +16,6 @@ _KB = 1.380649e-23
 _WIEN = 2.897771955e-3       # Wien's displacement constant b, m K
 
 
-_real = check_real
-
-
 def _array_1d(x, name):
     try:
         a = np.asarray(x)
@@ -111,13 +108,13 @@ class Spectrum:
     @classmethod
     def constant(cls, value) -> "Spectrum":
         """The same value at every wavelength."""
-        return cls._make("constant", (_real(value, "value"),))
+        return cls._make("constant", (check_real(value, "value"),))
 
     @classmethod
     def blackbody(cls, T) -> "Spectrum":
         """Planck's law at temperature ``T`` (kelvin, > 0), divided by its value at the peak
         wavelength (Wien), so the maximum is 1 (pbrt-v4 ``BlackbodySpectrum``)."""
-        t = _real(T, "T")
+        t = check_real(T, "T")
         if t <= 0:
             raise ValueError(f"T: must be > 0 K, got {t}")
         return cls._make("blackbody", (t,))
