@@ -7,6 +7,7 @@
     python bench/loop_ab.py --aligned                 # outputs on 64-byte lines (streaming stores)
     python bench/loop_ab.py --march x86-64-v3         # an AVX2 build, on an AVX-512 host too
     python bench/loop_ab.py --dtype float64           # the float64 kernels (16 lanes of double)
+    python bench/loop_ab.py --contract --ops eval,pdf # what the (N, 3) rows and the unit check cost
 
 It writes a small C++ program that calls batch.h's eval_batch / pdf_batch / sample_batch (the
 library's kernels, (N, 3) rows in and out, the unit and uniform checks included, no Python) on
@@ -18,6 +19,13 @@ a second time against `git archive <rev> cpp/include` and runs the two binaries 
 sessions measured a kernel change before spending a wheel build on it (session 20's prefetch and
 sample-acceptance changes; CONTRIBUTING). TSC cycles tick at the nominal clock, not the core's:
 compare figures of one run, not across hosts.
+
+--contract adds, for eval and pdf, the same packet loop (the model code, bsdf_f / bsdf_pdf's
+sanitizing, one thread, no chunking) in three variants beside the library's kernel: `rows-nocheck`
+(the (N, 3) rows without the unit check), `planes` (three component planes, as an (N, 3)
+Fortran-order array, with the check) and `planes-nocheck` (neither: Mitsuba's own setting, its
+kernels read planes and check nothing). The differences are what the API's row layout and its
+input contract cost per packet; the variants are measurement only, not library code paths.
 """
 from __future__ import annotations
 
@@ -54,15 +62,80 @@ OPS = ("eval", "pdf", "sample")
 
 DTYPES = {"float32": "float", "float64": "double"}
 
+# --contract: the eval / pdf packet loop of batch.h's pair_packet_loop without its chunking,
+# threads, prefetch and streaming, with or without the unit check, on rows or on planes. The check's
+# count goes to a volatile sink, else the compiler drops it.
+CONTRACT_LOOP = r"""volatile int64_t g_sink;
+static bool g_differ = false;  // a variant's values differ from the library kernel's
+template <bool Check, bool Planes, bool Pdf, class M, class T>
+__attribute__((flatten)) void contract_loop(const M &m0, const T *wo, const T *wi, const T *wo_p, const T *wi_p, T *out, T *out_p) {
+    using P = Packet<T>;
+    const KernelOf_t<M> m = m0;
+    int64_t bo = 0, bi = 0;
+    for (int64_t i = 0; i < N; i += 16) {
+        int64_t cnt = std::min<int64_t>(16, N - i);
+        Vec3<P> o, w;
+        if constexpr (Planes) {
+            o = load3_planes(wo_p, N, i, cnt);
+            w = load3_planes(wi_p, N, i, cnt);
+        } else {
+            o = load3_lanes<3>(wo, i, cnt);
+            w = load3_lanes<3>(wi, i, cnt);
+        }
+        if constexpr (Check) count_not_unit_pair(o, w, &bo, &bi);
+        if constexpr (Pdf) {
+            store1_lanes(out, i, cnt, bsdf_pdf(m, o, w, TransportMode::Radiance, uint8_t(0xff)));
+        } else {
+            auto f = bsdf_f(m, o, w, TransportMode::Radiance);
+            if constexpr (Planes) for (int c = 0; c < 3; ++c) store1_lanes(out_p + c * N, i, cnt, f[c]);
+            else store3_lanes(out, i, cnt, f);
+        }
+    }
+    g_sink = g_sink + bo + bi;
+}
+"""
+CONTRACT_END = r"""    if (g_differ) std::printf("contract variants differ from the library's values\n");"""
+CONTRACT_CALLS = r"""    Vec<F> wo_p(3 * N), wi_p(3 * N), f_p(3 * N);
+    for (int64_t i = 0; i < N; ++i)
+        for (int c = 0; c < 3; ++c) wo_p[c * N + i] = wo[3 * i + c], wi_p[c * N + i] = wi[3 * i + c];
+    const F *a = wo.data(), *b = wi.data(), *ap = wo_p.data(), *bp = wi_p.data();
+    // The variants run the library's model code on the same packets: their values must be the
+    // library kernel's (still in f and pdf), bit for bit.
+    bool same = true;
+    if (ops.find("eval") != std::string::npos) {
+        const Vec<F> lib(f);
+        F *o = f.data(), *op = f_p.data();
+        std::printf(" eval:rows-nocheck %.2f", best([&] { contract_loop<false, false, false>(m, a, b, ap, bp, o, op); }));
+        std::printf(" eval:planes %.2f", best([&] { contract_loop<true, true, false>(m, a, b, ap, bp, o, op); }));
+        std::printf(" eval:planes-nocheck %.2f", best([&] { contract_loop<false, true, false>(m, a, b, ap, bp, o, op); }));
+        same &= std::memcmp(lib.data(), o, sizeof(F) * size_t(3 * N)) == 0;
+        for (int64_t i = 0; i < N; ++i)
+            for (int c = 0; c < 3; ++c) same &= std::memcmp(&lib[3 * i + c], &op[c * N + i], sizeof(F)) == 0;
+    }
+    if (ops.find("pdf") != std::string::npos) {
+        const Vec<F> lib(pdf);
+        F *o = pdf.data();
+        std::printf(" pdf:rows-nocheck %.2f", best([&] { contract_loop<false, false, true>(m, a, b, ap, bp, o, o); }));
+        same &= std::memcmp(lib.data(), o, sizeof(F) * size_t(N)) == 0;
+        std::printf(" pdf:planes %.2f", best([&] { contract_loop<true, true, true>(m, a, b, ap, bp, o, o); }));
+        std::printf(" pdf:planes-nocheck %.2f", best([&] { contract_loop<false, true, true>(m, a, b, ap, bp, o, o); }));
+        same &= std::memcmp(lib.data(), o, sizeof(F) * size_t(N)) == 0;
+    }
+    if (!same) g_differ = true;
+"""
 
-def source(models, ops, aligned=False, dtype="float32") -> str:
+
+def source(models, ops, aligned=False, dtype="float32", contract=False) -> str:
     """The C++ program; aligned: every array starts on a 64-byte line (as bsdfkit's own result
     arrays do, so a model that streams its outputs does so here; batch.h), else where std::vector
     puts it (16 bytes past a page for these sizes, as numpy's arrays); dtype: the models' and
-    arrays' float type (float64: the 16-lane double packets of the float64 rows)."""
+    arrays' float type (float64: the 16-lane double packets of the float64 rows); contract: the
+    eval / pdf loop variants of --contract (module docstring) besides the library's kernels."""
     ct = DTYPES[dtype]
     runs = "\n".join(f'    run("{k}", {MODELS[k].replace("BxDF<float>", f"BxDF<{ct}>")}, ops);' for k in models)
     alloc = "A64" if aligned else "std::allocator"
+    contract_loop, contract_calls = (CONTRACT_LOOP, CONTRACT_CALLS) if contract else ("", "")
+    contract_end = CONTRACT_END if contract else ""
     return f"""#include <bsdfkit/bxdfs/all.h>
 #include <bsdfkit/batch.h>
 #include <x86intrin.h>
@@ -70,6 +143,7 @@ def source(models, ops, aligned=False, dtype="float32") -> str:
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <random>
 #include <string>
 #include <vector>
@@ -95,7 +169,7 @@ template <class Fn> double best(Fn fn) {{
     }}
     return b / (double(N) / {LANES});
 }}
-template <class Model> void run(const char *name, const Model &m, const std::string &ops) {{
+{contract_loop}template <class Model> void run(const char *name, const Model &m, const std::string &ops) {{
     using F = {ct};
     std::mt19937 g(1);
     std::normal_distribution<double> nd;
@@ -119,12 +193,13 @@ template <class Model> void run(const char *name, const Model &m, const std::str
         std::printf(" eval %.2f", best([&] {{ eval_batch<3, 3>(m, wo.data(), wi.data(), N, TransportMode::Radiance, f.data(), g_threads, bad); }}));
     if (ops.find("pdf") != std::string::npos)
         std::printf(" pdf %.2f", best([&] {{ pdf_batch<3, 3>(m, wo.data(), wi.data(), N, TransportMode::Radiance, 0xff, pdf.data(), g_threads, bad); }}));
-    if (ops.find("sample") != std::string::npos) {{
+{contract_calls}    if (ops.find("sample") != std::string::npos) {{
         SampleOut<F> so{{swi.data(), f.data(), pdf.data(), eta.data(), flags.data(), (bool *)valid.data(), (bool *)prop.data()}};
         std::printf(" sample %.2f", best([&] {{ sample_batch<3>(m, wo.data(), uc.data(), u.data(), N, TransportMode::Radiance, 0xff, so, g_threads, bad); }}));
     }}
     std::printf("\\n");
     if (bad.wo + bad.wi + bad.uc + bad.u != 0) std::printf("unexpected bad inputs\\n");
+{contract_end}
 }}
 int main(int argc, char **argv) {{
     if (argc > 1) N = std::atoll(argv[1]);
@@ -180,6 +255,8 @@ def main(argv=None) -> int:
                     help="g++ -march (default native; x86-64-v3: an AVX2 build on any AVX2 host; znver3 on AMD)")
     ap.add_argument("--dtype", default="float32", choices=sorted(DTYPES),
                     help="the kernels' float type (default float32; float64: the float64 rows)")
+    ap.add_argument("--contract", action="store_true",
+                    help="eval / pdf also without the unit check and on planes (see above); not with --base")
     ap.add_argument("--aligned", action="store_true",
                     help="arrays on 64-byte lines, as bsdfkit's results (where StreamOutputs models stream)")
     args = ap.parse_args(argv)
@@ -191,20 +268,24 @@ def main(argv=None) -> int:
     for o in ops:
         if o not in OPS:
             ap.error(f"--ops: unknown op {o!r} (known: {', '.join(OPS)})")
+    if args.contract and args.base is not None:
+        ap.error("--contract measures one tree's headers; leave out --base")
     if args.n < LANES or args.threads < 1 or args.reps < 1 or args.rounds < 1:
         ap.error(f"--n must be >= {LANES}; --threads, --reps and --rounds >= 1")
 
     work = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="bsdfkit-loop-ab-"))
     work.mkdir(parents=True, exist_ok=True)
     src = work / "loops.cpp"
-    src.write_text(source(models, ops, args.aligned, args.dtype))
+    src.write_text(source(models, ops, args.aligned, args.dtype, args.contract))
     b_bin = work / "loops_b"
     build(src, None, b_bin, args.march)
     print(f"# {summary()}; -march={args.march}; {args.dtype}; N = {args.n}, {args.threads} thread(s), best of {args.reps} calls; TSC cycles per packet of {LANES}")
     if args.base is None:
         res = run(b_bin, args)
         for (m, op), v in res.items():
-            print(f"{m:10s} {op:7s} {v:8.2f}")
+            lib = res.get((m, op.split(":")[0])) if ":" in op else None
+            share = f"  {lib / v:.2f}x the library kernel's speed" if lib else ""
+            print(f"{m:10s} {op:22s} {v:8.2f}{share}")
         return 0
 
     base_inc = work / "base"

@@ -73,3 +73,33 @@ def test_bad_march_is_named(tmp_path):
                         "--march", "no-such-cpu", "--keep", str(tmp_path)], capture_output=True, text=True)
     assert r.returncode != 0 and "Traceback" not in r.stderr
     assert "-march=no-such-cpu" in r.stderr and "could not build" in r.stderr
+
+
+def test_contract_source_only_with_the_flag(loop_ab):
+    plain = loop_ab.source(["diffuse"], ["eval", "pdf"])
+    assert "contract_loop" not in plain and "g_differ" not in plain
+    src = loop_ab.source(["diffuse"], ["eval", "pdf"], contract=True)
+    for variant in ("eval:rows-nocheck", "eval:planes", "eval:planes-nocheck", "pdf:rows-nocheck", "pdf:planes",
+                    "pdf:planes-nocheck"):
+        assert f'" {variant} %.2f"' in src
+    assert "contract_loop<true, true, true>" in src and "contract variants differ" in src
+
+
+def test_contract_with_base_is_refused(loop_ab, capsys):
+    with pytest.raises(SystemExit) as e:
+        loop_ab.main(["--contract", "--base", "HEAD"])
+    assert e.value.code == 2 and "--contract" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(shutil.which("g++") is None, reason="needs g++ (the library's compiler)")
+def test_contract_variants_run_and_match_the_library(tmp_path):
+    # N = 4099: whole packets and a padded tail; the program compares every variant's values with
+    # the library kernel's, bit for bit, and says so when they differ
+    out = subprocess.run([sys.executable, str(_PATH), "--contract", "--models", "cond_r", "--ops", "eval,pdf",
+                          "--n", "4099", "--reps", "2", "--keep", str(tmp_path)], check=True, capture_output=True,
+                         text=True).stdout
+    assert "differ" not in out and "unexpected bad inputs" not in out
+    ops = {l.split()[1]: float(l.split()[2]) for l in out.splitlines() if l.startswith("cond_r")}
+    assert set(ops) == {"eval", "pdf", "eval:rows-nocheck", "eval:planes", "eval:planes-nocheck", "pdf:rows-nocheck",
+                        "pdf:planes", "pdf:planes-nocheck"}
+    assert all(v > 0 for v in ops.values())
