@@ -950,8 +950,10 @@ inline void load_uniforms(const F *uc, const F *u, int64_t i, int64_t cnt, Packe
 // sample_chunk on the packet path: the same outputs and rules, kPacketWidth lanes at a time, in
 // one pass: the uniforms are checked on the loaded packets and the byte outputs (flags, valid,
 // pdf_is_proportional) written from registers (the scalar path's staging pass is not needed).
-// Returns the bad (wo, uc, u) counts.
-template <int SO, bool Stream, typename Model, typename F, typename Sampler>
+// Returns the bad (wo, uc, u) counts. Full: e - b is a multiple of kPacketWidth, so every packet's
+// loads and stores take their full-packet form, with no lane-count branch per load and store
+// (sample_chunks runs a chunk's whole packets so and its last, partial one in a call of its own).
+template <int SO, bool Stream, bool Full = false, typename Model, typename F, typename Sampler>
 inline void sample_chunk_packet(const Model &m, const Sampler &smp, bool model_ok, int64_t b, int64_t e,
                                 const F *__restrict wo, const F *__restrict uc, const F *__restrict u,
                                 F *__restrict owi, F *__restrict of, F *__restrict opdf, F *__restrict oeta,
@@ -969,7 +971,7 @@ inline void sample_chunk_packet(const Model &m, const Sampler &smp, bool model_o
     const auto w_wi = RowsOut<F, 3, Stream>{owi}.writer(), w_f = RowsOut<F, 3, Stream>{of}.writer();
     const auto w_pdf = RowsOut<F, 1, Stream>{opdf}.writer(), w_eta = RowsOut<F, 1, Stream>{oeta}.writer();
     for (int64_t i = b; i < e; i += kW<F>) {
-        int64_t cnt = std::min(kW<F>, e - i);
+        const int64_t cnt = Full ? kW<F> : std::min(kW<F>, e - i);
         if (i + kPrefetchAhead + kW<F> <= pf_end) {
             const int64_t j = i + kPrefetchAhead;
             prefetch_dirs<SO>(dirs_of<SO>(wo), j);
@@ -1001,6 +1003,14 @@ inline void sample_chunk_packet(const Model &m, const Sampler &smp, bool model_o
 // sample_batch's loop over chunks, the packet path streaming its outputs or not (Stream): one
 // instantiation per parallel_chunks call, as both loops inlined in one chunk function cost the
 // plain one 3-8 % in cache (session 21).
+// A chunk's whole packets run in a loop whose lane count is the constant kPacketWidth, its last,
+// partial packet (the array's padded tail) out of line through the same model code: in the loop
+// with a run-time count every load and store kept its tail branch and GCC spilled around them.
+// Zen 4, bench/loop_ab.py harness, 1 thread, medians of 5 alternating runs (session 24): float32
+// in cache 1.01-1.13x (Diffuse 1.12x, DiffuseTransmission 1.13x, NormalizedFresnel 1.07x, rough
+// Dielectric 0.99x), N = 1e6 1.00-1.17x; float64 in cache 0.96-1.15x (smooth Dielectric 0.96x,
+// Diffuse / Hair 1.15x); an AVX2 build (x86-64-v3) 0.97-1.06x. Bit-identical: the same packets.
+// (The eval / pdf loop split so ran 0.77-1.17x by model: not done.)
 template <int SO, bool Stream, typename Model, typename F, typename Sampler>
 void sample_chunks(const Model &m, const Sampler &sampler, const F *wo, const F *uc, const F *u, int64_t n,
                    bool model_ok, const SampleOut<F> &out, int nthreads, BadCounts &bad) {
@@ -1008,12 +1018,18 @@ void sample_chunks(const Model &m, const Sampler &sampler, const F *wo, const F 
         const DenormalsFlushedFor<Model> ftz;
         LocalModel<Model> mloc = m;
         if constexpr (is_vectorized<Model>::value) {
-            int64_t c[3];
-            sample_chunk_packet<SO, Stream>(mloc, sampler, model_ok, b, e, wo, uc, u, out.wi, out.f, out.pdf, out.eta,
-                                            out.flags, out.valid, out.proportional, n >= kPrefetchMinN, c);
-            bad.wo += c[0];
-            bad.uc += c[1];
-            bad.u += c[2];
+            int64_t c[3] = {0, 0, 0}, t[3] = {0, 0, 0};
+            const int64_t e_full = b + (e - b) / kW<F> * kW<F>;
+            sample_chunk_packet<SO, Stream, true>(mloc, sampler, model_ok, b, e_full, wo, uc, u, out.wi, out.f, out.pdf,
+                                                  out.eta, out.flags, out.valid, out.proportional, n >= kPrefetchMinN, c);
+            if (e_full < e)  // out of line (by value, but t), so the loop above keeps its registers
+                [=, &t]() __attribute__((noinline)) {
+                    sample_chunk_packet<SO, false>(mloc, sampler, model_ok, e_full, e, wo, uc, u, out.wi, out.f,
+                                                   out.pdf, out.eta, out.flags, out.valid, out.proportional, false, t);
+                }();
+            bad.wo += c[0] + t[0];
+            bad.uc += c[1] + t[1];
+            bad.u += c[2] + t[2];
         } else {
             F stage[kChunk];
             int64_t bo = 0, buc = count_bad_uniforms(uc, b, e), bu = count_bad_uniforms(u, 2 * b, 2 * e);
