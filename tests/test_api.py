@@ -158,6 +158,38 @@ def test_bad_directions():
         m.albedo([1.0, 1.0, 1.0])
 
 
+def test_direction_helpers_refuse_bad_input():
+    # bk.direction gave [nan nan nan] for theta=nan; the angles must be finite real numbers
+    for bad in (np.nan, np.inf, -np.inf, [0.1, np.nan]):
+        with pytest.raises(ValueError, match=r"^theta: must be finite"):
+            bk.direction(bad, 0.3)
+        with pytest.raises(ValueError, match=r"^phi: must be finite"):
+            bk.direction(0.3, bad)
+    with pytest.raises(ValueError, match=r"theta: must be finite, got 2 NaN or infinite"):
+        bk.direction([np.nan, 0.2, np.inf])
+    for name, kw in (("theta", dict(theta="0.3")), ("phi", dict(theta=0.3, phi=[True, False]))):
+        with pytest.raises(TypeError, match=f"^{name}: expected a real numeric array"):
+            bk.direction(**kw)
+    d = bk.direction(np.float32(0.5), [0, 1])   # good input unchanged: float64, broadcast
+    assert d.dtype == np.float64 and d.shape == (2, 3)
+    np.testing.assert_allclose(np.linalg.norm(d, axis=-1), 1)
+    rd = bk.directions.random_directions
+    rng = np.random.default_rng(0)
+    for n, err in ((-1, ValueError), (2 ** 28 + 1, ValueError), (2.5, TypeError), (np.nan, TypeError),
+                   (True, TypeError)):
+        with pytest.raises(err, match=r"^n: "):
+            rd(n, rng)
+    with pytest.raises(TypeError, match=r"^rng: expected a numpy.random.Generator"):
+        rd(4, 0)
+    assert rd(0, rng).shape == (0, 3)
+    v = rd(100, rng, upper=True)
+    assert v.shape == (100, 3) and np.all(v[:, 2] >= 0)
+    np.testing.assert_allclose(np.linalg.norm(v, axis=1), 1)
+    for n_theta, n_phi in ((np.nan, 4), (4, np.inf), (0, 4), (4, 2.0)):
+        with pytest.raises(ValueError, match=r"^n_(theta|phi): must be a positive integer"):
+            bk.hemisphere_grid(n_theta, n_phi)
+
+
 def test_bad_sample_arguments():
     m = bk.Dielectric(1.5, alpha=0.1)
     z = np.array([0, 0, 1.0])

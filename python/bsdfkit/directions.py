@@ -3,16 +3,25 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._arrays import _as_real_array, check_int
+
 __all__ = ["direction", "hemisphere_grid", "random_directions"]
 
 
 def direction(theta, phi=0.0) -> np.ndarray:
     """Unit direction(s) from polar angle ``theta`` (from +z, radians) and azimuth ``phi``
-    (from +x towards +y, radians); broadcasts, returns float64 (..., 3)."""
-    theta = np.asarray(theta, dtype=np.float64)
-    phi = np.asarray(phi, dtype=np.float64)
+    (from +x towards +y, radians); broadcasts, returns float64 (..., 3). Raises TypeError for
+    non-numeric input and ValueError naming ``theta`` or ``phi`` for NaN or infinite angles."""
+    theta, phi = _finite_angles(theta, "theta"), _finite_angles(phi, "phi")
     st = np.sin(theta)
     return np.stack(np.broadcast_arrays(st * np.cos(phi), st * np.sin(phi), np.cos(theta)), axis=-1)
+
+
+def _finite_angles(x, name: str) -> np.ndarray:
+    a = _as_real_array(x, name).astype(np.float64)
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name}: must be finite, got {np.count_nonzero(~np.isfinite(a))} NaN or infinite value(s)")
+    return a
 
 
 def hemisphere_grid(n_theta: int, n_phi: int, *, sphere: bool = False) -> np.ndarray:
@@ -32,7 +41,12 @@ def hemisphere_grid(n_theta: int, n_phi: int, *, sphere: bool = False) -> np.nda
 
 def random_directions(n: int, rng: np.random.Generator, *, upper: bool = False) -> np.ndarray:
     """``n`` directions uniform on the unit sphere (or, with ``upper``, the upper hemisphere:
-    z folded to z >= 0), float64 (n, 3), drawn from ``rng`` as normalised Gaussian triples."""
+    z folded to z >= 0), float64 (n, 3), drawn from ``rng`` as normalised Gaussian triples.
+    ``n``: an integer in [0, 2**28] (as :func:`hemisphere_grid`'s size limit)."""
+    n = check_int(n, "n", 0, 2 ** 28)
+    if not isinstance(rng, np.random.Generator):
+        raise TypeError(f"rng: expected a numpy.random.Generator (np.random.default_rng(seed)), "
+                        f"got {type(rng).__name__}")
     v = rng.standard_normal((n, 3))
     v /= np.linalg.norm(v, axis=1, keepdims=True)
     if upper:
