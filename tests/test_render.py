@@ -455,6 +455,40 @@ def test_bad_meshes_raise_value_error():
         s.add_material(object())
 
 
+def test_bad_cameras_name_the_field():
+    """Coordinates the float32 renderer cannot square (|x| > 1e18) name the field, before the
+    parallel-up check (eye=(3e38, 0, 0) once failed as "up: must not be parallel")."""
+    assert R.CAMERA_MAX_COORD == 1e18
+    for field, v in (("origin", (3e38, 0, 0)), ("origin", (1e39, 0, 0)), ("origin", (1e300, 0, 0)),
+                     ("target", (0, -2e18, 0)), ("up", (0, 1e39, 0))):
+        with pytest.raises(ValueError, match=rf"^camera\.{field}: coordinates must be within \+-1e\+18"):
+            R.Camera(**{field: v})._checked()
+        with pytest.raises(ValueError, match=rf"^camera\.{field}: coordinates"):   # before the scene is built
+            R.render(R.Scene(camera=R.Camera(**{field: v})), width=4, height=4, spp=1, progress=False)
+    for field, v in (("origin", (0, np.nan, 0)), ("target", (np.inf, 0, 0)), ("up", (0, 1)), ("up", [[0, 1, 0]])):
+        with pytest.raises(ValueError, match=rf"^camera\.{field}: expected 3 finite numbers"):
+            R.Camera(**{field: v})._checked()
+    with pytest.raises(TypeError, match=r"^camera\.origin: expected a real numeric array"):
+        R.Camera(origin="abc")._checked()
+    for up in ((0, 0, 0), (0, 1e-30, 0)):
+        with pytest.raises(ValueError, match=r"^camera\.up: must not be \(nearly\) zero"):
+            R.Camera(up=up)._checked()
+    with pytest.raises(ValueError, match=r"^camera\.up: must not be parallel"):
+        R.Camera(origin=(0, 5, 0), target=(0, 0, 0), up=(0, 2, 0))._checked()
+    # equal in float32 (the renderer's precision), distinct in float64
+    with pytest.raises(ValueError, match=r"^camera\.target: must differ from camera\.origin"):
+        R.Camera(origin=(1, 0, 0), target=(1 + 1e-9, 0, 0))._checked()
+    for fov, err in (("30", TypeError), (np.nan, ValueError), (180, ValueError)):
+        with pytest.raises(err, match=r"^camera\.fov: "):
+            R.Camera(fov=fov)._checked()
+    with pytest.raises(TypeError, match=r"^fov: "):
+        R.Scene().look_at((0, 1, 5), (0, 1, 0), fov="30")
+    # the largest accepted camera renders a finite image
+    sc = R.Scene(environment="sky").add_sphere(bk.Diffuse(0.5), center=(0, 0, 0), radius=1.0)
+    sc.camera = R.Camera(origin=(1e18, 1e18, -1e18), target=(-1e18, -1e18, 1e18), up=(0, 1e18, 0), fov=30)
+    assert np.all(np.isfinite(R.render(sc, width=8, height=4, spp=4, progress=False)))
+
+
 def test_missing_and_corrupt_env_map(tmp_path):
     missing = tmp_path / "nope.exr"
     with pytest.raises(FileNotFoundError) as ei:
@@ -592,4 +626,3 @@ def test_project_matches_the_renderer():
     px = R.project(sc.camera, [0.9, 1.3, -0.4], (w, h))
     # the centroid of a perspective sphere's disc is within a pixel of its projected centre here
     np.testing.assert_allclose([xs.mean() + 0.5, ys.mean() + 0.5], px, atol=1.0)
-

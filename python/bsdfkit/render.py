@@ -22,7 +22,8 @@ Conventions
   ``spectral=True`` traces 4 wavelengths per path instead (pbrt-v4's hero-wavelength scheme) and
   returns linear sRGB the same way; see :func:`preview`.
 * The camera is a pinhole: ``fov`` is the full horizontal field of view in degrees; image x
-  grows along ``forward x up``. Pixels are box-filtered (uniform jitter inside the pixel).
+  grows along ``forward x up``; its origin, target and up coordinates lie within +-1e18 (the
+  renderer works in float32, :class:`Camera`). Pixels are box-filtered (uniform jitter inside the pixel).
 * ``max_depth`` counts scattering events (pbrt-v4): 0 shows the environment only, 1 is direct
   lighting. Mitsuba's ``max_depth`` counts path vertices: Mitsuba's value is ours + 1.
 * Objects: spheres, triangle meshes (numpy arrays, or OBJ/PLY/... files through Assimp), fibres
@@ -61,6 +62,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import _core
+from ._arrays import _as_real_array, check_real
 
 __all__ = ["Camera", "Scene", "preview", "render", "default_environment", "procedural_environment", "default_scene",
            "gallery_scene", "hair_swatch", "hair_scene", "hair_row_scene", "load_mesh", "parse_spec", "write_gallery",
@@ -453,25 +455,47 @@ def _spec_of(model):
 
 # ---------------------------------------------------------------- scene
 
+#: Largest |coordinate| of the camera's origin, target and up: the renderer takes them as
+#: float32 and squares target - origin and forward x up there (cpp/bindings/render.cpp
+#: render_impl, render/camera.h look_at); within 1e18 those squares (<= 12e36) stay below
+#: float32's max 3.4e38, where beyond it they overflowed and the camera failed as "up: must not
+#: be parallel to the view direction".
+CAMERA_MAX_COORD = 1e18
+
+
 @dataclass
 class Camera:
-    """Pinhole camera: position, look-at point, up hint and full horizontal field of view (degrees)."""
+    """Pinhole camera: position, look-at point, up hint and full horizontal field of view (degrees).
+
+    origin, target, up: 3 finite numbers each, within +-``CAMERA_MAX_COORD`` (1e18: the renderer
+    works in float32); target must differ from origin (in float32) and up must not be (nearly)
+    zero or parallel to the view direction; fov in (0, 180). Checked when the camera is used
+    (``render``, ``project``, ``Scene.look_at``): ValueError naming the field."""
     origin: tuple = (0.0, 1.45, 5.6)
     target: tuple = (0.0, 0.9, 0.0)
     up: tuple = (0.0, 1.0, 0.0)
     fov: float = 32.0
 
     def _checked(self):
-        o, t, u = (np.asarray(x, dtype=np.float64) for x in (self.origin, self.target, self.up))
-        for name, x in (("origin", o), ("target", t), ("up", u)):
+        vecs = []
+        for name in ("origin", "target", "up"):
+            x = _as_real_array(getattr(self, name), f"camera.{name}").astype(np.float64)
             if x.shape != (3,) or not np.all(np.isfinite(x)):
                 raise ValueError(f"camera.{name}: expected 3 finite numbers")
+            if np.any(np.abs(x) > CAMERA_MAX_COORD):
+                raise ValueError(f"camera.{name}: coordinates must be within +-{CAMERA_MAX_COORD:g} (the renderer "
+                                 f"squares distances in float32, whose max is 3.4e38), got {x.tolist()}")
+            vecs.append(x)
+        o, t, u = vecs
         f = t - o
-        if not np.linalg.norm(f) > 0:
-            raise ValueError("camera.target: must differ from camera.origin")
+        f32 = t.astype(np.float32) - o.astype(np.float32)
+        if not (np.linalg.norm(f) > 0 and np.dot(f32, f32) > 0):   # the renderer's test is in float32
+            raise ValueError("camera.target: must differ from camera.origin (in float32, the renderer's precision)")
+        if not np.linalg.norm(u) >= 1e-6:
+            raise ValueError(f"camera.up: must not be (nearly) zero, got {u.tolist()}")
         if np.linalg.norm(np.cross(f / np.linalg.norm(f), u)) < 1e-6:
             raise ValueError("camera.up: must not be parallel to the view direction")
-        fov = float(self.fov)
+        fov = check_real(self.fov, "camera.fov")
         if not 0 < fov < 180:
             raise ValueError("camera.fov: must be in (0, 180) degrees")
         return o.tolist(), t.tolist(), u.tolist(), fov
@@ -597,7 +621,7 @@ class Scene:
     def look_at(self, origin, target, up=(0.0, 1.0, 0.0), fov=None) -> "Scene":
         """Sets the camera (``fov`` in degrees, full horizontal; kept if None)."""
         self.camera = Camera(tuple(_vec3(origin, "origin")), tuple(_vec3(target, "target")),
-                             tuple(_vec3(up, "up")), self.camera.fov if fov is None else float(fov))
+                             tuple(_vec3(up, "up")), self.camera.fov if fov is None else check_real(fov, "fov"))
         self.camera._checked()
         return self
 
