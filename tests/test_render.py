@@ -626,3 +626,34 @@ def test_project_matches_the_renderer():
     px = R.project(sc.camera, [0.9, 1.3, -0.4], (w, h))
     # the centroid of a perspective sphere's disc is within a pixel of its projected centre here
     np.testing.assert_allclose([xs.mean() + 0.5, ys.mean() + 0.5], px, atol=1.0)
+
+
+def test_project_refuses_bad_input():
+    """project() returned NaN for NaN points (and for a point at the camera) without an error."""
+    cam = R.Camera(origin=(0.2, 1.6, 4.0), target=(0.0, 0.9, 0.0), fov=40.0)
+    good = np.array([[0.9, 1.3, -0.4], [0.0, 0.9, 0.0]])
+    px = R.project(cam, good, (96, 64))
+    assert px.shape == (2, 2) and np.all(np.isfinite(px))
+    np.testing.assert_allclose(px[1], [48, 32], atol=1e-12)   # the target projects to the image centre
+    for bad in ([np.nan, 1, 0], [[0, 1, 0], [0, np.inf, 0]]):
+        with pytest.raises(ValueError, match=r"^points: 1 point\(s\) contain NaN or Inf"):
+            R.project(cam, bad, (96, 64))
+    # the camera's own position (0/0 before) and a point behind it have no pixel position
+    for bad in ([0.2, 1.6, 4.0], [[0.0, 0.9, 0.0], [0.4, 2.3, 8.0]]):
+        with pytest.raises(ValueError, match=r"^points: 1 point\(s\) are not in front of the camera"):
+            R.project(cam, bad, (96, 64))
+    with pytest.raises(ValueError, match=r"^points: expected an array of points with last axis of length 3"):
+        R.project(cam, [0.0, 0.9], (96, 64))
+    with pytest.raises(TypeError, match=r"^points: expected a real numeric array"):
+        R.project(cam, "x", (96, 64))
+    for size, err, match in (((96,), ValueError, r"^size: expected \(width, height\)"),
+                             (96, ValueError, r"^size: expected \(width, height\)"),
+                             ((0, 64), ValueError, r"^size: width and height must be > 0"),
+                             ((96, -1), ValueError, r"^size: width and height must be > 0"),
+                             ((np.nan, 64), ValueError, r"^size \(width\): must be finite"),
+                             ((96, np.inf), ValueError, r"^size \(height\): must be finite"),
+                             (("96", 64), TypeError, r"^size \(width\): expected a real number")):
+        with pytest.raises(err, match=match):
+            R.project(cam, good, size)
+    with pytest.raises(TypeError, match=r"^camera: expected a bsdfkit.render.Camera"):
+        R.project((0, 0, 0), good, (96, 64))

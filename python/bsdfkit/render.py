@@ -779,19 +779,46 @@ GALLERY_SPP = 48
 def project(camera: Camera, points, size) -> np.ndarray:
     """Pixel coordinates (x right, y down, pixel centres at +0.5) of world ``points`` (..., 3) in
     an image of ``size`` = (width, height) seen by the pinhole ``camera`` (the renderer's
-    convention: full horizontal fov, image x along forward x up)."""
+    convention: full horizontal fov, image x along forward x up).
+
+    Raises ValueError naming ``points`` for NaN / infinite points, points not in front of the
+    camera (on or behind the plane through its origin facing the view direction: they have no
+    pixel position) and positions beyond float64's range; ``size`` must be two finite numbers > 0."""
+    if not isinstance(camera, Camera):
+        raise TypeError(f"camera: expected a bsdfkit.render.Camera, got {type(camera).__name__}")
     o, t, u, fov = (np.asarray(v, dtype=np.float64) for v in camera._checked())
+    p = _as_real_array(points, "points")
+    if p.ndim == 0 or p.shape[-1] != 3:
+        raise ValueError(f"points: expected an array of points with last axis of length 3, got shape {p.shape}")
+    p = p.astype(np.float64)
+    if not np.all(np.isfinite(p)):
+        raise ValueError(f"points: {np.count_nonzero(~np.all(np.isfinite(p), axis=-1))} point(s) contain NaN or Inf")
+    try:
+        w, h = size
+    except (TypeError, ValueError):
+        raise ValueError(f"size: expected (width, height), got {size!r}") from None
+    w, h = check_real(w, "size (width)"), check_real(h, "size (height)")
+    if not (w > 0 and h > 0):
+        raise ValueError(f"size: width and height must be > 0, got {size!r}")
     f = (t - o) / np.linalg.norm(t - o)
     r = np.cross(f, u)
     r /= np.linalg.norm(r)
     up = np.cross(r, f)
-    d = np.asarray(points, dtype=np.float64) - o
-    z = d @ f
     th = math.tan(math.radians(float(fov)) / 2)
-    w, h = size
-    x = (1 + (d @ r) / (z * th)) * w / 2
-    y = (1 - (d @ up) / (z * th * h / w)) * h / 2
-    return np.stack([x, y], axis=-1)
+    with np.errstate(all="ignore"):
+        d = p - o
+        z = d @ f
+        x = (1 + (d @ r) / (z * th)) * w / 2
+        y = (1 - (d @ up) / (z * th * h / w)) * h / 2
+    behind = np.count_nonzero(~(z > 0))
+    if behind:
+        raise ValueError(f"points: {behind} point(s) are not in front of the camera (on or behind the plane through "
+                         "its origin facing the view direction); they have no pixel position")
+    xy = np.stack([x, y], axis=-1)
+    if not np.all(np.isfinite(xy)):
+        raise ValueError(f"points: {np.count_nonzero(~np.all(np.isfinite(xy), axis=-1))} point(s) project beyond "
+                         "float64's range (too close to the camera's plane for their offset, or too large)")
+    return xy
 
 
 def _labelled_gallery(path, img, sc, names, size):
