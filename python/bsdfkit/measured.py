@@ -15,8 +15,8 @@ import os
 
 import numpy as np
 
-from .models.measured import (MERL, MERL_DIMS, MERL_SCALE, Measured, read_merl, read_tensor, tensor_bytes,
-                              write_tensor)
+from .models.measured import (_F32_MAX, MERL, MERL_DIMS, MERL_SCALE, Measured, read_merl, read_tensor,
+                              tensor_bytes, write_tensor)
 
 __all__ = ["write_merl", "merl_directions", "read_merl", "check_isotropic", "tabulate", "projected_area",
            "read_tensor", "write_tensor", "tensor_bytes", "MERL", "Measured"]
@@ -73,7 +73,8 @@ def write_merl(path, model, *, check: bool = True) -> str:
     ``.binary`` file (3 int32 dims, then float64 red, green, blue planes, little-endian, each
     value f / scale at the bin centre, see :func:`merl_directions`). Bins where either direction
     is below the horizon are written as -1 ("not measured"). ``check`` tests isotropy first
-    (:func:`check_isotropic`). Returns the absolute path."""
+    (:func:`check_isotropic`). Raises ValueError for values :func:`read_merl` would refuse
+    (non-finite, or beyond float32's max once divided by the scales). Returns the absolute path."""
     if not hasattr(model, "eval"):
         raise TypeError(f"model: expected a bsdfkit model, got {type(model).__name__}")
     if check:
@@ -85,6 +86,9 @@ def write_merl(path, model, *, check: bool = True) -> str:
     raw = np.where(ok[..., None], raw, -1.0)
     if not np.all(np.isfinite(raw)):
         raise ValueError(f"model: {model!r} gave non-finite values on the MERL grid")
+    if np.any(raw > _F32_MAX):
+        raise ValueError(f"model: {model!r} gave values up to {float(raw.max()):.9g} on the MERL grid (after MERL's "
+                         f"channel scales), beyond float32's max {_F32_MAX:.9g}: read_merl refuses them")
     ap = os.path.abspath(os.fspath(path))
     with open(ap, "wb") as fh:
         fh.write(np.asarray(MERL_DIMS, "<i4").tobytes())

@@ -276,6 +276,27 @@ def test_hostile_tensor_files(tabulated, tmp_path):
     bad(lambda g: g["vndf"].__setitem__((0, 2), 0.0), "vndf.*integrates to zero")
     bad(lambda g: g.__setitem__("theta_i", g["theta_i"][::-1].copy()), "'theta_i'")
     bad(lambda g: g.__setitem__("jacobian", np.array([1, 1], np.uint8)), "'jacobian'")
+    # a spectral file whose RGB projection leaves float32 (the negative lobes of the sRGB
+    # matching weights lift it above the largest spectrum value): its red channel evaluated to
+    # 0 in float32 before
+    wl = np.linspace(360, 830, 32).astype(np.float32)
+    w_red = mm._spectral_to_rgb_weights(wl.astype(np.float64))[0]
+    lum = np.einsum("c,ptcyx->ptyx", LUM, f["rgb"])
+    for peak, ok in ((np.float32(3e38), False), (np.float32(1e30), True)):
+        g = {k: v.copy() for k, v in f.items() if k != "rgb"}
+        g["wavelengths"] = wl
+        g["spectra"] = np.where((w_red > 0)[None, None, :, None, None], peak * np.sign(lum[:, :, None]),
+                                np.float32(0)).astype(np.float32)
+        if ok:
+            m = bk.Measured.from_bytes(mm.tensor_bytes(g))
+            wo, wi = pairs(np.random.default_rng(1), 200, zmin=0.3)
+            f32 = m.eval(wo.astype(np.float32), wi.astype(np.float32))
+            np.testing.assert_allclose(f32, m.eval(wo, wi), rtol=1e-5)
+            assert np.all(np.isfinite(f32)) and f32[:, 0].max() > 1e29
+        else:
+            with pytest.raises(ValueError, match=r"<tensor data>: field 'spectra': its RGB projection reaches "
+                                                 r"4\.\d+e\+38, beyond float32's max 3\.40282347e\+38"):
+                bk.Measured.from_bytes(mm.tensor_bytes(g))
     # an absurd declared size: no allocation, an error naming the field
     i = data.index(b"vndf")
     shape_at = i + 4 + 2 + 1 + 8

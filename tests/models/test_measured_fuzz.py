@@ -65,16 +65,27 @@ def test_fuzz_merl_parser(merl_bytes, muts, cut):
 
 
 def test_fuzz_merl_values_reach_a_model(merl_bytes, tmp_path):
-    """Mutated payload bytes that stay finite load and evaluate finitely."""
+    """Mutated payload bytes: values that leave float32's range (a mutated exponent byte easily
+    gives 1e240) fail naming the values; mutated mantissa bytes (bytes 0-5 of a float64) keep
+    them in range, and the model evaluates finitely in float64 and float32."""
     rng = np.random.default_rng(0)
-    b = bytearray(merl_bytes)
-    for pos in rng.integers(12, len(b), 200):
-        b[pos] = rng.integers(0, 256)
-    p = tmp_path / "m.binary"
-    p.write_bytes(bytes(b))
-    try:
-        m = bk.MERL.load(p)
-    except ValueError as e:
-        assert "values: non-finite" in str(e)
-        return
-    assert np.all(np.isfinite(m.eval(WO, WO[::-1])))
+    n_values = (len(merl_bytes) - 12) // 8
+    for mantissa_only in (False, True):
+        b = bytearray(merl_bytes)
+        if mantissa_only:
+            pos = 12 + 8 * rng.integers(0, n_values, 200) + rng.integers(0, 6, 200)
+        else:
+            pos = rng.integers(12, len(b), 200)
+        for q in pos:
+            b[q] = rng.integers(0, 256)
+        p = tmp_path / f"m{int(mantissa_only)}.binary"
+        p.write_bytes(bytes(b))
+        try:
+            m = bk.MERL.load(p)
+        except ValueError as e:
+            assert not mantissa_only
+            assert "values: non-finite" in str(e) or "exceeds float32's max" in str(e)
+            continue
+        assert mantissa_only or np.all(np.frombuffer(bytes(b), "<f8", offset=12) <= np.finfo(np.float32).max)
+        assert np.all(np.isfinite(m.eval(WO, WO[::-1])))
+        assert np.all(np.isfinite(m.eval(WO.astype(np.float32), WO[::-1].astype(np.float32))))

@@ -3,6 +3,7 @@ BRDFRead.cpp's lookup_brdf_val), the write_merl -> MERL.load round trip, the tab
 (chi^2, consistency, efficiency), extremes and hostile files."""
 import os
 import pickle
+import re
 
 import numpy as np
 import pytest
@@ -129,6 +130,17 @@ def test_write_merl_rejects_anisotropic(tmp_path):
     assert not os.path.exists(tmp_path / "a.binary")
 
 
+def test_write_merl_refuses_what_read_merl_refuses(tmp_path):
+    """A model whose values leave float32's range once divided by MERL's scales: write_merl
+    refuses to write a file read_merl would refuse."""
+    def huge(wo, wi):
+        return np.full(np.broadcast_shapes(wo.shape, wi.shape), 1e300)
+    with pytest.raises(ValueError, match=r"^model: .* gave values up to 1\.5e\+303 on the MERL grid .* beyond "
+                                         r"float32's max 3\.40282347e\+38"):
+        bk.measured.write_merl(tmp_path / "h.binary", bk.Custom(huge, name="huge"))
+    assert not os.path.exists(tmp_path / "h.binary")
+
+
 # ---------------------------------------------------------------- model contract
 
 def test_value_semantics_and_pickle(glossy_file, tmp_path):
@@ -253,3 +265,22 @@ def test_truncated_and_inconsistent(tmp_path):
         p.write_bytes(data[:12] + planes.tobytes())
         with pytest.raises(ValueError, match="values: non-finite"):
             bk.MERL.load(p)
+    # finite float64 values beyond float32's max (the table is evaluated in float32 too, where
+    # they became inf and then 0 with no error); negative values of any size mark unmeasured bins
+    planes = np.frombuffer(data, "<f8", offset=12).copy()
+    for big in (1e300, 1e39, 3.4028236e38):
+        planes[12345] = big
+        p = tmp_path / "big.binary"
+        p.write_bytes(data[:12] + planes.tobytes())
+        msg = (rf"big\.binary: values: {re.escape(f'{big:.9g}')} at \(channel, theta_h, theta_d, phi_d\) = "
+               r"\(0, 0, 68, 105\) exceeds float32's max 3\.40282347e\+38")
+        with pytest.raises(ValueError, match=msg):
+            bk.MERL.load(p)
+    planes[12345], planes[54321] = np.finfo(np.float32).max, -1e300
+    p = tmp_path / "edge.binary"
+    p.write_bytes(data[:12] + planes.tobytes())
+    m = bk.MERL.load(p)
+    assert not m.measured[3, 31, 141, 0] and m.values[3, 31, 141, 0] == 0
+    np.testing.assert_allclose(m.values[0, 68, 105, 0], float(np.finfo(np.float32).max) / 1500, rtol=1e-15)
+    wo = bk.hemisphere_grid(6, 12)
+    assert np.all(np.isfinite(m.eval(wo.astype(np.float32), wo[::-1].astype(np.float32))))

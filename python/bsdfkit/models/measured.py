@@ -32,6 +32,11 @@ MERL_SCALE = (1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0)
 MERL_DIMS = (90, 90, 180)
 #: Sampler resolution: incidence-angle tables and azimuth columns (rows are MERL's 90 theta_h bins).
 MERL_SAMPLER_K, MERL_SAMPLER_NPHI = 32, 64
+#: float32's largest value: the C++ tables keep a float32 copy of their values for float32
+#: evaluation (merl.h v32; the measured warps), where a larger value became inf and float32
+#: calls returned 0 or inf without an error. File values are checked against it (MERL's are
+#: then divided by ~1500: headroom for the float32 arithmetic on them).
+_F32_MAX = float(np.finfo(np.float32).max)
 
 _INTERPOLATION = {"nearest": "MERLNearest", "linear": "MERLLinear"}
 _LOCK = threading.Lock()
@@ -94,7 +99,9 @@ def read_merl(path) -> tuple[np.ndarray, np.ndarray, str, str]:
     Format (MERL BRDFRead.cpp): 3 int32 (90, 90, 180), then 3 x 90 x 90 x 180 float64,
     channel-planar (all red, then green, then blue), C order [theta_h][theta_d][phi_d],
     little-endian. Raises ValueError naming the file and the field for a short header, other
-    dimensions, a payload of the wrong length, or NaN/infinite values.
+    dimensions, a payload of the wrong length, NaN/infinite values, or values beyond float32's
+    max 3.4e38 (the table is evaluated in float32 too). Negative values ("not measured") of any
+    size are accepted.
     """
     ap, data = _read_bytes(path, "MERL")
     return parse_merl(data, ap)
@@ -114,6 +121,10 @@ def parse_merl(data: bytes, ap: str = "<bytes>") -> tuple[np.ndarray, np.ndarray
     if not np.all(np.isfinite(raw)):
         bad = np.argwhere(~np.isfinite(raw))[0]
         raise ValueError(f"{ap}: values: non-finite value at (channel, theta_h, theta_d, phi_d) = {tuple(int(b) for b in bad)}")
+    if np.any(raw > _F32_MAX):
+        bad = tuple(int(b) for b in np.argwhere(raw > _F32_MAX)[0])
+        raise ValueError(f"{ap}: values: {raw[bad]:.9g} at (channel, theta_h, theta_d, phi_d) = {bad} exceeds "
+                         f"float32's max {_F32_MAX:.9g} (the table is evaluated in float32 too)")
     measured = np.moveaxis(raw >= 0, 0, -1)
     values = np.moveaxis(raw, 0, -1) * np.asarray(MERL_SCALE)
     values = np.where(measured, values, 0.0)
@@ -449,9 +460,10 @@ def _finite(a, fname, name, nonneg=False):
 
 def validate_measured(fields: dict, name: str) -> dict:
     """Check the fields of an RGL measured-BRDF tensor file as pbrt-v4 / Mitsuba do (names,
-    dtypes, shapes, consistency), plus values (finite; ndf, sigma, vndf, luminance >= 0; theta_i
-    increasing in [0, pi/2]; phi_i increasing; the anisotropic reduction 1, 2 or 4). Returns
-    the derived description (isotropic, reduction, jacobian, rgb table, ...)."""
+    dtypes, shapes, consistency), plus values (finite; a spectral file's RGB projection within
+    float32's range; ndf, sigma, vndf, luminance >= 0; theta_i increasing in [0, pi/2]; phi_i
+    increasing; the anisotropic reduction 1, 2 or 4). Returns the derived description
+    (isotropic, reduction, jacobian, rgb table, ...)."""
     desc = _check_field(fields, "description", name, 1, np.uint8)
     theta = _check_field(fields, "theta_i", name, 1, np.float32)
     phi = _check_field(fields, "phi_i", name, 1, np.float32)
@@ -510,6 +522,9 @@ def validate_measured(fields: dict, name: str) -> dict:
         rgb = np.einsum("cl,ptlyx->ptcyx", w, spec.astype(np.float64))
     else:
         rgb = spec.astype(np.float64)
+    if spectral and rgb.size and float(np.abs(rgb).max()) > _F32_MAX:
+        raise ValueError(f"{name}: field 'spectra': its RGB projection reaches {float(np.abs(rgb).max()):.9g}, beyond "
+                         f"float32's max {_F32_MAX:.9g} (the RGB table is evaluated in float32 too)")
     return dict(description=bytes(desc).decode("utf-8", "replace"), isotropic=isotropic, reduction=reduction,
                 jacobian=bool(jac[0]), spectral=spectral, rgb=rgb, theta_i=theta.astype(np.float64),
                 phi_i=phi.astype(np.float64))
