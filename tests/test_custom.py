@@ -51,6 +51,69 @@ def test_custom_with_sampler_and_errors():
     assert bk.Custom(f=lambert, name="x") == bk.Custom(f=lambert, name="x") != bk.Custom(f=lambert, name="y")
 
 
+def test_custom_callback_values_must_fit_the_call():
+    """A callback's values beyond the call's dtype (1e39 in float32; 1e308 whose albedo overflows
+    float64) raise ValueError naming the function instead of returning inf; a sampler must
+    return finite unit vectors of the batch's shape; pdf's shape must broadcast to the batch."""
+    def const(c):
+        return lambda wo, wi: np.full(np.broadcast_shapes(wo.shape, wi.shape)[:-1] + (3,), c)
+    wo = bk.direction(0.4, 0.2)
+    w32 = wo.astype(np.float32)
+    big = bk.Custom(f=const(1e39), name="big")
+    with pytest.raises(ValueError, match=r"^f \(big\): returned values up to 1e\+39, beyond float32's max "
+                                         r"3\.40282e\+38"):
+        big.eval(w32, w32)
+    with pytest.raises(ValueError, match=r"^f \(big\): returned values up to 1e\+39, beyond float32's max"):
+        big.albedo(w32, n_samples=16)
+    with pytest.raises(ValueError, match=r"^f \(big\): returned values up to 1e\+39, beyond float32's max"):
+        big.sample(w32, n=4)
+    np.testing.assert_allclose(big.eval(wo, wo), 1e39)              # fits float64
+    np.testing.assert_allclose(big.albedo(wo, n_samples=16), np.pi * 1e39, rtol=1e-12)
+    ok32 = bk.Custom(f=const(1e38), name="ok32")
+    np.testing.assert_allclose(ok32.eval(w32, w32), 1e38, rtol=1e-7)
+    np.testing.assert_allclose(ok32.albedo(w32, n_samples=16), np.pi * 1e38, rtol=1e-6)   # pi e38 < 3.4e38
+    huge = bk.Custom(f=const(1e308), name="huge")
+    assert np.all(huge.eval(wo, wo) == 1e308)
+    with pytest.raises(ValueError, match=r"^f \(huge\): the albedo estimate .* overflows float64"):
+        huge.albedo(wo, n_samples=16)                              # was [inf inf inf]
+    with pytest.raises(ValueError, match=r"^f \(x\): the albedo estimate .* overflows float32"):
+        bk.Custom(f=const(2e38), name="x").albedo(w32, n_samples=16)   # pi * 2e38 > float32's max
+
+    def pdf(wo, wi):
+        return np.where(wi[..., 2] * wo[..., 2] > 0, 1 / (2 * np.pi), 0.0)
+
+    def uniform(wo, uc, u):
+        z = u[..., 0] * np.sign(wo[..., 2])
+        r = np.sqrt(1 - z * z)
+        return np.stack([r * np.cos(2 * np.pi * u[..., 1]), r * np.sin(2 * np.pi * u[..., 1]), z], -1)
+    lam = const(0.5 / np.pi)
+    for name, sampler, match in (("long", lambda wo, uc, u: 2 * uniform(wo, uc, u),
+                                  r"returned 5 direction\(s\) that are not finite unit vectors"),
+                                 ("nan", lambda wo, uc, u: np.full(wo.shape, np.nan), r"returned 5 direction"),
+                                 ("flat", lambda wo, uc, u: uniform(wo, uc, u)[..., :2], r"returned shape \(5, 2\); "
+                                  r"expected \(5, 3\)")):
+        c = bk.Custom(f=lam, pdf=pdf, sample=sampler, name=name)
+        with pytest.raises(ValueError, match=rf"^sample \({name}\): {match}"):
+            c.sample(wo, n=5)
+        with pytest.raises(ValueError, match=rf"^sample \({name}\): "):
+            c.albedo(wo, n_samples=5)
+    s = bk.Custom(f=lam, pdf=pdf, sample=uniform, name="u").sample(wo, n=5)
+    assert np.all(s.valid) and np.allclose(np.linalg.norm(s.wi, axis=1), 1)
+    # a bad wo is named as such before the functions see it (a sampler built on wo returned a
+    # non-unit wi for it, which was reported as the sampler's fault)
+    mirror = bk.Custom(f=lam, pdf=pdf, sample=lambda wo, uc, u: wo * np.array([-1.0, -1.0, 1.0]), name="mirror")
+    for call in (lambda: mirror.sample([0, 0, 2.0], n=2), lambda: mirror.albedo([0, 0, 2.0], n_samples=4),
+                 lambda: mirror.eval([0, 0, 2.0], wo)):
+        with pytest.raises(ValueError, match=r"^wo: 1 direction\(s\) are not finite unit vectors"):
+            call()
+    with pytest.raises(ValueError, match=r"^uc: 1 sample value"):
+        mirror.sample(wo, [1.5], [[0.1, 0.2]])
+    with pytest.raises(ValueError, match=r"^pdf \(p\): returned shape \(2,\); expected \(4,\)"):
+        bk.Custom(f=lam, pdf=lambda wo, wi: np.ones(2), sample=uniform, name="p").pdf(np.tile(wo, (4, 1)), wo)
+    with pytest.raises(ValueError, match=r"^pdf \(p\): returned values up to 1e\+39, beyond float32's max"):
+        bk.Custom(f=lam, pdf=lambda wo, wi: np.full(wi.shape[:-1], 1e39), sample=uniform, name="p").pdf(w32, w32)
+
+
 def test_every_plot_view_accepts_custom(tmp_path):
     import matplotlib.pyplot as plt
     c = bk.Custom(f=lambert, name="my lambert")

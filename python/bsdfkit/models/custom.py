@@ -13,7 +13,11 @@ surface, f without the cosine):
 Without ``sample`` (and ``pdf``) wi is drawn from the cosine-weighted hemisphere on wo's side
 (both hemispheres, half each, with ``transmission=True``), which is what ``albedo`` and the
 sampling view then use. Values are computed in float64 (float32 inputs give float32 outputs).
-Negative or non-finite values from ``f`` or ``pdf`` raise ``ValueError``. Two Custom models
+``ValueError`` naming the function is raised when ``f`` or ``pdf`` returns negative or
+non-finite values, or values beyond the largest number of the call's dtype (3.4e38 for float32
+inputs), or a shape that does not broadcast to the batch; when ``sample`` returns anything but
+finite unit vectors of the batch's shape (a direction it cannot draw is a unit vector whose
+``pdf`` is 0); and when ``albedo``'s estimate (the mean of f |cos| / pdf) overflows. Two Custom models
 are equal when they wrap the same functions with the same name; ``repr`` shows the functions'
 names (it cannot be evaluated back). Pickling works for module-level functions.
 """
@@ -37,6 +41,16 @@ def _bad_uniform(u) -> int:
     return int(np.count_nonzero(~((u >= 0) & (u <= 1))))  # NaN fails both
 
 
+def _check_fits(v: np.ndarray, dtype, what: str) -> None:
+    """``v`` (finite, >= 0) must be representable in the output dtype: a float32 call stored
+    1e39 as inf before."""
+    dtype = np.dtype(dtype)
+    top = float(np.finfo(dtype).max)
+    if v.size and float(v.max()) > top:
+        raise ValueError(f"{what}: returned values up to {float(v.max()):.6g}, beyond {dtype.name}'s max {top:.6g} "
+                         f"(the call's dtype)")
+
+
 class _PyCore:
     """The ``_core`` model interface (eval / pdf / sample / albedo into preallocated outputs)
     implemented in numpy around the user's functions, so BxDF's argument handling is shared."""
@@ -51,7 +65,7 @@ class _PyCore:
 
     pdf_fast = sample_fast = albedo_fast = eval_fast
 
-    def _f(self, wo, wi):
+    def _f(self, wo, wi, dtype=np.float64):
         v = np.asarray(self.p["f"](wo, wi), dtype=np.float64)
         batch = np.broadcast_shapes(wo.shape[:-1], wi.shape[:-1])
         if v.shape == batch:
@@ -59,19 +73,26 @@ class _PyCore:
         try:
             v = np.broadcast_to(v, batch + (3,))
         except ValueError:
-            raise ValueError(f"f: returned shape {v.shape}; expected {batch + (3,)} or {batch}") from None
+            raise ValueError(f"f ({self.p['name']}): returned shape {v.shape}; expected {batch + (3,)} "
+                             f"or {batch}") from None
         if not np.all(np.isfinite(v)) or np.any(v < 0):
             raise ValueError(f"f ({self.p['name']}): returned negative or non-finite values")
+        _check_fits(v, dtype, f"f ({self.p['name']})")
         same = wo[..., 2] * wi[..., 2] > 0
         keep = (wo[..., 2] != 0) & (same | self.p["transmission"])
         return np.where(keep[..., None], v, 0.0)
 
-    def _pdf(self, wo, wi, sf=3):
+    def _pdf(self, wo, wi, sf=3, dtype=np.float64):
         if self.p["pdf"] is not None:
-            p = np.broadcast_to(np.asarray(self.p["pdf"](wo, wi), dtype=np.float64),
-                                np.broadcast_shapes(wo.shape[:-1], wi.shape[:-1]))
+            p = np.asarray(self.p["pdf"](wo, wi), dtype=np.float64)
+            batch = np.broadcast_shapes(wo.shape[:-1], wi.shape[:-1])
+            try:
+                p = np.broadcast_to(p, batch)
+            except ValueError:
+                raise ValueError(f"pdf ({self.p['name']}): returned shape {p.shape}; expected {batch}") from None
             if not np.all(np.isfinite(p)) or np.any(p < 0):
                 raise ValueError(f"pdf ({self.p['name']}): returned negative or non-finite values")
+            _check_fits(p, dtype, f"pdf ({self.p['name']})")
         else:
             p = np.abs(wi[..., 2]) / np.pi * (0.5 if self.p["transmission"] else 1.0)
         same = wo[..., 2] * wi[..., 2] > 0
@@ -79,18 +100,34 @@ class _PyCore:
         allowed &= same | self.p["transmission"]
         return np.where(allowed & (wo[..., 2] != 0), p, 0.0)
 
+    # Each entry point counts the bad inputs first and returns the counts (BxDF raises naming the
+    # input) before calling the user's functions: a non-unit wo would otherwise come back as a
+    # complaint about what the functions returned.
     def eval(self, wo, wi, mode, out):
-        wo64, wi64 = wo.astype(np.float64), wi.astype(np.float64)
-        out[...] = self._f(wo64, wi64)
-        return _bad(wo), _bad(wi)
+        bad = _bad(wo), _bad(wi)
+        if any(bad):
+            return bad
+        out[...] = self._f(wo.astype(np.float64), wi.astype(np.float64), out.dtype)
+        return bad
 
     def pdf(self, wo, wi, mode, sf, out):
-        out[...] = self._pdf(wo.astype(np.float64), wi.astype(np.float64), sf)
-        return _bad(wo), _bad(wi)
+        bad = _bad(wo), _bad(wi)
+        if any(bad):
+            return bad
+        out[...] = self._pdf(wo.astype(np.float64), wi.astype(np.float64), sf, out.dtype)
+        return bad
 
     def _draw(self, wo, uc, u):
         if self.p["sample"] is not None:
-            return np.asarray(self.p["sample"](wo, uc, u), dtype=np.float64)
+            wi = np.asarray(self.p["sample"](wo, uc, u), dtype=np.float64)
+            if wi.shape != wo.shape:
+                raise ValueError(f"sample ({self.p['name']}): returned shape {wi.shape}; expected {wo.shape}")
+            bad = _bad(wi)
+            if bad:
+                raise ValueError(f"sample ({self.p['name']}): returned {bad} direction(s) that are not finite unit "
+                                 "vectors (|wi|^2 must equal 1 within 1e-4; mark a direction it cannot draw by "
+                                 "pdf = 0)")
+            return wi
         r, phi = np.sqrt(u[..., 0]), 2 * np.pi * u[..., 1]        # Malley: cosine-weighted
         z = np.sqrt(np.maximum(0.0, 1 - u[..., 0]))
         side = np.where(wo[..., 2] < 0, -1.0, 1.0)
@@ -99,13 +136,16 @@ class _PyCore:
         return np.stack([r * np.cos(phi), r * np.sin(phi), side * z], -1)
 
     def sample(self, wo, uc, u, mode, sf, wi_out, f_out, pdf_out, flags_out, eta_out, valid_out, prop_out):
+        bad = _bad(wo), _bad_uniform(uc), _bad_uniform(u)
+        if any(bad):
+            return bad
         n = len(uc)
         wo64 = np.broadcast_to(wo.astype(np.float64), (n, 3))
         uc64 = np.minimum(uc.astype(np.float64), 1 - 2 ** -53)
         u64 = np.minimum(u.astype(np.float64), 1 - 2 ** -53)
         wi = self._draw(wo64, uc64, u64)
-        f = self._f(wo64, wi)
-        p = self._pdf(wo64, wi, sf)
+        f = self._f(wo64, wi, f_out.dtype)
+        p = self._pdf(wo64, wi, sf, pdf_out.dtype)
         ok = (p > 0) & np.any(f > 0, axis=-1) & (wi[:, 2] != 0)
         wi_out[...] = np.where(ok[:, None], wi, np.array([0.0, 0.0, 1.0]))  # invalid: the normal
         f_out[...] = np.where(ok[:, None], f, 0.0)
@@ -116,9 +156,11 @@ class _PyCore:
         eta_out[...] = 1.0
         valid_out[...] = ok
         prop_out[...] = False
-        return _bad(wo), _bad_uniform(uc), _bad_uniform(u)
+        return bad
 
     def albedo(self, wo, n_samples, seed, mode, out):
+        if _bad(wo):
+            return _bad(wo)
         rng = np.random.default_rng(seed)
         chunk = max(1, 1_000_000 // max(1, len(wo)))
         acc = np.zeros((len(wo), 3))
@@ -128,12 +170,18 @@ class _PyCore:
             wo_k = np.repeat(wo.astype(np.float64), k, axis=0)
             uc, u = rng.random(len(wo_k)), rng.random((len(wo_k), 2))
             wi = self._draw(wo_k, uc, u)
-            f, p = self._f(wo_k, wi), self._pdf(wo_k, wi)
+            f, p = self._f(wo_k, wi, out.dtype), self._pdf(wo_k, wi, dtype=out.dtype)
             w = np.where(p > 0, np.abs(wi[:, 2]) / np.where(p > 0, p, 1.0), 0.0)
-            acc += (f * w[:, None]).reshape(len(wo), k, 3).sum(1)
+            with np.errstate(over="ignore", invalid="ignore"):
+                acc += (f * w[:, None]).reshape(len(wo), k, 3).sum(1)
             done += k
-        out[...] = acc / n_samples
-        return _bad(wo)
+        est = acc / n_samples
+        top = float(np.finfo(out.dtype).max)
+        if not (np.all(np.isfinite(est)) and float(est.max(initial=0.0)) <= top):
+            raise ValueError(f"f ({self.p['name']}): the albedo estimate (the mean of f |cos| / pdf) overflows "
+                             f"{out.dtype.name} (max {top:.6g})")
+        out[...] = est
+        return 0
 
 
 class Custom(BxDF, register=False):  # a user model: not in the registry of shipped models
