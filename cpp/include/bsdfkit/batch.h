@@ -477,13 +477,14 @@ template <typename F> inline int64_t count_bad_uniforms(const F *p, int64_t b, i
 
 // ---- Direction arrays as the packet path reads them. S (a template argument) is 3 for rows
 // (an (N, 3) C-order array: x y z interleaved, transposed to packets through load3_lanes), 0
-// for one broadcast direction, and kAnyLayout for a layout known only at run time (Dirs::layout;
-// one instantiation of the model code then serves every combination, the layout being a branch
-// per packet that every lane shares). Planes (structure of arrays, what Mitsuba's kernels read:
-// an (N, 3) Fortran-order array, i.e. the x, y and z components each contiguous, `plane`
-// elements apart) load as three packet loads, no transposition.
+// for one broadcast direction, kPlanesLayout for planes, and kAnyLayout for a layout known only at
+// run time (Dirs::layout; one instantiation of the model code then serves every combination, the
+// layout being a branch per packet that every lane shares). Planes (structure of arrays, what
+// Mitsuba's kernels read: an (N, 3) Fortran-order array, i.e. the x, y and z components each
+// contiguous, `plane` elements apart) load as three packet loads, no transposition.
 enum class DirLayout : uint8_t { Rows, One, Planes };
 inline constexpr int kAnyLayout = -1;
+inline constexpr int kPlanesLayout = -2;
 template <typename F> struct Dirs {
     const F *p;
     DirLayout layout;
@@ -496,7 +497,9 @@ template <typename F> inline Vec3<Packet<F>> load3_planes(const F *p, int64_t pl
                            load1_lanes(p + 2 * plane, i, cnt, F(1)));
 }
 template <int S, typename F> inline Vec3<Packet<F>> load_dirs(const Dirs<F> &d, int64_t i, int64_t cnt) {
-    if constexpr (S != kAnyLayout) {
+    if constexpr (S == kPlanesLayout) {
+        return load3_planes(d.p, d.plane, i, cnt);
+    } else if constexpr (S != kAnyLayout) {
         return load3_lanes<S>(d.p, i, cnt);
     } else {
         if (d.layout == DirLayout::Planes) return load3_planes(d.p, d.plane, i, cnt);
@@ -537,6 +540,8 @@ template <int S, typename F> inline void prefetch_dirs(const Dirs<F> &d, int64_t
     constexpr size_t B = sizeof(F) * size_t(kW<F>);
     if constexpr (S == 3) {
         prefetch_span(d.p + 3 * j, 3 * B);
+    } else if constexpr (S == kPlanesLayout) {
+        for (int c = 0; c < 3; ++c) prefetch_span(d.p + c * d.plane + j, B);
     } else if constexpr (S == kAnyLayout) {
         if (d.layout == DirLayout::Rows) prefetch_span(d.p + 3 * j, 3 * B);
         else if (d.layout == DirLayout::Planes)
@@ -722,14 +727,20 @@ void pair_packet_loop(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int6
         // flags) then cannot alias the outputs, so their loads and the flag mask leave the loop.
         const Compute cp = compute;
         const auto wr = out.writer();
+        // Planes: local copies of the direction arrays' descriptors too, which the outputs' stores
+        // cannot alias, so their pointers and plane strides stay in registers (the planes' eval
+        // 1.1-1.2x, pdf 1.0-1.6x in cache on Zen 4). Rows read the captured descriptors as before:
+        // even a local reference to them changed GCC's code for the light rows kernels, 0.88x.
+        constexpr bool local = SO == kPlanesLayout && SI == kPlanesLayout;
+        const Dirs<F> cwo = wo, cwi = wi;
         const int64_t pf_end = prefetch ? e : b;  // prefetch while i + kPrefetchAhead + kW <= pf_end
         for (int64_t i = b; i < e; i += kW<F>) {
             int64_t cnt = std::min(kW<F>, e - i);
             if (i + kPrefetchAhead + kW<F> <= pf_end) {
-                prefetch_dirs<SO>(wo, i + kPrefetchAhead);
-                prefetch_dirs<SI>(wi, i + kPrefetchAhead);
+                prefetch_dirs<SO>(local ? cwo : wo, i + kPrefetchAhead);
+                prefetch_dirs<SI>(local ? cwi : wi, i + kPrefetchAhead);
             }
-            Vec3<Packet<F>> o = load_dirs<SO>(wo, i, cnt), w = load_dirs<SI>(wi, i, cnt);
+            Vec3<Packet<F>> o = load_dirs<SO>(local ? cwo : wo, i, cnt), w = load_dirs<SI>(local ? cwi : wi, i, cnt);
             count_not_unit_pair(o, w, &bo, &bi);
             wr.put(i, cnt, cp(mloc, o, w, i, cnt));
         }
@@ -818,11 +829,24 @@ void pdf_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMod
 // not all rows: planes (SoA) read without transposition. eval writes f as rows (out_plane = 0)
 // or as three planes out_plane elements apart. The same model code and packets as
 // eval_batch / pdf_batch, so the values are bit-identical to theirs for any layout. Plain
-// stores (no streaming).
+// stores (no streaming). Both directions as planes (and eval's f as planes), the SoA call,
+// have a loop of their own with the layout known at compile time: through the run-time layout
+// path the per-packet layout branches left planes slower than rows on Zen 4 (SoA / rows 0.77-0.91x
+// for Diffuse, bench/RESULTS_zen4.md of session 23).
 template <typename Model, typename F>
 void eval_batch_dirs(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_t n, TransportMode mode, F *out,
                      int64_t out_plane, int nthreads, BadCounts &bad) {
     static_assert(is_vectorized<Model>::value, "eval_batch_dirs: a packet model (Vectorized = true)");
+    const auto f = [mode](const auto &mm, const auto &o, const auto &w, int64_t, int64_t) { return bsdf_f(mm, o, w, mode); };
+    if (wo.layout == DirLayout::Planes && wi.layout == DirLayout::Planes && out_plane != 0) {
+        pair_packet_loop<kPlanesLayout, kPlanesLayout>(
+            m, wo, wi, n, nthreads, bad,
+            store_out([out, out_plane](int64_t i, int64_t cnt, const Spectrum<Packet<F>> &v) {
+                for (int c = 0; c < 3; ++c) store1_lanes(out + c * out_plane, i, cnt, v[c]);
+            }),
+            f);
+        return;
+    }
     pair_packet_loop<kAnyLayout, kAnyLayout>(
         m, wo, wi, n, nthreads, bad,
         store_out([out, out_plane](int64_t i, int64_t cnt, const Spectrum<Packet<F>> &v) {
@@ -832,16 +856,20 @@ void eval_batch_dirs(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64
                 for (int c = 0; c < 3; ++c) store1_lanes(out + c * out_plane, i, cnt, v[c]);
             }
         }),
-        [mode](const auto &mm, const auto &o, const auto &w, int64_t, int64_t) { return bsdf_f(mm, o, w, mode); });
+        f);
 }
 template <typename Model, typename F>
 void pdf_batch_dirs(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_t n, TransportMode mode, uint8_t sf,
                     F *out, int nthreads, BadCounts &bad) {
     static_assert(is_vectorized<Model>::value, "pdf_batch_dirs: a packet model (Vectorized = true)");
-    pair_packet_loop<kAnyLayout, kAnyLayout>(
-        m, wo, wi, n, nthreads, bad,
-        store_out([out](int64_t i, int64_t cnt, const Packet<F> &v) { store1_lanes(out, i, cnt, v); }),
-        [mode, sf](const auto &mm, const auto &o, const auto &w, int64_t, int64_t) { return bsdf_pdf(mm, o, w, mode, sf); });
+    const auto pdf = [mode, sf](const auto &mm, const auto &o, const auto &w, int64_t, int64_t) {
+        return bsdf_pdf(mm, o, w, mode, sf);
+    };
+    const auto store = store_out([out](int64_t i, int64_t cnt, const Packet<F> &v) { store1_lanes(out, i, cnt, v); });
+    if (wo.layout == DirLayout::Planes && wi.layout == DirLayout::Planes)
+        pair_packet_loop<kPlanesLayout, kPlanesLayout>(m, wo, wi, n, nthreads, bad, store, pdf);
+    else
+        pair_packet_loop<kAnyLayout, kAnyLayout>(m, wo, wi, n, nthreads, bad, store, pdf);
 }
 
 template <typename F> struct SampleOut {
