@@ -704,6 +704,24 @@ template <typename Store> struct StoreOut {
 };
 template <typename Store> inline StoreOut<Store> store_out(const Store &s) { return {s}; }
 
+// eval's f as three component planes `plane` elements apart (an (N, 3) Fortran-order array),
+// each plane a RowsOut<F, 1, Stream> of its own (streamed where that plane starts on a line).
+template <typename F, bool Stream> struct PlanesOut {
+    using Plane = RowsOut<F, 1, Stream>;
+    static constexpr bool kStream = Plane::kStream;
+    F *p;
+    int64_t plane;
+    struct Writer {
+        const typename Plane::Writer w[3];
+        void put(int64_t i, int64_t cnt, const Spectrum<Packet<F>> &v) const {
+            for (int c = 0; c < 3; ++c) w[c].put(i, cnt, v[c]);
+        }
+    };
+    Writer writer() const {
+        return Writer{{Plane{p}.writer(), Plane{p + plane}.writer(), Plane{p + 2 * plane}.writer()}};
+    }
+};
+
 // A per-chunk local copy of the model's trivially copyable kernel (core/bxdf.h: the model, or
 // its `Kernel` base when it holds a shared table): its parameters then cannot alias the outputs,
 // so they stay in registers instead of being reloaded, and alias-checked, every iteration.
@@ -828,23 +846,33 @@ void pdf_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMod
 // eval / pdf on the packet path with the layouts chosen at run time (Dirs), for inputs that are
 // not all rows: planes (SoA) read without transposition. eval writes f as rows (out_plane = 0)
 // or as three planes out_plane elements apart. The same model code and packets as
-// eval_batch / pdf_batch, so the values are bit-identical to theirs for any layout. Plain
-// stores (no streaming). Both directions as planes (and eval's f as planes), the SoA call,
-// have a loop of their own with the layout known at compile time: through the run-time layout
-// path the per-packet layout branches left planes slower than rows on Zen 4 (SoA / rows 0.77-0.91x
-// for Diffuse, bench/RESULTS_zen4.md of session 23).
+// eval_batch / pdf_batch, so the values are bit-identical to theirs for any layout. The SoA call
+// (both directions as planes, and eval's f as planes) has loops of its own with the layout known
+// at compile time, whose outputs stream as pair_rows_loop's rows do (a model with StreamOutputs,
+// a call whose bytes reach kStreamMinBytes, out on a line): through the run-time layout path,
+// with its per-packet layout branches and plain stores, planes ran slower than rows on Zen 4
+// (SoA / rows 0.77-0.91x for Diffuse, bench/RESULTS_zen4.md of session 23). Other mixes take the
+// run-time layout path, with plain stores.
+template <typename Model, typename F> inline bool planes_stream(const Model &m, int64_t n, int outputs, const F *out) {
+    if constexpr (kStreams<F> && streams_outputs<Model>::value)
+        return big_enough_to_stream((6 + outputs) * n * int64_t(sizeof(F))) && on_line(out) && instance_streams(m);
+    else
+        return false;
+}
 template <typename Model, typename F>
 void eval_batch_dirs(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_t n, TransportMode mode, F *out,
                      int64_t out_plane, int nthreads, BadCounts &bad) {
     static_assert(is_vectorized<Model>::value, "eval_batch_dirs: a packet model (Vectorized = true)");
     const auto f = [mode](const auto &mm, const auto &o, const auto &w, int64_t, int64_t) { return bsdf_f(mm, o, w, mode); };
     if (wo.layout == DirLayout::Planes && wi.layout == DirLayout::Planes && out_plane != 0) {
-        pair_packet_loop<kPlanesLayout, kPlanesLayout>(
-            m, wo, wi, n, nthreads, bad,
-            store_out([out, out_plane](int64_t i, int64_t cnt, const Spectrum<Packet<F>> &v) {
-                for (int c = 0; c < 3; ++c) store1_lanes(out + c * out_plane, i, cnt, v[c]);
-            }),
-            f);
+        constexpr int P = kPlanesLayout;
+        if constexpr (kStreams<F> && streams_outputs<Model>::value) {
+            if (planes_stream(m, n, 3, out)) {
+                pair_packet_loop<P, P>(m, wo, wi, n, nthreads, bad, PlanesOut<F, true>{out, out_plane}, f);
+                return;
+            }
+        }
+        pair_packet_loop<P, P>(m, wo, wi, n, nthreads, bad, PlanesOut<F, false>{out, out_plane}, f);
         return;
     }
     pair_packet_loop<kAnyLayout, kAnyLayout>(
@@ -865,11 +893,20 @@ void pdf_batch_dirs(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_
     const auto pdf = [mode, sf](const auto &mm, const auto &o, const auto &w, int64_t, int64_t) {
         return bsdf_pdf(mm, o, w, mode, sf);
     };
-    const auto store = store_out([out](int64_t i, int64_t cnt, const Packet<F> &v) { store1_lanes(out, i, cnt, v); });
-    if (wo.layout == DirLayout::Planes && wi.layout == DirLayout::Planes)
-        pair_packet_loop<kPlanesLayout, kPlanesLayout>(m, wo, wi, n, nthreads, bad, store, pdf);
-    else
-        pair_packet_loop<kAnyLayout, kAnyLayout>(m, wo, wi, n, nthreads, bad, store, pdf);
+    if (wo.layout == DirLayout::Planes && wi.layout == DirLayout::Planes) {
+        constexpr int P = kPlanesLayout;
+        if constexpr (kStreams<F> && streams_outputs<Model>::value) {
+            if (planes_stream(m, n, 1, out)) {
+                pair_packet_loop<P, P>(m, wo, wi, n, nthreads, bad, RowsOut<F, 1, true, true>{out}, pdf);
+                return;
+            }
+        }
+        pair_packet_loop<P, P>(m, wo, wi, n, nthreads, bad, RowsOut<F, 1, false>{out}, pdf);
+        return;
+    }
+    pair_packet_loop<kAnyLayout, kAnyLayout>(
+        m, wo, wi, n, nthreads, bad,
+        store_out([out](int64_t i, int64_t cnt, const Packet<F> &v) { store1_lanes(out, i, cnt, v); }), pdf);
 }
 
 template <typename F> struct SampleOut {
