@@ -489,6 +489,26 @@ def test_bad_cameras_name_the_field():
     assert np.all(np.isfinite(R.render(sc, width=8, height=4, spp=4, progress=False)))
 
 
+def test_scene_geometry_beyond_float32_is_named():
+    """Geometry the float32 renderer cannot hold (finite float64 beyond 1e18: 3e38 became inf in
+    Embree's buffers) names the argument when it is added, as the camera's fields do."""
+    m, tri = bk.Diffuse(0.5), np.array([[0, 1, 2]])
+    cases = [(lambda s: s.add_sphere(m, center=(1e300, 0, 0)), r"^center: coordinates"),
+             (lambda s: s.add_sphere(m, center=(0, 0, 0), radius=1e30), r"^center \+- radius: coordinates"),
+             (lambda s: s.add_mesh(m, np.array([[0, 0, 0], [1, 0, 0], [0, 3e38, 0]]), tri), r"^vertices: coordinates"),
+             (lambda s: s.add_mesh(m, np.eye(3), tri, transform=np.diag([1e30, 1, 1, 1])),
+              r"^vertices \(transformed\): coordinates"),
+             (lambda s: s.add_curves(m, np.array([[[0, 0, 0], [0, 1e19, 0]]])), r"^points \(with radius\): coordinates"),
+             (lambda s: s.add_ground(size=1e40), r"^height, size: coordinates")]
+    for add, msg in cases:
+        with pytest.raises(ValueError, match=msg + r" must be within \+-1e\+18 \(the renderer works in float32\)"):
+            add(R.Scene())
+    # at the limit: accepted, and a mesh far away still renders a finite image
+    sc = R.Scene(environment="sky").add_sphere(m, center=(0, 0, 0), radius=1.0)
+    sc.add_mesh(m, np.array([[-1e18, -1e17, -1e18], [1e18, -1e17, -1e18], [0, -1e17, 1e18]]), tri)
+    assert np.all(np.isfinite(R.render(sc, width=8, height=4, spp=2, progress=False)))
+
+
 def test_missing_and_corrupt_env_map(tmp_path):
     missing = tmp_path / "nope.exr"
     with pytest.raises(FileNotFoundError) as ei:

@@ -22,8 +22,9 @@ Conventions
   ``spectral=True`` traces 4 wavelengths per path instead (pbrt-v4's hero-wavelength scheme) and
   returns linear sRGB the same way; see :func:`preview`.
 * The camera is a pinhole: ``fov`` is the full horizontal field of view in degrees; image x
-  grows along ``forward x up``; its origin, target and up coordinates lie within +-1e18 (the
-  renderer works in float32, :class:`Camera`). Pixels are box-filtered (uniform jitter inside the pixel).
+  grows along ``forward x up``; its origin, target and up coordinates, like the scene's geometry,
+  lie within +-1e18 (the renderer works in float32, :class:`Camera`). Pixels are box-filtered
+  (uniform jitter inside the pixel).
 * ``max_depth`` counts scattering events (pbrt-v4): 0 shows the environment only, 1 is direct
   lighting. Mitsuba's ``max_depth`` counts path vertices: Mitsuba's value is ours + 1.
 * Objects: spheres, triangle meshes (numpy arrays, or OBJ/PLY/... files through Assimp), fibres
@@ -455,7 +456,8 @@ def _spec_of(model):
 
 # ---------------------------------------------------------------- scene
 
-#: Largest |coordinate| of the camera's origin, target and up: the renderer takes them as
+#: Largest |coordinate| of the camera's origin, target and up, and of the scene's geometry
+#: (sphere centres +- radii, mesh vertices, fibre points, the ground): the renderer takes them as
 #: float32 and squares target - origin and forward x up there (cpp/bindings/render.cpp
 #: render_impl, render/camera.h look_at); within 1e18 those squares (<= 12e36) stay below
 #: float32's max 3.4e38, where beyond it they overflowed and the camera failed as "up: must not
@@ -508,6 +510,16 @@ def _model_check(material, name="material"):
     return material
 
 
+def _check_extent(a, name):
+    """Scene geometry (world units) within +-CAMERA_MAX_COORD, as the camera's: Embree and the
+    renderer hold it in float32 and square differences of it (finite float64 values up to 1.8e308
+    passed the finiteness check and became inf or overflowed there)."""
+    m = float(np.max(np.abs(a))) if np.size(a) else 0.0
+    if m > CAMERA_MAX_COORD:
+        raise ValueError(f"{name}: coordinates must be within +-{CAMERA_MAX_COORD:g} (the renderer works in "
+                         f"float32), got a magnitude of {m:g}")
+
+
 def _vec3(x, name):
     a = np.asarray(x, dtype=np.float64)
     if a.shape != (3,) or not np.all(np.isfinite(a)):
@@ -534,6 +546,8 @@ class Scene:
         r = float(radius)
         if not (math.isfinite(r) and r > 0):
             raise ValueError("radius: must be finite and > 0")
+        _check_extent(c, "center")
+        _check_extent(np.abs(c) + r, "center +- radius")
         self.objects.append(dict(kind="sphere", material=_model_check(material), center=c, radius=r))
         return self
 
@@ -555,6 +569,7 @@ class Scene:
         v = _apply_transform(v, transform)
         if fit:
             v = _fit_on_ground(v)
+        _check_extent(v, "vertices" if transform is None else "vertices (transformed)")
         self.objects.append(dict(kind="mesh", material=_model_check(material), vertices=v, indices=i))
         return self
 
@@ -578,8 +593,10 @@ class Scene:
             ctrl.append(np.concatenate([qe, re[:, None]], axis=1))
             segs.append(start + np.arange(len(q) - 1))
             start += len(qe)
+        ctrl = np.concatenate(ctrl)
+        _check_extent(np.abs(ctrl[:, :3]) + ctrl[:, 3:], "points (with radius)")
         self.objects.append(dict(kind="curves", material=_model_check(material),
-                                 points=np.concatenate(ctrl), segments=np.concatenate(segs).astype(np.int64)))
+                                 points=ctrl, segments=np.concatenate(segs).astype(np.int64)))
         return self
 
     def add_ground(self, material=None, *, height=0.0, size=200.0, checker=None, checker_size=0.5) -> "Scene":
@@ -596,6 +613,7 @@ class Scene:
             raise ValueError("height, size: must be finite, size > 0")
         if checker is not None and not (math.isfinite(cs) and cs > 0):
             raise ValueError("checker_size: must be finite and > 0")
+        _check_extent(np.array([h, s / 2]), "height, size")
         a = s / 2
         v = np.array([[-a, h, -a], [a, h, -a], [a, h, a], [-a, h, a]])
         i = np.array([[0, 2, 1], [0, 3, 2]])   # counter-clockwise seen from above: normal +y
