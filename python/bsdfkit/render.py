@@ -479,16 +479,10 @@ class Camera:
     fov: float = 32.0
 
     def _checked(self):
-        vecs = []
-        for name in ("origin", "target", "up"):
-            x = _as_real_array(getattr(self, name), f"camera.{name}").astype(np.float64)
-            if x.shape != (3,) or not np.all(np.isfinite(x)):
-                raise ValueError(f"camera.{name}: expected 3 finite numbers")
-            if np.any(np.abs(x) > CAMERA_MAX_COORD):
-                raise ValueError(f"camera.{name}: coordinates must be within +-{CAMERA_MAX_COORD:g} (the renderer "
-                                 f"squares distances in float32, whose max is 3.4e38), got {x.tolist()}")
-            vecs.append(x)
-        o, t, u = vecs
+        names = ("origin", "target", "up")
+        o, t, u = (_vec3(getattr(self, n), f"camera.{n}") for n in names)
+        for n, x in zip(names, (o, t, u)):
+            _check_extent(x, f"camera.{n}")
         f = t - o
         f32 = t.astype(np.float32) - o.astype(np.float32)
         if not (np.linalg.norm(f) > 0 and np.dot(f32, f32) > 0):   # the renderer's test is in float32
@@ -511,9 +505,9 @@ def _model_check(material, name="material"):
 
 
 def _check_extent(a, name):
-    """Scene geometry (world units) within +-CAMERA_MAX_COORD, as the camera's: Embree and the
-    renderer hold it in float32 and square differences of it (finite float64 values up to 1.8e308
-    passed the finiteness check and became inf or overflowed there)."""
+    """World coordinates (the camera's, the scene geometry's) within +-CAMERA_MAX_COORD: Embree
+    and the renderer hold them in float32 and square differences of them (finite float64 values
+    up to 1.8e308 passed the finiteness check and became inf or overflowed there)."""
     m = float(np.max(np.abs(a))) if np.size(a) else 0.0
     if m > CAMERA_MAX_COORD:
         raise ValueError(f"{name}: coordinates must be within +-{CAMERA_MAX_COORD:g} (the renderer works in "
@@ -521,7 +515,7 @@ def _check_extent(a, name):
 
 
 def _vec3(x, name):
-    a = np.asarray(x, dtype=np.float64)
+    a = _as_real_array(x, name).astype(np.float64)
     if a.shape != (3,) or not np.all(np.isfinite(a)):
         raise ValueError(f"{name}: expected 3 finite numbers")
     return a

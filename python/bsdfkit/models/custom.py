@@ -159,8 +159,9 @@ class _PyCore:
         return bad
 
     def albedo(self, wo, n_samples, seed, mode, out):
-        if _bad(wo):
-            return _bad(wo)
+        bad = _bad(wo)
+        if bad:
+            return bad
         rng = np.random.default_rng(seed)
         chunk = max(1, 1_000_000 // max(1, len(wo)))
         acc = np.zeros((len(wo), 3))
