@@ -853,11 +853,19 @@ void pdf_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMod
 // with its per-packet layout branches and plain stores, planes ran slower than rows on Zen 4
 // (SoA / rows 0.77-0.91x for Diffuse, bench/RESULTS_zen4.md of session 23). Other mixes take the
 // run-time layout path, with plain stores.
-template <typename Model, typename F> inline bool planes_stream(const Model &m, int64_t n, int outputs, const F *out) {
-    if constexpr (kStreams<F> && streams_outputs<Model>::value)
-        return big_enough_to_stream((6 + outputs) * n * int64_t(sizeof(F))) && on_line(out) && instance_streams(m);
-    else
-        return false;
+// The SoA call's loop: `streamed` (a stream-storing output over out, `outputs` floats per element)
+// where the model and call stream, else `plain`.
+template <typename Model, typename F, typename Streamed, typename Plain, typename Compute>
+void planes_pair_loop(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_t n, int nthreads, BadCounts &bad,
+                      const F *out, int outputs, const Streamed &streamed, const Plain &plain, const Compute &compute) {
+    constexpr int P = kPlanesLayout;
+    if constexpr (kStreams<F> && streams_outputs<Model>::value) {
+        if (big_enough_to_stream((6 + outputs) * n * int64_t(sizeof(F))) && on_line(out) && instance_streams(m)) {
+            pair_packet_loop<P, P>(m, wo, wi, n, nthreads, bad, streamed, compute);
+            return;
+        }
+    }
+    pair_packet_loop<P, P>(m, wo, wi, n, nthreads, bad, plain, compute);
 }
 template <typename Model, typename F>
 void eval_batch_dirs(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_t n, TransportMode mode, F *out,
@@ -865,14 +873,8 @@ void eval_batch_dirs(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64
     static_assert(is_vectorized<Model>::value, "eval_batch_dirs: a packet model (Vectorized = true)");
     const auto f = [mode](const auto &mm, const auto &o, const auto &w, int64_t, int64_t) { return bsdf_f(mm, o, w, mode); };
     if (wo.layout == DirLayout::Planes && wi.layout == DirLayout::Planes && out_plane != 0) {
-        constexpr int P = kPlanesLayout;
-        if constexpr (kStreams<F> && streams_outputs<Model>::value) {
-            if (planes_stream(m, n, 3, out)) {
-                pair_packet_loop<P, P>(m, wo, wi, n, nthreads, bad, PlanesOut<F, true>{out, out_plane}, f);
-                return;
-            }
-        }
-        pair_packet_loop<P, P>(m, wo, wi, n, nthreads, bad, PlanesOut<F, false>{out, out_plane}, f);
+        planes_pair_loop(m, wo, wi, n, nthreads, bad, out, 3, PlanesOut<F, true>{out, out_plane},
+                         PlanesOut<F, false>{out, out_plane}, f);
         return;
     }
     pair_packet_loop<kAnyLayout, kAnyLayout>(
@@ -894,14 +896,8 @@ void pdf_batch_dirs(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_
         return bsdf_pdf(mm, o, w, mode, sf);
     };
     if (wo.layout == DirLayout::Planes && wi.layout == DirLayout::Planes) {
-        constexpr int P = kPlanesLayout;
-        if constexpr (kStreams<F> && streams_outputs<Model>::value) {
-            if (planes_stream(m, n, 1, out)) {
-                pair_packet_loop<P, P>(m, wo, wi, n, nthreads, bad, RowsOut<F, 1, true, true>{out}, pdf);
-                return;
-            }
-        }
-        pair_packet_loop<P, P>(m, wo, wi, n, nthreads, bad, RowsOut<F, 1, false>{out}, pdf);
+        planes_pair_loop(m, wo, wi, n, nthreads, bad, out, 1, RowsOut<F, 1, true, true>{out}, RowsOut<F, 1, false>{out},
+                         pdf);
         return;
     }
     pair_packet_loop<kAnyLayout, kAnyLayout>(
