@@ -5,6 +5,7 @@
     python bench/loop_ab.py --n 16384                 # in cache (L2): the arithmetic alone
     python bench/loop_ab.py --base HEAD~1             # A = the headers of a revision, B = the tree's
     python bench/loop_ab.py --aligned                 # outputs on 64-byte lines (streaming stores)
+    python bench/loop_ab.py --numpy-like              # arrays on 2 MB pages as throughput.py's (numpy's) are
     python bench/loop_ab.py --march x86-64-v3         # an AVX2 build, on an AVX-512 host too
     python bench/loop_ab.py --dtype float64           # the float64 kernels (16 lanes of double)
     python bench/loop_ab.py --contract --ops eval,pdf # what the (N, 3) rows and the unit check cost
@@ -26,6 +27,12 @@ sanitizing, one thread, no chunking) in three variants beside the library's kern
 Fortran-order array, with the check) and `planes-nocheck` (neither: Mitsuba's own setting, its
 kernels read planes and check nothing). The differences are what the API's row layout and its
 input contract cost per packet; the variants are measurement only, not library code paths.
+
+The model `null` (NULL_MODEL: f = 1, pdf = 1, the mirror sample; the program checks those outputs)
+computes nothing: the library's kernels on it take what the API's contract and the batch loops
+cost alone. bench/throughput.py times it beside every cell (its "contract bound"), through this
+program with --numpy-like arrays and seconds per call (the program's 4th argument "s"; a 5th
+picks a subset of the compiled ops).
 """
 from __future__ import annotations
 
@@ -56,7 +63,53 @@ MODELS = {
     "thin": "ThinDielectricBxDF<float>::make({})",
     "hair": "HairBxDF<float>::make({})",
     "nfresnel": "NormalizedFresnelBxDF<float>::make({})",
+    # The API contract alone (NULL_MODEL below): not a library model.
+    "null": "NullBxDF<float>::make({})",
 }
+
+# A model that computes nothing, so that the library's batch kernels on it time the API's contract
+# alone: the (N, 3) rows read and written, the unit and uniform checks, bsdf_f / bsdf_pdf's
+# sanitizing, bsdf_sample's acceptance rule and its seven outputs. f = 1 and pdf = 1 for every
+# pair; sample: the mirror direction (-wo.x, -wo.y, wo.z), f = 1, pdf = 1, always valid. Every model
+# pays this; throughput.py's contract bound is its rate (bench only, not a library model).
+NULL_MODEL = r"""template <typename F> struct NullBxDF {
+    struct Params {};
+    static constexpr const char *Name = "Null";
+    static NullBxDF make(const Params &) { return {}; }
+    uint8_t flags() const { return DiffuseReflection; }
+    static constexpr bool Vectorized = true;
+    static constexpr bool StreamOutputs = true;  // as the light models
+    template <typename V> Spectrum<V> f(const Vec3<V> &, const Vec3<V> &, TransportMode) const {
+        return Spectrum<V>(V(1));
+    }
+    template <typename V> V pdf(const Vec3<V> &, const Vec3<V> &, TransportMode, uint8_t) const { return V(1); }
+    template <typename V> BSDFSample<V> sample_f(const Vec3<V> &wo, V, Point2<V>, TransportMode, uint8_t) const {
+        BSDFSample<V> s;
+        s.wi = Vec3<V>(-wo.x, -wo.y, wo.z);
+        s.f = Spectrum<V>(V(1));
+        s.pdf = V(1);
+        s.flags = SpecularReflection;
+        s.valid = Mask<V>(true);
+        return s;
+    }
+    void regularize() {}
+};
+// The null model's outputs are what it defines (a wrong one: the harness timed something else).
+template <class F> bool null_outputs_ok(const std::string &ops, int64_t n, const F *wo, const F *f, const F *pdf,
+                                        const F *swi) {
+    bool ok = true;
+    for (int64_t i = 0; i < n; ++i) {
+        if (ops.find("sample") != std::string::npos)
+            ok &= swi[3 * i] == -wo[3 * i] && swi[3 * i + 1] == -wo[3 * i + 1] && swi[3 * i + 2] == wo[3 * i + 2] &&
+                  f[3 * i] == F(1) && pdf[i] == F(1);
+        else if (ops.find("pdf") != std::string::npos)
+            ok &= pdf[i] == F(1);
+        else
+            ok &= f[3 * i] == F(1) && f[3 * i + 2] == F(1);
+    }
+    return ok;
+}
+"""
 OPS = ("eval", "pdf", "sample")
 
 
@@ -103,7 +156,7 @@ CONTRACT_CALLS = r"""    Vec<F> wo_p(3 * N), wi_p(3 * N), f_p(3 * N);
     // library kernel's (still in f and pdf), bit for bit.
     bool same = true;
     if (ops.find("eval") != std::string::npos) {
-        const Vec<F> lib(f);
+        const Vec<F> lib(f.begin(), f.end());
         F *o = f.data(), *op = f_p.data();
         std::printf(" eval:rows-nocheck %.2f", best([&] { contract_loop<false, false, false>(m, a, b, ap, bp, o, op); }));
         std::printf(" eval:planes %.2f", best([&] { contract_loop<true, true, false>(m, a, b, ap, bp, o, op); }));
@@ -113,7 +166,7 @@ CONTRACT_CALLS = r"""    Vec<F> wo_p(3 * N), wi_p(3 * N), f_p(3 * N);
             for (int c = 0; c < 3; ++c) same &= std::memcmp(&lib[3 * i + c], &op[c * N + i], sizeof(F)) == 0;
     }
     if (ops.find("pdf") != std::string::npos) {
-        const Vec<F> lib(pdf);
+        const Vec<F> lib(pdf.begin(), pdf.end());
         F *o = pdf.data();
         std::printf(" pdf:rows-nocheck %.2f", best([&] { contract_loop<false, false, true>(m, a, b, ap, bp, o, o); }));
         same &= std::memcmp(lib.data(), o, sizeof(F) * size_t(N)) == 0;
@@ -125,7 +178,7 @@ CONTRACT_CALLS = r"""    Vec<F> wo_p(3 * N), wi_p(3 * N), f_p(3 * N);
 """
 
 
-def source(models, ops, aligned=False, dtype="float32", contract=False) -> str:
+def source(models, ops, aligned=False, dtype="float32", contract=False, numpy_like=False) -> str:
     """The C++ program; aligned: every array starts on a 64-byte line (as bsdfkit's own result
     arrays do, so a model that streams its outputs does so here; batch.h), else where std::vector
     puts it (16 bytes past a page for these sizes, as numpy's arrays); dtype: the models' and
@@ -134,12 +187,16 @@ def source(models, ops, aligned=False, dtype="float32", contract=False) -> str:
     ct = DTYPES[dtype]
     runs = "\n".join(f'    run("{k}", {MODELS[k].replace("BxDF<float>", f"BxDF<{ct}>")}, ops);' for k in models)
     alloc = "A64" if aligned else "std::allocator"
+    # numpy_like: on 2 MB pages (madvise, as numpy asks for its large arrays), the inputs 16 bytes
+    # past a page as numpy's, the outputs on a line as bsdfkit's result arrays (throughput.py's cells)
+    vin, vout = ("Huge<T, 16>", "Huge<T, 0>") if numpy_like else (f"{alloc}<T>", f"{alloc}<T>")
     contract_loop, contract_calls = (CONTRACT_LOOP, CONTRACT_CALLS) if contract else ("", "")
     contract_end = CONTRACT_END if contract else ""
     return f"""#include <bsdfkit/bxdfs/all.h>
 #include <bsdfkit/batch.h>
 #include <x86intrin.h>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -147,6 +204,7 @@ def source(models, ops, aligned=False, dtype="float32", contract=False) -> str:
 #include <random>
 #include <string>
 #include <vector>
+#include <sys/mman.h>
 using namespace bsdfkit;
 template <class T> struct A64 {{  // 64-byte aligned storage
     using value_type = T;
@@ -157,26 +215,49 @@ template <class T> struct A64 {{  // 64-byte aligned storage
     template <class U> bool operator==(const A64<U> &) const {{ return true; }}
     template <class U> bool operator!=(const A64<U> &) const {{ return false; }}
 }};
+template <class T, size_t Off> struct Huge {{  // on 2 MB pages, Off bytes past a 2 MB boundary
+    using value_type = T;
+    template <class U> struct rebind {{ using other = Huge<U, Off>; }};
+    Huge() = default;
+    template <class U> Huge(const Huge<U, Off> &) {{}}
+    T *allocate(size_t n) {{
+        const size_t huge = size_t(1) << 21, bytes = (n * sizeof(T) + Off + huge - 1) / huge * huge;
+        void *p = nullptr;
+        if (posix_memalign(&p, huge, bytes) != 0) std::abort();
+        madvise(p, bytes, MADV_HUGEPAGE);
+        return reinterpret_cast<T *>(static_cast<char *>(p) + Off);
+    }}
+    void deallocate(T *p, size_t) {{ std::free(reinterpret_cast<char *>(p) - Off); }}
+    template <class U> bool operator==(const Huge<U, Off> &) const {{ return true; }}
+    template <class U> bool operator!=(const Huge<U, Off> &) const {{ return false; }}
+}};
 template <class T> using Vec = std::vector<T, {alloc}<T>>;
+template <class T> using VecIn = std::vector<T, {vin}>;
+template <class T> using VecOut = std::vector<T, {vout}>;
 static int64_t N = 1000000;
 static int g_threads = 1, g_reps = 20;
+static bool g_seconds = false;  // argv[4] == "s": seconds per call (wall clock) instead of TSC per packet
 template <class Fn> double best(Fn fn) {{
     double b = 1e300;
     for (int r = 0; r < g_reps; ++r) {{
         unsigned long long t0 = __rdtsc();
+        auto c0 = std::chrono::steady_clock::now();
         fn();
-        b = std::min(b, double(__rdtsc() - t0));
+        double tsc = double(__rdtsc() - t0);
+        double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
+        b = std::min(b, g_seconds ? sec : tsc);
     }}
-    return b / (double(N) / {LANES});
+    return g_seconds ? b : b / (double(N) / {LANES});
 }}
-{contract_loop}template <class Model> void run(const char *name, const Model &m, const std::string &ops) {{
+{NULL_MODEL}{contract_loop}template <class Model> void run(const char *name, const Model &m, const std::string &ops) {{
     using F = {ct};
     std::mt19937 g(1);
     std::normal_distribution<double> nd;
     std::uniform_real_distribution<F> ud(F(0), F(1));
-    Vec<F> wo(3 * N), wi(3 * N), f(3 * N), swi(3 * N), pdf(N), eta(N), uc(N), u(2 * N);
-    Vec<uint8_t> flags(N);
-    Vec<char> valid(N), prop(N);
+    VecIn<F> wo(3 * N), wi(3 * N), uc(N), u(2 * N);
+    VecOut<F> f(3 * N), swi(3 * N), pdf(N), eta(N);
+    VecOut<uint8_t> flags(N);
+    VecOut<char> valid(N), prop(N);
     for (int64_t i = 0; i < N; ++i) {{
         for (int side = 0; side < 2; ++side) {{
             double x = nd(g), y = nd(g), z = nd(g);
@@ -190,22 +271,26 @@ template <class Fn> double best(Fn fn) {{
     BadCounts bad;
     std::printf("%s", name);
     if (ops.find("eval") != std::string::npos)
-        std::printf(" eval %.2f", best([&] {{ eval_batch<3, 3>(m, wo.data(), wi.data(), N, TransportMode::Radiance, f.data(), g_threads, bad); }}));
+        std::printf(" eval %.6g", best([&] {{ eval_batch<3, 3>(m, wo.data(), wi.data(), N, TransportMode::Radiance, f.data(), g_threads, bad); }}));
     if (ops.find("pdf") != std::string::npos)
-        std::printf(" pdf %.2f", best([&] {{ pdf_batch<3, 3>(m, wo.data(), wi.data(), N, TransportMode::Radiance, 0xff, pdf.data(), g_threads, bad); }}));
+        std::printf(" pdf %.6g", best([&] {{ pdf_batch<3, 3>(m, wo.data(), wi.data(), N, TransportMode::Radiance, 0xff, pdf.data(), g_threads, bad); }}));
 {contract_calls}    if (ops.find("sample") != std::string::npos) {{
         SampleOut<F> so{{swi.data(), f.data(), pdf.data(), eta.data(), flags.data(), (bool *)valid.data(), (bool *)prop.data()}};
-        std::printf(" sample %.2f", best([&] {{ sample_batch<3>(m, wo.data(), uc.data(), u.data(), N, TransportMode::Radiance, 0xff, so, g_threads, bad); }}));
+        std::printf(" sample %.6g", best([&] {{ sample_batch<3>(m, wo.data(), uc.data(), u.data(), N, TransportMode::Radiance, 0xff, so, g_threads, bad); }}));
     }}
     std::printf("\\n");
     if (bad.wo + bad.wi + bad.uc + bad.u != 0) std::printf("unexpected bad inputs\\n");
+    if constexpr (std::is_same_v<Model, NullBxDF<F>>)
+        if (!null_outputs_ok(ops, N, wo.data(), f.data(), pdf.data(), swi.data())) std::printf("null model: wrong outputs\\n");
 {contract_end}
 }}
 int main(int argc, char **argv) {{
     if (argc > 1) N = std::atoll(argv[1]);
     if (argc > 2) g_threads = std::atoi(argv[2]);
     if (argc > 3) g_reps = std::atoi(argv[3]);
-    const std::string ops = "{",".join(ops)}";
+    if (argc > 4) g_seconds = std::string(argv[4]) == "s";
+    std::string ops = "{",".join(ops)}";
+    if (argc > 5) ops = argv[5];  // a subset of the compiled ops
 {runs}
 }}
 """
@@ -257,6 +342,9 @@ def main(argv=None) -> int:
                     help="the kernels' float type (default float32; float64: the float64 rows)")
     ap.add_argument("--contract", action="store_true",
                     help="eval / pdf also without the unit check and on planes (see above); not with --base")
+    ap.add_argument("--numpy-like", action="store_true",
+                    help="arrays on 2 MB pages (madvise), inputs 16 bytes past a page as numpy's, outputs on a line "
+                         "as bsdfkit's results: throughput.py's setting (its contract bound)")
     ap.add_argument("--aligned", action="store_true",
                     help="arrays on 64-byte lines, as bsdfkit's results (where StreamOutputs models stream)")
     args = ap.parse_args(argv)
@@ -276,7 +364,7 @@ def main(argv=None) -> int:
     work = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="bsdfkit-loop-ab-"))
     work.mkdir(parents=True, exist_ok=True)
     src = work / "loops.cpp"
-    src.write_text(source(models, ops, args.aligned, args.dtype, args.contract))
+    src.write_text(source(models, ops, args.aligned, args.dtype, args.contract, args.numpy_like))
     b_bin = work / "loops_b"
     build(src, None, b_bin, args.march)
     print(f"# {summary()}; -march={args.march}; {args.dtype}; N = {args.n}, {args.threads} thread(s), best of {args.reps} calls; TSC cycles per packet of {LANES}")

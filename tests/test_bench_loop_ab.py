@@ -27,7 +27,7 @@ def test_parse_reads_model_op_pairs(loop_ab):
 def test_source_holds_only_the_requested_models_and_ops(loop_ab):
     src = loop_ab.source(["diffuse"], ["pdf"])
     assert 'run("diffuse"' in src and 'run("cond_r"' not in src
-    assert 'const std::string ops = "pdf";' in src
+    assert 'std::string ops = "pdf";' in src
     assert "using Vec = std::vector<T, std::allocator<T>>" in src
     assert "using Vec = std::vector<T, A64<T>>" in loop_ab.source(["diffuse"], ["pdf"], aligned=True)
     assert "using F = float;" in src and "DiffuseBxDF<float>::make" in src
@@ -103,3 +103,20 @@ def test_contract_variants_run_and_match_the_library(tmp_path):
     assert set(ops) == {"eval", "pdf", "eval:rows-nocheck", "eval:planes", "eval:planes-nocheck", "pdf:rows-nocheck",
                         "pdf:planes", "pdf:planes-nocheck"}
     assert all(v > 0 for v in ops.values())
+
+
+@pytest.mark.skipif(shutil.which("g++") is None, reason="needs g++")
+def test_null_model_runs_every_op_and_checks_its_outputs(tmp_path):
+    # the contract bound's model: the program checks that the library kernels wrote what the null
+    # model defines (f = 1, pdf = 1, the mirror sample) and says so otherwise; N = 4099 has a
+    # padded tail
+    out = subprocess.run([sys.executable, str(_PATH), "--models", "null", "--ops", "eval,pdf,sample", "--n", "4099",
+                          "--reps", "2", "--keep", str(tmp_path)], check=True, capture_output=True, text=True).stdout
+    assert "wrong outputs" not in out and "unexpected bad inputs" not in out
+    ops = {l.split()[1]: float(l.split()[2]) for l in out.splitlines() if l.startswith("null")}
+    assert set(ops) == {"eval", "pdf", "sample"} and all(v > 0 for v in ops.values())
+    # the built program also takes seconds per call and a subset of its ops (throughput.py's use)
+    secs = subprocess.run([str(tmp_path / "loops_b"), "4099", "2", "3", "s", "sample"], check=True,
+                          capture_output=True, text=True).stdout
+    (line,) = [l.split() for l in secs.splitlines() if l.startswith("null")]
+    assert line[1] == "sample" and len(line) == 3 and 0 < float(line[2]) < 1

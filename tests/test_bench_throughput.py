@@ -122,3 +122,42 @@ def test_bad_tag_stops_before_measuring(tp, monkeypatch, capsys, bad):
         tp.main()
     assert e.value.code == 2
     assert "--tag" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("value, have, memory, contract, verdict", [
+    (0.5, 500, 4000, 550, "contract-bound"),  # 0.91 of the contract bound, far from the memory bound
+    (0.3, 300, 4000, 550, "NOT met"),          # 0.55 of the contract bound
+    (0.3, 300, 4000, None, "NOT met"),         # no contract bound measured: the memory bound alone
+    (0.5, 500, 600, 550, "bound"),             # 0.83 of the memory bound: the machine's bound comes first
+    (1.3, 1300, 4000, 550, "met"),             # the target itself
+    (0.9, 900, 4000, 1400, "NOT met"),         # at 0.64 of a contract bound above the target's need
+    (1.1, 1100, 4000, 1150, "contract-bound"),  # 0.96 of a contract bound the target (1200) exceeds by 4 %
+])
+def test_judge_contract_bound(tp, value, have, memory, contract, verdict):
+    # judge(value, target, need_rate, memory bound, have_rate, divider bound, contract bound)
+    v, text = tp.judge(value, 1.2, 1200, memory, have, None, contract)
+    assert v == verdict
+    if contract and verdict in ("contract-bound", "NOT met"):
+        assert f"contract bound {contract}" in text
+
+
+def test_contract_times_stay_out_of_bsdfkit_rates(tp):
+    key = ("diffuse", "sample", "float32")
+    cell = {"kernel_1t": 2e-3, "kernel_2t": 1.1e-3, "contract_1t": 1.5e-3, "contract_2t": 8e-4}
+    (row,) = tp.build_rows(1000, {key: cell}, ["diffuse"], ["sample"], ["float32"], 1, with_copy=False)
+    assert set(row["bk_time"]) == {"kernel_1t", "kernel_2t"}
+    assert row["contract"]["rate_1t"] == pytest.approx(1000 / 1.5e-3)
+    assert row["contract"]["rate_2t"] == pytest.approx(1000 / 8e-4)
+
+
+def test_contract_bound_runs(tp):
+    # builds loop_ab's null-model harness as the bench does and times one op: two positive times
+    # (no timing claim: the figures depend on the host)
+    pytest.importorskip("drjit")
+    import shutil
+    if shutil.which("g++") is None:
+        pytest.skip("needs g++")
+    exe = tp.build_contract(("float32",))
+    assert "float32" in exe and tp.CONTRACT["error"] is None
+    t1, t2 = tp.contract_bound("pdf", "float32", 40_000, 1)
+    assert 0 < t1 < 1 and 0 < t2 < 1
