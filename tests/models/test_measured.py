@@ -305,6 +305,44 @@ def test_hostile_tensor_files(tabulated, tmp_path):
         bk.Measured.from_bytes(huge)
 
 
+def test_tensor_values_whose_evaluation_overflows_float32(tabulated):
+    """Every value of a file within float32, but f = rgb ndf / (4 sigma) / max(cos_i, 1e-2)
+    (bxdfs/measured.h) beyond it: a float32 eval overflowed and the kernels' output check
+    returned 0 without an error. Now refused at load, naming the fields; a file whose bound, in
+    float64 from the tables, stays below float32's max loads and evaluates finitely in float32."""
+    _, _, path = tabulated["iso"]
+    f = {k: np.array(v) for k, v in mm.parse_tensor(open(path, "rb").read()).items()}
+    assert f["jacobian"][0] == 1
+    rgb_max = float(np.abs(f["rgb"]).max())
+    factor = float(f["ndf"].max()) / (4 * float(f["sigma"][f["sigma"] > 0].min())) / 1e-2
+    wo, wi = pairs(np.random.default_rng(3), 400, zmin=0.2)
+    # and grazing mirror pairs, where the bound is nearly reached (the old float32 eval of the
+    # refused file below returned 0 at 89.9 degrees, where float64 gave 5.1e38)
+    th = np.radians(np.linspace(80, 89.9, 12))
+    g_wo = np.stack([np.sin(th), 0 * th, np.cos(th)], 1)
+    wo, wi = np.concatenate([wo, g_wo]), np.concatenate([wi, g_wo * [-1, -1, 1]])
+    for target, ok in ((1e39, False), (3e36, True)):
+        g = {k: v.copy() for k, v in f.items()}
+        g["ndf"] = (g["ndf"].astype(np.float64) * (target / (rgb_max * factor))).astype(np.float32)
+        assert float(g["ndf"].max()) < np.finfo(np.float32).max / 10   # each value inside float32
+        data = mm.tensor_bytes(g)
+        if ok:
+            m = bk.Measured.from_bytes(data)
+            f32 = m.eval(wo.astype(np.float32), wi.astype(np.float32))
+            assert np.all(np.isfinite(f32)) and f32.max() > 1e33
+            np.testing.assert_allclose(f32, m.eval(wo, wi), rtol=2e-5)
+        else:
+            with pytest.raises(ValueError, match=r"<tensor data>: fields 'rgb', 'ndf', 'sigma': the evaluation "
+                                                 r"can reach (9\.9\d*e\+38|1\.0\d*e\+39) \(max \|rgb\| \* max ndf / \(4 min sigma\) "
+                                                 r"/ 0\.01\), beyond float32's max 3\.40282347e\+38"):
+                bk.Measured.from_bytes(data)
+    # a jacobian file whose sigma is all zero divides by zero everywhere
+    g = {k: v.copy() for k, v in f.items()}
+    g["sigma"][:] = 0
+    with pytest.raises(ValueError, match=r"'sigma': all zero"):
+        bk.Measured.from_bytes(mm.tensor_bytes(g))
+
+
 @pytest.mark.parametrize("reduction", [2, 4])
 def test_reduced_anisotropic_vs_mitsuba(tmp_path, reduction):
     """Mitsuba's 2- and 4-fold reductions: wo and wi mirrored into the stored azimuth range."""

@@ -37,6 +37,7 @@ MERL_SAMPLER_K, MERL_SAMPLER_NPHI = 32, 64
 #: calls returned 0 or inf without an error. File values are checked against it (MERL's are
 #: then divided by ~1500: headroom for the float32 arithmetic on them).
 _F32_MAX = float(np.finfo(np.float32).max)
+_MEASURED_MIN_COS = 1e-2  # bxdfs/measured.h measured::kMinCos: f = f cos / max(cos_i, kMinCos)
 
 _INTERPOLATION = {"nearest": "MERLNearest", "linear": "MERLLinear"}
 _LOCK = threading.Lock()
@@ -461,7 +462,8 @@ def _finite(a, fname, name, nonneg=False):
 def validate_measured(fields: dict, name: str) -> dict:
     """Check the fields of an RGL measured-BRDF tensor file as pbrt-v4 / Mitsuba do (names,
     dtypes, shapes, consistency), plus values (finite; a spectral file's RGB projection within
-    float32's range; ndf, sigma, vndf, luminance >= 0; theta_i increasing in [0, pi/2]; phi_i
+    float32's range, and the largest value the evaluation can reach, max |rgb| [max ndf /
+    (4 min sigma)] / kMinCos, too; ndf, sigma, vndf, luminance >= 0; theta_i increasing in [0, pi/2]; phi_i
     increasing; the anisotropic reduction 1, 2 or 4). Returns the derived description
     (isotropic, reduction, jacobian, rgb table, ...)."""
     desc = _check_field(fields, "description", name, 1, np.uint8)
@@ -525,6 +527,25 @@ def validate_measured(fields: dict, name: str) -> dict:
     if spectral and rgb.size and float(np.abs(rgb).max()) > _F32_MAX:
         raise ValueError(f"{name}: field 'spectra': its RGB projection reaches {float(np.abs(rgb).max()):.9g}, beyond "
                          f"float32's max {_F32_MAX:.9g} (the RGB table is evaluated in float32 too)")
+    # The largest value the evaluation can reach: f = rgb [ndf / (4 sigma) with the jacobian] /
+    # max(cos_i, kMinCos) (bxdfs/measured.h), every factor a convex combination of table entries.
+    # Beyond float32's max a float32 call's arithmetic overflows and the kernels' output check
+    # would turn that into 0: such a file is refused here instead.
+    spec_name = "spectra" if spectral else "rgb"
+    bound = float(np.abs(rgb).max()) if rgb.size else 0.0
+    fields = f"'{spec_name}'"
+    if bool(jac[0]) and bound > 0:
+        s_pos = sigma[sigma > 0]
+        if s_pos.size == 0:
+            raise ValueError(f"{name}: field 'sigma': all zero, and the jacobian divides by it")
+        bound *= float(ndf.max()) / (4.0 * float(s_pos.min()))
+        fields = f"'{spec_name}', 'ndf', 'sigma'"
+    bound /= _MEASURED_MIN_COS
+    if bound > _F32_MAX:
+        raise ValueError(f"{name}: fields {fields}: the evaluation can reach {bound:.9g} (max |rgb|"
+                         + (" * max ndf / (4 min sigma)" if bool(jac[0]) else "")
+                         + f" / {_MEASURED_MIN_COS:g}), beyond float32's max {_F32_MAX:.9g} (the model is "
+                         "evaluated in float32 too)")
     return dict(description=bytes(desc).decode("utf-8", "replace"), isotropic=isotropic, reduction=reduction,
                 jacobian=bool(jac[0]), spectral=spectral, rgb=rgb, theta_i=theta.astype(np.float64),
                 phi_i=phi.astype(np.float64))
