@@ -533,16 +533,16 @@ def validate_measured(fields: dict, name: str) -> dict:
     # would turn that into 0: such a file is refused here instead.
     spec_name = "spectra" if spectral else "rgb"
     bound = float(np.abs(rgb).max()) if rgb.size else 0.0
-    fields = f"'{spec_name}'"
+    named = f"field '{spec_name}'"
     if bool(jac[0]) and bound > 0:
         s_pos = sigma[sigma > 0]
         if s_pos.size == 0:
             raise ValueError(f"{name}: field 'sigma': all zero, and the jacobian divides by it")
         bound *= float(ndf.max()) / (4.0 * float(s_pos.min()))
-        fields = f"'{spec_name}', 'ndf', 'sigma'"
+        named = f"fields '{spec_name}', 'ndf', 'sigma'"
     bound /= _MEASURED_MIN_COS
     if bound > _F32_MAX:
-        raise ValueError(f"{name}: fields {fields}: the evaluation can reach {bound:.9g} (max |rgb|"
+        raise ValueError(f"{name}: {named}: the evaluation can reach {bound:.9g} (max |rgb|"
                          + (" * max ndf / (4 min sigma)" if bool(jac[0]) else "")
                          + f" / {_MEASURED_MIN_COS:g}), beyond float32's max {_F32_MAX:.9g} (the model is "
                          "evaluated in float32 too)")
