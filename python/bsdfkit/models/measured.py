@@ -524,17 +524,19 @@ def validate_measured(fields: dict, name: str) -> dict:
         rgb = np.einsum("cl,ptlyx->ptcyx", w, spec.astype(np.float64))
     else:
         rgb = spec.astype(np.float64)
-    if spectral and rgb.size and float(np.abs(rgb).max()) > _F32_MAX:
-        raise ValueError(f"{name}: field 'spectra': its RGB projection reaches {float(np.abs(rgb).max()):.9g}, beyond "
+    rgb_max = float(np.abs(rgb).max()) if rgb.size else 0.0
+    if spectral and rgb_max > _F32_MAX:
+        raise ValueError(f"{name}: field 'spectra': its RGB projection reaches {rgb_max:.9g}, beyond "
                          f"float32's max {_F32_MAX:.9g} (the RGB table is evaluated in float32 too)")
     # The largest value the evaluation can reach: f = rgb [ndf / (4 sigma) with the jacobian] /
     # max(cos_i, kMinCos) (bxdfs/measured.h), every factor a convex combination of table entries.
     # Beyond float32's max a float32 call's arithmetic overflows and the kernels' output check
     # would turn that into 0: such a file is refused here instead.
+    jacobian = bool(jac[0])
     spec_name = "spectra" if spectral else "rgb"
-    bound = float(np.abs(rgb).max()) if rgb.size else 0.0
+    bound = rgb_max
     named = f"field '{spec_name}'"
-    if bool(jac[0]) and bound > 0:
+    if jacobian and bound > 0:
         s_pos = sigma[sigma > 0]
         if s_pos.size == 0:
             raise ValueError(f"{name}: field 'sigma': all zero, and the jacobian divides by it")
@@ -543,11 +545,11 @@ def validate_measured(fields: dict, name: str) -> dict:
     bound /= _MEASURED_MIN_COS
     if bound > _F32_MAX:
         raise ValueError(f"{name}: {named}: the evaluation can reach {bound:.9g} (max |rgb|"
-                         + (" * max ndf / (4 min sigma)" if bool(jac[0]) else "")
+                         + (" * max ndf / (4 min sigma)" if jacobian else "")
                          + f" / {_MEASURED_MIN_COS:g}), beyond float32's max {_F32_MAX:.9g} (the model is "
                          "evaluated in float32 too)")
     return dict(description=bytes(desc).decode("utf-8", "replace"), isotropic=isotropic, reduction=reduction,
-                jacobian=bool(jac[0]), spectral=spectral, rgb=rgb, theta_i=theta.astype(np.float64),
+                jacobian=jacobian, spectral=spectral, rgb=rgb, theta_i=theta.astype(np.float64),
                 phi_i=phi.astype(np.float64))
 
 
