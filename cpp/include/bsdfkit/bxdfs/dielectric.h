@@ -117,14 +117,15 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
         return is_smooth() ? sample_smooth(wo, uc, mode, sample_flags) : sample_rough(wo, uc, u, mode, sample_flags);
     }
 
-    // 2 divisions (f, pdf; neither on the path to the lobe choice), 2 square roots. The lobe
+    // 2 divisions (f, pdf; neither on the path to the lobe choice), 1 square root. The lobe
     // probabilities are FrDielectricRatio's numerators r : t (= R : T), its denominator joins
     // f's division (as sample_rough).
     template <typename V>
     BSDFSample<V> sample_smooth(const Vec3<V> &wo, V uc, TransportMode mode, uint8_t sample_flags) const {
         BSDFSample<V> s;
-        V r, t, den, pr, pt;
-        FrDielectricRatio(CosTheta(wo), eta, &r, &t, &den); // R = r / den, T = t / den
+        V r, t, den, pr, pt, cos_t;
+        // R = r / den, T = t / den; cos_t the transmitted cosine (0 under total internal reflection)
+        FrDielectricRatioScaled(clamp(CosTheta(wo), V(-1), V(1)), V(1), eta, &r, &t, &den, &cos_t);
         // eta == 1 is a pure pass-through: R = 0, T = 1 exactly rather than trusting rounding
         if (!not_index_matched()) {
             r = V(0);
@@ -133,9 +134,12 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
         lobe_probs(r, t, sample_flags, &pr, &pt);
         Mask<V> reflect = ChooseFirstLobe(uc, pr, pt);
         // Specular reflection about +z, or refraction through the flat interface.
-        Vec3<V> wr(-wo.x, -wo.y, wo.z), wt;
+        // (Refract's direction through n = +z from the Fresnel term's cos_t: one square root for both;
+        // Refract's total internal reflection test sin2_t >= 1 is cos_t == 0, as its safe_sqrt)
+        Vec3<V> wr(-wo.x, -wo.y, wo.z);
         V etap, inv_etap;
-        Mask<V> refr_ok = Refract(wo, Vec3<V>(V(0), V(0), V(1)), eta, &etap, &wt, &inv_etap);
+        Vec3<V> wt = RefractScaled(wo, Vec3<V>(V(0), V(0), V(1)), CosTheta(wo), V(1), cos_t, eta, &etap, &inv_etap);
+        Mask<V> refr_ok = cos_t > V(0);
         s.wi = select(reflect, wr, wt);
         V cos_i = DeltaAbsCos(s.wi);
         V ft = mode == TransportMode::Radiance ? t * sqr(inv_etap) : t;

@@ -291,7 +291,10 @@ template <typename F> struct PlasticBxDF {
 
     Spectrum<F> Ks{F(1)};
     Spectrum<F> diffuse{F(0)};  // R / (1 - {Fdr | R Fdr}) / (pi eta^2), the base's constant factor
+    Spectrum<F> diffuse_tt{F(0)}; // diffuse 4 eta^2: the factor of trans_halves' product (smooth f)
     F eta = 1.49;
+    F inv_eta2 = F(1) / (F(1.49) * F(1.49));  // 1 / eta^2 as FrDielectricRatioScaledAbove rounds it
+    bool dense = true;          // eta > 1: no total internal reflection for light from outside
     F spec_weight = 0.5;        // w = mean(Ks) / (mean(R) + mean(Ks))
     TrowbridgeReitz<F> mfd;
     bool smooth = true;
@@ -312,6 +315,8 @@ template <typename F> struct PlasticBxDF {
     static PlasticBxDF make(const Params &p, const PlasticTablesT<S> &tab) {
         PlasticBxDF m;
         m.eta = F(p.eta);
+        m.inv_eta2 = F(1) / (m.eta * m.eta);
+        m.dense = m.eta > F(1);
         m.smooth = !is_rough(p);
         S a = coat_alpha(p);
         m.mfd = TrowbridgeReitz<F>(F(a), F(a), p.masking);
@@ -325,6 +330,7 @@ template <typename F> struct PlasticBxDF {
             S R = p.reflectance[c];
             S scale = R / (1.0 - (p.nonlinear ? S(R * fdr) : fdr));
             m.diffuse[c] = F(scale * InvPi<double> / (p.eta * p.eta));
+            m.diffuse_tt[c] = F(scale * (4.0 * InvPi<double>));
             m.Ks[c] = F(p.specular_reflectance[c]);
             rmean += R / 3.0;
             smean += p.specular_reflectance[c] / 3.0;
@@ -374,24 +380,18 @@ template <typename F> struct PlasticBxDF {
         *pd = select(some, b, V(1));
     }
 
-    // Smooth coating, o and i upper: the base term diffuse T(cos_o) T(cos_i), T = 1 - F from the
-    // Fresnel numerators over one product of denominators (1 division). The smooth paths take
-    // the Fresnel terms of cosines above the surface (FrDielectricRatioAbove): lanes with a cosine
-    // <= 0 are masked by the caller.
-    template <typename V> Spectrum<V> f_smooth(V to, V den_o, const Vec3<V> &i) const {
-        V ti, den_i;
-        FrDielectricTransAbove(i.z, eta, &ti, &den_i);
-        return f_smooth_base(to, ti, den_o, den_i);
-    }
-    // The same at a cosine-hemisphere sample whose sin^2 (the disk radius^2) is known: the
-    // sampler's transmitted root runs beside the sample's z root instead of after it.
-    template <typename V> Spectrum<V> f_smooth(V to, V den_o, V cos_i, V sin2_i) const {
-        V ri, ti, den_i;
-        FrDielectricRatioAboveSin2(cos_i, sin2_i, eta, &ri, &ti, &den_i); // ri is dead code here
-        return f_smooth_base(to, ti, den_o, den_i);
-    }
-    template <typename V> Spectrum<V> f_smooth_base(V to, V ti, V den_o, V den_i) const {
-        return to_lanes<V>(diffuse) * (to * ti / (den_o * den_i));
+    // Smooth coating: the transmittance T = 1 - F at a cosine c > 0 from outside (sin2 = 1 - c^2)
+    // as T = 2 eta tq / dq, tq = c cos_t (a^2 + b^2), dq = a^2 b^2: FrDielectricNumerators' t and den
+    // without their constant factors 4 eta and 2, which diffuse_tt holds. Lanes with c <= 0 are
+    // masked by the caller. Where eta > 1 (dense) the transmitted cosine's radicand is at least
+    // 1 - 1 / eta^2 > 0 for every lane (sin2 <= 1), so no clamp. 1 square root.
+    template <typename V> void trans_halves(V c, V sin2, V *tq, V *dq) const {
+        V x = neg_mul_add(sin2, V(inv_eta2), V(1));
+        V ct = dense ? sqrt(x) : safe_sqrt(x);
+        V a = mul_add(V(eta), c, ct), b = mul_add(V(eta), ct, c);
+        V a2 = sqr(a), b2 = sqr(b);
+        *tq = c * ct * (a2 + b2);
+        *dq = a2 * b2;
     }
 
     // What the rough coating's f and pdf share at (o, i): the half vector h = o + i, never
@@ -446,16 +446,21 @@ template <typename F> struct PlasticBxDF {
     // flip only z (mirror_z): every term they take of x and y is even in the pair's common sign
     // (|h|^2, D_denom's squares, o.h, Smith's roots), so the values are those of the full flip,
     // bit for bit; the sampler flips all of wo (its azimuth matters) and maps wi back.
-    template <typename V> static Vec3<V> mirror_z(const Vec3<V> &w, V s) { return Vec3<V>(w.x, w.y, w.z * s); }
+    // The flip is a sign change (mulsign_: an exclusive or on packets, no multiplier); lanes with
+    // wo.z = +-0 (which mulsign_ may flip or not) are masked: o.z > 0 fails there.
+    template <typename V> static Vec3<V> mirror_z(const Vec3<V> &w, const Vec3<V> &wo) {
+        return Vec3<V>(w.x, w.y, mulsign_(w.z, wo.z));
+    }
     template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
-        V s = select(wo.z < V(0), V(-1), V(1));
-        Vec3<V> o = mirror_z(wo, s), i = mirror_z(wi, s);
+        Vec3<V> o = mirror_z(wo, wo), i = mirror_z(wi, wo);
         Mask<V> active = (o.z > V(0)) & (i.z > V(0));
         Spectrum<V> v;
         if (smooth) {
-            V to, den_o;
-            FrDielectricTransAbove(o.z, eta, &to, &den_o);
-            v = f_smooth(to, den_o, i);
+            // diffuse T(cos_o) T(cos_i) = diffuse_tt tq_o tq_i / (dq_o dq_i): 1 division
+            V tq_o, dq_o, tq_i, dq_i;
+            trans_halves(o.z, neg_mul_add(o.z, o.z, V(1)), &tq_o, &dq_o);
+            trans_halves(i.z, neg_mul_add(i.z, i.z, V(1)), &tq_i, &dq_i);
+            v = to_lanes<V>(diffuse_tt) * (tq_o * tq_i / (dq_o * dq_i));
         } else {
             v = f_rough(o, i, transmittance(o.z), coat(o, i));
         }
@@ -463,8 +468,7 @@ template <typename F> struct PlasticBxDF {
     }
 
     template <typename V> V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
-        V s = select(wo.z < V(0), V(-1), V(1));
-        Vec3<V> o = mirror_z(wo, s), i = mirror_z(wi, s);
+        Vec3<V> o = mirror_z(wo, wo), i = mirror_z(wi, wo);
         Mask<V> active = (o.z > V(0)) & (i.z > V(0)) & Mask<V>((sample_flags & RT_Reflection) != 0);
         V p;
         if (smooth) {
@@ -482,8 +486,9 @@ template <typename F> struct PlasticBxDF {
     template <typename V>
     BSDFSample<V> sample_f(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode, uint8_t sample_flags) const {
         BSDFSample<V> r;
-        V s = select(wo.z < V(0), V(-1), V(1));
-        Vec3<V> o = wo * s;
+        // wo flipped whole into the upper hemisphere (the sign of wo.z on each component; mulsign_,
+        // as mirror_z), the sample flipped back
+        Vec3<V> o(mulsign_(wo.x, wo.z), mulsign_(wo.y, wo.z), mulsign_(wo.z, wo.z));
         V sin2_d;
         Vec3<V> wd = SampleCosineHemisphere(u, &sin2_d);
         Vec3<V> i;
@@ -498,8 +503,12 @@ template <typename F> struct PlasticBxDF {
             spec = uc < p_spec;
             Vec3<V> ws(-o.x, -o.y, o.z);
             i = select(spec, ws, wd);
-            Spectrum<V> fs = to_lanes<V>(Ks) * (ro / (den_o * DeltaAbsCos(ws)));
-            r.f = select(spec, fs, f_smooth(to, den_o, wd.z, sin2_d));
+            // f = Ks ro / (den_o cos) (the mirror) or diffuse to ti / (den_o den_i) (the base): the
+            // chosen lobe's quotient in one division
+            V ri, ti, den_i;
+            FrDielectricRatioAboveSin2(wd.z, sin2_d, eta, &ri, &ti, &den_i); // ri is dead code here
+            V q = select(spec, ro, to * ti) / (den_o * select(spec, DeltaAbsCos(ws), den_i));
+            r.f = select(spec, to_lanes<V>(Ks), to_lanes<V>(diffuse)) * q;
             // as pdf(): the base's share times the cosine density
             r.pdf = select(spec, p_spec, pd * inv * CosineHemispherePDF(wd.z));
             r.flags = select_flag<V>(spec, SpecularReflection, DiffuseReflection);
@@ -517,7 +526,7 @@ template <typename F> struct PlasticBxDF {
             r.pdf = pdf_rough(o, i, T_o, c);
             r.flags = select_flag<V>(spec, GlossyReflection, DiffuseReflection);
         }
-        r.wi = i * s;
+        r.wi = Vec3<V>(mulsign_(i.x, wo.z), mulsign_(i.y, wo.z), mulsign_(i.z, wo.z));
         r.eta = V(1);
         r.valid = (o.z > V(0)) & (i.z > V(0)) & (r.pdf > V(0)) & Mask<V>((sample_flags & RT_Reflection) != 0);
         return r;

@@ -105,6 +105,13 @@ template <typename T> inline T lerp(T t, T a, T b) { return (1 - t) * a + t * b;
 template <typename T> inline T safe_sqrt(T x) { return sqrt(select(x > T(0), x, T(0))); }
 template <typename T> inline T safe_div(T a, T b) { return select(b != T(0), a / b, T(0)); }
 template <typename T> inline T copysign1(T mag, T sgn) { return select(sgn < T(0), -mag, mag); }
+// v with its sign flipped where s < 0: on packets an exclusive or with s's sign bit (Dr.Jit's
+// mulsign; no multiplier), which flips at s = -0 as well, where the scalar form does not; callers
+// use it where s = +-0 is masked out.
+template <typename T> inline T mulsign_(T v, T s) {
+    if constexpr (is_packet_v<T>) return drjit::mulsign(v, s);
+    else return select(s < T(0), -v, v);
+}
 
 // t[x] and d[x] per lane for two 64-entry tables (a table and its slopes) and one integer-valued
 // float index x. For a 16-lane float packet on AVX-512 each table sits in four registers and each
