@@ -72,7 +72,16 @@ template <typename F, typename Eta = F> struct ThinDielectricBxDF {
         BSDFSample<V> s;
         V cos_i = DeltaAbsCos(wo); // |wi.z| = |wo.z| for both lobes
         V rs, ts, den, pr, pt;
-        slab_ratio(AbsCosTheta(wo), eta, &rs, &ts, &den);
+        {
+            // slab_ratio's terms from outside (|cos| > 0 on every lane the acceptance rule keeps:
+            // wo.z = 0 is rejected there), without FrDielectricRatio's side and grazing selects;
+            // the same formulas for a per-lane eta (spectral packets) as for a scalar one
+            V r, t, d;
+            FrDielectricRatioScaledAbove(AbsCosTheta(wo), V(1), eta, &r, &t, &d);
+            rs = r + r;
+            ts = select(Mask<V>(eta == Eta(1)), d, t);  // index-matched: T' = 1 exactly, as slab_ratio
+            den = d + r;
+        }
         restrict_lobes(rs, ts, sample_flags, &pr, &pt);
         V sum = pr + pt;
         Mask<V> active = sum > V(0);
