@@ -419,13 +419,15 @@ template <typename F> struct PlasticBxDF {
     // as Ks r / (den D_denom(wm) G_denom) = Ks r |h|^4 / (den D_denom(h) G_denom) (the Fresnel
     // numerator over its denominator, both in h: FrDielectricRatioScaled; core/microfacet.h):
     // 1 division.
+    // active: the lanes to keep (others 0; the two lobes' scalars are masked before the channels).
     template <typename V>
-    Spectrum<V> f_rough(const Vec3<V> &o, const Vec3<V> &i, V T_o, const Coat<V> &c) const {
+    Spectrum<V> f_rough(const Vec3<V> &o, const Vec3<V> &i, V T_o, const Coat<V> &c, Mask<V> active) const {
         V r, t, den;
         FrDielectricRatioScaledAbove(c.c_oh, c.len2, eta, &r, &t, &den); // o.h > 0 where c.ok
         V coat_v = r * c.l4 / (den * c.dd * mfd.G_denom(o.z, i.z, c.root_o, c.root_i));
-        Spectrum<V> v = to_lanes<V>(diffuse) * (T_o * transmittance(i.z)), ks = to_lanes<V>(Ks);
-        V coat = select(c.ok, coat_v, V(0));
+        V base = select(active, T_o * transmittance(i.z), V(0));
+        Spectrum<V> v = to_lanes<V>(diffuse) * base, ks = to_lanes<V>(Ks);
+        V coat = select(c.ok & active, coat_v, V(0));
         for (int k = 0; k < Spectrum<V>::Size; ++k) v[k] = mul_add(ks[k], coat, v[k]);
         return v;
     }
@@ -460,11 +462,11 @@ template <typename F> struct PlasticBxDF {
             V tq_o, dq_o, tq_i, dq_i;
             trans_halves(o.z, neg_mul_add(o.z, o.z, V(1)), &tq_o, &dq_o);
             trans_halves(i.z, neg_mul_add(i.z, i.z, V(1)), &tq_i, &dq_i);
-            v = to_lanes<V>(diffuse_tt) * (tq_o * tq_i / (dq_o * dq_i));
+            v = to_lanes<V>(diffuse_tt) * select(active, tq_o * tq_i / (dq_o * dq_i), V(0));
         } else {
-            v = f_rough(o, i, transmittance(o.z), coat(o, i));
+            v = f_rough(o, i, transmittance(o.z), coat(o, i), active);
         }
-        return select(active, v, Spectrum<V>(V(0)));
+        return v; // the inactive lanes' scalars were zeroed before the channels (diffuse, Ks finite)
     }
 
     template <typename V> V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
@@ -522,7 +524,7 @@ template <typename F> struct PlasticBxDF {
             Vec3<V> ws = reflect_about_h(o, m, dot(o, m), m2);
             i = select(spec, ws, wd);
             Coat<V> c = coat(o, i);
-            r.f = f_rough(o, i, T_o, c);
+            r.f = f_rough(o, i, T_o, c, Mask<V>(true));
             r.pdf = pdf_rough(o, i, T_o, c);
             r.flags = select_flag<V>(spec, GlossyReflection, DiffuseReflection);
         }
