@@ -396,15 +396,17 @@ template <typename F> struct PlasticSpectral : SplitChannelModel<PlasticSpectral
     double fdr = 0, eta = 1.49;
     bool nonlinear = false;
     struct Chan {
-        F diffuse, Ks;
+        F diffuse, diffuse_tt, Ks;
     };
     Chan chan(double l) const {
         double R = reflectance(l);
-        // R / (1 - {Fdr | R Fdr}) / (pi eta^2) (PlasticBxDF::make)
-        return {F(R / (1 - (nonlinear ? R * fdr : fdr)) * InvPi<double> / (eta * eta)), F(specular(l))};
+        // R / (1 - {Fdr | R Fdr}) / (pi eta^2) and its 4 eta^2 multiple (PlasticBxDF::make)
+        double scale = R / (1 - (nonlinear ? R * fdr : fdr));
+        return {F(scale * InvPi<double> / (eta * eta)), F(scale * (4.0 * InvPi<double>)), F(specular(l))};
     }
     static void put(PlasticBxDF<F> &m, int c, const Chan &v) {
         m.diffuse[c] = v.diffuse;
+        m.diffuse_tt[c] = v.diffuse_tt;
         m.Ks[c] = v.Ks;
     }
 };
