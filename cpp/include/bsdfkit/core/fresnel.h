@@ -79,11 +79,6 @@ inline void FrDielectricRatioAboveSin2(F cos_i, F sin2_i, E eta, F *r_num, F *t_
 template <typename F, typename E> inline void FrDielectricRatioAbove(F cos_i, E eta, F *r_num, F *t_num, F *den) {
     FrDielectricRatioScaledAbove(cos_i, F(1), eta, r_num, t_num, den);
 }
-// Its transmittance numerator and denominator alone (T = t / den).
-template <typename F, typename E> inline void FrDielectricTransAbove(F cos_i, E eta, F *t_num, F *den) {
-    F r;
-    FrDielectricRatioAbove(cos_i, eta, &r, t_num, den); // r is dead code here
-}
 
 template <typename F, typename E> inline void FrDielectricRT(F cos_i, E eta, F *R, F *T) {
     F r, t, den;
