@@ -380,14 +380,25 @@ template <typename F> struct PlasticBxDF {
         *pd = select(some, b, V(1));
     }
 
+    // The transmitted cosine for light from outside at sin^2 = sin2 of the incident angle, as
+    // FrDielectricRatioScaledAbove computes it (|h| = 1); where eta > 1 (dense) its radicand is at
+    // least 1 - 1 / eta^2 > 0 for every lane (sin2 <= 1), so no clamp. 1 square root.
+    template <typename V> V cos_t(V sin2) const {
+        V x = neg_mul_add(sin2, V(inv_eta2), V(1));
+        return dense ? sqrt(x) : safe_sqrt(x);
+    }
+    // FrDielectricRatioAboveSin2's numerators and denominator (R = r / den, T = t / den) at a
+    // cosine c > 0 from outside with sin2 = 1 - c^2 (or a sample's own sin^2), through cos_t.
+    template <typename V> void ratio_above(V c, V sin2, V *r, V *t, V *den) const {
+        V a2, b2;
+        FrDielectricNumerators(c, cos_t(sin2), V(eta), &a2, &b2, r, t, den);
+    }
     // Smooth coating: the transmittance T = 1 - F at a cosine c > 0 from outside (sin2 = 1 - c^2)
     // as T = 2 eta tq / dq, tq = c cos_t (a^2 + b^2), dq = a^2 b^2: FrDielectricNumerators' t and den
     // without their constant factors 4 eta and 2, which diffuse_tt holds. Lanes with c <= 0 are
-    // masked by the caller. Where eta > 1 (dense) the transmitted cosine's radicand is at least
-    // 1 - 1 / eta^2 > 0 for every lane (sin2 <= 1), so no clamp. 1 square root.
+    // masked by the caller. 1 square root.
     template <typename V> void trans_halves(V c, V sin2, V *tq, V *dq) const {
-        V x = neg_mul_add(sin2, V(inv_eta2), V(1));
-        V ct = dense ? sqrt(x) : safe_sqrt(x);
+        V ct = cos_t(sin2);
         V a = mul_add(V(eta), c, ct), b = mul_add(V(eta), ct, c);
         V a2 = sqr(a), b2 = sqr(b);
         *tq = c * ct * (a2 + b2);
@@ -476,7 +487,7 @@ template <typename F> struct PlasticBxDF {
         if (smooth) {
             // the base's share pd / (ps + pd) of the cosine lobe (F's denominator cancels)
             V ro, to, den_o, ps, pd;
-            FrDielectricRatioAbove(o.z, eta, &ro, &to, &den_o);
+            ratio_above(o.z, neg_mul_add(o.z, o.z, V(1)), &ro, &to, &den_o);
             lobe_weights(ro, to, &ps, &pd);
             p = pd * (V(1) / (ps + pd)) * CosineHemispherePDF(i.z);
         } else {
@@ -498,7 +509,7 @@ template <typename F> struct PlasticBxDF {
         if (smooth) {
             // delta reflection: f = Ks F / cos, discrete probability p; else the cosine lobe
             V ro, to, den_o, ps, pd;
-            FrDielectricRatioAbove(o.z, eta, &ro, &to, &den_o);
+            ratio_above(o.z, neg_mul_add(o.z, o.z, V(1)), &ro, &to, &den_o);
             lobe_weights(ro, to, &ps, &pd);
             V inv = V(1) / (ps + pd);
             V p_spec = ps * inv;
@@ -508,7 +519,7 @@ template <typename F> struct PlasticBxDF {
             // f = Ks ro / (den_o cos) (the mirror) or diffuse to ti / (den_o den_i) (the base): the
             // chosen lobe's quotient in one division
             V ri, ti, den_i;
-            FrDielectricRatioAboveSin2(wd.z, sin2_d, eta, &ri, &ti, &den_i); // ri is dead code here
+            ratio_above(wd.z, sin2_d, &ri, &ti, &den_i); // ri is dead code here
             V q = select(spec, ro, to * ti) / (den_o * select(spec, DeltaAbsCos(ws), den_i));
             r.f = select(spec, to_lanes<V>(Ks), to_lanes<V>(diffuse)) * q;
             // as pdf(): the base's share times the cosine density
