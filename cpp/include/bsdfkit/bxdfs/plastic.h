@@ -387,8 +387,9 @@ template <typename F> struct PlasticBxDF {
         V x = neg_mul_add(sin2, V(inv_eta2), V(1));
         return dense ? sqrt(x) : safe_sqrt(x);
     }
-    // FrDielectricRatioAboveSin2's numerators and denominator (R = r / den, T = t / den) at a
-    // cosine c > 0 from outside with sin2 = 1 - c^2 (or a sample's own sin^2), through cos_t.
+    // The Fresnel numerators and denominator (R = r / den, T = t / den; FrDielectricRatioScaledAbove's
+    // at |h| = 1) at a cosine c > 0 from outside with sin2 = 1 - c^2 (or a sample's own sin^2:
+    // the transmitted root then does not wait for c's), through cos_t.
     template <typename V> void ratio_above(V c, V sin2, V *r, V *t, V *den) const {
         V a2, b2;
         FrDielectricNumerators(c, cos_t(sin2), V(eta), &a2, &b2, r, t, den);

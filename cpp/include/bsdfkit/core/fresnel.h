@@ -54,30 +54,17 @@ template <typename F, typename E> inline void FrDielectricRatio(F cos_i, E eta, 
     FrDielectricRatioScaled(clamp(cos_i, F(-1), F(1)), F(1), eta, r_num, t_num, den);
 }
 // FrDielectricRatioScaled for light arriving from outside, cos_i > 0 (a caller's mask drops the
-// other lanes), and a scalar eta: the same formulas with the inside flip, the clamp and the masks
-// folded away. Past the critical angle (eta < 1) cos_t = 0 gives t = 0 and r = den (R = 1) by the
-// formulas themselves, and cos_i > 0 keeps den > 0; a cos_i a rounding past |h| (or past 1 for a
-// direction of length 1 within the unit tolerance) makes cos_t a rounding past it, not a NaN.
-// 1 square root.
+// other lanes), and eta a scalar (or a per-lane packet: one division per packet): the same
+// formulas with the inside flip, the clamp and the masks folded away. Past the critical angle
+// (eta < 1) cos_t = 0 gives t = 0 and r = den (R = 1) by the formulas themselves, and cos_i > 0
+// keeps den > 0; a cos_i a rounding past |h| (or past 1 for a direction of length 1 within the
+// unit tolerance) makes cos_t a rounding past it, not a NaN. 1 square root.
 template <typename F, typename E>
 inline void FrDielectricRatioScaledAbove(F cos_i, F len2, E eta, F *r_num, F *t_num, F *den) {
-    const E inv_eta2 = E(1) / (eta * eta); // a scalar division
+    const E inv_eta2 = E(1) / (eta * eta); // a scalar division for a scalar eta
     F sin2_i = neg_mul_add(cos_i, cos_i, len2); // len2 sin^2 of the incident angle
     F cos_t = safe_sqrt(neg_mul_add(sin2_i, F(inv_eta2), len2)), a2, b2;
     FrDielectricNumerators(cos_i, cos_t, F(eta), &a2, &b2, r_num, t_num, den);
-}
-// FrDielectricRatioAbove (|h| = 1) when sin^2 of the incident angle is known on its own (e.g. a
-// cosine-hemisphere sample's disk radius^2): the transmitted cosine's root then does not wait for
-// cos_i's. 1 square root.
-template <typename F, typename E>
-inline void FrDielectricRatioAboveSin2(F cos_i, F sin2_i, E eta, F *r_num, F *t_num, F *den) {
-    const E inv_eta2 = E(1) / (eta * eta); // a scalar division
-    F cos_t = safe_sqrt(neg_mul_add(sin2_i, F(inv_eta2), F(1))), a2, b2;
-    FrDielectricNumerators(cos_i, cos_t, F(eta), &a2, &b2, r_num, t_num, den);
-}
-// FrDielectricRatio for cos_i > 0 (|h| = 1 above).
-template <typename F, typename E> inline void FrDielectricRatioAbove(F cos_i, E eta, F *r_num, F *t_num, F *den) {
-    FrDielectricRatioScaledAbove(cos_i, F(1), eta, r_num, t_num, den);
 }
 
 template <typename F, typename E> inline void FrDielectricRT(F cos_i, E eta, F *R, F *T) {
