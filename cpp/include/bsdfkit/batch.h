@@ -990,10 +990,11 @@ template <typename F> inline void store_mask_bytes(uint8_t *p, int64_t i, int64_
 #if defined(__AVX512BW__) && defined(__AVX512VL__)
     static_assert(kPacketWidth == 16, "store_mask_bytes: one 16-bit mask per packet");
     // float32 only: float64's two 8-lane mask halves joined so ran 0.97-1.00x (session 26)
-    if (sizeof(F) == 4 && cnt == kW<F>) {
-        if constexpr (sizeof(F) == 4)
+    if constexpr (sizeof(F) == 4) {
+        if (cnt == kW<F>) {
             _mm_storeu_si128(reinterpret_cast<__m128i *>(p + i), _mm_maskz_mov_epi8(m.k, _mm_set1_epi8(1)));
-        return;
+            return;
+        }
     }
 #endif
     store_bytes(p, i, cnt, mask_to_float<Packet<F>>(m));

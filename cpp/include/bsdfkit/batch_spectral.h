@@ -396,17 +396,15 @@ template <typename F> struct PlasticSpectral : SplitChannelModel<PlasticSpectral
     double fdr = 0, eta = 1.49;
     bool nonlinear = false;
     struct Chan {
-        F diffuse, diffuse_tt, Ks;
+        double scale;  // R / (1 - {Fdr | R Fdr}) (PlasticBxDF::make)
+        F Ks;
     };
     Chan chan(double l) const {
         double R = reflectance(l);
-        // R / (1 - {Fdr | R Fdr}) / (pi eta^2) and its 4 eta^2 multiple (PlasticBxDF::make)
-        double scale = R / (1 - (nonlinear ? R * fdr : fdr));
-        return {F(scale * InvPi<double> / (eta * eta)), F(scale * (4.0 * InvPi<double>)), F(specular(l))};
+        return {R / (1 - (nonlinear ? R * fdr : fdr)), F(specular(l))};
     }
-    static void put(PlasticBxDF<F> &m, int c, const Chan &v) {
-        m.diffuse[c] = v.diffuse;
-        m.diffuse_tt[c] = v.diffuse_tt;
+    void put(PlasticBxDF<F> &m, int c, const Chan &v) const {
+        PlasticBxDF<F>::set_base(m, c, v.scale, eta);
         m.Ks[c] = v.Ks;
     }
 };

@@ -125,7 +125,7 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
         BSDFSample<V> s;
         V r, t, den, pr, pt, cos_t;
         // R = r / den, T = t / den; cos_t the transmitted cosine (0 under total internal reflection)
-        FrDielectricRatioScaled(clamp(CosTheta(wo), V(-1), V(1)), V(1), eta, &r, &t, &den, &cos_t);
+        FrDielectricRatio(CosTheta(wo), eta, &r, &t, &den, &cos_t);
         // eta == 1 is a pure pass-through: R = 0, T = 1 exactly rather than trusting rounding
         if (!not_index_matched()) {
             r = V(0);

@@ -328,9 +328,7 @@ template <typename F> struct PlasticBxDF {
         m.has_diffuse = false;
         for (int c = 0; c < 3; ++c) {
             S R = p.reflectance[c];
-            S scale = R / (1.0 - (p.nonlinear ? S(R * fdr) : fdr));
-            m.diffuse[c] = F(scale * InvPi<double> / (p.eta * p.eta));
-            m.diffuse_tt[c] = F(scale * (4.0 * InvPi<double>));
+            set_base(m, c, R / (1.0 - (p.nonlinear ? S(R * fdr) : fdr)), p.eta);
             m.Ks[c] = F(p.specular_reflectance[c]);
             rmean += R / 3.0;
             smean += p.specular_reflectance[c] / 3.0;
@@ -339,6 +337,13 @@ template <typename F> struct PlasticBxDF {
         // both means 0 is a black material; any split will do
         m.spec_weight = F(rmean + smean > 0.0 ? S(smean / (rmean + smean)) : S(0.5));
         return m;
+    }
+
+    // The base's factors of channel c from scale = R / (1 - {Fdr | R Fdr}) (also the spectral
+    // adapter's, batch_spectral.h): diffuse = scale / (pi eta^2) and diffuse_tt, its 4 eta^2 multiple.
+    static void set_base(PlasticBxDF &m, int c, const S &scale, const S &eta) {
+        m.diffuse[c] = F(scale * InvPi<double> / (eta * eta));
+        m.diffuse_tt[c] = F(scale * (4.0 * InvPi<double>));
     }
 
     uint8_t flags() const {
@@ -399,9 +404,8 @@ template <typename F> struct PlasticBxDF {
     // without their constant factors 4 eta and 2, which diffuse_tt holds. Lanes with c <= 0 are
     // masked by the caller. 1 square root.
     template <typename V> void trans_halves(V c, V sin2, V *tq, V *dq) const {
-        V ct = cos_t(sin2);
-        V a = mul_add(V(eta), c, ct), b = mul_add(V(eta), ct, c);
-        V a2 = sqr(a), b2 = sqr(b);
+        V ct = cos_t(sin2), a2, b2, r, t, den; // r, t, den are dead code here
+        FrDielectricNumerators(c, ct, V(eta), &a2, &b2, &r, &t, &den);
         *tq = c * ct * (a2 + b2);
         *dq = a2 * b2;
     }
@@ -462,11 +466,12 @@ template <typename F> struct PlasticBxDF {
     // bit for bit; the sampler flips all of wo (its azimuth matters) and maps wi back.
     // The flip is a sign change (mulsign_: an exclusive or on packets, no multiplier); lanes with
     // wo.z = +-0 (which mulsign_ may flip or not) are masked: o.z > 0 fails there.
-    template <typename V> static Vec3<V> mirror_z(const Vec3<V> &w, const Vec3<V> &wo) {
-        return Vec3<V>(w.x, w.y, mulsign_(w.z, wo.z));
+    template <typename V> static Vec3<V> mirror_z(const Vec3<V> &w, V z) { return Vec3<V>(w.x, w.y, mulsign_(w.z, z)); }
+    template <typename V> static Vec3<V> flip(const Vec3<V> &w, V z) {
+        return Vec3<V>(mulsign_(w.x, z), mulsign_(w.y, z), mulsign_(w.z, z));
     }
     template <typename V> Spectrum<V> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
-        Vec3<V> o = mirror_z(wo, wo), i = mirror_z(wi, wo);
+        Vec3<V> o = mirror_z(wo, wo.z), i = mirror_z(wi, wo.z);
         Mask<V> active = (o.z > V(0)) & (i.z > V(0));
         Spectrum<V> v;
         if (smooth) {
@@ -482,7 +487,7 @@ template <typename F> struct PlasticBxDF {
     }
 
     template <typename V> V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
-        Vec3<V> o = mirror_z(wo, wo), i = mirror_z(wi, wo);
+        Vec3<V> o = mirror_z(wo, wo.z), i = mirror_z(wi, wo.z);
         Mask<V> active = (o.z > V(0)) & (i.z > V(0)) & Mask<V>((sample_flags & RT_Reflection) != 0);
         V p;
         if (smooth) {
@@ -500,9 +505,9 @@ template <typename F> struct PlasticBxDF {
     template <typename V>
     BSDFSample<V> sample_f(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode, uint8_t sample_flags) const {
         BSDFSample<V> r;
-        // wo flipped whole into the upper hemisphere (the sign of wo.z on each component; mulsign_,
-        // as mirror_z), the sample flipped back
-        Vec3<V> o(mulsign_(wo.x, wo.z), mulsign_(wo.y, wo.z), mulsign_(wo.z, wo.z));
+        // wo flipped whole into the upper hemisphere (flip: the sign of wo.z on each component), the
+        // sample flipped back
+        Vec3<V> o = flip(wo, wo.z);
         V sin2_d;
         Vec3<V> wd = SampleCosineHemisphere(u, &sin2_d);
         Vec3<V> i;
@@ -540,7 +545,7 @@ template <typename F> struct PlasticBxDF {
             r.pdf = pdf_rough(o, i, T_o, c);
             r.flags = select_flag<V>(spec, GlossyReflection, DiffuseReflection);
         }
-        r.wi = Vec3<V>(mulsign_(i.x, wo.z), mulsign_(i.y, wo.z), mulsign_(i.z, wo.z));
+        r.wi = flip(i, wo.z);
         r.eta = V(1);
         r.valid = (o.z > V(0)) & (i.z > V(0)) & (r.pdf > V(0)) & Mask<V>((sample_flags & RT_Reflection) != 0);
         return r;

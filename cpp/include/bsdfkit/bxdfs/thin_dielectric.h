@@ -50,6 +50,10 @@ template <typename F, typename Eta = F> struct ThinDielectricBxDF {
     template <typename V, typename E> static void slab_ratio(V cos_o, E eta, V *rs, V *ts, V *den) {
         V r, t, d;
         FrDielectricRatio(cos_o, eta, &r, &t, &d);
+        slab_terms(r, t, d, eta, rs, ts, den);
+    }
+    // The slab's numerators from the interface's r, t over d (R = r / d, T = t / d).
+    template <typename V, typename E> static void slab_terms(V r, V t, V d, E eta, V *rs, V *ts, V *den) {
         *rs = r + r;
         *ts = t;
         // index-matched: r = 0, T' = 1 exactly (t = d only to rounding); per lane for a packet eta
@@ -73,14 +77,13 @@ template <typename F, typename Eta = F> struct ThinDielectricBxDF {
         V cos_i = DeltaAbsCos(wo); // |wi.z| = |wo.z| for both lobes
         V rs, ts, den, pr, pt;
         {
-            // slab_ratio's terms from outside (|cos| > 0 on every lane the acceptance rule keeps:
-            // wo.z = 0 is rejected there), without FrDielectricRatio's side and grazing selects;
-            // the same formulas for a per-lane eta (spectral packets) as for a scalar one
+            // slab_ratio with the interface's terms from outside (|cos| > 0 on every lane the
+            // acceptance rule keeps: wo.z = 0 is rejected there), without FrDielectricRatio's side
+            // and grazing selects; the same formulas for a per-lane eta (spectral packets) as for a
+            // scalar one
             V r, t, d;
             FrDielectricRatioScaledAbove(AbsCosTheta(wo), V(1), eta, &r, &t, &d);
-            rs = r + r;
-            ts = select(Mask<V>(eta == Eta(1)), d, t);  // index-matched: T' = 1 exactly, as slab_ratio
-            den = d + r;
+            slab_terms(r, t, d, eta, &rs, &ts, &den);
         }
         restrict_lobes(rs, ts, sample_flags, &pr, &pt);
         V sum = pr + pt;

@@ -50,8 +50,9 @@ inline void FrDielectricRatioScaled(F cos_i, F len2, E eta_, F *r_num, F *t_num,
     *r_num = select(ok, r, F(1));
     *t_num = select(ok, t, F(0));
 }
-template <typename F, typename E> inline void FrDielectricRatio(F cos_i, E eta, F *r_num, F *t_num, F *den) {
-    FrDielectricRatioScaled(clamp(cos_i, F(-1), F(1)), F(1), eta, r_num, t_num, den);
+template <typename F, typename E>
+inline void FrDielectricRatio(F cos_i, E eta, F *r_num, F *t_num, F *den, F *cos_t_out = nullptr) {
+    FrDielectricRatioScaled(clamp(cos_i, F(-1), F(1)), F(1), eta, r_num, t_num, den, cos_t_out);
 }
 // FrDielectricRatioScaled for light arriving from outside, cos_i > 0 (a caller's mask drops the
 // other lanes), and eta a scalar (or a per-lane packet: one division per packet): the same
