@@ -38,7 +38,7 @@ inline void FrDielectricRatioScaled(F cos_i, F len2, E eta_, F *r_num, F *t_num,
     cos_i = abs(cos_i);
     // len2 sin^2 of the transmitted angle; cos^2 <= 1 (rounding past |h| clamped, a NaN kept)
     F c2 = sqr(cos_i);
-    F sin2_t = (len2 - select(c2 > len2, len2, c2)) * sqr(inv_etap);
+    F sin2_t = (len2 - min_(len2, c2)) * sqr(inv_etap);  // min_: select(c2 > len2, len2, c2)
     Mask<F> tir = sin2_t >= len2;
     F cos_t = safe_sqrt(len2 - sin2_t);
     if (cos_t_out) *cos_t_out = cos_t;
@@ -111,7 +111,7 @@ template <typename F> inline Cplx<F> csqrt(Cplx<F> z) {
 // |h|^6 and F does not change (as FrDielectricRatioScaled).
 template <typename F, typename E> inline void FrComplexRatioScaled(F c, F len2, E eta, E k, F *num, F *den) {
     F cos2 = sqr(c);
-    cos2 = select(cos2 > len2, len2, cos2); // cos^2 <= 1 (rounding past |h|; a NaN kept)
+    cos2 = min_(len2, cos2); // cos^2 <= 1 (rounding past |h|; a NaN kept): select(cos2 > len2, len2, cos2)
     F sin2 = len2 - cos2;
     E eta2 = eta * eta, k2 = k * k;
     F t0 = F(eta2 - k2) * len2 - sin2;

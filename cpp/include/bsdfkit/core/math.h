@@ -10,8 +10,9 @@
 //  V3 A loop-invariant test (sample_flags, a model switch) masks a value by its bits
 //     (keep_or_zero; restrict_lobes): a select on an invariant bool does not vectorize in float64.
 //     Model switches are stored as F (0 or 1), not bool, so they can mask a float vector.
-//  V4 max_/min_/clamp are selects (no fmin/fmax: their NaN rules block it); no errno-setting
-//     calls; sin and cos through sincos_ (libm's have no vector form without -ffast-math).
+//  V4 max_/min_/clamp are selects (no fmin/fmax: their NaN rules block it; on packets the same
+//     lanes by x86's MAXPS / MINPS, core/simd.h minmax_lanes); no errno-setting calls; sin and
+//     cos through sincos_ (libm's have no vector form without -ffast-math).
 //  V5 Avoid selects whose operands are themselves selected divisions (two safe_divs in a row) and
 //     tests repeated between a model and the BSDF-level rules: GCC's PRE merges them into bool
 //     selects. -ffp-contract=off keeps vector body and scalar remainder bit-identical.
@@ -98,8 +99,15 @@ template <typename T> inline T mul_sub(const T &a, const T &b, const T &c) {
     return mul_add(a, b, T(-c));
 }
 // max/min as selects: operands are finite in every use, and selects vectorize.
-template <typename T> inline T max_(T a, T b) { return select(a > b, a, b); }
-template <typename T> inline T min_(T a, T b) { return select(a < b, a, b); }
+// On packets one MAXPS / MINPS each (minmax_lanes, core/simd.h: the same lanes).
+template <typename T> inline T max_(T a, T b) {
+    if constexpr (is_packet_v<T>) return minmax_lanes<true>(a, b);
+    else return select(a > b, a, b);
+}
+template <typename T> inline T min_(T a, T b) {
+    if constexpr (is_packet_v<T>) return minmax_lanes<false>(a, b);
+    else return select(a < b, a, b);
+}
 template <typename T> inline T clamp(T x, T lo, T hi) { return select(x < lo, lo, select(x > hi, hi, x)); }
 template <typename T> inline T lerp(T t, T a, T b) { return (1 - t) * a + t * b; }
 template <typename T> inline T safe_sqrt(T x) { return sqrt(select(x > T(0), x, T(0))); }

@@ -11,7 +11,7 @@ namespace bsdfkit {
 template <typename F> inline constexpr F OneMinusEpsilon = F(1) - std::numeric_limits<F>::epsilon() / F(2);
 template <typename F> inline F clamp_uniform(F u) {
     const F one_minus = F(OneMinusEpsilon<scalar_t<F>>);
-    return select(u < one_minus, u, one_minus);
+    return min_(u, one_minus);  // select(u < one_minus, u, one_minus), NaN kept
 }
 template <typename F> inline Point2<F> clamp_uniform(Point2<F> u) { return {clamp_uniform(u.x), clamp_uniform(u.y)}; }
 

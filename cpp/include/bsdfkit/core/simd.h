@@ -67,16 +67,56 @@ template <typename V> inline V mask_to_float(const Mask<V> &m) {
 // would otherwise make ambiguous. Same formulas as the scalar ones in core/math.h.
 template <typename T, size_t N> using PacketT = drjit::Packet<T, N>;
 template <typename T, size_t N> inline PacketT<T, N> sqr(const PacketT<T, N> &x) { return x * x; }
+// x86's MAXPS / MINPS lane by lane: a > b ? a : b and a < b ? a : b, i.e. exactly the lanes of
+// select(a > b, a, b) / select(a < b, a, b), NaN and signed zeros included (the second operand
+// wherever the compare fails), in one instruction where GCC keeps the select as a compare into a
+// mask register and a blend. (Dr.Jit's minimum / maximum add a NaN fix-up: two instructions.)
+// Packets of one or two AVX-512 or AVX registers; other packets through the select.
+template <bool Max, typename P> inline P minmax_lanes(const P &a, const P &b) {
+    using T = drjit::scalar_t<P>;
+    constexpr size_t N = drjit::size_v<P>;
+    [[maybe_unused]] constexpr size_t R = 64 / sizeof(T);  // lanes of a zmm register
+#if defined(__AVX512F__)
+    if constexpr (std::is_same_v<T, float> && N == 16) {
+        P r;
+        r.m = Max ? _mm512_max_ps(a.m, b.m) : _mm512_min_ps(a.m, b.m);
+        return r;
+    } else if constexpr (std::is_same_v<T, double> && N == 8) {
+        P r;
+        r.m = Max ? _mm512_max_pd(a.m, b.m) : _mm512_min_pd(a.m, b.m);
+        return r;
+    } else if constexpr (N == 2 * R) {
+        return P(minmax_lanes<Max>(a.a1, b.a1), minmax_lanes<Max>(a.a2, b.a2));
+    } else
+#elif defined(__AVX__)
+    if constexpr (std::is_same_v<T, float> && N == 8) {
+        P r;
+        r.m = Max ? _mm256_max_ps(a.m, b.m) : _mm256_min_ps(a.m, b.m);
+        return r;
+    } else if constexpr (std::is_same_v<T, double> && N == 4) {
+        P r;
+        r.m = Max ? _mm256_max_pd(a.m, b.m) : _mm256_min_pd(a.m, b.m);
+        return r;
+    } else if constexpr (N == R || N == 2 * R) {  // two (or four) ymm registers
+        return P(minmax_lanes<Max>(a.a1, b.a1), minmax_lanes<Max>(a.a2, b.a2));
+    } else
+#endif
+    {
+        return Max ? drjit::select(a > b, a, b) : drjit::select(a < b, a, b);
+    }
+}
+// select(x < lo, lo, select(x > hi, hi, x)) as max(lo, min(hi, x)) lane by lane: the same lanes
+// for lo <= hi (every caller's bounds are ordered constants), NaN kept.
 template <typename T, size_t N>
 inline PacketT<T, N> clamp(const PacketT<T, N> &x, const PacketT<T, N> &lo, const PacketT<T, N> &hi) {
-    return drjit::select(x < lo, lo, drjit::select(x > hi, hi, x));
+    return minmax_lanes<true>(lo, minmax_lanes<false>(hi, x));
 }
 template <typename T, size_t N>
 inline PacketT<T, N> lerp(const PacketT<T, N> &t, const PacketT<T, N> &a, const PacketT<T, N> &b) {
     return (T(1) - t) * a + t * b;
 }
 template <typename T, size_t N> inline PacketT<T, N> safe_sqrt(const PacketT<T, N> &x) {
-    return drjit::sqrt(x & (x > T(0))); // = select(x > 0, x, 0), see zero_unless
+    return drjit::sqrt(minmax_lanes<true>(x, PacketT<T, N>(T(0)))); // = sqrt(select(x > 0, x, 0))
 }
 
 // x where m is set, else +0: the same bits as select(m, x, 0). For packets an AND with the lane
