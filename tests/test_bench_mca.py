@@ -64,3 +64,35 @@ def test_loop_between_markers_is_an_error(mca):
         mca.loop_body(looping)
     with pytest.raises(ValueError, match="loop"):   # with no conditional branch on the way
         mca.loop_body(looping, take=set())
+
+
+def test_shortest_path_takes_the_cheap_side(mca):
+    # the *_smooth keys: the fall-through side of the uniform branch (1 instruction, not 3)
+    assert mca.loop_body(ASM, shortest=True) == mca.loop_body(ASM, take=set())
+    assert len(mca.loop_body(ASM, shortest=True)) == len(mca.loop_body(ASM)) - 2
+
+
+# llc's layout of a Dr.Jit kernel: set-up, the loop body from its label to the backward branch
+LLC = """
+drjit_1:
+	movq	24(%rcx), %rax
+	jmp	.LBB0_1
+.LBB0_1:                                # %body
+	vmovaps	(%rax,%rdi,4), %zmm0
+	vdivps	%zmm1, %zmm0, %zmm0
+	vmovntps	%zmm0, (%rdx,%rdi,4)
+	addq	$16, %rdi
+	cmpq	%rsi, %rdi
+	jb	.LBB0_1
+# %bb.2:
+	vzeroupper
+	retq
+"""
+
+
+def test_llc_loop_body(mca):
+    assert mca.llc_loop_body(LLC) == ["vmovaps	(%rax,%rdi,4), %zmm0", "vdivps	%zmm1, %zmm0, %zmm0",
+                                      "vmovntps	%zmm0, (%rdx,%rdi,4)", "addq	$16, %rdi", "cmpq	%rsi, %rdi",
+                                      "jb	.LBB0_1"]
+    with pytest.raises(ValueError, match="loop"):
+        mca.llc_loop_body(LLC.replace("jb\t.LBB0_1", "jb\t.LBB0_3"))
