@@ -71,37 +71,43 @@ template <typename T, size_t N> inline PacketT<T, N> sqr(const PacketT<T, N> &x)
 // select(a > b, a, b) / select(a < b, a, b), NaN and signed zeros included (the second operand
 // wherever the compare fails), in one instruction where GCC keeps the select as a compare into a
 // mask register and a blend. (Dr.Jit's minimum / maximum add a NaN fix-up: two instructions.)
-// Packets of one or two AVX-512 or AVX registers; other packets through the select.
-template <bool Max, typename P> inline P minmax_lanes(const P &a, const P &b) {
-    using T = drjit::scalar_t<P>;
-    constexpr size_t N = drjit::size_v<P>;
-    [[maybe_unused]] constexpr size_t R = 64 / sizeof(T);  // lanes of a zmm register
-#if defined(__AVX512F__)
-    if constexpr (std::is_same_v<T, float> && N == 16) {
-        P r;
-        r.m = Max ? _mm512_max_ps(a.m, b.m) : _mm512_min_ps(a.m, b.m);
-        return r;
-    } else if constexpr (std::is_same_v<T, double> && N == 8) {
-        P r;
-        r.m = Max ? _mm512_max_pd(a.m, b.m) : _mm512_min_pd(a.m, b.m);
-        return r;
-    } else if constexpr (N == 2 * R) {
-        return P(minmax_lanes<Max>(a.a1, b.a1), minmax_lanes<Max>(a.a2, b.a2));
-    } else
-#elif defined(__AVX__)
-    if constexpr (std::is_same_v<T, float> && N == 8) {
-        P r;
-        r.m = Max ? _mm256_max_ps(a.m, b.m) : _mm256_min_ps(a.m, b.m);
-        return r;
-    } else if constexpr (std::is_same_v<T, double> && N == 4) {
-        P r;
-        r.m = Max ? _mm256_max_pd(a.m, b.m) : _mm256_min_pd(a.m, b.m);
-        return r;
-    } else if constexpr (N == R || N == 2 * R) {  // two (or four) ymm registers
-        return P(minmax_lanes<Max>(a.a1, b.a1), minmax_lanes<Max>(a.a2, b.a2));
-    } else
+// On a packet's native register (its member m), on both halves of a packet of several (a1, a2),
+// else through the select.
+namespace detail_minmax {
+#if defined(__SSE2__)
+template <bool Max> inline __m128 op(__m128 a, __m128 b) { return Max ? _mm_max_ps(a, b) : _mm_min_ps(a, b); }
+template <bool Max> inline __m128d op(__m128d a, __m128d b) { return Max ? _mm_max_pd(a, b) : _mm_min_pd(a, b); }
 #endif
-    {
+#if defined(__AVX__)
+template <bool Max> inline __m256 op(__m256 a, __m256 b) { return Max ? _mm256_max_ps(a, b) : _mm256_min_ps(a, b); }
+template <bool Max> inline __m256d op(__m256d a, __m256d b) {
+    return Max ? _mm256_max_pd(a, b) : _mm256_min_pd(a, b);
+}
+#endif
+#if defined(__AVX512F__)
+template <bool Max> inline __m512 op(__m512 a, __m512 b) { return Max ? _mm512_max_ps(a, b) : _mm512_min_ps(a, b); }
+template <bool Max> inline __m512d op(__m512d a, __m512d b) {
+    return Max ? _mm512_max_pd(a, b) : _mm512_min_pd(a, b);
+}
+#endif
+// (the traits take the packet, not its register type: a vector type as a template argument
+// draws GCC's -Wignored-attributes)
+template <bool Max, typename P, typename = void> struct native : std::false_type {};
+template <bool Max, typename P>
+struct native<Max, P, std::void_t<decltype((void)op<Max>(std::declval<P &>().m, std::declval<P &>().m))>>
+    : std::true_type {};
+template <typename P, typename = void> struct halves : std::false_type {};
+template <typename P> struct halves<P, std::void_t<decltype((void)std::declval<P &>().a1)>> : std::true_type {};
+} // namespace detail_minmax
+template <bool Max, typename P> inline P minmax_lanes(const P &a, const P &b) {
+    using namespace detail_minmax;
+    if constexpr (native<Max, P>::value) {
+        P r;
+        r.m = op<Max>(a.m, b.m);
+        return r;
+    } else if constexpr (halves<P>::value) {
+        return P(minmax_lanes<Max>(a.a1, b.a1), minmax_lanes<Max>(a.a2, b.a2));
+    } else {
         return Max ? drjit::select(a > b, a, b) : drjit::select(a < b, a, b);
     }
 }
