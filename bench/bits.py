@@ -105,6 +105,8 @@ def main(argv=None) -> int:
     ap.add_argument("--only", default="", help="comma-separated substrings of the entries to keep "
                     "(e.g. Dielectric,Plastic,render)")
     args = ap.parse_args(argv)
+    if args.n < 600:
+        ap.error(f"--n must be >= 600 (the horizon, pole and below-horizon rows), got {args.n}")
     fp = fingerprints(args.n, render=not args.no_render, only=args.only, spectral=not args.no_spectral)
     Path(args.out).write_text(json.dumps(fp, indent=1) + "\n")
     print(f"{len(fp)} fingerprints -> {args.out}")

@@ -147,8 +147,9 @@ def loop_body(asm: str, take=None, shortest=False):
     return walk(begin + 1)
 
 
-def find_mca():
-    for c in ("llvm-mca-19", "/usr/lib/llvm-19/bin/llvm-mca", "llvm-mca"):
+def find_llvm_tool(name):
+    """LLVM 19's `name` (llvm-mca, llc): name-19 on PATH, /usr/lib/llvm-19/bin/name, or name."""
+    for c in (f"{name}-19", f"/usr/lib/llvm-19/bin/{name}", name):
         p = shutil.which(c) or (c if Path(c).exists() else None)
         if p:
             return p
@@ -160,12 +161,11 @@ def mitsuba_loop(key, op, work):
     `bsdf.eval / pdf / sample` on this host (KernelHistory), compiled with llc (the IR carries
     Dr.Jit's target-cpu and features) and its loop body taken from the vectorized loop's label to
     the backward branch. Needs mitsuba, drjit and llc (apt: llvm-19)."""
-    import os
-    os.environ.setdefault("DRJIT_LIBLLVM_PATH", "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1")
     import numpy as np
+    from throughput import CONFIG, _setup_drjit_env  # same directory: the bench's plugins and libLLVM choice
+    _setup_drjit_env(None)
     import drjit as dr
     import mitsuba as mi
-    from throughput import CONFIG  # same directory: the bench's Mitsuba plugin dictionaries
     mkey = MITSUBA_KEY[key]
     plugin = CONFIG[mkey][3]
     if plugin is None:
@@ -194,7 +194,7 @@ def mitsuba_loop(key, op, work):
         sys.exit(f"expected one Mitsuba kernel, Dr.Jit ran {len(irs)}")
     ll, asm = work / "mitsuba.ll", work / "mitsuba.s"
     ll.write_text(irs[0].getvalue() if hasattr(irs[0], "getvalue") else str(irs[0]))
-    llc = next((c for c in ("llc-19", "/usr/lib/llvm-19/bin/llc", "llc") if shutil.which(c) or Path(c).exists()), None)
+    llc = find_llvm_tool("llc")
     if not llc:
         sys.exit("llc not found (apt-get install llvm-19)")
     subprocess.run([llc, "-O3", str(ll), "-o", str(asm)], check=True)
@@ -247,7 +247,7 @@ def main():
     if args.list or not args.key or not args.op:
         print("kernels:", ", ".join(sorted(KERNELS)), "- ops:", ", ".join(sorted(CALL)))
         return 0
-    mca = find_mca()
+    mca = find_llvm_tool("llvm-mca")
     if not mca:
         sys.exit("llvm-mca not found (apt-get install llvm-19)")
     from _machine import library_cxx  # same directory
