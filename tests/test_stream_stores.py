@@ -1,11 +1,12 @@
 """Streaming (non-temporal) stores of a large call's outputs (batch.h, kStreamMinBytes; the models that
 declare StreamOutputs: Diffuse, DiffuseTransmission, and Conductor, Dielectric and ThinDielectric when
-smooth). A call of at least 16 MiB of traffic whose output starts on a 64-byte line writes whole lines
-with streaming stores; any other output is stored plainly. Only how the values are stored changes: these
-calls must give the values of small calls (the plain path) bit for bit, with outputs on a line or not,
-at any thread count, in float32 and float64, for eval, pdf and sample (the delta lobes' eval and pdf:
-zeros written over NaN). A rough Conductor (its instance does not stream) runs the same checks as a
-control."""
+smooth). A call of at least 16 MiB of traffic writes whole lines with streaming stores: eval / pdf from
+the first element whose output row starts on a 64-byte line (the rows before it, fewer than a packet,
+plainly: numpy's arrays start 16 bytes past a line), the sampler where its output starts on one. Only
+how the values are stored changes: these calls must give the values of small calls (the plain path) bit
+for bit, with outputs on a line or at any offset from one, as rows or as planes (Fortran order), at any
+thread count, in float32 and float64, for eval, pdf and sample (the delta lobes' eval and pdf: zeros
+written over NaN). A rough Conductor (its instance does not stream) runs the same checks as a control."""
 import numpy as np
 import pytest
 
@@ -75,11 +76,21 @@ def test_eval_pdf_streamed_equal_small_calls(name, inputs):
         assert f.ctypes.data % 64 == 0 and p.ctypes.data % 64 == 0
         np.testing.assert_array_equal(f, ref_f, err_msg=f"{name} eval, {threads} thread(s)")
         np.testing.assert_array_equal(p, ref_p, err_msg=f"{name} pdf, {threads} thread(s)")
-        for misalign in (0, 1, 3):
+        # every offset from a line a float can have (numpy's own: 16 bytes): the first rows plainly,
+        # up to a packet of them, the rest streamed
+        for misalign in range(64 // dtype.itemsize):
             out_f, out_p = _view((N, 3), dtype, misalign), _view((N,), dtype, misalign)
             assert m.eval(wo, wi, out=out_f) is out_f and m.pdf(wo, wi, out=out_p) is out_p
             np.testing.assert_array_equal(out_f, ref_f, err_msg=f"{name} eval out= +{misalign}")
             np.testing.assert_array_equal(out_p, ref_p, err_msg=f"{name} pdf out= +{misalign}")
+        # planes (Fortran order) in and out, the output's planes at other offsets from a line too
+        wo_f, wi_f = np.asfortranarray(wo), np.asfortranarray(wi)
+        for misalign in (0, 1, 4, 7):
+            out_f = _view((3, N), dtype, misalign).T
+            out_p = _view((N,), dtype, misalign)
+            assert m.eval(wo_f, wi_f, out=out_f) is out_f and m.pdf(wo_f, wi_f, out=out_p) is out_p
+            np.testing.assert_array_equal(out_f, ref_f, err_msg=f"{name} eval planes out= +{misalign}")
+            np.testing.assert_array_equal(out_p, ref_p, err_msg=f"{name} pdf planes out= +{misalign}")
 
 
 FIELDS = ("wi", "f", "pdf", "flags", "eta", "valid", "pdf_is_proportional")

@@ -514,6 +514,13 @@ template <int S, typename F> inline bool is_one(const Dirs<F> &d) {
 template <int S, typename F> inline Dirs<F> dirs_of(const F *p) {
     return {p, S == 0 ? DirLayout::One : DirLayout::Rows, 0};
 }
+// The same directions from element h on (one broadcast direction stays itself).
+template <typename F> inline Dirs<F> shifted(const Dirs<F> &d, int64_t h) {
+    Dirs<F> r = d;
+    if (d.layout == DirLayout::Rows) r.p += 3 * h;
+    else if (d.layout == DirLayout::Planes) r.p += h;
+    return r;
+}
 
 // ---- Software prefetch of the streamed inputs, kPrefetchAhead elements ahead of the packet
 // loop (within its chunk), every 64-byte line of the packet's rows (prefetcht0). A hint: it
@@ -572,7 +579,8 @@ template <int S, typename F> inline void prefetch_dirs(const Dirs<F> &d, int64_t
 // streaming is not the default. Realigning unaligned outputs in registers (one permutation per
 // line, the previous packet's last group carried in a register across the loop) gained as much
 // on Diffuse eval but cost its sampler 7 % (four carries spilled), so unaligned outputs are
-// stored plainly.
+// stored plainly; since session 28 an eval / pdf output off a line has its first rows (up to
+// a packet, line_head) stored plainly and the rest, from a line, streamed.
 #if BSDFKIT_SHUFFLE_ROWS && (defined(__AVX512F__) || defined(__AVX2__))
 #define BSDFKIT_STREAM_STORES 1
 #else
@@ -610,6 +618,17 @@ template <typename M> inline bool instance_streams(const M &m) {
 template <typename M, typename = void> struct streams_samples : streams_outputs<M> {};
 template <typename M> struct streams_samples<M, std::enable_if_t<!M::StreamSamples>> : std::false_type {};
 inline bool on_line(const void *p) { return (reinterpret_cast<uintptr_t>(p) & 63) == 0; }
+// The elements before rows of C values of F from p on start on a 64-byte line: the smallest h in
+// [0, kW) with p + C h on a line, or -1 if none (p not aligned to F). Every multiple of sizeof(F)
+// is reached: C h sizeof(F) mod 64 takes each of those values once for h < 64 / sizeof(F) <= kW
+// (C = 1 or 3, odd). A call whose output is off a line (numpy's own arrays start 16 bytes past
+// one) runs its first h elements plainly and the rest, from a line, with streaming stores.
+template <typename F> inline int64_t line_head(const F *p, int C) {
+    const uintptr_t a = reinterpret_cast<uintptr_t>(p);
+    for (int64_t h = 0; h < kW<F>; ++h)
+        if (((a + uintptr_t(C * h) * sizeof(F)) & 63) == 0) return h;
+    return -1;
+}
 
 #if BSDFKIT_STREAM_STORES
 // One register group at q (aligned to its size), streamed: a whole 64-byte line on AVX-512, half
@@ -798,8 +817,12 @@ void pair_rows_loop(const Model &m, const F *wo, const F *wi, int64_t n, F *out,
                     const Compute &compute) {
     const Dirs<F> dwo = dirs_of<SO>(wo), dwi = dirs_of<SI>(wi);
     if constexpr (SO == 3 && SI == 3 && kStreams<F> && streams_outputs<Model>::value) {
-        if (big_enough_to_stream((6 + C) * n * int64_t(sizeof(F))) && on_line(out) && instance_streams(m)) {
-            pair_packet_loop<SO, SI>(m, dwo, dwi, n, nthreads, bad, RowsOut<F, C, true, true>{out}, compute);
+        const int64_t h = line_head(out, C);
+        if (big_enough_to_stream((6 + C) * n * int64_t(sizeof(F))) && h >= 0 && instance_streams(m)) {
+            // out off a line: its first h rows plainly (the same loop as below), the rest from a line
+            if (h > 0) pair_packet_loop<SO, SI>(m, dwo, dwi, h, 1, bad, RowsOut<F, C, false>{out}, compute);
+            pair_packet_loop<SO, SI>(m, shifted(dwo, h), shifted(dwi, h), n - h, nthreads, bad,
+                                     RowsOut<F, C, true, true>{out + C * h}, compute);
             return;
         }
     }
@@ -855,13 +878,18 @@ void pdf_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMod
 // run-time layout path, with plain stores.
 // The SoA call's loop: `streamed` (a stream-storing output over out, `outputs` floats per element)
 // where the model and call stream, else `plain`.
-template <typename Model, typename F, typename Streamed, typename Plain, typename Compute>
+// The output's first plane off a line: its first h elements plainly, the rest (make(h): the outputs
+// from element h on) from a line, as pair_rows_loop.
+template <typename Model, typename F, typename MakeStreamed, typename Plain, typename Compute>
 void planes_pair_loop(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_t n, int nthreads, BadCounts &bad,
-                      const F *out, int outputs, const Streamed &streamed, const Plain &plain, const Compute &compute) {
+                      const F *out, int outputs, const MakeStreamed &streamed, const Plain &plain,
+                      const Compute &compute) {
     constexpr int P = kPlanesLayout;
     if constexpr (kStreams<F> && streams_outputs<Model>::value) {
-        if (big_enough_to_stream((6 + outputs) * n * int64_t(sizeof(F))) && on_line(out) && instance_streams(m)) {
-            pair_packet_loop<P, P>(m, wo, wi, n, nthreads, bad, streamed, compute);
+        const int64_t h = line_head(out, 1);
+        if (big_enough_to_stream((6 + outputs) * n * int64_t(sizeof(F))) && h >= 0 && instance_streams(m)) {
+            if (h > 0) pair_packet_loop<P, P>(m, wo, wi, h, 1, bad, plain, compute);
+            pair_packet_loop<P, P>(m, shifted(wo, h), shifted(wi, h), n - h, nthreads, bad, streamed(h), compute);
             return;
         }
     }
@@ -873,7 +901,8 @@ void eval_batch_dirs(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64
     static_assert(is_vectorized<Model>::value, "eval_batch_dirs: a packet model (Vectorized = true)");
     const auto f = [mode](const auto &mm, const auto &o, const auto &w, int64_t, int64_t) { return bsdf_f(mm, o, w, mode); };
     if (wo.layout == DirLayout::Planes && wi.layout == DirLayout::Planes && out_plane != 0) {
-        planes_pair_loop(m, wo, wi, n, nthreads, bad, out, 3, PlanesOut<F, true>{out, out_plane},
+        planes_pair_loop(m, wo, wi, n, nthreads, bad, out, 3,
+                         [out, out_plane](int64_t h) { return PlanesOut<F, true>{out + h, out_plane}; },
                          PlanesOut<F, false>{out, out_plane}, f);
         return;
     }
@@ -896,8 +925,8 @@ void pdf_batch_dirs(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_
         return bsdf_pdf(mm, o, w, mode, sf);
     };
     if (wo.layout == DirLayout::Planes && wi.layout == DirLayout::Planes) {
-        planes_pair_loop(m, wo, wi, n, nthreads, bad, out, 1, RowsOut<F, 1, true, true>{out}, RowsOut<F, 1, false>{out},
-                         pdf);
+        planes_pair_loop(m, wo, wi, n, nthreads, bad, out, 1,
+                         [out](int64_t h) { return RowsOut<F, 1, true, true>{out + h}; }, RowsOut<F, 1, false>{out}, pdf);
         return;
     }
     pair_packet_loop<kAnyLayout, kAnyLayout>(
