@@ -182,6 +182,38 @@ def test_sample_out_on_the_fast_path(rng):
         m.sample(wo, np.where(np.arange(n) == 5, np.float32(2), uc), u, out=fresh())
 
 
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_sample_takes_planes_on_the_fast_path(rng, dtype):
+    # Fortran-order wo and u (the .T of (3, N) and (2, N) arrays): the compiled entry transposes them
+    # into rows itself (it returned None and the general path converted them with numpy before);
+    # values bit-identical to C-order inputs, bad values still named, out= still written
+    m = bk.Dielectric(1.5, alpha=0.2)
+    n = 1000 + 13  # several packets and a partial one
+    wo, uc, u = _dirs(rng, n).astype(dtype), rng.random(n).astype(dtype), rng.random((n, 2)).astype(dtype)
+    wo_f, u_f = np.asfortranarray(wo), np.asfortranarray(u)
+    assert wo_f.flags.f_contiguous and not wo_f.flags.c_contiguous and not u_f.flags.c_contiguous
+    want = m.sample(wo, uc, u)
+    fields = ("wi", "f", "pdf", "flags", "eta", "valid", "pdf_is_proportional")
+    for a, b in ((wo_f, u), (wo, u_f), (wo_f, u_f)):
+        r = m._core.sample_fast(a, uc, b, 0, 3)
+        assert r is not None
+        got = m.sample(a, uc, b)
+        for k in fields:
+            np.testing.assert_array_equal(getattr(got, k), getattr(want, k), err_msg=k)
+        out = m.sample(wo, uc, u)  # an earlier result, overwritten
+        out.pdf[...] = np.nan
+        assert m.sample(a, uc, b, out=out) is out
+        np.testing.assert_array_equal(out.pdf, want.pdf)
+    bad_wo = wo_f.copy(order="F")
+    bad_wo[17] *= 2
+    with pytest.raises(ValueError, match=r"wo: 1 direction\(s\) are not finite unit"):
+        m.sample(bad_wo, uc, u_f)
+    bad_u = u_f.copy(order="F")
+    bad_u[3, 1] = -0.5
+    with pytest.raises(ValueError, match="u: 1 sample value"):
+        m.sample(wo_f, uc, bad_u)
+
+
 def test_eval_out_on_the_fast_path(rng):
     m = bk.Diffuse(0.5)
     wo, wi = _dirs(rng, 10), _dirs(rng, 10)

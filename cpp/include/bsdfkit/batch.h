@@ -934,6 +934,21 @@ void pdf_batch_dirs(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_
         store_out([out](int64_t i, int64_t cnt, const Packet<F> &v) { store1_lanes(out, i, cnt, v); }), pdf);
 }
 
+// Rows of C (an (N, C) C-order array at dst) from C component planes n elements apart at src (an
+// (N, C) Fortran-order array), over the pool's threads: the layout the kernels without a planes
+// path read (sample's wo and u, albedo's wo), made by packets (planes loaded, rows stored as
+// store_lanes does), each output line written by the thread that owns its chunk.
+template <int C, typename F> void planes_to_rows(const F *src, int64_t n, F *dst, int nthreads) {
+    parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
+        for (int64_t i = b; i < e; i += kW<F>) {
+            const int64_t cnt = std::min(kW<F>, e - i);
+            Packet<F> v[C];
+            for (int c = 0; c < C; ++c) v[c] = load1_lanes(src + c * n, i, cnt, F(0));
+            store_lanes<C>(dst, i, cnt, v);
+        }
+    });
+}
+
 template <typename F> struct SampleOut {
     F *wi, *f, *pdf, *eta;
     uint8_t *flags;
