@@ -69,6 +69,7 @@ import json
 import math
 import os
 import platform
+import re
 import subprocess
 import sys
 import threading
@@ -1487,12 +1488,16 @@ def rerender(args):
     except (OSError, ValueError, KeyError, TypeError) as e:
         sys.exit(f"--report: {src} is not a results JSON of bench/throughput.py ({e!r})")
     quick = bool(st.get("quick"))
-    run_args = argparse.Namespace(quick=quick, tag=args.tag, repeats=st.get("repeats", 3),
+    tag = args.tag
+    if tag is None:  # results_<tag>.json re-renders into RESULTS_<tag>.md, never over another host's RESULTS.md
+        m = re.fullmatch(r"results_(.+)\.json", src.name)
+        tag = host_tag(m.group(1)) if m else None
+    run_args = argparse.Namespace(quick=quick, tag=tag, repeats=st.get("repeats", 3),
                                   rounds=st.get("rounds", 1 if quick else 2),
                                   retry_rounds=st.get("retry_rounds", 0 if quick else 2))
     out_dir = Path(args.out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    md = out_dir / report_names(args.tag)[0]
+    md = out_dir / report_names(tag)[0]
     write_markdown(md, data["machine"], data.get("mitsuba"), main_rows, data.get("scaling", []),
                    data.get("mitsuba_scalar", []), data.get("agreement"), run_args, st.get("elapsed_s", 0.0),
                    rerendered=f"`{src.name}`")

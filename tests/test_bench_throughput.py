@@ -180,6 +180,15 @@ def test_report_rerenders_a_results_json(tp, tmp_path, monkeypatch):
     assert body(text) == body((tp.HERE / "RESULTS_zen4.md").read_text())
 
 
+def test_report_takes_the_tag_from_the_file_name(tp, tmp_path, monkeypatch):
+    # results_zen4.json without --tag: RESULTS_zen4.md, not RESULTS.md (another host's report)
+    src = tmp_path / "results_zen4.json"
+    src.write_text((tp.HERE / "results_zen4.json").read_text())
+    monkeypatch.setattr(sys, "argv", ["throughput.py", "--report", str(src), "--out-dir", str(tmp_path)])
+    tp.main()
+    assert (tmp_path / "RESULTS_zen4.md").exists() and not (tmp_path / "RESULTS.md").exists()
+
+
 def test_report_refuses_a_non_results_file(tp, tmp_path, monkeypatch):
     bad = tmp_path / "x.json"
     bad.write_text("{}")

@@ -480,10 +480,14 @@ template <template <typename> class Model> struct PyModel {
         {
             py::gil_scoped_release release;
             const Model<F> &m = get<F>();
-            if (rows_o) planes_to_rows<3>(po, n, rows_o, num_threads()), po = rows_o;
-            if (rows_u) planes_to_rows<2>(pu, n, rows_u, num_threads()), pu = rows_u;
-            if (o.rows == n) sample_batch<3>(m, po, pc, pu, n, md, sf, out, num_threads(), bad);
-            else sample_batch<0>(m, po, pc, pu, n, md, sf, out, num_threads(), bad);
+            // an interrupted transposition leaves the scratch incomplete: no kernel on it (the
+            // interrupt raises below)
+            bool ready = !rows_o || planes_to_rows<3>(po, n, rows_o, num_threads());
+            ready = ready && (!rows_u || planes_to_rows<2>(pu, n, rows_u, num_threads()));
+            if (rows_o) po = rows_o;
+            if (rows_u) pu = rows_u;
+            if (ready && o.rows == n) sample_batch<3>(m, po, pc, pu, n, md, sf, out, num_threads(), bad);
+            else if (ready) sample_batch<0>(m, po, pc, pu, n, md, sf, out, num_threads(), bad);
         }
         raise_if_interrupted();
         raise_bad(bad, false, true);

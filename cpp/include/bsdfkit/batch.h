@@ -936,10 +936,11 @@ void pdf_batch_dirs(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_
 
 // Rows of C (an (N, C) C-order array at dst) from C component planes n elements apart at src (an
 // (N, C) Fortran-order array), over the pool's threads: the layout the kernels without a planes
-// path read (sample's wo and u, albedo's wo), made by packets (planes loaded, rows stored as
-// store_lanes does), each output line written by the thread that owns its chunk.
-template <int C, typename F> void planes_to_rows(const F *src, int64_t n, F *dst, int nthreads) {
-    parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
+// path read (sample's wo and u), made by packets (planes loaded, rows stored as store_lanes
+// does), each output line written by the thread that owns its chunk. False if an interrupt
+// stopped it (dst then incomplete), as parallel_chunks.
+template <int C, typename F> bool planes_to_rows(const F *src, int64_t n, F *dst, int nthreads) {
+    return parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
         for (int64_t i = b; i < e; i += kW<F>) {
             const int64_t cnt = std::min(kW<F>, e - i);
             Packet<F> v[C];
