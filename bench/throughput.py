@@ -1478,6 +1478,11 @@ def report_names(tag=None):
     return ("RESULTS.md", "results.json") if tag is None else (f"RESULTS_{tag}.md", f"results_{tag}.json")
 
 
+def default_settings(quick):
+    """Repeats per measurement, interleaved rounds per cell and retry rounds when not given."""
+    return {"repeats": 3, "rounds": 1 if quick else 2, "retry_rounds": 0 if quick else 2}
+
+
 def rerender(args):
     """--report: the markdown of an earlier run from its results JSON, nothing measured."""
     src = Path(args.report)
@@ -1492,9 +1497,9 @@ def rerender(args):
     if tag is None:  # results_<tag>.json re-renders into RESULTS_<tag>.md, never over another host's RESULTS.md
         m = re.fullmatch(r"results_(.+)\.json", src.name)
         tag = host_tag(m.group(1)) if m else None
-    run_args = argparse.Namespace(quick=quick, tag=tag, repeats=st.get("repeats", 3),
-                                  rounds=st.get("rounds", 1 if quick else 2),
-                                  retry_rounds=st.get("retry_rounds", 0 if quick else 2))
+    # an older JSON lacks some settings: the defaults that run had
+    run_args = argparse.Namespace(quick=quick, tag=tag, **{**default_settings(quick), **{
+        k: st[k] for k in ("repeats", "rounds", "retry_rounds") if k in st}})
     out_dir = Path(args.out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     md = out_dir / report_names(tag)[0]
@@ -1537,10 +1542,11 @@ def main():
     n_main = 10**5 if args.quick else 10**6
     n_scaling = [10**3, 10**4] if args.quick else [10**3, 10**5]
     n_scalar = 10**3 if args.quick else 10**4
-    args.repeats = args.repeats or 3
-    args.rounds = args.rounds or (1 if args.quick else 2)
+    d = default_settings(args.quick)
+    args.repeats = args.repeats or d["repeats"]
+    args.rounds = args.rounds or d["rounds"]
     if args.retry_rounds is None:
-        args.retry_rounds = 0 if args.quick else 2
+        args.retry_rounds = d["retry_rounds"]
     threads = [1, 2]
     info = machine_info()
     info["divider"] = divider_rates()

@@ -13,7 +13,6 @@
 #include <pybind11/pybind11.h>
 
 #include <algorithm>
-#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -461,20 +460,11 @@ template <template <typename> class Model> struct PyModel {
                 *pu = static_cast<const F *>(u.data);
         // Fortran-order wo / u (planes, e.g. the .T of a (3, N) array): the sample kernels read rows,
         // so the planes are transposed into scratch rows first, on the pool's threads (the general
-        // path's numpy conversion took ~6 ms per (1e6, 3) float32 array, 3.5x the kernel). A large
-        // scratch comes from the block cache (its pages stay warm from call to call).
-        const size_t scratch = size_t(o.planes ? 3 * n : 0) + size_t(u.planes ? 2 * n : 0);
-        py::object scratch_block;
-        std::unique_ptr<F[]> scratch_small;
-        F *rows = nullptr;
-        if (scratch * sizeof(F) >= BlockCache::kMinBytes) {
-            void *d = nullptr;
-            scratch_block = cached_block(scratch * sizeof(F), &d);
-            rows = static_cast<F *>(d);
-        } else if (scratch) {
-            scratch_small.reset(new F[scratch]);
-            rows = scratch_small.get();
-        }
+        // path's numpy conversion took ~6 ms per (1e6, 3) float32 array, 3.5x the kernel). The
+        // scratch is a result_array: from 1 MiB on a block-cache block, whose pages stay warm.
+        const py::ssize_t scratch = py::ssize_t(o.planes ? 3 * n : 0) + py::ssize_t(u.planes ? 2 * n : 0);
+        py::array scratch_rows = result_array<F>({scratch});
+        F *rows = static_cast<F *>(scratch_rows.mutable_data());
         F *rows_o = o.planes ? rows : nullptr, *rows_u = u.planes ? rows + (o.planes ? 3 * n : 0) : nullptr;
         BadCounts bad;
         {

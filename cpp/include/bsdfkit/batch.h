@@ -812,21 +812,35 @@ void pair_scalar_loop(const Model &m, const F *wo, const F *wi, int64_t n, int n
 
 // pair_packet_loop writing rows of C to out; streamed (RowsOut<..., true>) in a call over two
 // full direction arrays whose bytes read and written reach kStreamMinBytes, out on a line.
+// pair_packet_loop writing `plain`, or, where the model and the call stream (two full direction
+// arrays plus `outputs` floats per element reach kStreamMinBytes), streaming from element h on
+// (line_head: the first whose output starts on a line; -1: none, plain), the h before it through
+// `plain` in a call of their own; streamed(h) is the stream-storing output from element h.
+template <int SO, int SI, typename Model, typename F, typename MakeStreamed, typename Plain, typename Compute>
+void stream_or_plain_loop(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_t n, int nthreads,
+                          BadCounts &bad, int outputs, int64_t h, const MakeStreamed &streamed, const Plain &plain,
+                          const Compute &compute) {
+    if constexpr (kStreams<F> && streams_outputs<Model>::value) {
+        if (big_enough_to_stream((6 + outputs) * n * int64_t(sizeof(F))) && h >= 0 && instance_streams(m)) {
+            if (h > 0) pair_packet_loop<SO, SI>(m, wo, wi, h, 1, bad, plain, compute);
+            pair_packet_loop<SO, SI>(m, shifted(wo, h), shifted(wi, h), n - h, nthreads, bad, streamed(h), compute);
+            return;
+        }
+    }
+    pair_packet_loop<SO, SI>(m, wo, wi, n, nthreads, bad, plain, compute);
+}
+
 template <int SO, int SI, int C, typename Model, typename F, typename Compute>
 void pair_rows_loop(const Model &m, const F *wo, const F *wi, int64_t n, F *out, int nthreads, BadCounts &bad,
                     const Compute &compute) {
     const Dirs<F> dwo = dirs_of<SO>(wo), dwi = dirs_of<SI>(wi);
-    if constexpr (SO == 3 && SI == 3 && kStreams<F> && streams_outputs<Model>::value) {
-        const int64_t h = line_head(out, C);
-        if (big_enough_to_stream((6 + C) * n * int64_t(sizeof(F))) && h >= 0 && instance_streams(m)) {
-            // out off a line: its first h rows plainly (the same loop as below), the rest from a line
-            if (h > 0) pair_packet_loop<SO, SI>(m, dwo, dwi, h, 1, bad, RowsOut<F, C, false>{out}, compute);
-            pair_packet_loop<SO, SI>(m, shifted(dwo, h), shifted(dwi, h), n - h, nthreads, bad,
-                                     RowsOut<F, C, true, true>{out + C * h}, compute);
-            return;
-        }
+    if constexpr (SO == 3 && SI == 3) {
+        stream_or_plain_loop<SO, SI>(m, dwo, dwi, n, nthreads, bad, C, line_head(out, C),
+                                     [out](int64_t h) { return RowsOut<F, C, true, true>{out + C * h}; },
+                                     RowsOut<F, C, false>{out}, compute);
+    } else {
+        pair_packet_loop<SO, SI>(m, dwo, dwi, n, nthreads, bad, RowsOut<F, C, false>{out}, compute);
     }
-    pair_packet_loop<SO, SI>(m, dwo, dwi, n, nthreads, bad, RowsOut<F, C, false>{out}, compute);
 }
 
 // f(wo, wi) for N pairs; SO / SI are 3 for a full array, 0 for one broadcast direction.
@@ -876,24 +890,14 @@ void pdf_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMod
 // with its per-packet layout branches and plain stores, planes ran slower than rows on Zen 4
 // (SoA / rows 0.77-0.91x for Diffuse, bench/RESULTS_zen4.md of session 23). Other mixes take the
 // run-time layout path, with plain stores.
-// The SoA call's loop: `streamed` (a stream-storing output over out, `outputs` floats per element)
-// where the model and call stream, else `plain`.
-// The output's first plane off a line: its first h elements plainly, the rest (make(h): the outputs
-// from element h on) from a line, as pair_rows_loop.
+// The SoA call's loop: stream_or_plain_loop on planes, streaming from the first element whose first
+// output plane starts on a line.
 template <typename Model, typename F, typename MakeStreamed, typename Plain, typename Compute>
 void planes_pair_loop(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_t n, int nthreads, BadCounts &bad,
                       const F *out, int outputs, const MakeStreamed &streamed, const Plain &plain,
                       const Compute &compute) {
-    constexpr int P = kPlanesLayout;
-    if constexpr (kStreams<F> && streams_outputs<Model>::value) {
-        const int64_t h = line_head(out, 1);
-        if (big_enough_to_stream((6 + outputs) * n * int64_t(sizeof(F))) && h >= 0 && instance_streams(m)) {
-            if (h > 0) pair_packet_loop<P, P>(m, wo, wi, h, 1, bad, plain, compute);
-            pair_packet_loop<P, P>(m, shifted(wo, h), shifted(wi, h), n - h, nthreads, bad, streamed(h), compute);
-            return;
-        }
-    }
-    pair_packet_loop<P, P>(m, wo, wi, n, nthreads, bad, plain, compute);
+    stream_or_plain_loop<kPlanesLayout, kPlanesLayout>(m, wo, wi, n, nthreads, bad, outputs, line_head(out, 1),
+                                                       streamed, plain, compute);
 }
 template <typename Model, typename F>
 void eval_batch_dirs(const Model &m, const Dirs<F> &wo, const Dirs<F> &wi, int64_t n, TransportMode mode, F *out,
