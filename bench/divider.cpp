@@ -78,9 +78,9 @@ int arith() {
     std::printf("{\"arith_1t\": %.6g, \"arith_2t\": %.6g}\n", best1, best2);
     return 0;
 }
-// `divider stream R W [all]`: the memory bound of a kernel that reads R bytes and writes W bytes
-// once per call. The element range in blocks, each reading its share of the R bytes (64-byte
-// loads, OR-reduced) and writing its share of the W bytes (zeros), as the batch kernels move them
+// `divider stream R W [zeros] [all]`: the memory bound of a kernel that reads R bytes and writes W
+// bytes once per call. The element range in blocks, each reading its share of the R bytes (64-byte
+// loads, OR-reduced) and writing its share of the W bytes, as the batch kernels move them
 // ("fused"), or all reads and then all writes ("two passes"), each with plain stores and with
 // streaming stores (no read for ownership; what the delta models' eval / pdf use, batch.h): the
 // fastest of the four. The buffers are on 2 MB pages (as numpy's large arrays) and stay allocated
@@ -88,8 +88,14 @@ int arith() {
 // host's L3: part of them stays cached between passes, for the kernels too). On 2 threads each
 // takes half of the blocks (contiguous halves, as parallel_chunks' chunks), started together;
 // every variant repeats its pass for >= 20 ms and keeps the best time per pass of 5 such runs.
-// Prints JSON {"stream_1t": s, "stream_2t": s, "bytes_read", "bytes_written"} (seconds per pass;
-// the bytes the blocks cover: R and W rounded up to whole lines); `all` also prints each
+// The bytes written are data (every 64-bit word non-zero, different on every line), as a kernel's
+// outputs are; `zeros` writes zeros, as the delta lobes' eval / pdf do. The content matters on the
+// Zen 4 host: its memory took streamed lines of zeros at 85-96 GB/s and lines of data at 27-30 GB/s
+// (session 29, 36-512 MB, 1 and 2 threads; real eval outputs, half of them zero rows, 29.5 GB/s;
+// a line with one non-zero word 55 GB/s), so a bound written in zeros was no bound for data.
+// Prints JSON {"stream_1t": s, "stream_2t": s, "bytes_read", "bytes_written", "nonzero_words"}
+// (seconds per pass; the bytes the blocks cover: R and W rounded up to whole lines; the 64-bit
+// words of the written buffer that are non-zero after the passes); `all` also prints each
 // variant's time to stderr.
 struct StreamBufs {
     uint64_t *src, *dst;
@@ -115,6 +121,12 @@ static inline SV sv_zero() { return _mm512_setzero_si512(); }
 static inline void sv_store(uint64_t *p, SV v) { _mm512_store_si512(p, v); }
 static inline void sv_stream(uint64_t *p, SV v) { _mm512_stream_si512(reinterpret_cast<SV *>(p), v); }
 static inline uint64_t sv_reduce(SV v) { return uint64_t(_mm512_reduce_or_epi64(v)); }
+// the data written at word j: non-zero odd words, different on every line
+static inline SV sv_data(size_t j) {
+    return _mm512_add_epi64(_mm512_set_epi64(0x3fd1e3779b97f4a7, 0x3fc2b7e151628aed, 0x3fe243f6a8885a31, 0x3fb7f4a7c15e3779,
+                                             0x3fa9e3779b97f4a7, 0x3ff2b7e151628aed, 0x3f9243f6a8885a31, 0x3fe7f4a7c15e3779),
+                            _mm512_set1_epi64((long long)(j << 1)));
+}
 #else
 using SV = __m256i;
 static inline SV sv_load(const uint64_t *p) { return _mm256_load_si256(reinterpret_cast<const SV *>(p)); }
@@ -126,6 +138,10 @@ static inline uint64_t sv_reduce(SV v) {
     alignas(32) uint64_t t[4];
     _mm256_store_si256(reinterpret_cast<SV *>(t), v);
     return t[0] | t[1] | t[2] | t[3];
+}
+static inline SV sv_data(size_t j) {
+    return _mm256_add_epi64(_mm256_set_epi64x(0x3fd1e3779b97f4a7, 0x3fc2b7e151628aed, 0x3fe243f6a8885a31, 0x3fb7f4a7c15e3779),
+                            _mm256_set1_epi64x((long long)(j << 1)));
 }
 #endif
 constexpr size_t kSV = sizeof(SV) / 8;  // words per vector
@@ -141,7 +157,7 @@ static inline BlockSpan block_span(const StreamBufs &b, size_t k) {
 }
 // Fused: each block reads its share and then writes its share (a kernel's pattern); else the
 // range's reads first, then its writes (two passes, as numpy's reduce and fill).
-template <bool NT, bool Fused>
+template <bool NT, bool Fused, bool Zeros>
 __attribute__((noinline)) uint64_t stream_part(const StreamBufs &b, size_t blk0, size_t blk1) {
     SV acc0 = sv_zero(), acc1 = acc0, zero = acc0;
     auto reads = [&](const BlockSpan &sp) {
@@ -152,8 +168,9 @@ __attribute__((noinline)) uint64_t stream_part(const StreamBufs &b, size_t blk0,
     };
     auto writes = [&](const BlockSpan &sp) {
         for (size_t j = sp.w0; j < sp.w1; j += kSV) {
-            if constexpr (NT) sv_stream(b.dst + j, zero);
-            else sv_store(b.dst + j, zero);
+            const SV v = Zeros ? zero : sv_data(j);
+            if constexpr (NT) sv_stream(b.dst + j, v);
+            else sv_store(b.dst + j, v);
         }
     };
     for (size_t k = blk0; k < blk1; ++k) {
@@ -166,11 +183,11 @@ __attribute__((noinline)) uint64_t stream_part(const StreamBufs &b, size_t blk0,
     if constexpr (NT) _mm_sfence();
     return sv_reduce(sv_or(acc0, acc1));
 }
-template <bool NT, bool Fused> double stream_time(const StreamBufs &b, int nt) {
+template <bool NT, bool Fused, bool Zeros> double stream_time(const StreamBufs &b, int nt) {
     volatile uint64_t sink = 0;
     auto run_k = [&](size_t blk0, size_t blk1, long k) {
         uint64_t s = 0;
-        for (long r = 0; r < k; ++r) s |= stream_part<NT, Fused>(b, blk0, blk1);
+        for (long r = 0; r < k; ++r) s |= stream_part<NT, Fused, Zeros>(b, blk0, blk1);
         sink = sink | s;
     };
     auto t0 = std::chrono::steady_clock::now();
@@ -197,7 +214,11 @@ template <bool NT, bool Fused> double stream_time(const StreamBufs &b, int nt) {
     }
     return best;
 }
-int stream(long long rbytes, long long wbytes, bool verbose) {
+template <bool Zeros> void stream_variants(const StreamBufs &b, int nt, double v[4]) {
+    v[0] = stream_time<false, true, Zeros>(b, nt), v[1] = stream_time<true, true, Zeros>(b, nt);
+    v[2] = stream_time<false, false, Zeros>(b, nt), v[3] = stream_time<true, false, Zeros>(b, nt);
+}
+int stream(long long rbytes, long long wbytes, bool zeros, bool verbose) {
     StreamBufs b;
     b.nr = size_t((rbytes + 63) / 64 * 8);
     b.nw = size_t((wbytes + 63) / 64 * 8);
@@ -212,22 +233,33 @@ int stream(long long rbytes, long long wbytes, bool verbose) {
     }
     double t[2];
     for (int nt = 1; nt <= 2; ++nt) {
-        double v[4] = {stream_time<false, true>(b, nt), stream_time<true, true>(b, nt), stream_time<false, false>(b, nt),
-                       stream_time<true, false>(b, nt)};
+        double v[4];
+        if (zeros) stream_variants<true>(b, nt, v);
+        else stream_variants<false>(b, nt, v);
         if (verbose)  // `divider stream R W all`: each variant's time per pass
             std::fprintf(stderr, "%dT fused plain %.6g, fused streaming %.6g, two passes plain %.6g, two passes streaming %.6g\n",
                          nt, v[0], v[1], v[2], v[3]);
         t[nt - 1] = *std::min_element(v, v + 4);
     }
-    std::printf("{\"stream_1t\": %.6g, \"stream_2t\": %.6g, \"bytes_read\": %zu, \"bytes_written\": %zu}\n", t[0],
-                t[1], words_r * 8, words_w * 8);
+    size_t nonzero = 0;
+    for (size_t j = 0; j < words_w; ++j) nonzero += b.dst[j] != 0;
+    std::printf("{\"stream_1t\": %.6g, \"stream_2t\": %.6g, \"bytes_read\": %zu, \"bytes_written\": %zu, "
+                "\"nonzero_words\": %zu}\n", t[0], t[1], words_r * 8, words_w * 8, nonzero);
     std::free(b.src);
     std::free(b.dst);
     return 0;
 }
 int main(int argc, char **argv) {
     if (argc > 1 && std::strcmp(argv[1], "arith") == 0) return arith();
-    if (argc > 3 && std::strcmp(argv[1], "stream") == 0) return stream(std::atoll(argv[2]), std::atoll(argv[3]), argc > 4 && std::strcmp(argv[4], "all") == 0);
+    if (argc > 3 && std::strcmp(argv[1], "stream") == 0) {
+        bool zeros = false, all = false;
+        for (int a = 4; a < argc; ++a) {
+            if (std::strcmp(argv[a], "zeros") == 0) zeros = true;
+            else if (std::strcmp(argv[a], "all") == 0) all = true;
+            else return std::fprintf(stderr, "divider stream: unknown option %s (zeros, all)\n", argv[a]), 2;
+        }
+        return stream(std::atoll(argv[2]), std::atoll(argv[3]), zeros, all);
+    }
     const long n = 400000;
     double best[4] = {0, 0, 0, 0};
     for (int r = 0; r < 7; ++r) {

@@ -31,7 +31,9 @@ What is timed (every figure is the best of several repeats after a warm-up):
            single-threaded and split over 2 Python threads; reported as elements/s.
   stream bound: the memory bound of the kernel's own traffic: one C++ pass (`divider stream`)
            reading its input bytes and writing its output bytes block by block, as the kernels
-           do, with vector loads and plain or streaming stores (1 and 2 threads). The "targets"
+           do, with vector loads and plain or streaming stores (1 and 2 threads), writing data
+           (non-zero words; zeros only for the delta lobes' eval / pdf, whose outputs are zeros:
+           this host's memory writes zero lines ~3x faster than data). The "targets"
            table judges every row against issue 17's targets, or against >= 0.8 of this bound
            where a target needs more than the bound.
   divider bound: the rate a row's divisions and square roots per element allow at this machine's
@@ -254,12 +256,16 @@ _STREAM_BUFFERS = {}
 
 
 STREAM = {"method": None}  # which pass measured the stream bound: "c++" (bench/divider.cpp) or "numpy"
+STREAM_DATA_WORD = 0x3FC2B7E151628AED  # the numpy stand-in's non-zero word (divider.cpp writes its own data)
 
 
-def stream_bound(rbytes, wbytes, repeats):
+def stream_bound(rbytes, wbytes, repeats, zeros=False):
     """The memory bound of a kernel that reads rbytes and writes wbytes once per call: (1 thread s,
     2 threads s) per pass. Measured afresh at every call (measure_cells times it beside each cell:
-    this host's memory bandwidth moves by 10-20 % with its neighbours' load).
+    this host's memory bandwidth moves by 10-20 % with its neighbours' load). The pass writes data
+    (non-zero words), as a kernel's outputs are, or zeros (zeros=True: the delta lobes' eval / pdf,
+    DELTA_ZERO, whose outputs are zeros): the Zen 4 host's memory took streamed zero lines ~3x
+    faster than data (session 29), so a bound written in zeros was no bound for a kernel's data.
 
     `divider stream` (bench/divider.cpp, built with the library's flags) when the build is there:
     the element range in blocks, each reading its share of the input bytes with vector loads and
@@ -272,8 +278,8 @@ def stream_bound(rbytes, wbytes, repeats):
     running faster than the numpy passes (up to 1.6x), so they were no bound."""
     if ARITH["exe"] is not None:
         try:
-            out = json.loads(subprocess.run([str(ARITH["exe"]), "stream", str(int(rbytes)), str(int(wbytes))],
-                                            check=True, capture_output=True, text=True, timeout=120).stdout)
+            args = [str(ARITH["exe"]), "stream", str(int(rbytes)), str(int(wbytes))] + (["zeros"] if zeros else [])
+            out = json.loads(subprocess.run(args, check=True, capture_output=True, text=True, timeout=120).stdout)
             STREAM["method"] = STREAM["method"] or "c++"  # a numpy fallback in any cell stays named
             return out["stream_1t"], out["stream_2t"]
         except (OSError, subprocess.SubprocessError, ValueError, KeyError):
@@ -286,11 +292,12 @@ def stream_bound(rbytes, wbytes, repeats):
         dst[:] = 0  # touch the pages
         _STREAM_BUFFERS[key] = (src, dst)
     src, dst = _STREAM_BUFFERS[key]
+    word = 0 if zeros else STREAM_DATA_WORD
 
     def part(a, b, k):
         for _ in range(k):
             np.bitwise_or.reduce(a)
-            b.fill(0)
+            b.fill(word)
 
     t0 = time.perf_counter()
     part(src, dst, 1)
@@ -513,7 +520,8 @@ def measure_cells(inputs, n, keys, ops, dtypes, threads, repeats, rounds, mi=Non
                                     settle()
                                     keep(dt, f"{variant}_{nt}t", best_time(calls[dt][variant], repeats))
                     if with_stream:
-                        s1, s2 = stream_bound(*io_split(op, n, np.dtype(dt).itemsize), repeats)
+                        s1, s2 = stream_bound(*io_split(op, n, np.dtype(dt).itemsize), repeats,
+                                              zeros=(key, op) in DELTA_ZERO)
                         keep(dt, "stream_1t", s1)
                         keep(dt, "stream_2t", s2)
                         cb = contract_bound(op, dt, n, repeats)
@@ -894,7 +902,8 @@ def build_rows(n, cells, keys, ops, dtypes, repeats, with_copy=True):
                     rb, wb = io_split(op, n, np.dtype(dt).itemsize)
                     s1, s2 = (c["stream_1t"], c["stream_2t"]) if "stream_1t" in c else stream_bound(rb, wb, repeats)
                     row["stream"] = {"read_bytes": rb, "write_bytes": wb, "time_1t": s1, "time_2t": s2,
-                                     "rate_1t": n / s1, "rate_2t": n / s2}
+                                     "rate_1t": n / s1, "rate_2t": n / s2,
+                                     "writes": "zeros" if (key, op) in DELTA_ZERO else "data"}
                 bkr, mir = row["bk_rate"], row["mi_rate"] or {}
                 row["ratios"] = {
                     # end to end, numpy in -> numpy out, both libraries
@@ -1412,7 +1421,7 @@ def write_markdown(path, info, mi_info, main_rows, scaling_rows, scalar_runs, ag
     else:
         w("- Memory (stream) bound: `bench/divider.cpp stream R W` (built with the library's flags): the "
           "element range in 4096 blocks, each reading its share of the kernel's R input bytes (64-byte vector "
-          "loads, OR-reduced) and writing its share of the W output bytes (zeros) as a kernel does, or all "
+          "loads, OR-reduced) and writing its share of the W output bytes as a kernel does, or all "
           "reads and then all writes; plain or streaming stores; buffers on 2 MB pages (as numpy's) kept "
           "across passes as a kernel's arrays between calls: the fastest of the four variants; on 2 threads "
           "each takes a contiguous half, started together; the best time per pass over 5 runs of >= 20 ms. "
@@ -1421,6 +1430,19 @@ def write_markdown(path, info, mi_info, main_rows, scaling_rows, scalar_runs, ag
           "beside its kernels (this host's bandwidth moves with its neighbours' load). It is the time the "
           "kernel's bytes take to move at this machine's bandwidth, so a kernel at t/stream ≈ 1 is "
           "memory-bound. (Sessions 12-22 used numpy passes for it, which the kernels outran by up to 1.6x.)")
+        if stream_writes_data(main_rows):
+            w("  The pass writes data (every 64-bit word non-zero), as the kernels' outputs are, and zeros only for the "
+              "delta lobes' eval / pdf (‡), whose outputs are zeros: on the Zen 4 host the memory takes streamed "
+              "lines of zeros ~3x faster than lines of data (85-96 vs 27-30 GB/s, 36-512 MB, 1 or 2 threads; a "
+              "line with one non-zero word ~55 GB/s; a rough Conductor's eval outputs 29.5 GB/s, random floats "
+              "27.5), so the passes of sessions 23-28, which wrote zeros for every row, overstated the bound of "
+              "every row that writes data (a float32 sample's bytes at N = 1e6, 2 threads: 0.53-0.60 ms in zeros, "
+              "1.28 ms in data). Outputs with zero words (f = 0 rows) can move a few per cent faster than the "
+              "pass, so t/stream slightly below 1 is possible.")
+        else:
+            w("  **This run's pass wrote zeros for every row** (the pass of sessions 23-28): on the Zen 4 host the "
+              "memory takes streamed lines of zeros ~3x faster than lines of data (session 29), so its memory bound "
+              "overstates what a kernel writing data can reach; a later run's bound writes data.")
     if info.get("contract_error"):
         w(f"- Contract bound: not measured ({info['contract_error']}).")
     else:
@@ -1470,6 +1492,12 @@ def remeasure_failing(main_rows, cells, inputs, n, threads, args, mi, div):
         after = {main_rows[i]["dtype"]: not_met(main_rows[i], div) for i in idx}
         out.append({"key": key, "op": op, "label": CONFIG[key][1], "before": before, "after": after})
     return out
+
+
+def stream_writes_data(main_rows):
+    """Whether the run's stream bound wrote data (session 29 on: each row's stream records what it
+    wrote); a run before that wrote zeros for every row."""
+    return any((r.get("stream") or {}).get("writes") for r in main_rows)
 
 
 def report_names(tag=None):

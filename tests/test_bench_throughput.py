@@ -5,6 +5,7 @@ mistakes would silently change the committed table's verdicts."""
 import math
 import sys
 
+import numpy as np
 import pytest
 from conftest import load_bench
 
@@ -97,15 +98,42 @@ def test_stream_bound_pass(tp, monkeypatch):
     import subprocess
     exe = tp.build_divider()
     for rb, wb in ((24_000_000, 4_000_000), (3 * 4 * 1001, 7), (64, 0)):
-        out = json.loads(subprocess.run([str(exe), "stream", str(rb), str(wb)], check=True, capture_output=True,
-                                        text=True, timeout=120).stdout)
-        assert out["bytes_read"] == -(-rb // 64) * 64 and out["bytes_written"] == -(-wb // 64) * 64
-        assert 0 < out["stream_1t"] < 1 and 0 < out["stream_2t"] < 1
+        for extra in ([], ["zeros"]):
+            out = json.loads(subprocess.run([str(exe), "stream", str(rb), str(wb)] + extra, check=True,
+                                            capture_output=True, text=True, timeout=120).stdout)
+            assert out["bytes_read"] == -(-rb // 64) * 64 and out["bytes_written"] == -(-wb // 64) * 64
+            assert 0 < out["stream_1t"] < 1 and 0 < out["stream_2t"] < 1
+            # the pass writes data (every word non-zero, as a kernel's outputs) unless told zeros
+            # (the delta lobes' eval / pdf): this host's memory writes zero lines ~3x faster
+            assert out["nonzero_words"] == (0 if extra else out["bytes_written"] // 8)
+    bad = subprocess.run([str(exe), "stream", "64", "64", "zero"], capture_output=True, text=True, timeout=60)
+    assert bad.returncode != 0 and "zero" in bad.stderr
+    calls = []
+    real_run = subprocess.run
+
+    def spy(args, *a, **k):
+        calls.append(list(args))
+        return real_run(args, *a, **k)
+
+    monkeypatch.setattr(tp.subprocess, "run", spy)
     t1, t2 = tp.stream_bound(2_400_000, 400_000, 1)
-    assert tp.STREAM["method"] == "c++" and 0 < t1 < 1 and 0 < t2 < 1
+    assert tp.STREAM["method"] == "c++" and 0 < t1 < 1 and 0 < t2 < 1 and calls[-1][-1] == "400000"
+    tp.stream_bound(2_400_000, 400_000, 1, zeros=True)
+    assert calls[-1][-1] == "zeros"
     monkeypatch.setitem(tp.ARITH, "exe", None)
     t1, t2 = tp.stream_bound(2_400_000, 400_000, 1)
     assert tp.STREAM["method"] == "numpy" and 0 < t1 < 1 and 0 < t2 < 1
+    assert np.all(tp._STREAM_BUFFERS[(2_400_000, 400_000)][1] == tp.STREAM_DATA_WORD)
+    tp.stream_bound(2_400_000, 400_000, 1, zeros=True)
+    assert not tp._STREAM_BUFFERS[(2_400_000, 400_000)][1].any()
+
+
+def test_stream_writes_named_in_method(tp):
+    # the report's Method says what the run's stream pass wrote: data (rows record it, session 29
+    # on) or, for an older run's JSON re-rendered with --report, zeros for every row
+    data = [{"stream": {"writes": "data"}}, {"stream": {"writes": "zeros"}}, {"stream": None}]
+    old = [{"stream": {"read_bytes": 1}}, {"stream": None}]
+    assert tp.stream_writes_data(data) and not tp.stream_writes_data(old)
 
 
 def test_report_names(tp):
