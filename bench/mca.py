@@ -147,13 +147,30 @@ def loop_body(asm: str, take=None, shortest=False):
     return walk(begin + 1)
 
 
+LLVM_LEAST = 17  # llvm-mca's znver4 model and llc for Dr.Jit 1.5's IR (llvm.maximum) need LLVM >= 17
+
+
+def llvm_major(tool):
+    """The LLVM major version `tool --version` prints, or None."""
+    try:
+        out = subprocess.run([tool, "--version"], capture_output=True, text=True, timeout=30).stdout
+    except (OSError, subprocess.SubprocessError):
+        return None
+    m = re.search(r"LLVM version (\d+)", out)
+    return int(m.group(1)) if m else None
+
+
 def find_llvm_tool(name):
-    """LLVM 19's `name` (llvm-mca, llc): name-19 on PATH, /usr/lib/llvm-19/bin/name, or name."""
-    for c in (f"{name}-19", f"/usr/lib/llvm-19/bin/{name}", name):
-        p = shutil.which(c) or (c if Path(c).exists() else None)
-        if p:
-            return p
-    return None
+    """`name` (llvm-mca, llc) of LLVM >= LLVM_LEAST: name-19 .. name-17 on PATH or in
+    /usr/lib/llvm-N/bin, else the unversioned name if it is that new. An older unversioned tool
+    (Debian 12's llvm-mca is LLVM 14, without -mcpu=znver4) is not taken: None then."""
+    for v in range(19, LLVM_LEAST - 1, -1):
+        for c in (f"{name}-{v}", f"/usr/lib/llvm-{v}/bin/{name}"):
+            p = shutil.which(c) or (c if Path(c).exists() else None)
+            if p:
+                return p
+    p = shutil.which(name)
+    return p if p and (llvm_major(p) or 0) >= LLVM_LEAST else None
 
 
 def mitsuba_loop(key, op, work):
@@ -196,7 +213,7 @@ def mitsuba_loop(key, op, work):
     ll.write_text(irs[0].getvalue() if hasattr(irs[0], "getvalue") else str(irs[0]))
     llc = find_llvm_tool("llc")
     if not llc:
-        sys.exit("llc not found (apt-get install llvm-19)")
+        sys.exit(f"llc of LLVM >= {LLVM_LEAST} not found (apt-get install llvm-19)")
     subprocess.run([llc, "-O3", str(ll), "-o", str(asm)], check=True)
     return llc_loop_body(asm.read_text())
 
@@ -249,7 +266,7 @@ def main():
         return 0
     mca = find_llvm_tool("llvm-mca")
     if not mca:
-        sys.exit("llvm-mca not found (apt-get install llvm-19)")
+        sys.exit(f"llvm-mca of LLVM >= {LLVM_LEAST} not found (apt-get install llvm-19)")
     from _machine import library_cxx  # same directory
     work = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="bsdfkit-mca-"))
     work.mkdir(parents=True, exist_ok=True)

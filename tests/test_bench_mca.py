@@ -96,3 +96,23 @@ def test_llc_loop_body(mca):
                                       "jb	.LBB0_1"]
     with pytest.raises(ValueError, match="loop"):
         mca.llc_loop_body(LLC.replace("jb\t.LBB0_1", "jb\t.LBB0_3"))
+
+
+def test_find_llvm_tool_skips_an_old_unversioned_tool(mca, monkeypatch, tmp_path):
+    # Debian 12's unversioned llvm-mca is LLVM 14 (no -mcpu=znver4): not taken; a versioned one
+    # of LLVM 17-19 is, and an unversioned one is when it is that new
+    def fake_tool(path, major):
+        path.write_text(f"#!/bin/sh\necho 'Debian LLVM version {major}.0.6'\n")
+        path.chmod(0o755)
+        return str(path)
+
+    old = fake_tool(tmp_path / "llvm-mca", 14)
+    found = {"llvm-mca": old}
+    monkeypatch.setattr(mca.shutil, "which", lambda c: found.get(c))
+    monkeypatch.setattr(mca, "Path", lambda c: tmp_path / "absent" / str(c).lstrip("/"))
+    assert mca.llvm_major(old) == 14
+    assert mca.find_llvm_tool("llvm-mca") is None
+    found["llvm-mca"] = fake_tool(tmp_path / "llvm-mca-new", 19)
+    assert mca.find_llvm_tool("llvm-mca") == found["llvm-mca"]
+    found["llvm-mca-18"] = "/opt/llvm-mca-18"
+    assert mca.find_llvm_tool("llvm-mca") == "/opt/llvm-mca-18"
