@@ -214,6 +214,33 @@ def test_sample_takes_planes_on_the_fast_path(rng, dtype):
         m.sample(wo_f, uc, bad_u)
 
 
+@pytest.mark.parametrize("name, n", [("Diffuse", 300_001), ("Dielectric", 2 * 8192 + 3 * 1024 + 13),
+                                     ("CoatedDiffuse", 8192 + 1024 + 5)])
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_sample_planes_across_chunks_equal_rows(rng, name, n, dtype):
+    # Fortran-order wo / u transposed into rows on the pool's threads (planes_to_rows, chunks of
+    # 8192), then the rows kernel: across chunks, the partial packet and both thread counts the
+    # values are those of C-order inputs bit for bit; Diffuse's float32 call is large enough to
+    # stream its outputs, CoatedDiffuse (a random walk) runs the scalar loop
+    m = {"Diffuse": lambda: bk.Diffuse(0.7), "Dielectric": lambda: bk.Dielectric(1.5, alpha=0.3),
+         "CoatedDiffuse": lambda: bk.CoatedDiffuse(reflectance=0.5, alpha=0.1)}[name]()
+    wo, uc, u = _dirs(rng, n).astype(dtype), rng.random(n).astype(dtype), rng.random((n, 2)).astype(dtype)
+    want = m.sample(wo, uc, u)
+    assert np.count_nonzero(want.pdf) > n // 2
+    fields = ("wi", "f", "pdf", "flags", "eta", "valid", "pdf_is_proportional")
+    for threads in (1, 2):  # conftest restores the thread count
+        bk.set_num_threads(threads)
+        for a, b in ((np.asfortranarray(wo), u), (wo, np.asfortranarray(u)), (np.asfortranarray(wo), np.asfortranarray(u))):
+            assert m._core.sample_fast(a, uc, b, 0, 3) is not None
+            got = m.sample(a, uc, b)
+            for k in fields:
+                np.testing.assert_array_equal(getattr(got, k), getattr(want, k), err_msg=f"{k}, {threads} thread(s)")
+    bad = np.asfortranarray(wo)
+    bad[n - 2] = [np.nan, 0, 1]  # in the last block's partial packet
+    with pytest.raises(ValueError, match=r"wo: 1 direction\(s\) are not finite unit"):
+        m.sample(bad, uc, np.asfortranarray(u))
+
+
 def test_eval_out_on_the_fast_path(rng):
     m = bk.Diffuse(0.5)
     wo, wi = _dirs(rng, 10), _dirs(rng, 10)
