@@ -224,6 +224,8 @@ int stream(long long rbytes, long long wbytes, bool zeros, bool verbose) {
     b.nw = size_t((wbytes + 63) / 64 * 8);
     b.src = alloc_lines(b.nr);
     b.dst = alloc_lines(b.nw);
+    // the opposite of what the passes write, so that nonzero_words shows they wrote every word
+    std::memset(b.dst, zeros ? 1 : 0, b.nw * 8);
     // the blocks cover both buffers once, without gaps or overlaps (the words a pass moves)
     size_t words_r = 0, words_w = 0, next_r = 0, next_w = 0;
     for (size_t k = 0; k < kStreamBlocks; ++k) {

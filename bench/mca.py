@@ -161,10 +161,10 @@ def llvm_major(tool):
 
 
 def find_llvm_tool(name):
-    """`name` (llvm-mca, llc) of LLVM >= LLVM_LEAST: name-19 .. name-17 on PATH or in
+    """`name` (llvm-mca, llc) of LLVM >= LLVM_LEAST: name-25 .. name-17 on PATH or in
     /usr/lib/llvm-N/bin, else the unversioned name if it is that new. An older unversioned tool
     (Debian 12's llvm-mca is LLVM 14, without -mcpu=znver4) is not taken: None then."""
-    for v in range(19, LLVM_LEAST - 1, -1):
+    for v in range(25, LLVM_LEAST - 1, -1):
         for c in (f"{name}-{v}", f"/usr/lib/llvm-{v}/bin/{name}"):
             p = shutil.which(c) or (c if Path(c).exists() else None)
             if p:
