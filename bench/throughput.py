@@ -900,10 +900,11 @@ def build_rows(n, cells, keys, ops, dtypes, repeats, with_copy=True):
                     c1, c2 = copy_bound(nb, repeats)
                     row["copy"] = {"bytes": nb, "time_1t": c1, "time_2t": c2, "rate_1t": n / c1, "rate_2t": n / c2}
                     rb, wb = io_split(op, n, np.dtype(dt).itemsize)
-                    s1, s2 = (c["stream_1t"], c["stream_2t"]) if "stream_1t" in c else stream_bound(rb, wb, repeats)
+                    zeros = row["delta_zero"]  # what the cell's pass wrote (measure_cells), or this one writes
+                    s1, s2 = ((c["stream_1t"], c["stream_2t"]) if "stream_1t" in c
+                              else stream_bound(rb, wb, repeats, zeros=zeros))
                     row["stream"] = {"read_bytes": rb, "write_bytes": wb, "time_1t": s1, "time_2t": s2,
-                                     "rate_1t": n / s1, "rate_2t": n / s2,
-                                     "writes": "zeros" if (key, op) in DELTA_ZERO else "data"}
+                                     "rate_1t": n / s1, "rate_2t": n / s2, "writes": "zeros" if zeros else "data"}
                 bkr, mir = row["bk_rate"], row["mi_rate"] or {}
                 row["ratios"] = {
                     # end to end, numpy in -> numpy out, both libraries
