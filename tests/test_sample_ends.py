@@ -52,7 +52,8 @@ def test_dielectric_total_internal_reflection_at_uc_1_matches_mitsuba(alpha):
     u = rng.random((n, 2)).astype(np.float32).astype(np.float64)
     uc = np.ones(n)
     s = m.sample(wo, uc, u)
-    r = ref.sample(m, wo, uc, u)
+    # sampling does not depend on the masking: Mitsuba's roughdielectric (separable) samples the same lobes
+    r = ref.sample(bk.Dielectric(1.5, alpha=alpha, masking="separable"), wo, uc, u)
     assert r["valid"].mean() > 0.8 and r["reflection"][r["valid"]].mean() > 0.8
     if alpha == 0:  # the same direction and weight for every sample
         assert np.all(s.valid == r["valid"])

@@ -5,6 +5,10 @@
 * :func:`from_pbrt` reads the ``Material`` / ``MakeNamedMaterial`` statements of pbrt-v4 scene
   text; :func:`parse_pbrt_materials` gives the parsed statements (type, parameters, line, how
   many shapes use them) without converting them.
+* ``model.to_mitsuba()`` is the other direction: it exports only a model Mitsuba has exactly and
+  otherwise raises :class:`MitsubaExportError` naming the reason (e.g. height-correlated masking)
+  and the measured difference; ``to_mitsuba(approximate=True)`` exports the nearest Mitsuba
+  material and warns with :class:`MitsubaApproximationWarning`.
 * :func:`spectrum_to_rgb` projects a wavelength/value spectrum to linear sRGB the way Mitsuba's
   RGB variants do, so spectra in either format give the RGB values Mitsuba would use.
 
@@ -13,9 +17,11 @@ measured materials, Beckmann roughness, ``specular_reflectance`` tints ...) is r
 ``ValueError`` that names the plugin or material, the parameter and what is supported.
 """
 
+from ..models._mitsuba_export import MitsubaApproximationWarning, MitsubaExportError
 from .mitsuba import MIRROR_ETA, MITSUBA_IOR, from_mitsuba
 from .pbrt import PBRT_GLASS_ETA, PbrtMaterial, PbrtParam, from_pbrt, parse_pbrt_materials
 from .spectra import spectrum_to_rgb
 
 __all__ = ["from_mitsuba", "from_pbrt", "parse_pbrt_materials", "PbrtMaterial", "PbrtParam",
-           "spectrum_to_rgb", "MITSUBA_IOR", "PBRT_GLASS_ETA", "MIRROR_ETA"]
+           "spectrum_to_rgb", "MITSUBA_IOR", "PBRT_GLASS_ETA", "MIRROR_ETA", "MitsubaExportError",
+           "MitsubaApproximationWarning"]

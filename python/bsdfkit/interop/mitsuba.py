@@ -389,11 +389,12 @@ def from_mitsuba(d) -> BxDF:
     the front side (wo.z > 0) and mirrors it to the back. bsdfkit turns rough lobes with
     max(alpha) < 1e-3 into deltas (pbrt's rule); Mitsuba keeps them as very sharp lobes.
 
-    Round trip: ``from_mitsuba(to_mitsuba(m)) == m`` for every model ``to_mitsuba`` accepts with
-    ``masking="separable"`` (or no microfacet lobe) and alphas either both < 1e-3 or both >=
-    1e-4 (``to_mitsuba`` floors rough alphas at 1e-4). A ``masking="correlated"`` rough model
-    comes back with ``masking="separable"``: Mitsuba cannot express the height-correlated form.
-    Eta = 1 dielectrics come back as ``Dielectric(1.0)``.
+    Round trip: ``from_mitsuba(m.to_mitsuba()) == m`` for every model ``to_mitsuba`` exports, with
+    alphas either both < 1e-3 or both >= 1e-4 (``to_mitsuba`` floors rough alphas at 1e-4). A
+    rough ``masking="correlated"`` model is refused by ``to_mitsuba()`` (Mitsuba cannot express
+    the height-correlated form); ``to_mitsuba(approximate=True)`` exports it with a warning and it
+    comes back with ``masking="separable"``. Smooth models come back with the default masking
+    (a mirror has none). Eta = 1 dielectrics come back as ``Dielectric(1.0)``.
 
     Raises ``ValueError`` naming the plugin and parameter for anything else: unknown plugins,
     textures, Beckmann roughness, tints, unknown parameters, presets or IOR names.

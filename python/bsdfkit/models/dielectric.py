@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from .. import _core
+from . import _mitsuba_export as _me
 from . import _spectral as _sp
 from .base import MIN_ALPHA, BxDF, _MASKING, _alphas, _masking, alpha_text, is_smooth, masking_knob
 
@@ -73,9 +74,19 @@ class Dielectric(BxDF):
     def describe(self) -> str:
         return f"Dielectric η={_sp.fmt_param(self._params['eta'])}{alpha_text(self._params)}"
 
-    def to_mitsuba(self) -> dict:
-        """``dielectric`` / ``roughdielectric`` (ggx) with int_ior = eta, ext_ior = 1 (eta < 1 is
-        passed as is: Mitsuba accepts int_ior < ext_ior); eta == 1 -> ``null`` (pbrt's pass-through)."""
+    def to_mitsuba(self, approximate: bool = False) -> dict:
+        """The Mitsuba 3 plugin dictionary of this material: ``dielectric`` / ``roughdielectric``
+        (ggx) with int_ior = eta, ext_ior = 1 (eta < 1 is passed as is: Mitsuba accepts int_ior <
+        ext_ior); eta == 1 -> ``null`` (pbrt's pass-through). A spectral eta is written as its
+        value at 550 nm (what RGB mode uses).
+
+        Mitsuba's ``roughdielectric`` has the separable Smith masking G1(wo) G1(wi): a rough model
+        with ``masking="correlated"`` (the default, pbrt-v4's) raises ``MitsubaExportError`` (a
+        NotImplementedError and a ValueError) stating the measured difference;
+        ``approximate=True`` exports the separable version and warns with
+        ``MitsubaApproximationWarning`` stating it. Smooth and eta = 1 models export exactly.
+        """
+        approximate = _me.check_approximate(approximate)
         eta, p = _sp.scalar_of(self.eta), self._params
         if eta == 1.0:
             # pbrt: eta == 1 is always the smooth branch, a straight pass-through with R = 0,
@@ -83,9 +94,13 @@ class Dielectric(BxDF):
             return {"type": "null"}
         if is_smooth(p):
             return {"type": "dielectric", "int_ior": eta, "ext_ior": 1.0}
-        return {"type": "roughdielectric", "distribution": "ggx", "alpha_u": max(p["alpha_x"], MIN_ALPHA),
-                "alpha_v": max(p["alpha_y"], MIN_ALPHA), "sample_visible": True, "int_ior": eta, "ext_ior": 1.0}
-
+        d = {"type": "roughdielectric", "distribution": "ggx", "alpha_u": max(p["alpha_x"], MIN_ALPHA),
+             "alpha_v": max(p["alpha_y"], MIN_ALPHA), "sample_visible": True, "int_ior": eta, "ext_ior": 1.0}
+        if p["masking"] != "separable":
+            from ..interop.mitsuba import from_mitsuba
+            _me.refuse_or_warn(self, from_mitsuba(d), [_me.MASKING_REASON.format(plugin="roughdielectric")],
+                               approximate)
+        return d
 
 
 class ThinDielectric(BxDF):
@@ -126,7 +141,11 @@ class ThinDielectric(BxDF):
     def describe(self) -> str:
         return f"ThinDielectric η={_sp.fmt_param(self._params['eta'])}"
 
-    def to_mitsuba(self) -> dict:
+    def to_mitsuba(self, approximate: bool = False) -> dict:
+        """``thindielectric`` with int_ior = eta (its value at 550 nm if a spectrum), ext_ior = 1;
+        eta == 1 -> ``null``. Always exact (delta lobes only); ``approximate`` is accepted for
+        uniformity with the other models."""
+        _me.check_approximate(approximate)
         eta = _sp.scalar_of(self.eta)
         return {"type": "null"} if eta == 1.0 else {"type": "thindielectric", "int_ior": eta, "ext_ior": 1.0}
 

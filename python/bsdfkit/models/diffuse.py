@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from .. import _core
 from . import _spectral as _sp
+from ._mitsuba_export import check_approximate as _check_approximate
 from .base import BxDF, rgb_dict
 
 __all__ = ["Diffuse", "DiffuseTransmission"]
@@ -42,7 +43,10 @@ class Diffuse(BxDF):
     def describe(self) -> str:
         return f"Diffuse R={_sp.fmt_param(self._params['reflectance'])}"
 
-    def to_mitsuba(self) -> dict:
+    def to_mitsuba(self, approximate: bool = False) -> dict:
+        """``twosided{diffuse}`` with the RGB reflectance (a spectrum's RGB value, as RGB mode
+        uses). Always exact; ``approximate`` is accepted for uniformity."""
+        _check_approximate(approximate)
         r = _sp.rgb_of(self.reflectance, "reflectance")
         return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": rgb_dict(r)}}
 
@@ -89,7 +93,9 @@ class DiffuseTransmission(BxDF):
         p = self._params
         return f"DiffuseTransmission R={_sp.fmt_param(p['reflectance'])}, T={_sp.fmt_param(p['transmittance'])}"
 
-    def to_mitsuba(self) -> dict:
+    def to_mitsuba(self, approximate: bool = False) -> dict:
+        """Raises NotImplementedError: Mitsuba 3 has no diffuse-transmission plugin."""
+        _check_approximate(approximate)
         raise NotImplementedError(
             "Mitsuba 3 has no diffuse-transmission BSDF plugin; use "
             "bsdfkit.testing.drjit_models.diffuse_transmission_f_pdf as the reference")

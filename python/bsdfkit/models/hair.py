@@ -159,11 +159,13 @@ class Hair(BxDF):
     def cost_family(self) -> str:
         return "Hair/far-field" if self._params["h"] is None else "Hair"   # far field: 16 single-h kernels
 
-    def to_mitsuba(self) -> dict:
+    def to_mitsuba(self, approximate: bool = False) -> dict:
         """Mitsuba 3 ``hair`` (sigma_a form, ext_ior 1). Mitsuba has no ``h``: it derives it from
         wo (``bsdfkit.testing.hair_ref.wo_for_h``), and its fibre axis is local y where bsdfkit's
         (pbrt-v4's) is x (``hair_ref.to_mitsuba_frame``); so only h = 0 converts, other h and the
-        far-field fibre (h=None) raise ValueError."""
+        far-field fibre (h=None) raise ValueError, also with ``approximate=True``."""
+        from ._mitsuba_export import check_approximate
+        check_approximate(approximate)
         if self._params["h"] != 0.0:
             raise ValueError(f"Hair(h={self._params['h']!r}): Mitsuba 3's hair has no h parameter (it derives h "
                              "from the direction); only h=0 converts")

@@ -222,6 +222,13 @@ class CoatedDiffuse(_AnalyticSpectral, BxDF):
     mitsuba = None
     knobs = _KNOBS
 
+    def to_mitsuba(self, approximate: bool = False) -> dict:
+        """Raises NotImplementedError: Mitsuba 3 has no plugin for pbrt-v4's stochastic layered
+        BSDFs (its ``plastic`` is a different, closed-form coating model: ``bsdfkit.Plastic``)."""
+        from ._mitsuba_export import no_plugin
+        no_plugin(self, approximate, "Mitsuba 3 has no plugin for pbrt-v4's layered (coated) BSDFs; "
+                  "bsdfkit.Plastic is the coating model Mitsuba has (plastic / roughplastic)")
+
     def __init__(self, reflectance=0.5, eta=1.5, alpha=None, alpha_x=None, alpha_y=None, thickness=0.01,
                  albedo=0.0, g=0.0, max_depth=10, n_samples=1, seed=0, masking="correlated", mis="pbrt",
                  method="stochastic"):
@@ -305,6 +312,13 @@ class CoatedConductor(_AnalyticSpectral, BxDF):
     exact_eval, reciprocal = _ByMethod(False, True), _ByMethod(False, True)   # per instance: see _ByMethod
     mitsuba = None
     knobs = _KNOBS
+
+    def to_mitsuba(self, approximate: bool = False) -> dict:
+        """Raises NotImplementedError: Mitsuba 3 has no plugin for pbrt-v4's stochastic layered
+        BSDFs (its ``plastic`` is a different, closed-form coating model: ``bsdfkit.Plastic``)."""
+        from ._mitsuba_export import no_plugin
+        no_plugin(self, approximate, "Mitsuba 3 has no plugin for pbrt-v4's layered (coated) BSDFs; "
+                  "bsdfkit.Plastic is the coating model Mitsuba has (plastic / roughplastic)")
 
     def __init__(self, conductor_eta, conductor_k, conductor_alpha=0.0, conductor_alpha_x=None,
                  conductor_alpha_y=None, interface_eta=1.5, interface_alpha=0.0, interface_alpha_x=None,

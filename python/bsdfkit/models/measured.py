@@ -226,6 +226,13 @@ class MERL(BxDF):
     transmission = False
     delta_only = False
     mitsuba = None              # Mitsuba 3 has no MERL plugin
+
+    def to_mitsuba(self, approximate: bool = False) -> dict:
+        """Raises NotImplementedError: Mitsuba 3 has no MERL plugin (its ``measured`` plugin reads
+        RGL tensor files: ``bsdfkit.Measured``)."""
+        from ._mitsuba_export import no_plugin
+        no_plugin(self, approximate, "Mitsuba 3 has no MERL plugin (its 'measured' plugin reads RGL "
+                  "tensor files, bsdfkit.Measured)")
     knobs = (KnobDecl("interpolation", ("linear", "nearest"), "approximation",
                       "table lookup: trilinear between bin centres, or MERL's nearest bin"),)
 
@@ -648,9 +655,12 @@ class Measured(BxDF):
     def cost_family(self) -> str:
         return "Measured"
 
-    def to_mitsuba(self) -> dict:
+    def to_mitsuba(self, approximate: bool = False) -> dict:
         """Mitsuba 3's ``measured`` plugin on the same file (Mitsuba's plugin is one-sided: it
-        agrees with this model for wo.z > 0)."""
+        agrees with this model for wo.z > 0). A model built from bytes (``data=``, e.g.
+        ``bsdfkit.measured.tabulate``) has no file: ValueError (``save()`` it first)."""
+        from ._mitsuba_export import check_approximate
+        check_approximate(approximate)
         if self._params["path"] is None:
             raise ValueError("to_mitsuba: a Measured model built from bytes has no file for Mitsuba's "
                              "measured plugin; save() it first")

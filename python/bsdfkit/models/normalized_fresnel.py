@@ -44,7 +44,10 @@ class NormalizedFresnel(BxDF):
     mitsuba = None
     knobs = ()                 # no accuracy setting (FresnelMoment1 is pbrt-v4's fixed polynomial)
 
-    def to_mitsuba(self) -> dict:
+    def to_mitsuba(self, approximate: bool = False) -> dict:
+        """Raises NotImplementedError: Mitsuba 3 has no normalized-Fresnel plugin."""
+        from ._mitsuba_export import check_approximate
+        check_approximate(approximate)
         raise NotImplementedError("Mitsuba 3 has no normalized-Fresnel (BSSRDF exit) plugin; use "
                                   "bsdfkit.testing.hair_ref.normalized_fresnel_f as the reference")
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _core
+from . import _mitsuba_export as _me
 from . import _spectral as _sp
 from .base import _MASKING, MIN_ALPHA, BxDF, _masking, _rgb, _scalar, fmt_value, masking_knob, rgb_dict
 from .registry import KnobDecl
@@ -40,8 +41,13 @@ class Plastic(BxDF):
         reflections are summed as 1 / (1 - Fdr), which keeps the diffuse colour as given.
         True: R / (1 - R Fdr), the physical sum of the base's inter-reflections (colours
         saturate and darken, as in real wet/varnished materials).
-    masking: the coating's masking-shadowing, "correlated" (height-correlated Smith, pbrt-v4)
-        or "separable" (G1 G1, what Mitsuba uses; pass this to reproduce Mitsuba exactly).
+    masking: the coating's masking-shadowing, "correlated" (height-correlated Smith, pbrt-v4;
+        the default) or "separable" (G1 G1, what Mitsuba uses: pass it to reproduce Mitsuba
+        exactly; ``from_mitsuba`` does). The default is not Mitsuba's because every bsdfkit
+        microfacet model defaults to pbrt-v4's height-correlated masking (the physically
+        consistent one), and a changed default would silently change the material of every
+        existing spec string and script that omits it; instead ``to_mitsuba`` refuses a rough
+        correlated model (``approximate=True`` exports it with a warning stating the difference).
     specular_reflectance: multiplier Ks on the coating's reflection, scalar or RGB >= 0
         (physically 1; Mitsuba ``specular_reflectance``).
 
@@ -139,13 +145,21 @@ class Plastic(BxDF):
         a = self._params["alpha"]
         return f"Plastic R={_sp.fmt_param(self._params['reflectance'])}, " + (f"α={a:.2g}" if a >= SMOOTH_ALPHA else "smooth")
 
-    def to_mitsuba(self) -> dict:
-        """``twosided{plastic}`` (smooth coating) or ``twosided{roughplastic}`` (ggx, visible-normal
-        sampling). Mitsuba's plastics are one-sided and use separable masking: a
-        ``masking="correlated"`` rough model's f differs slightly (its pdf agrees)."""
+    def to_mitsuba(self, approximate: bool = False) -> dict:
+        """The Mitsuba 3 plugin dictionary of this material: ``twosided{plastic}`` (smooth coating)
+        or ``twosided{roughplastic}`` (ggx, visible-normal sampling); spectra are written as their
+        RGB values (what RGB mode uses).
+
+        Mitsuba's ``roughplastic`` has the separable Smith masking: a rough model with
+        ``masking="correlated"`` (the default) raises ``MitsubaExportError`` (a
+        NotImplementedError and a ValueError) stating the measured difference;
+        ``approximate=True`` exports the separable version and warns with
+        ``MitsubaApproximationWarning`` stating it. A smooth coating has no masking and exports
+        exactly with either setting."""
+        approximate = _me.check_approximate(approximate)
         p = self._params
-        inner = {"diffuse_reflectance": rgb_dict(_sp.rgb_of(p["reflectance"], "reflectance")), "int_ior": float(p["eta"]), "ext_ior": 1.0,
-                 "nonlinear": bool(p["nonlinear"])}
+        inner = {"diffuse_reflectance": rgb_dict(_sp.rgb_of(p["reflectance"], "reflectance")),
+                 "int_ior": float(p["eta"]), "ext_ior": 1.0, "nonlinear": bool(p["nonlinear"])}
         ks = _sp.rgb_of(p["specular_reflectance"], "reflectance")
         if np.any(np.asarray(ks) != 1.0):
             inner["specular_reflectance"] = rgb_dict(ks)
@@ -154,7 +168,12 @@ class Plastic(BxDF):
         else:
             inner.update(type="roughplastic", distribution="ggx", alpha=max(float(p["alpha"]), MIN_ALPHA),
                          sample_visible=True)
-        return {"type": "twosided", "bsdf": inner}
+        d = {"type": "twosided", "bsdf": inner}
+        if inner["type"] == "roughplastic" and p["masking"] != "separable":
+            from ..interop.mitsuba import from_mitsuba
+            _me.refuse_or_warn(self, from_mitsuba(d), [_me.MASKING_REASON.format(plugin="roughplastic")],
+                               approximate)
+        return d
 
     @property
     def transmittance_table(self) -> np.ndarray:

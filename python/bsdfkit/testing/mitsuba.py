@@ -23,8 +23,10 @@ Conventions and caveats
   eta == 1 as a straight pass-through specular transmission).
 * **Masking.** Mitsuba's microfacet shadowing is always the *separable* Smith
   ``G1(wo) G1(wi)`` (and ``G1 = 0`` on back-facing microfacets); pbrt-v4 uses the
-  height-correlated form. Only models with ``masking="separable"`` agree pointwise; pdfs agree
-  in both cases (the visible-normal density only involves G1).
+  height-correlated form. Only models with ``masking="separable"`` agree pointwise, and
+  ``to_mitsuba`` refuses rough correlated models (pass ``model.to_mitsuba(approximate=True)``,
+  a dict, to compare against the nearest Mitsuba material: pdfs agree, the visible-normal
+  density only involves G1).
 * **Smoothness.** As in pbrt, ``max(alpha_x, alpha_y) < 1e-3`` selects the smooth (delta)
   plugin; otherwise alphas are floored at 1e-4 (pbrt does the same; Mitsuba would clamp anyway).
 * **Precision.** Mitsuba's wheels are float32 only. Inputs are rounded to float32 (the cosine
@@ -140,11 +142,10 @@ def to_mitsuba(model) -> dict:
     """Mitsuba plugin dictionary that should agree with a bsdfkit model: ``model.to_mitsuba()``
     (each model class writes its own; see e.g. ``Conductor.to_mitsuba``). A ``dict`` is returned
     unchanged (raw Mitsuba dictionaries). Models without a Mitsuba counterpart raise
-    NotImplementedError, approximations Mitsuba lacks (Schlick conductors) ValueError.
-
-    ``masking`` is not representable: Mitsuba always uses the separable Smith G, so for
-    ``masking="correlated"`` models f differs (by up to tens of percent at grazing angles / high
-    roughness) while the pdf still agrees. The returned dict is the same for both."""
+    NotImplementedError; materials Mitsuba lacks exactly (rough ``masking="correlated"`` models,
+    Schlick / F82 conductors) raise ``bsdfkit.interop.MitsubaExportError`` (a NotImplementedError
+    and a ValueError). To compare against the nearest Mitsuba material on purpose, pass the dict
+    ``model.to_mitsuba(approximate=True)``."""
     if isinstance(model, dict):
         return model
     if not hasattr(model, "to_mitsuba"):
