@@ -62,7 +62,11 @@ Error definition (used by :func:`tradeoff`, :func:`simplify`, the tests and ``be
   configuration (``f_cfg |cos| / pdf_ref``; stratified uniforms, common to all configurations), so
   their difference is estimated with an error proportional to the difference itself, far below
   the tolerances (an independent Monte Carlo estimate per configuration would need ~1e8 samples
-  for 1e-4).
+  for 1e-4). A stochastic reference (CoatedDiffuse, CoatedConductor: ``sample`` returns a pdf
+  only proportional to the density, ``pdf_is_proportional``) cannot weight by ``1 / pdf_ref``:
+  then each configuration's albedo is the mean of its *own* sampling weights ``f |cos| / pdf``
+  (exact in expectation; pbrt-v4's ``rho``) over the same uniforms, 4096 per wo by default, and
+  ``albedo_err`` includes that Monte Carlo noise (~1e-3 for an albedo ~0.5).
 * delta (specular) lobes: ``eval`` is 0 for every given pair, so such lobes are compared on
   sampled pairs: each configuration is sampled with the same ``(wo, uc, u)`` as the reference and
   ``v = f |cos theta_i|`` of the sample is compared (a configuration that picks another lobe or

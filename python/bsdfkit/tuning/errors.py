@@ -165,9 +165,18 @@ class _Prepared:
         wo = np.repeat(ds.albedo_wo, m, axis=0)
         uc, u = np.tile(ds.albedo_uc, k), np.tile(ds.albedo_u, (k, 1))
         s = ref.sample(wo, uc, u)
+        self.k, self.m = k, m
+        # A reference whose samples carry a pdf only proportional to the true density (pbrt-v4's
+        # layered walks: as low as 1e-13 where pdf() gives 0.57) cannot weight other
+        # configurations' f by 1 / pdf. Then every configuration's albedo is the mean of its own
+        # sampling weights f |cos| / pdf (exact in expectation, pbrt's rho) over the same uniforms.
+        self.proportional = bool(np.any(s.pdf_is_proportional & s.valid))
+        self.w_wo, self.w_uc, self.w_u = wo, uc, u
+        self.w_group = np.repeat(np.arange(k), m)
+        if self.proportional:
+            s = _no_rows(s)
         delta = s.valid & ((s.flags & int(BxDFFlags.Specular)) != 0)
         smooth = s.valid & ~delta & (s.pdf > 0)
-        self.k, self.m = k, m
         # albedo rows: evaluated pairs (smooth) and re-sampled rows (delta), weight 1 / (pdf m)
         self.a_wo, self.a_wi = wo[smooth], s.wi[smooth]
         self.a_w = 1.0 / (s.pdf[smooth] * m)
@@ -182,6 +191,32 @@ class _Prepared:
             self.d_wi, self.d_flags = r.wi, r.flags
         else:
             self.d_wi, self.d_flags = np.empty((0, 3)), np.empty(0, np.uint8)
+
+
+def _no_rows(s):
+    """A sample result with every row invalid (no eval rows for the albedo)."""
+    from dataclasses import replace
+    return replace(s, valid=np.zeros_like(s.valid))
+
+
+def _weight_albedo(cfg, prep):
+    """Albedo (K, 3) of a configuration as the mean of its own sampling weights f |cos| / pdf over
+    the albedo uniforms (spectral mode: per-wavelength weights integrated as :func:`color_weights`)."""
+    m, dt = cfg.model, cfg.dtype
+    wo, uc, u = prep.w_wo.astype(dt), prep.w_uc.astype(dt), prep.w_u.astype(dt)
+    if cfg.spectral:
+        lam, W = color_weights()
+        v = np.zeros((len(wo), 3))
+        for g in range(len(lam)):
+            for order, hero in _heroes(m):
+                w = m.sample(wo, uc, u, wavelengths=lam[g][order]).weight.astype(np.float64)
+                v += w @ W[g] if hero is None else w[:, :1] * W[g][hero]
+    else:
+        v = m.sample(wo, uc, u).weight.astype(np.float64)
+    v = np.where(np.isfinite(v), v, 0.0)
+    alb = np.zeros((prep.k, 3))
+    np.add.at(alb, prep.w_group, v)
+    return alb / prep.m
 
 
 def _eval_cos(m, dtype, wo, wi):
@@ -271,6 +306,8 @@ def _values(cfg: Config, prep: _Prepared):
     ev, dl = (_eval_cos_spectral, _delta_cos_spectral) if cfg.spectral else (_eval_cos, _delta_cos)
     v = np.concatenate([ev(m, dt, ds.wo, ds.wi),
                         dl(m, dt, ds.delta_wo, ds.delta_uc, ds.delta_u, prep.d_wi, prep.d_flags)])
+    if prep.proportional:
+        return v, _weight_albedo(cfg, prep)
     alb = np.zeros((prep.k, 3))
     if len(prep.a_wo):
         np.add.at(alb, prep.a_group, ev(m, dt, prep.a_wo, prep.a_wi) * prep.a_w[:, None])

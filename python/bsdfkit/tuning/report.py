@@ -210,10 +210,13 @@ def _check_tol(tol) -> float:
     return t
 
 
-def _stochastic_defaults(sto, n, n_albedo):
-    """Default sizes: stochastic models (every eval a random walk) get smaller sets."""
+def _stochastic_defaults(sto, n, n_albedo, ref_sto=False):
+    """Default sizes: stochastic models (every eval a random walk) get smaller sets. The albedo
+    set keeps 4096 samples per wo when the reference is stochastic: then every configuration's
+    albedo is the mean of its own sampling weights (one walk per sample, not an eval of
+    n_samples walks; see ``errors._Prepared``), and 64 samples would leave ~5 % noise."""
     n = (STOCHASTIC_N if sto else 8192) if n is None else n
-    n_albedo = (64 if sto else 4096) if n_albedo is None else n_albedo
+    n_albedo = (64 if sto and not ref_sto else 4096) if n_albedo is None else n_albedo
     return n, n_albedo
 
 
@@ -249,11 +252,15 @@ def tradeoff(model, directions=None, n: int | None = None, seed: int = 0, *, n_a
     (the RMS difference of two realizations of the configuration / sqrt 2) and ``bias``
     (``sqrt(rms_err^2 - noise^2 - reference_noise^2)``, clamped at 0); ``Table.reference_noise``
     is the converged reference's own noise (two realizations), included in rms_err. The Pareto
-    front is on rms_err. Defaults there: n = 512 pairs, n_albedo = 64, n_timing = 4096.
+    front is on rms_err. Defaults there: n = 512 pairs, n_timing = 4096, n_albedo = 4096 (each
+    configuration's albedo is the mean of its own sampling weights: the walk's sample pdf is only
+    proportional to the density; 64 when only the configurations are stochastic).
     """
     _check_model(model)
     sto = _any_stochastic(model)
-    n, n_albedo = _stochastic_defaults(sto, n, n_albedo)
+    from .configs import configurations
+    ref_sto = is_stochastic(configurations(model)[0].model if reference is None else reference)
+    n, n_albedo = _stochastic_defaults(sto, n, n_albedo, ref_sto)
     if n_timing is None:
         n_timing = 4096 if sto else 65536
     n, seed, n_albedo = _check_int(n, "n", 16), _check_int(seed, "seed", 0), _check_int(n_albedo, "n_albedo", 16)
@@ -453,7 +460,7 @@ def simplify(model, tol, metric: str | None = None, directions=None, seed: int =
         metric = "rms" if sto else "p99"
     if margin is None:
         margin = 0.8 if metric == "rms" else 0.5
-    n, n_albedo = _stochastic_defaults(sto, n, n_albedo)
+    n, n_albedo = _stochastic_defaults(sto, n, n_albedo, is_stochastic(model))
     col = _check_metric(metric)
     allowed = _check_allow(model, allow)
     seed, n, n_albedo = _check_int(seed, "seed", 0), _check_int(n, "n", 16), _check_int(n_albedo, "n_albedo", 16)
