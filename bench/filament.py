@@ -9,7 +9,7 @@ Writes bench/FILAMENT.md and bench/filament.json (or --out-dir).
 Throughput: M elements/s of eval / pdf (preallocated out=) and of the compiled sample kernel
 (preallocated outputs), float32 and float64, at the current thread count (bk.get_num_threads()),
 each the best of several repeats. Every figure is also given relative to the foundation's rough
-conductor (bench/throughput.py's headline model: Cu, GGX alpha 0.3, separable masking) measured
+conductor (tools/perf/throughput.py's headline model: Cu, GGX alpha 0.3, separable masking) measured
 back to back with it in the same round, so machine load cancels out of the ratio.
 
 Accuracy: each knob setting against the default (Filament's desktop high quality, which is also
@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 import bsdfkit as bk
-from _machine import cpu_model, load  # same directory
+from _host import cpu_model, load  # same directory
 from bsdfkit.directions import random_directions
 
 HERE = Path(__file__).resolve().parent
@@ -86,7 +86,13 @@ def configs():
     ]
 
 
-from throughput import best_time, wait_quiet  # noqa: E402  (same directory: same timing rules)
+from _host import wait_quiet  # noqa: E402  (same directory: same timing rules)
+from bsdfkit.tuning import best_time as _timer  # noqa: E402
+
+
+def best_time(fn, repeats=5):
+    """Min over `repeats` of the mean time of back-to-back calls, each repeat >= 20 ms."""
+    return _timer(fn, repeats=repeats, min_time=0.02, warmup=1)
 
 
 def make_inputs(n):

@@ -22,7 +22,7 @@ import time
 import numpy as np
 
 import bsdfkit as bk
-from _machine import cpu_model  # same directory
+from _host import cpu_model  # same directory
 
 FAMILIES = {
     "Diffuse": (lambda: bk.Diffuse((0.7, 0.4, 0.2)), {"reflectance": (0.5, 0.5, 0.5)}, None),

@@ -21,7 +21,7 @@ import statistics
 import numpy as np
 
 import bsdfkit as bk
-from _machine import cpu_model  # same directory
+from _host import cpu_model  # same directory
 from bsdfkit.tuning.costs import time_repeats
 
 CASES = {

@@ -25,7 +25,7 @@ NOTE = ("\n**Reading.** The single-h kernels run on 16-lane packets (Dr.Jit's pa
         "selects where the exponent is finite by construction (`exp_finite`), the asymptotic Mp branch's "
         "log, second exp and I0 (the TT lobe takes that branch on most pairs at beta_m = 0.3), and the "
         "denormal intermediates of Mp's narrow tails times Np, each a microcode assist on Intel, now "
-        "flushed (the kernels run with FTZ | DAZ, core/simd.h `DenormalsFlushed`). bench/RESULTS.md has the "
+        "flushed (the kernels run with FTZ | DAZ, core/simd.h `DenormalsFlushed`). tools/perf/results/RESULTS.md has the "
         "same model against Mitsuba per thread count and end to end.\n")
 
 CASES = {

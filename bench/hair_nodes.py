@@ -19,7 +19,7 @@ import time
 import numpy as np
 
 import bsdfkit as bk
-from _machine import cpu_model  # same directory
+from _host import cpu_model  # same directory
 from bsdfkit.tuning import direction_set
 
 NODES = (64, 32, 16, 8, 4)

@@ -23,7 +23,7 @@ import numpy as np
 os.environ.setdefault("DRJIT_LIBLLVM_PATH", "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1")
 
 import bsdfkit as bk  # noqa: E402
-from _machine import cpu_model  # noqa: E402  (same directory)
+from _host import cpu_model  # noqa: E402  (same directory)
 from bsdfkit.models import registry  # noqa: E402
 from bsdfkit.models.spec import parse_spec  # noqa: E402
 from bsdfkit.tuning.costs import best_time  # noqa: E402

@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from _machine import cpu_model, host_tag, simd_isa  # same directory
+from _host import cpu_model, host_tag, simd_isa  # same directory
 
 HERE = Path(__file__).resolve().parent
 
@@ -403,7 +403,7 @@ smaller environment working set (e.g. a coarser sampling table than the radiance
 
 
 def write_report(res, out_dir, tag=None):
-    """RENDER.md + render.json; with a tag (a run on another kind of host, _machine.host_tag)
+    """RENDER.md + render.json; with a tag (a run on another kind of host, _host.host_tag)
     RENDER_<tag>.md + render_<tag>.json, whose notes point at RENDER.md's instead of repeating
     them. Returns the markdown file's path."""
     out_dir = Path(out_dir)

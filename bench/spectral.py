@@ -28,7 +28,7 @@ import numpy as np
 
 import bsdfkit as bk
 from bsdfkit.models._spectral import _spectral_core
-from _machine import cpu_model, simd_isa  # same directory
+from _host import cpu_model, simd_isa  # same directory
 
 HERE = Path(__file__).resolve().parent
 

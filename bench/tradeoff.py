@@ -42,7 +42,7 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from throughput import QUIET, machine_info, wait_quiet  # noqa: E402  (same directory: same timing rules)
+from _host import QUIET, machine_info, wait_quiet  # noqa: E402  (same directory: same timing rules)
 
 import bsdfkit as bk  # noqa: E402
 from bsdfkit.tuning import best_time as _best_time, configurations, family, simplify, tradeoff  # noqa: E402

@@ -13,24 +13,6 @@ def random_dirs(rng, n, hemisphere=None, dtype=np.float64):
     return v.astype(dtype)
 
 
-def load_bench(script):
-    """A script of bench/ (e.g. "mca.py") imported as a module, its directory on sys.path while it
-    loads (the scripts import bench/_machine.py as a sibling)."""
-    import importlib.util
-    import sys
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[1] / "bench" / script
-    sys.path.insert(0, str(path.parent))
-    try:
-        spec = importlib.util.spec_from_file_location("bench_" + path.stem, path)
-        mod = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(mod)
-    finally:
-        sys.path.remove(str(path.parent))
-    return mod
-
-
 def fibonacci_sphere(n):
     """n unit vectors spread evenly over the sphere (a spherical Fibonacci lattice), float64 (n, 3)."""
     k = np.arange(n) + 0.5

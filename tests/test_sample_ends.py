@@ -146,7 +146,7 @@ def test_invalid_sample_carries_the_normal(dtype):
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
 def test_fast_path_equals_general_path(dtype):
     """eval / pdf on plain contiguous arrays take a shortcut past the general argument handling
-    (bench/overhead.py): the same values, shapes, dtypes and errors as the general path."""
+    (tools/perf/overhead.py): the same values, shapes, dtypes and errors as the general path."""
     m = bk.Dielectric(1.5, alpha=0.3)
     rng = np.random.default_rng(0)
     wo = rng.normal(size=(4, 5, 3))

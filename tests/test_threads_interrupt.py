@@ -4,7 +4,7 @@ Pool: results are bit-identical for any thread count, from concurrent Python thr
 holds the pool, the others run on their own thread) and in a forked child (whose pool has no
 helper threads). Its point -- the caller never waits for a helper that has not started, so a
 descheduled thread cannot stall a call for a scheduler slice -- is a timing property measured by
-bench/stalls.py, not asserted here.
+tools/perf/stalls.py, not asserted here.
 Interrupts: a long albedo or tradeoff call stops on SIGINT with KeyboardInterrupt (run in a
 subprocess that the test interrupts), as render does.
 """

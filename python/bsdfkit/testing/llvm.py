@@ -3,7 +3,7 @@
 Dr.Jit 1.5 emits ``llvm.maximum``/``llvm.minimum``, which the x86 code generator of LLVM 15 and 16
 cannot select (a process abort). :func:`configure_llvm_env` sets ``DRJIT_LIBLLVM_PATH`` to the newest
 libLLVM >= :data:`MIN_WORKING_LLVM` before Dr.Jit is imported (``scripts/test`` prints its result;
-``bench/throughput.py`` loads this file by path so that its workers never import bsdfkit).
+``tools/perf/throughput.py`` loads this file by path so that its workers never import bsdfkit).
 """
 import os
 import re

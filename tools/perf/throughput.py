@@ -1,12 +1,12 @@
 #!/usr/bin/env python3
 """Throughput of bsdfkit's array kernels against Mitsuba 3 (llvm_ad_rgb and scalar_rgb).
 
-    python bench/throughput.py            # full run, N = 1e6 (+ 1e3 / 1e5 scaling), ~2-3 min
-    python bench/throughput.py --quick    # smoke test, N = 1e5 (+ 1e3 / 1e4), ~40 s
-    python bench/throughput.py --models cond_rough,diffuse   # a subset of the models
-    python bench/throughput.py --report bench/results_zen4.json --tag zen4   # re-render a run's report
+    python tools/perf/throughput.py            # full run, N = 1e6 (+ 1e3 / 1e5 scaling), ~2-3 min
+    python tools/perf/throughput.py --quick    # smoke test, N = 1e5 (+ 1e3 / 1e4), ~40 s
+    python tools/perf/throughput.py --models cond_rough,diffuse   # a subset of the models
+    python tools/perf/throughput.py --report tools/perf/results/results_zen4.json --tag zen4   # re-render a run's report
 
-Writes bench/RESULTS.md and bench/results.json (or --out-dir; --tag zen4: RESULTS_zen4.md and
+Writes tools/perf/results/RESULTS.md and tools/perf/results/results.json (or --out-dir; --tag zen4: RESULTS_zen4.md and
 results_zen4.json, for a run on another kind of host: machines of this kind are Intel AVX-512 or
 AMD Zen 3 / Zen 4 hosts, and the ratios to Mitsuba differ between them).
 
@@ -37,9 +37,9 @@ What is timed (every figure is the best of several repeats after a warm-up):
            table judges every row against issue 17's targets, or against >= 0.8 of this bound
            where a target needs more than the bound.
   divider bound: the rate a row's divisions and square roots per element allow at this machine's
-           divide / square-root throughput (bench/divider.cpp, compiled here with g++; counts in
+           divide / square-root throughput (tools/perf/divider.cpp, compiled here with g++; counts in
            DIVIDER_OPS); a row at >= 0.8 of the lowest bound is judged "bound".
-  contract bound: the library's batch kernel on a model that computes nothing (bench/loop_ab.py's
+  contract bound: the library's batch kernel on a model that computes nothing (tools/perf/loop_ab.py's
            `null` model, built here with the library's flags; 1 and 2 threads, each cell's rounds):
            the (N, 3) rows, the unit / uniform checks, sanitizing and sample acceptance every call
            pays under the API's contract, which Mitsuba's kernels (planes, no checks) do not.
@@ -80,9 +80,11 @@ from pathlib import Path
 
 import numpy as np
 
-from _machine import cpu_model, host_tag, library_cxx, simd_flags  # same directory
+from _machine import (QUIET, _cpu_jiffies, busy_cores, cpu_model, host_tag, library_cxx,  # noqa: F401
+                      machine_info, simd_flags, wait_quiet)  # same directory (host facts: bench/_host.py)
 
 HERE = Path(__file__).resolve().parent
+RESULTS = HERE / "results"  # one report per host tag (tools/perf/README.md)
 SEED = 20240611
 
 CU_ETA = [0.201006, 0.923749, 1.102215]
@@ -186,32 +188,6 @@ def best_time(fn, repeats=5, min_time=0.02, warmup=1):
     return timer(fn, repeats=repeats, min_time=min_time, warmup=warmup)
 
 
-def machine_info():
-    cpu, simd = cpu_model(), simd_flags()
-    mem = None
-    try:
-        mem = next(l.split()[1] for l in open("/proc/meminfo") if l.startswith("MemTotal"))
-        mem = f"{int(mem) / 2**20:.1f} GiB"
-    except (OSError, StopIteration):
-        pass
-    import bsdfkit as bk
-    info = {"date": _dt.datetime.now().astimezone().isoformat(timespec="seconds"), "nproc": os.cpu_count(),
-            "cpu": cpu, "simd": simd, "mem": mem, "platform": platform.platform(),
-            "python": platform.python_version(), "numpy": np.__version__, "bsdfkit": bk.__version__,
-            "load_avg_start": os.getloadavg()}
-    try:
-        info["gcc"] = subprocess.run(["gcc", "-dumpfullversion"], capture_output=True, text=True).stdout.strip()
-    except OSError:
-        pass
-    try:
-        import importlib.metadata as md
-        info["mitsuba"] = md.version("mitsuba")
-        info["drjit"] = md.version("drjit")
-    except Exception:
-        pass
-    return info
-
-
 # ------------------------------------------------------------------------------------ bsdfkit
 
 def bk_calls(m, op, d, transmissive):
@@ -255,7 +231,7 @@ _COPY_CACHE = {}
 _STREAM_BUFFERS = {}
 
 
-STREAM = {"method": None}  # which pass measured the stream bound: "c++" (bench/divider.cpp) or "numpy"
+STREAM = {"method": None}  # which pass measured the stream bound: "c++" (tools/perf/divider.cpp) or "numpy"
 STREAM_DATA_WORD = 0x3FC2B7E151628AED  # the numpy stand-in's non-zero word (divider.cpp writes its own data)
 
 
@@ -267,7 +243,7 @@ def stream_bound(rbytes, wbytes, repeats, zeros=False):
     DELTA_ZERO, whose outputs are zeros): the Zen 4 host's memory took streamed zero lines ~3x
     faster than data (session 29), so a bound written in zeros was no bound for a kernel's data.
 
-    `divider stream` (bench/divider.cpp, built with the library's flags) when the build is there:
+    `divider stream` (tools/perf/divider.cpp, built with the library's flags) when the build is there:
     the element range in blocks, each reading its share of the input bytes with vector loads and
     writing its share of the output bytes, as the kernels move them (or all reads, then all
     writes), with plain or streaming stores, on 2 MB pages as numpy's arrays: the fastest of the
@@ -320,7 +296,7 @@ def stream_bound(rbytes, wbytes, repeats, zeros=False):
     return tuple(res)
 
 
-CONTRACT = {"exe": {}, "error": None}  # dtype -> the null-model harness (bench/loop_ab.py), built by build_contract()
+CONTRACT = {"exe": {}, "error": None}  # dtype -> the null-model harness (tools/perf/loop_ab.py), built by build_contract()
 # At least this many calls per contract-bound figure: at N = 1e6 on the Zen 4 host a 2-thread run's
 # calls went from ~1.2 to ~0.75 ms after 40-50 of them (the host's memory traffic; session 25), and
 # the bound is the fast end (the best call), so that a row is not called contract-bound too easily.
@@ -328,7 +304,7 @@ CONTRACT_MIN_CALLS = 60
 
 
 def build_contract(dtypes=("float32", "float64")):
-    """Builds bench/loop_ab.py's harness on its `null` model (a model that computes nothing: f = 1,
+    """Builds tools/perf/loop_ab.py's harness on its `null` model (a model that computes nothing: f = 1,
     pdf = 1, the mirror sample) for each dtype, with the library's flags. Returns {dtype: exe};
     empty (and CONTRACT["error"] set) when g++ or the headers are missing."""
     import tempfile
@@ -407,17 +383,6 @@ def settle():
     time.sleep(0.005)
 
 
-def _cpu_jiffies():
-    """The all-CPU row of /proc/stat: user nice system idle iowait irq softirq steal ..."""
-    with open("/proc/stat") as f:
-        return [int(x) for x in f.readline().split()[1:]]
-
-
-def _cpu_times():
-    v = _cpu_jiffies()
-    return sum(v[:8]), v[3] + v[4]  # total, idle + iowait
-
-
 def steal_ticks():
     """(steal, total) jiffies of all CPUs from /proc/stat, or None. Steal is the time the
     hypervisor ran something else while this VM's vCPUs wanted to run: contention that neither
@@ -434,33 +399,6 @@ def steal_share(a, b):
     if not a or not b or b[1] <= a[1]:
         return None
     return (b[0] - a[0]) / (b[1] - a[1])
-
-
-QUIET = {"budget_s": 60.0, "waited_s": 0.0, "busy_samples": []}
-
-
-def busy_cores(dt=0.1):
-    """CPU cores kept busy by other processes over dt seconds (this process sleeps meanwhile)."""
-    try:
-        t0, i0 = _cpu_times()
-        time.sleep(dt)
-        t1, i1 = _cpu_times()
-    except OSError:
-        return 0.0
-    return (os.cpu_count() or 1) * (1 - (i1 - i0) / max(1, t1 - t0))
-
-
-def wait_quiet(threshold=0.3, max_wait=15.0):
-    """On a shared machine, wait (bounded, from a global budget) until other processes use less
-    than `threshold` cores; returns the busy cores seen when measuring starts."""
-    t0 = time.perf_counter()
-    b = busy_cores()
-    while b > threshold and time.perf_counter() - t0 < max_wait and QUIET["waited_s"] < QUIET["budget_s"]:
-        time.sleep(0.4)
-        b = busy_cores()
-        QUIET["waited_s"] += 0.5
-    QUIET["busy_samples"].append(round(b, 2))
-    return b
 
 
 CELL_INFO = ("busy_cores", "steal")  # a cell's load figures, not timings
@@ -951,7 +889,7 @@ DIVIDER_OPS = {
 
 
 def build_divider():
-    """Compiles bench/divider.cpp with the library's flags into a temporary directory (also the
+    """Compiles tools/perf/divider.cpp with the library's flags into a temporary directory (also the
     arithmetic probe's program: ARITH["exe"]); returns its path. Raises if it cannot."""
     import tempfile
     exe = Path(tempfile.mkdtemp(prefix="bsdfkit-divider-")) / "divider"
@@ -963,7 +901,7 @@ def build_divider():
 
 def divider_rates():
     """The vector divide and square root throughput of this machine on the kernels' packet type
-    (bench/divider.cpp, compiled here with the library's flags): {"1t": {op: elements/ns}, "2t":
+    (tools/perf/divider.cpp, compiled here with the library's flags): {"1t": {op: elements/ns}, "2t":
     ...} (2t: two processes at once, summed), or None without a compiler."""
     try:
         exe = build_divider()
@@ -978,7 +916,7 @@ def divider_rates():
         return None
 
 
-ARITH = {"exe": None}  # bench/divider.cpp built by build_divider(): the divider rates and the arithmetic probe
+ARITH = {"exe": None}  # tools/perf/divider.cpp built by build_divider(): the divider rates and the arithmetic probe
 
 
 def arith_probe():
@@ -1134,7 +1072,7 @@ def write_targets(w, main_rows, div=None):
       "machine's measured divide / square-root throughput; next section). Issue 17 asks for "
       f"{BOUND_SHARE} of the memory bound where the target needs more than the bound; a row at that share "
       "of the bound is judged the same when its target lies just below the bound. A 2T/1T row is also judged "
-      "bound when the **host's arithmetic scaling**, measured in the same rounds (`bench/divider.cpp arith`: "
+      "bound when the **host's arithmetic scaling**, measured in the same rounds (`tools/perf/divider.cpp arith`: "
       "register-only multiply-adds on 1, then 2 threads), was below 2× and the row reaches "
       f"{SCALING_TARGET / 2:.1f} of it (the target's share of ideal scaling): the hypervisor then ran the "
       "second vCPU on a core it shares, which no kernel can scale past. A kernel row that misses its target "
@@ -1191,14 +1129,14 @@ def write_targets(w, main_rows, div=None):
 def write_divider(w, main_rows, div):
     w("## Divider bound\n")
     if not div:
-        w("Not measured (no C++ compiler, or bench/divider.cpp failed to build).\n")
+        w("Not measured (no C++ compiler, or tools/perf/divider.cpp failed to build).\n")
         return
     w("Divides and square roots run on one unit per core that is not pipelined like the others, so a "
       "kernel that issues d divisions and s square roots per element can run no faster than 1 / (d / D + s / S) "
-      "elements/s per core, D and S the unit's throughputs. `bench/divider.cpp` measures D and S on the "
+      "elements/s per core, D and S the unit's throughputs. `tools/perf/divider.cpp` measures D and S on the "
       "kernels' own packet type (16 lanes of Dr.Jit packets, the library's compiler flags; 12 independent "
       "chains; 2 threads = two processes at once). Counts per element come from the kernels' disassembly "
-      "(`DIVIDER_OPS` in bench/throughput.py). Mitsuba's kernels are float32 throughout, which is why a "
+      "(`DIVIDER_OPS` in tools/perf/throughput.py). Mitsuba's kernels are float32 throughout, which is why a "
       "float64 row can sit below 0.6× Mitsuba's float32 kernel at its own bound.\n")
     w("| threads | divide f32 | sqrt f32 | divide f64 | sqrt f64 |")
     w("|---|--:|--:|--:|--:|")
@@ -1226,7 +1164,7 @@ def write_markdown(path, info, mi_info, main_rows, scaling_rows, scalar_runs, ag
     w = L.append
     n_main = main_rows[0]["n"]
     w("# bsdfkit throughput vs Mitsuba 3\n")
-    w(f"Generated by `python bench/throughput.py{' --quick' if args.quick else ''}{' --tag ' + args.tag if args.tag else ''}` on {info['date']} "
+    w(f"Generated by `python tools/perf/throughput.py{' --quick' if args.quick else ''}{' --tag ' + args.tag if args.tag else ''}` on {info['date']} "
       f"(wall time {elapsed:.0f} s). All ratios come from this one run; absolute rates drift on "
       "shared machines, ratios much less.\n")
     if rerendered:
@@ -1414,13 +1352,13 @@ def write_markdown(path, info, mi_info, main_rows, scaling_rows, scalar_runs, ag
     w("- bsdfkit plain sample = `m.sample(wo, uc, u)` (checks the uniforms, allocates 7 outputs); its kernel "
       "figure calls the compiled `m._core.sample` with preallocated outputs.")
     if info.get("stream_method") == "numpy":
-        w("- Memory (stream) bound: **the numpy stand-in** in some or all cells (bench/divider.cpp did not build or "
+        w("- Memory (stream) bound: **the numpy stand-in** in some or all cells (tools/perf/divider.cpp did not build or "
           "run here): a read-only "
           "pass (`np.bitwise_or.reduce` over the input bytes as uint64) plus a write-only pass (`fill` of a "
           "buffer of the output bytes), each of 2 Python threads doing its half; best of 1 and 2 threads, timed "
           "in each cell's own rounds. Looser than the hardware's bound (kernels ran up to 1.6x faster).")
     else:
-        w("- Memory (stream) bound: `bench/divider.cpp stream R W` (built with the library's flags): the "
+        w("- Memory (stream) bound: `tools/perf/divider.cpp stream R W` (built with the library's flags): the "
           "element range in 4096 blocks, each reading its share of the kernel's R input bytes (64-byte vector "
           "loads, OR-reduced) and writing its share of the W output bytes as a kernel does, or all "
           "reads and then all writes; plain or streaming stores; buffers on 2 MB pages (as numpy's) kept "
@@ -1447,7 +1385,7 @@ def write_markdown(path, info, mi_info, main_rows, scaling_rows, scalar_runs, ag
     if info.get("contract_error"):
         w(f"- Contract bound: not measured ({info['contract_error']}).")
     else:
-        w("- Contract bound: bench/loop_ab.py's harness (built here with the library's flags) calls the library's "
+        w("- Contract bound: tools/perf/loop_ab.py's harness (built here with the library's flags) calls the library's "
           "`eval_batch` / `pdf_batch` / `sample_batch` (batch.h: the same packet loops, chunking, thread pool, "
           "unit-direction and uniform checks, f / pdf sanitizing and sample acceptance as `m._core`) on its `null` "
           "model, which computes nothing (f = 1, pdf = 1; sample: the mirror direction, f = 1, pdf = 1; the "
@@ -1520,7 +1458,7 @@ def rerender(args):
         st = data["settings"]
         main_rows = data["main"]
     except (OSError, ValueError, KeyError, TypeError) as e:
-        sys.exit(f"--report: {src} is not a results JSON of bench/throughput.py ({e!r})")
+        sys.exit(f"--report: {src} is not a results JSON of tools/perf/throughput.py ({e!r})")
     quick = bool(st.get("quick"))
     tag = args.tag
     if tag is None:  # results_<tag>.json re-renders into RESULTS_<tag>.md, never over another host's RESULTS.md
@@ -1541,7 +1479,7 @@ def rerender(args):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="smaller N and fewer repeats (smoke test)")
-    ap.add_argument("--out-dir", default=str(HERE), help="where RESULTS.md and results.json go")
+    ap.add_argument("--out-dir", default=str(RESULTS), help="where RESULTS.md and results.json go")
     ap.add_argument("--tag", default=None, type=host_tag,
                     help="name the reports RESULTS_<tag>.md / results_<tag>.json (a run on another kind of host, "
                          "e.g. zen4, beside the committed RESULTS.md of another)")
@@ -1556,7 +1494,7 @@ def main():
     ap.add_argument("--llvm", default=None, help="libLLVM for Dr.Jit (default: the newest working one, bsdfkit.testing.llvm)")
     ap.add_argument("--report", default=None, metavar="RESULTS_JSON",
                     help="measure nothing: re-render the markdown report of an earlier run from its results JSON "
-                         "(e.g. bench/results_zen4.json, with --tag zen4) with this version's verdicts")
+                         "(e.g. tools/perf/results/results_zen4.json, with --tag zen4) with this version's verdicts")
     ap.add_argument("--_worker", default=None, help=argparse.SUPPRESS)
     ap.add_argument("--spec", default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()

@@ -1,14 +1,14 @@
 """Cycles per packet of the batch kernels' own loops, and an A/B of two versions of the headers.
 
-    python bench/loop_ab.py                           # every model, eval / pdf / sample, N = 1e6
-    python bench/loop_ab.py --models diffuse,cond_r --ops pdf --threads 2
-    python bench/loop_ab.py --n 16384                 # in cache (L2): the arithmetic alone
-    python bench/loop_ab.py --base HEAD~1             # A = the headers of a revision, B = the tree's
-    python bench/loop_ab.py --aligned                 # outputs on 64-byte lines (streaming stores)
-    python bench/loop_ab.py --numpy-like              # arrays on 2 MB pages as throughput.py's (numpy's) are
-    python bench/loop_ab.py --march x86-64-v3         # an AVX2 build, on an AVX-512 host too
-    python bench/loop_ab.py --dtype float64           # the float64 kernels (16 lanes of double)
-    python bench/loop_ab.py --contract --ops eval,pdf # what the (N, 3) rows and the unit check cost
+    python tools/perf/loop_ab.py                           # every model, eval / pdf / sample, N = 1e6
+    python tools/perf/loop_ab.py --models diffuse,cond_r --ops pdf --threads 2
+    python tools/perf/loop_ab.py --n 16384                 # in cache (L2): the arithmetic alone
+    python tools/perf/loop_ab.py --base HEAD~1             # A = the headers of a revision, B = the tree's
+    python tools/perf/loop_ab.py --aligned                 # outputs on 64-byte lines (streaming stores)
+    python tools/perf/loop_ab.py --numpy-like              # arrays on 2 MB pages as throughput.py's (numpy's) are
+    python tools/perf/loop_ab.py --march x86-64-v3         # an AVX2 build, on an AVX-512 host too
+    python tools/perf/loop_ab.py --dtype float64           # the float64 kernels (16 lanes of double)
+    python tools/perf/loop_ab.py --contract --ops eval,pdf # what the (N, 3) rows and the unit check cost
 
 It writes a small C++ program that calls batch.h's eval_batch / pdf_batch / sample_batch (the
 library's kernels, (N, 3) rows in and out, the unit and uniform checks included, no Python) on
@@ -30,7 +30,7 @@ input contract cost per packet; the variants are measurement only, not library c
 
 The model `null` (NULL_MODEL: f = 1, pdf = 1, the mirror sample; the program checks those outputs)
 computes nothing: the library's kernels on it take what the API's contract and the batch loops
-cost alone. bench/throughput.py times it beside every cell (its "contract bound"), through this
+cost alone. tools/perf/throughput.py times it beside every cell (its "contract bound"), through this
 program with --numpy-like arrays and seconds per call (the program's 4th argument "s"; a 5th
 picks a subset of the compiled ops).
 """
@@ -44,7 +44,7 @@ import tempfile
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-ROOT = HERE.parent
+ROOT = HERE.parents[1]
 sys.path.insert(0, str(HERE))
 from _machine import library_cxx, summary  # noqa: E402
 

@@ -1,10 +1,10 @@
 """Static throughput of a packet kernel's loop with llvm-mca: cycles per packet and port pressure,
 a figure no neighbour on a shared host can disturb.
 
-    python bench/mca.py cond_rough eval                 # -mcpu=sapphirerapids (an AVX-512 host)
-    python bench/mca.py diel_rough pdf --mcpu znver3    # the AMD Zen 3 model (build with -march=znver3)
-    python bench/mca.py diel_smooth sample --mcpu znver4 --mitsuba   # and Mitsuba's own kernel beside it
-    python bench/mca.py --list
+    python tools/perf/mca.py cond_rough eval                 # -mcpu=sapphirerapids (an AVX-512 host)
+    python tools/perf/mca.py diel_rough pdf --mcpu znver3    # the AMD Zen 3 model (build with -march=znver3)
+    python tools/perf/mca.py diel_smooth sample --mcpu znver4 --mitsuba   # and Mitsuba's own kernel beside it
+    python tools/perf/mca.py --list
 
 It writes a small translation unit whose loop is batch.h's packet loop for one model and op
 (rows of (N, 3) loaded and stored through batch.h's shuffles, bsdf_f / bsdf_pdf on Packet<float>
@@ -17,7 +17,7 @@ one, the *_smooth keys the shorter, smooth one; --take picks the sides instead);
 on it. `sample` is the model's sampler alone (wo as rows, the uniforms as planes; f and wi stored as
 rows, pdf and eta as planes), without the kernel's acceptance rule, uniform checks and byte outputs.
 
---mitsuba adds the same figures for Mitsuba's kernel of the same model and op (bench/throughput.py's
+--mitsuba adds the same figures for Mitsuba's kernel of the same model and op (tools/perf/throughput.py's
 plugin dictionary, variant llvm_ad_rgb): the LLVM IR Dr.Jit generated for it on this host, taken
 from Dr.Jit's kernel history, compiled with llc for the target Dr.Jit chose, and its vectorized
 loop. Mitsuba reads and writes planes and checks nothing, so the difference per packet is the model
@@ -63,7 +63,7 @@ KERNELS = {
     "thin": ("thin_dielectric.h", "ThinDielectricBxDF<float>"),
 }
 SHORTEST = {"cond_smooth", "diel_smooth", "plastic_smooth"}
-# The bench/throughput.py configuration of the same model (its Mitsuba plugin, for --mitsuba).
+# The tools/perf/throughput.py configuration of the same model (its Mitsuba plugin, for --mitsuba).
 MITSUBA_KEY = {"diffuse": "diffuse", "cond_rough": "cond_rough", "diel_rough": "diel_rough", "plastic": "roughplastic",
                "hair": "hair", "cond_smooth": "cond_smooth", "diel_smooth": "diel_smooth",
                "plastic_smooth": "plastic", "thin": "thin"}
@@ -186,7 +186,7 @@ def mitsuba_loop(key, op, work):
     mkey = MITSUBA_KEY[key]
     plugin = CONFIG[mkey][3]
     if plugin is None:
-        sys.exit(f"{key}: no Mitsuba counterpart in bench/throughput.py")
+        sys.exit(f"{key}: no Mitsuba counterpart in tools/perf/throughput.py")
     mi.set_variant("llvm_ad_rgb")
     bsdf, ctx, n = mi.load_dict(plugin), mi.BSDFContext(), 4096
     rng = np.random.default_rng(1)

@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """Fingerprints of the library's outputs, to check that a change keeps them bit for bit.
 
-    python bench/bits.py /tmp/before.json              # with the installed build
+    python tools/perf/bits.py /tmp/before.json              # with the installed build
     ... rebuild (pip install --no-build-isolation --no-deps .) ...
-    python bench/bits.py /tmp/after.json --compare /tmp/before.json
+    python tools/perf/bits.py /tmp/after.json --compare /tmp/before.json
 
 For every registered example (bsdfkit.models.registry, the contract suite's models) one SHA-256
 over eval, pdf and sample (wi, f, pdf, eta, flags, valid) in float32 and float64, and over the
@@ -76,7 +76,7 @@ def fingerprints(n: int = 40000, render: bool = True, only: str = "", spectral: 
         out[f"{cls.__name__}-{label}"] = h.hexdigest()[:16]
     if render and (keep("render") or keep("render_spectral")):
         from bsdfkit import render as R
-        sys.path.insert(0, str(HERE))
+        sys.path.insert(0, str(HERE.parents[1] / "bench"))
         import render as bench_render  # bench/render.py's scene
 
         scene, _ = bench_render.build_scene()

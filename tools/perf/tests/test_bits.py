@@ -1,15 +1,15 @@
-"""bench/bits.py: the fingerprints repeat exactly on the same build, follow the outputs, and
+"""tools/perf/bits.py: the fingerprints repeat exactly on the same build, follow the outputs, and
 --compare names what differs."""
 
 import json
 
 import pytest
-from conftest import load_bench
+from perf_support import load_tool
 
 
 @pytest.fixture(scope="module")
 def bits():
-    return load_bench("bits.py")
+    return load_tool("bits.py")
 
 
 def test_fingerprints_repeat_and_compare(bits, tmp_path, capsys):

@@ -1,4 +1,4 @@
-"""bench/loop_ab.py: the harness over batch.h's loops builds, runs and reads its own output, and an
+"""tools/perf/loop_ab.py: the harness over batch.h's loops builds, runs and reads its own output, and an
 A/B against a revision's headers runs both binaries (the figures themselves are timings: not
 asserted)."""
 import shutil
@@ -7,15 +7,15 @@ import subprocess
 from pathlib import Path
 
 import pytest
-from conftest import load_bench
+from perf_support import load_tool
 
-_ROOT = Path(__file__).resolve().parents[1]
-_PATH = _ROOT / "bench" / "loop_ab.py"
+_ROOT = Path(__file__).resolve().parents[3]
+_PATH = _ROOT / "tools" / "perf" / "loop_ab.py"
 
 
 @pytest.fixture(scope="module")
 def loop_ab():
-    return load_bench("loop_ab.py")
+    return load_tool("loop_ab.py")
 
 
 def test_parse_reads_model_op_pairs(loop_ab):

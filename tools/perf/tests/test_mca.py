@@ -1,14 +1,14 @@
-"""bench/mca.py's loop extraction: the instructions between the llvm-mca markers in execution
+"""tools/perf/mca.py's loop extraction: the instructions between the llvm-mca markers in execution
 order (GCC rotates loops, so the end marker can come first in the text). A pure function of the
 assembly text; llvm-mca itself is not needed here."""
 
 import pytest
-from conftest import load_bench
+from perf_support import load_tool
 
 
 @pytest.fixture(scope="module")
 def mca():
-    return load_bench("mca.py")
+    return load_tool("mca.py")
 
 
 # a rotated loop as GCC lays it out: the tail of the body (stores) first, then the begin marker,

@@ -7,7 +7,7 @@ yet. The pool in cpp/include/bsdfkit/pool.h lets the caller finish the work itse
 stall shows as a large p99 / max against the median; compare the 2-thread row with the 1-thread
 row of the same run (both see the same load).
 
-    python bench/stalls.py [--n 65536] [--calls 300]
+    python tools/perf/stalls.py [--n 65536] [--calls 300]
 """
 from __future__ import annotations
 

@@ -4,11 +4,11 @@ Mitsuba 3 llvm_ad_rgb's (dr.set_thread_count(1)), each timed by the CPU time its
 (time.process_time, all threads), so that time spent descheduled by other processes does not count.
 Cache and memory-bandwidth contention still do: give the results as ratios from one run.
 
-    python bench/throughput_cpu.py --python /work/venv/main/bin/python --python /work/venv/perf/bin/python
+    python tools/perf/throughput_cpu.py --python /work/venv/main/bin/python --python /work/venv/perf/bin/python
 
 runs Mitsuba once and bsdfkit under each given interpreter (e.g. two installs), interleaved, --rounds times,
 and prints a Markdown table of M elements per CPU-second with each bsdfkit column's ratio to Mitsuba
-(median over rounds, with the min-max spread). Same inputs, models and calls as bench/throughput.py.
+(median over rounds, with the min-max spread). Same inputs, models and calls as tools/perf/throughput.py.
 """
 from __future__ import annotations
 

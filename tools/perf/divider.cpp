@@ -1,4 +1,4 @@
-// bench/divider.cpp: the throughput of the vector divide and square root on the kernels' own
+// tools/perf/divider.cpp: the throughput of the vector divide and square root on the kernels' own
 // packet type (core/simd.h Packet<F>, 16 lanes: Dr.Jit packets), built like the library
 // (-O3 -march=native, no fast math). 12 independent chains keep the divider busy, so the time
 // per operation is its reciprocal throughput. Prints JSON: elements per nanosecond (1 thread).

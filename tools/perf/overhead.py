@@ -12,7 +12,7 @@ preallocated outputs (``m._core.eval/pdf/sample(..., out arrays)``, inputs alrea
 pairs, interleaved repeat by repeat so load changes hit both alike, and prints the per-repeat
 ratio plain / kernel (median and range): the wrapper's cost at large N (issue 17 item 3).
 
-    python bench/overhead.py [--repeats 7] [--model conductor] [--large 1000000] [--json out.json]
+    python tools/perf/overhead.py [--repeats 7] [--model conductor] [--large 1000000] [--json out.json]
 """
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""bench/throughput.py's bookkeeping: merging repeated measurements of a cell and the steal share.
+"""tools/perf/throughput.py's bookkeeping: merging repeated measurements of a cell and the steal share.
 
 The script itself is a benchmark (never run in the suite); these are its pure helpers, whose
 mistakes would silently change the committed table's verdicts."""
@@ -7,12 +7,12 @@ import sys
 
 import numpy as np
 import pytest
-from conftest import load_bench
+from perf_support import load_tool
 
 
 @pytest.fixture(scope="module")
 def tp():
-    return load_bench("throughput.py")
+    return load_tool("throughput.py")
 
 
 def test_merge_cells_keeps_each_variants_minimum(tp):
@@ -82,7 +82,7 @@ def test_judge_scaling(tp, sc, bk2, b2, host, verdict):
 
 
 def test_arith_probe_runs(tp):
-    # builds bench/divider.cpp as the bench does and runs its `arith` mode: two positive times
+    # builds tools/perf/divider.cpp as the bench does and runs its `arith` mode: two positive times
     # (no timing claim: the figures depend on the host)
     pytest.importorskip("drjit")
     assert tp.build_divider() == tp.ARITH["exe"]
@@ -196,7 +196,7 @@ def test_judge_splits_not_met_rows(tp, have, contract, limited):
 
 def test_report_rerenders_a_results_json(tp, tmp_path, monkeypatch):
     # --report re-renders the committed Zen 4 run without measuring: the same table, the re-render noted
-    src = tp.HERE / "results_zen4.json"
+    src = tp.RESULTS / "results_zen4.json"
     monkeypatch.setattr(sys, "argv", ["throughput.py", "--report", str(src), "--tag", "zen4", "--out-dir", str(tmp_path)])
     tp.main()
     text = (tmp_path / "RESULTS_zen4.md").read_text()
@@ -209,13 +209,13 @@ def test_report_rerenders_a_results_json(tp, tmp_path, monkeypatch):
         if at is not None:
             del lines[at:at + 2]  # the note and the blank line after it
         return "\n".join(lines)
-    assert body(text) == body((tp.HERE / "RESULTS_zen4.md").read_text())
+    assert body(text) == body((tp.RESULTS / "RESULTS_zen4.md").read_text())
 
 
 def test_report_takes_the_tag_from_the_file_name(tp, tmp_path, monkeypatch):
     # results_zen4.json without --tag: RESULTS_zen4.md, not RESULTS.md (another host's report)
     src = tmp_path / "results_zen4.json"
-    src.write_text((tp.HERE / "results_zen4.json").read_text())
+    src.write_text((tp.RESULTS / "results_zen4.json").read_text())
     monkeypatch.setattr(sys, "argv", ["throughput.py", "--report", str(src), "--out-dir", str(tmp_path)])
     tp.main()
     assert (tmp_path / "RESULTS_zen4.md").exists() and not (tmp_path / "RESULTS.md").exists()
