@@ -119,13 +119,21 @@ def _add_simplify_command(sub) -> None:
         "simplify", help="cheapest knob configuration of every material of a pbrt-v4 scene within a tolerance",
         description="Read the materials of a pbrt-v4 scene file (bsdfkit.from_pbrt) and print, per material, the "
                     "configuration bsdfkit.simplify chooses (knob settings and the precision to call it with), its "
-                    "error against the most accurate configuration and the speedup the cost table expects.")
+                    "error against the material as given (the same figure as bsdfkit.simplify's report), whether "
+                    "it meets the tolerance, and the speedup the cost table expects. A material whose tolerance "
+                    "is not met gets a 'TOLERANCE NOT MET' line; with --strict the exit status is then 1. "
+                    "Ctrl-C stops after the current material.")
     si.add_argument("scene", metavar="SCENE.pbrt", help="pbrt-v4 scene file")
     si.add_argument("--tol", type=float, default=1e-3, help="error tolerance (default 1e-3)")
-    si.add_argument("--metric", default="p99", choices=("p99", "max", "albedo"),
-                    help="error metric (default p99: 99th percentile of the relative error of f·|cos θi|)")
+    si.add_argument("--metric", default=None, choices=("p99", "max", "albedo", "rms"),
+                    help="error metric (default, as bsdfkit.simplify: p99, the 99th percentile of the relative error "
+                         "of f·|cos θi|; rms, its relative RMS against the converged walk, for the stochastic "
+                         "CoatedDiffuse / CoatedConductor)")
     si.add_argument("--seed", type=int, default=0, help="seed of the direction set (default 0)")
-    si.add_argument("-n", type=int, default=8192, metavar="N", help="direction pairs per material (default 8192)")
+    si.add_argument("-n", type=int, default=None, metavar="N",
+                    help="direction pairs per material (default, as bsdfkit.simplify: 8192; 512 for stochastic models)")
+    si.add_argument("--strict", action="store_true",
+                    help="exit with status 1 when any material does not meet the tolerance")
     si.add_argument("--skip-unsupported", action="store_true",
                     help="skip materials bsdfkit cannot represent instead of failing")
     si.add_argument("-v", "--verbose", action="store_true", help="print the full report of every material")
@@ -142,7 +150,7 @@ def _run_simplify_command(args) -> int:
         return fail(f"--tol: expected a finite number >= 0, got {args.tol:g}")
     if args.seed < 0:
         return fail(f"--seed: expected an integer >= 0, got {args.seed}")
-    if args.n < 16:
+    if args.n is not None and args.n < 16:
         return fail(f"-n: expected an integer >= 16, got {args.n}")
     import os
     import warnings
@@ -173,19 +181,48 @@ def _run_simplify_command(args) -> int:
             print(f"  - {w.material!r} ({where}): {w.reason}")
     if not materials:
         return fail(f"{args.scene}: no materials found")
-    print(f"{args.scene}: {len(materials)} material(s), tol {args.tol:g}, metric {args.metric}, seed {args.seed}")
+    from .tuning import METRIC_DESCRIPTIONS, ToleranceNotMetWarning
+
+    metric = ("p99 for deterministic materials, rms for stochastic ones" if args.metric is None else args.metric)
+    print(f"{args.scene}: {len(materials)} material(s), tol {args.tol:g}, metric {metric}, seed {args.seed}")
+    for m in ((("p99", "rms") if args.metric is None else (args.metric,))):
+        print(f"  {m}: {METRIC_DESCRIPTIONS[m]}")
     width = max(len(name) for name in materials)
-    for name, model in materials.items():
-        _, rep = simplify(model, args.tol, metric=args.metric, seed=args.seed, n=args.n)
-        sp = "unknown" if rep.expected_speedup is None else f"{rep.expected_speedup:.2f}x"
-        changes = ", ".join(f"{k} {a}->{b}" for k, a, b, _ in rep.changes) or "unchanged"
-        print(f"{name:<{width}}  {describe(model)}")
-        print(f"{'':<{width}}  chosen: {changes}; call with {rep.dtype.__name__}")
-        print(f"{'':<{width}}  error: {args.metric} {rep.error[args.metric]:.2e} (max {rep.error['max']:.2e}, "
-              f"p99 {rep.error['p99']:.2e}, albedo {rep.error['albedo']:.2e}); expected speedup {sp} "
-              f"over the most accurate configuration")
-        if args.verbose:
-            print("\n".join(f"{'':<{width}}  " + line for line in str(rep).splitlines()))
+    missed = []
+    done = 0
+    try:
+        for name, model in materials.items():
+            with warnings.catch_warnings():   # the TOLERANCE NOT MET line below says it
+                warnings.simplefilter("ignore", ToleranceNotMetWarning)
+                _, rep = simplify(model, args.tol, metric=args.metric, seed=args.seed, n=args.n)
+            sp = "unknown" if rep.expected_speedup is None else f"{rep.expected_speedup:.2f}x"
+            changes = ", ".join(f"{k} {a}->{b}" for k, a, b, _ in rep.changes) or "unchanged"
+            others = ", ".join(f"{k} {v:.2e}" for k, v in rep.error.items() if k != rep.metric)
+            print(f"{name:<{width}}  {describe(model)}")
+            print(f"{'':<{width}}  chosen: {changes}; call with {rep.dtype.__name__}")
+            print(f"{'':<{width}}  error vs the material as given: {rep.metric} {rep.error[rep.metric]:.2e} "
+                  f"({others}); expected speedup {sp} over the most accurate configuration")
+            if rep.within_tol:
+                print(f"{'':<{width}}  tol met: {rep.metric} {rep.error[rep.metric]:.2e} <= {args.tol:g}")
+            else:
+                missed.append(name)
+                print(f"{'':<{width}}  TOLERANCE NOT MET: {rep.metric} {rep.error[rep.metric]:.2e} > {args.tol:g}; "
+                      "no configuration reaches it, the most accurate one is shown")
+            if args.verbose:
+                print("\n".join(f"{'':<{width}}  " + line for line in str(rep).splitlines()))
+            sys.stdout.flush()
+            done += 1
+    except KeyboardInterrupt:
+        sys.stderr.write(f"bsdfkit simplify: interrupted after {done} of {len(materials)} material(s)\n")
+        return 130
+    if missed:
+        msg = (f"{len(missed)} of {len(materials)} material(s) do NOT meet tol {args.tol:g}: {', '.join(missed)}")
+        print(msg)
+        if args.strict:
+            sys.stderr.write(f"bsdfkit simplify: {msg}\n")
+            return 1
+    else:
+        print(f"all {len(materials)} material(s) meet tol {args.tol:g}")
     return 0
 
 

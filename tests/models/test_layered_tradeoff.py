@@ -55,10 +55,12 @@ def test_unreachable_tol_returns_the_most_accurate_with_a_note():
     """A smooth metal under a rough coat is pbrt's estimator's worst case (f reaches the mirror
     only through the rough exit: relative RMS ~1 per walk); 2 % is out of reach of 64 walks, and
     simplify says so instead of returning something outside tol."""
-    m, rep = bk.simplify(bk.CoatedConductor.from_metal("Au", interface_alpha=0.1), 0.02, n=N)
+    with pytest.warns(bk.tuning.ToleranceNotMetWarning):
+        m, rep = bk.simplify(bk.CoatedConductor.from_metal("Au", interface_alpha=0.1), 0.02, n=N)
     print(rep)
     assert m.n_samples == 64 and m.max_depth == 100 and m.method == "stochastic"
     assert rep.error["rms"] > 0.02 and any("no configuration" in x for x in rep.notes)
+    assert not rep.within_tol and rep.summary().startswith("TOLERANCE NOT MET")
 
 
 def test_cheapest_model_comes_back_unchanged():

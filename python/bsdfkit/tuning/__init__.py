@@ -98,8 +98,8 @@ what the knobs change is arithmetic per direction, which threads do not change.
 from .configs import Config, Knob, configurations, family, knobs
 from .costs import COST_RESOLUTION, best_time, knob_costs
 from .errors import ALBEDO_COS_THETA, FLOOR_FRACTION, DirectionSet, direction_set, relative_error
-from .report import METRICS, SimplifyReport, Table, simplify, tradeoff
+from .report import METRIC_DESCRIPTIONS, METRICS, SimplifyReport, Table, ToleranceNotMetWarning, simplify, tradeoff
 
 __all__ = ["Knob", "knobs", "Config", "configurations", "DirectionSet", "direction_set", "tradeoff", "simplify",
            "Table", "SimplifyReport", "relative_error", "knob_costs", "family", "best_time", "METRICS",
-           "FLOOR_FRACTION", "ALBEDO_COS_THETA", "COST_RESOLUTION"]
+           "FLOOR_FRACTION", "ALBEDO_COS_THETA", "COST_RESOLUTION", "METRIC_DESCRIPTIONS", "ToleranceNotMetWarning"]

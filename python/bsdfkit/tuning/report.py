@@ -14,11 +14,25 @@ from .costs import SPREAD_WARN, _check_costs, _costs_for, _measure, _op, _pick, 
 from .errors import STOCHASTIC_N, _Evaluation, _check_int, is_stochastic
 from .configs import _check_allow, _check_model, _knobs_from, _label, _specs, family
 
-__all__ = ["METRICS", "Table", "tradeoff", "SimplifyReport", "simplify"]
+__all__ = ["METRICS", "METRIC_DESCRIPTIONS", "Table", "tradeoff", "SimplifyReport", "simplify",
+           "ToleranceNotMetWarning"]
 
 
 #: Error metrics accepted by :func:`simplify` and :func:`pareto`, and their Table columns.
 METRICS = {"max": "max_err", "p99": "p99_err", "albedo": "albedo_err", "rms": "rms_err"}
+
+#: What each metric measures (named in reports and the CLI; definitions in the module docstring).
+METRIC_DESCRIPTIONS = {
+    "p99": "99th percentile of the relative error of f·|cos θi|",
+    "max": "largest relative error of f·|cos θi|",
+    "albedo": "largest absolute error of the directional albedo",
+    "rms": "relative RMS of f·|cos θi| against the converged walk (noise and bias)",
+}
+
+
+class ToleranceNotMetWarning(UserWarning):
+    """:func:`simplify` found no configuration within the tolerance; the report's
+    ``within_tol`` is False and it returned the most accurate configuration."""
 
 
 def _pareto_mask(err, thr) -> np.ndarray:
@@ -331,18 +345,35 @@ class SimplifyReport:
     notes: list = field(default_factory=list)
     fixed: list = field(default_factory=list)
     allow: tuple = ()
+    #: True when the returned configuration's error is <= tol. False only when no configuration
+    #: is (stochastic models with a tol below what n_samples = 64 reaches): then the most accurate
+    #: configuration is returned, ``n_within_tol`` is 0 and simplify warns (ToleranceNotMetWarning).
+    within_tol: bool = True
 
     @property
     def unchanged(self) -> bool:
         """True when the output model equals the input (the precision may still be float32)."""
         return self.model == self.input_model
 
+    @property
+    def metric_description(self) -> str:
+        """What ``metric`` measures, e.g. "99th percentile of the relative error of f·|cos θi|"."""
+        return METRIC_DESCRIPTIONS.get(self.metric, self.metric)
+
     def summary(self) -> str:
-        """One line: chosen configuration, error against the input and expected speedup."""
+        """One line: chosen configuration, error against the input (the metric named), whether it
+        meets tol, and the expected speedup. A missed tolerance starts with "TOLERANCE NOT MET"."""
         ch = "unchanged" if not self.changes else ", ".join(f"{k}={b}" for k, a, b, _ in self.changes)
-        sp = "unknown" if self.speedup_vs_input is None else f"{self.speedup_vs_input:.2f}×"
-        return (f"{ch} | {self.metric} error vs input {self.error[self.metric]:.2e} <= tol {self.tol:g} | "
-                f"expected speedup over the input {sp} | dtype {np.dtype(self.dtype).name}")
+        sp = "unknown" if self.speedup_vs_input is None else f"{self.speedup_vs_input:.2f}×" + (
+            " (slower)" if self.speedup_vs_input < 1 else "")
+        e = self.error[self.metric]
+        metric = f"{self.metric} error ({self.metric_description}) vs input {e:.2e}"
+        if self.within_tol:
+            return (f"{ch} | {metric} <= tol {self.tol:g} | expected speedup over the input {sp} | "
+                    f"dtype {np.dtype(self.dtype).name}")
+        return (f"TOLERANCE NOT MET: no configuration within tol {self.tol:g}; returned the most accurate, "
+                f"{ch} | {metric} > tol {self.tol:g} | expected speedup over the input {sp} | "
+                f"dtype {np.dtype(self.dtype).name}")
 
     def __str__(self):
         L = [f"simplify({self.input_model.describe()}, tol={self.tol:g}, metric={self.metric!r}, seed={self.seed}"
@@ -352,6 +383,9 @@ class SimplifyReport:
              f"albedo {self.error['albedo']:.2e} (floor {self.floor:.1e})",
              f"  {self.n_within_tol} of {self.n_configurations} configurations within tol; ranked by "
              f"{self.ranked_by}"]
+        if not self.within_tol:
+            L.insert(1, f"  TOLERANCE NOT MET: the returned model's {self.metric} error {self.error[self.metric]:.2e} "
+                        f"> tol {self.tol:g}")
         if self.expected_speedup is not None:
             L.append(f"  expected speedup over the most accurate configuration: {self.expected_speedup:.2f}×")
         if not self.changes:
@@ -410,8 +444,10 @@ def simplify(model, tol, metric: str | None = None, directions=None, seed: int =
     e.g. ``allow=("diffuse",)``. Every parameter that differs between input and output is listed
     in ``report.changes`` (empty: the model comes back unchanged).
 
-    metric: ``"p99"`` (default), ``"max"`` (relative error of f |cos theta_i|) or ``"albedo"``
-    (absolute directional-albedo error); definitions in the module docstring. Errors are measured
+    metric: ``"p99"`` (the default for deterministic models: the 99th percentile of the relative
+    error of f |cos theta_i|), ``"max"`` (its maximum), ``"albedo"`` (absolute directional-albedo
+    error) or ``"rms"`` (the default for stochastic models, below); definitions in the module
+    docstring, one-line descriptions in ``METRIC_DESCRIPTIONS``; ``report.metric`` names the one used. Errors are measured
     on ``directions`` (default: :func:`direction_set` of ``n`` rows drawn with ``seed``); float32
     configurations on float32 directions, so ``report.dtype`` is the precision to call the result
     with. A lobe whose removal stays within ``tol`` is dropped (a FilamentStandard with clear_coat
@@ -441,7 +477,9 @@ def simplify(model, tol, metric: str | None = None, directions=None, seed: int =
     :func:`tradeoff`) with ``margin`` 0.8 (an RMS over hundreds of pairs is a stable statistic),
     and the default set is 512 pairs. The input itself is a candidate only if its own error is
     within tol; when no configuration is (tol below what n_samples = 64 reaches), the most
-    accurate configuration is returned and ``notes`` says so. The answer to "how many samples
+    accurate configuration is returned, ``report.within_tol`` is False, ``report.n_within_tol``
+    is 0, ``summary()`` starts with "TOLERANCE NOT MET", ``notes`` extrapolates the n_samples that
+    would reach it, and a :class:`ToleranceNotMetWarning` is issued. The answer to "how many samples
     does this car paint need for 2 % error" is ``report.config["n_samples"]``, with its measured
     error in ``report.error["rms"]``. Caveat: the relative RMS is normalized by mean(v_ref^2),
     which a pair on a narrow coat highlight (alpha <~ 0.05; deterministic and 1e3 x brighter)
@@ -555,8 +593,12 @@ def simplify(model, tol, metric: str | None = None, directions=None, seed: int =
         input_model=model, model=cfg.model, dtype=cfg.dtype, config=dict(cfg.labels), changes=changes, kept=kept,
         error=_error_dict(err, ev.stochastic or metric == "rms", ev.stochastic), tol=tol, metric=metric, expected_speedup=exp,
         speedup_vs_input=vs_in, ranked_by=ranked_by, reference=model, description=cfg.describe(),
-        n_configurations=len(ev.configs), n_within_tol=len(cands), seed=seed, floor=ev.floor, notes=notes,
-        fixed=fixed, allow=tuple(sorted(allowed)))
+        n_configurations=len(ev.configs), n_within_tol=0 if none_within else len(cands), seed=seed,
+        floor=ev.floor, notes=notes, fixed=fixed, allow=tuple(sorted(allowed)), within_tol=bool(err[col] <= tol))
+    if not report.within_tol:
+        warnings.warn(f"simplify: tolerance not met: no configuration of {model.describe()} has {metric} error "
+                      f"<= {tol:g}; the most accurate one is returned with {metric} error {err[col]:.2e} "
+                      "(report.within_tol is False)", ToleranceNotMetWarning, stacklevel=2)
     return cfg.model, report
 
 
