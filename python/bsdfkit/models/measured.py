@@ -15,6 +15,7 @@ import collections
 import hashlib
 import os
 import threading
+import weakref
 
 import numpy as np
 
@@ -561,6 +562,7 @@ def validate_measured(fields: dict, name: str) -> dict:
 
 
 _MEASURED: "collections.OrderedDict" = collections.OrderedDict()   # digest -> (fields, info, _core table)
+_IN_MEMORY: "weakref.WeakValueDictionary" = weakref.WeakValueDictionary()   # digest -> a live in-memory Measured
 
 
 def _measured_entry(digest, data: bytes | None, name: str):
@@ -670,7 +672,7 @@ class Measured(BxDF):
         p = self._params
         return f"Measured {os.path.basename(p['path'])}" if p["path"] else "Measured (tabulated)"
 
-    __slots__ = ("_keep",)
+    __slots__ = ("_keep", "__weakref__")
 
     def __init__(self, path=None, *, digest=None, data=None):
         if (path is None) == (data is None):
@@ -687,6 +689,8 @@ class Measured(BxDF):
             raise ValueError(f"{name}: digest: the content changed (expected {digest}, got {dig})")
         object.__setattr__(self, "_keep", _measured_entry(dig, data, name))   # (fields, info, table, bytes)
         super().__init__(path=ap, digest=dig)
+        if ap is None:   # rebuilt from its parameters (path None, digest) while alive: _from_params
+            _IN_MEMORY[dig] = self
 
     @classmethod
     def load(cls, path) -> "Measured":
@@ -712,7 +716,18 @@ class Measured(BxDF):
 
     @classmethod
     def _from_params(cls, p):
-        return cls(p["path"], digest=p["digest"])
+        if p["path"] is not None:
+            return cls(p["path"], digest=p["digest"])
+        # an in-memory model (from_bytes, tabulate): its parameters are (None, digest); the bytes
+        # are those of a live model with that digest, else of the table cache
+        live = _IN_MEMORY.get(p["digest"])
+        if live is not None:
+            return live
+        entry = _measured_entry(p["digest"], None, "")
+        if entry is None:
+            raise ValueError(f"digest: no in-memory Measured model with sha256 {p['digest'][:12]}... is alive any "
+                             "more, and its bytes are not cached; keep the model, or save() it and load the file")
+        return cls(data=entry[3])
 
     def __reduce__(self):
         if self._params["path"] is None:
