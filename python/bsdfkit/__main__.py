@@ -136,6 +136,8 @@ def _add_simplify_command(sub) -> None:
                     help="exit with status 1 when any material does not meet the tolerance")
     si.add_argument("--skip-unsupported", action="store_true",
                     help="skip materials bsdfkit cannot represent instead of failing")
+    si.add_argument("--skip-missing-includes", action="store_true",
+                    help="skip Include / Import files that do not exist (e.g. geometry) instead of failing")
     si.add_argument("-v", "--verbose", action="store_true", help="print the full report of every material")
 
 
@@ -158,22 +160,31 @@ def _run_simplify_command(args) -> int:
     if not os.path.isfile(args.scene):
         return fail(f"{args.scene}: no such file")
     from .interop import from_pbrt
-    from .interop.pbrt import PbrtSkipWarning
+    from .interop.pbrt import PbrtMissingIncludeWarning, PbrtSkipWarning
     from .models.describe import describe
     from .tuning import simplify
 
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", PbrtSkipWarning)
-            materials = from_pbrt(os.path.abspath(args.scene), skip_unsupported=args.skip_unsupported)
+            warnings.simplefilter("always", PbrtMissingIncludeWarning)
+            materials = from_pbrt(os.path.abspath(args.scene), skip_unsupported=args.skip_unsupported,
+                                  skip_missing_includes=args.skip_missing_includes)
     except OSError as e:
-        return fail(str(e))
+        msg = str(e).replace("from_pbrt(..., skip_missing_includes=True)", "--skip-missing-includes")
+        return fail(msg)
     except ValueError as e:
         return fail(f"{args.scene}: {e}")
     skipped = [w.message for w in caught if isinstance(w.message, PbrtSkipWarning)]
+    missing = [w.message for w in caught if isinstance(w.message, PbrtMissingIncludeWarning)]
     for w in caught:
-        if not isinstance(w.message, PbrtSkipWarning):
+        if not isinstance(w.message, (PbrtSkipWarning, PbrtMissingIncludeWarning)):
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    if missing:
+        print(f"{args.scene}: skipped {len(missing)} missing include(s):")
+        for w in missing:
+            where = f"{os.path.relpath(w.file)}: line {w.line}" if w.file else f"line {w.line}"
+            print(f"  - {w.include!r} ({where})")
     if skipped:
         print(f"{args.scene}: skipped {len(skipped)} unsupported material(s):")
         for w in skipped:

@@ -19,9 +19,10 @@ measured materials, Beckmann roughness, ``specular_reflectance`` tints ...) is r
 
 from ..models._mitsuba_export import MitsubaApproximationWarning, MitsubaExportError
 from .mitsuba import MIRROR_ETA, MITSUBA_IOR, from_mitsuba
-from .pbrt import PBRT_GLASS_ETA, PbrtMaterial, PbrtParam, from_pbrt, parse_pbrt_materials
+from .pbrt import (PBRT_GLASS_ETA, PbrtColorSpaceWarning, PbrtMaterial, PbrtMissingIncludeWarning, PbrtParam,
+                   PbrtSkipWarning, from_pbrt, parse_pbrt_materials)
 from .spectra import spectrum_to_rgb
 
 __all__ = ["from_mitsuba", "from_pbrt", "parse_pbrt_materials", "PbrtMaterial", "PbrtParam",
            "spectrum_to_rgb", "MITSUBA_IOR", "PBRT_GLASS_ETA", "MIRROR_ETA", "MitsubaExportError",
-           "MitsubaApproximationWarning"]
+           "MitsubaApproximationWarning", "PbrtSkipWarning", "PbrtMissingIncludeWarning", "PbrtColorSpaceWarning"]

@@ -13,7 +13,8 @@ from ..models import (BxDF, CoatedConductor, CoatedDiffuse, Conductor, Dielectri
                       METALS, ThinDielectric, roughness_to_alpha)
 from .spectra import spectrum_to_rgb
 
-__all__ = ["PBRT_GLASS_ETA", "PbrtParam", "PbrtMaterial", "PbrtSkipWarning", "parse_pbrt_materials", "from_pbrt"]
+__all__ = ["PBRT_GLASS_ETA", "PbrtParam", "PbrtMaterial", "PbrtSkipWarning", "PbrtMissingIncludeWarning",
+           "PbrtColorSpaceWarning", "parse_pbrt_materials", "from_pbrt"]
 
 
 #: Index of refraction at 550 nm of pbrt-v4's named glass spectra: linear interpolation of the
@@ -280,8 +281,28 @@ _PBRT_DIRECTIVES = frozenset("""
 #: Nesting limit of Include/Import (a cycle would otherwise recurse forever).
 PBRT_MAX_INCLUDE_DEPTH = 32
 
+#: ``ActiveTransform``'s argument: a bare word (pbrt-v4 src/pbrt/parser.cpp).
+_ACTIVE_TRANSFORM = ("All", "StartTime", "EndTime")
 
-def parse_pbrt_materials(text: str, *, path=None) -> list:
+#: Directives that push / pop pbrt-v4's graphics state (the current material among it):
+#: TransformBegin/End are pbrt-v4's deprecated spelling of AttributeBegin/End, and ObjectBegin /
+#: ObjectEnd push and pop it too (pbrt-v4 BasicSceneBuilder).
+_PUSH = ("AttributeBegin", "TransformBegin", "ObjectBegin")
+_POP = ("AttributeEnd", "TransformEnd", "ObjectEnd")
+
+
+class PbrtMissingIncludeWarning(UserWarning):
+    """An ``Include`` / ``Import`` whose file does not exist, skipped by
+    ``from_pbrt(..., skip_missing_includes=True)`` (attributes: ``file``, the including file or
+    None for text; ``line``; ``include``, the name as written; ``path``, where it was looked for)."""
+
+
+class PbrtColorSpaceWarning(UserWarning):
+    """A ``ColorSpace`` other than ``"srgb"``: bsdfkit reads pbrt RGB values as linear sRGB, so
+    colours given in that space come out differently (attributes: ``file``, ``line``, ``colorspace``)."""
+
+
+def parse_pbrt_materials(text: str, *, path=None, skip_missing_includes: bool = False) -> list:
     """The material statements of pbrt-v4 scene text, in order, as ``PbrtMaterial`` records.
 
     Understands pbrt's tokens (quoted strings with escapes, numbers, ``true``/``false``,
@@ -291,18 +312,29 @@ def parse_pbrt_materials(text: str, *, path=None) -> list:
     followed to count the shapes using each material; ``Include "file"`` and ``Import "file"``
     are read in place, relative to the including file (``path``; the working directory for text
     without one), at most :data:`PBRT_MAX_INCLUDE_DEPTH` deep; every other pbrt directive is
-    skipped. Anonymous materials are named ``"material#<n> (line <line>)"`` (``"... (<file>
-    line <line>)"`` inside an included file). Does not convert parameters: see
-    :meth:`PbrtMaterial.to_bxdf` and :func:`from_pbrt`.
+    skipped (every directive of pbrt-v4's format is known: ``ActiveTransform All | StartTime |
+    EndTime``, ``Option``, ``ColorSpace``, ``MediumInterface`` with one or two names, ...;
+    ``TransformBegin``/``TransformEnd`` and ``ObjectBegin``/``ObjectEnd`` scope the current material
+    as ``AttributeBegin``/``AttributeEnd`` do, as in pbrt-v4). Anonymous materials are named
+    ``"material#<n> (line <line>)"`` (``"... (<file> line <line>)"`` inside an included file).
+    Does not convert parameters: see :meth:`PbrtMaterial.to_bxdf` and :func:`from_pbrt`.
+    ``skip_missing_includes=True``: an Include / Import of a file that does not exist is skipped
+    with one :class:`PbrtMissingIncludeWarning` per include (scene files often include geometry a
+    material user does not have). A ``ColorSpace`` other than srgb warns once per file
+    (:class:`PbrtColorSpaceWarning`): RGB values are read as linear sRGB.
 
     ``ValueError`` with the line number (and file) for malformed text: unterminated strings or
     brackets, stray ``]``, non-numbers in lists, malformed parameter declarations, a word that is
-    not a pbrt directive, a ``MakeNamedMaterial`` without ``"string type"``, a redefined named
-    material, Include nested too deep. ``OSError`` naming the file for a missing include.
+    not a pbrt directive, a bad ``ActiveTransform`` argument, a ``MakeNamedMaterial`` without
+    ``"string type"``, a redefined named material, Include nested too deep. ``OSError`` naming
+    the file for a missing include (unless ``skip_missing_includes``).
     """
     if not isinstance(text, str):
         raise TypeError(f"text: expected str (pbrt scene text), got {type(text).__name__}")
-    st = {"recs": [], "by_name": {}, "current": None, "stack": [], "n_anon": 0}
+    if not isinstance(skip_missing_includes, (bool, np.bool_)):
+        raise TypeError(f"skip_missing_includes: expected True or False, got {skip_missing_includes!r}")
+    st = {"recs": [], "by_name": {}, "current": None, "stack": [], "n_anon": 0,
+          "skip_missing": bool(skip_missing_includes), "colorspace_warned": set()}
     _parse_into(st, text, None if path is None else os.fspath(path), 0)
     return [PbrtMaterial(name=r[0], type=r[1], line=r[2], named=r[3], params=r[4], shapes=r[5], file=r[6])
             for r in st["recs"]]
@@ -364,18 +396,41 @@ def _parse_statements(st, text, path, depth, where):
             if depth + 1 > PBRT_MAX_INCLUDE_DEPTH:
                 raise _PbrtError(f"line {line}: {kw} {fname!r}: nested deeper than {PBRT_MAX_INCLUDE_DEPTH} "
                                  "files (an Include cycle?)")
+            if st["skip_missing"] and not os.path.exists(full):
+                w = PbrtMissingIncludeWarning(f"from_pbrt: {path or '<text>'}: line {line}: skipped {kw} "
+                                              f"{fname!r}: no file {full!r}")
+                w.file, w.line, w.include, w.path = path, line, fname, full
+                warnings.warn(w, stacklevel=5)
+                continue
             try:
                 sub = _read_scene_file(full)
             except OSError as e:
+                hint = ("; from_pbrt(..., skip_missing_includes=True) skips it with a warning"
+                        if not os.path.exists(full) else "")
                 raise OSError(f"{path or '<text>'}: line {line}: {kw} {fname!r}: cannot read {full!r} "
-                              f"({e.strerror or e})") from None
+                              f"({e.strerror or e}){hint}") from None
             _parse_into(st, sub, full, depth + 1)
         elif kw == "NamedMaterial":
             name = _statement_name(ts, kw, line)
             st["current"] = ("named", name)
-        elif kw == "AttributeBegin":
+        elif kw == "ActiveTransform":
+            a = ts.next()
+            if a is None or a[0] != "bare" or a[1] not in _ACTIVE_TRANSFORM:
+                got = "end of input" if a is None else repr(a[1])
+                raise _PbrtError(f"line {line}: ActiveTransform: expected {', '.join(_ACTIVE_TRANSFORM)}, got {got}")
+        elif kw == "ColorSpace":
+            cs = _statement_name(ts, kw, line)
+            if cs.lower() != "srgb" and path not in st["colorspace_warned"]:
+                st["colorspace_warned"].add(path)
+                w = PbrtColorSpaceWarning(
+                    f"from_pbrt: {path or '<text>'}: line {line}: ColorSpace {cs!r} is not honoured: bsdfkit reads "
+                    "pbrt RGB values as linear sRGB, so colours given in that space differ (one warning per file)")
+                w.file, w.line, w.colorspace = path, line, cs
+                warnings.warn(w, stacklevel=5)
+        elif kw in _PUSH:
             stack.append(st["current"])
-        elif kw == "AttributeEnd":
+            _skip_args(ts)
+        elif kw in _POP:
             if stack:
                 st["current"] = stack.pop()
             _skip_args(ts)
@@ -664,13 +719,15 @@ def _pbrt_hair(rec):
     return Hair(sigma_a=sigma_a, **kw)
 
 
-def from_pbrt(source, *, skip_unsupported: bool = False) -> dict:
+def from_pbrt(source, *, skip_unsupported: bool = False, skip_missing_includes: bool = False) -> dict:
     """bsdfkit models for the materials of a pbrt-v4 scene: ``{name: BxDF}`` in file order.
 
     ``source``: scene text, or the path of a scene file (an ``os.PathLike``, or a ``str``
     without a newline that names an existing file; ``.gz`` files are decompressed).
     ``Include``/``Import`` are followed relative to the including file (text: the working
-    directory); a missing include raises ``OSError`` naming it.
+    directory); a missing include raises ``OSError`` naming it, or, with
+    ``skip_missing_includes=True``, is skipped with one :class:`PbrtMissingIncludeWarning` per
+    include (a scene's geometry files are not needed for its materials).
 
     Named materials keep their names; anonymous ``Material`` statements are called
     ``"material#<n> (line <line>)"`` (see :func:`parse_pbrt_materials` for the syntax handled).
@@ -722,7 +779,7 @@ def from_pbrt(source, *, skip_unsupported: bool = False) -> dict:
     """
     text, path = _scene_source(source)
     out = {}
-    for rec in parse_pbrt_materials(text, path=path):
+    for rec in parse_pbrt_materials(text, path=path, skip_missing_includes=skip_missing_includes):
         try:
             out[rec.name] = rec.to_bxdf()
         except _PbrtError as e:
