@@ -43,7 +43,9 @@ def test_path_and_pathlike_and_text(scene_dir, monkeypatch):
     by_path = bk.from_pbrt(scene_dir / "scene.pbrt", skip_unsupported=True)
     assert list(by_path) == ["gold", "glass", "material#2 (line 5)"]
     assert by_path["glass"] == bk.Dielectric(1.33, alpha=0.0, masking="correlated")
-    assert by_path["gold"] == bk.Conductor.from_metal("Au", roughness=0.04)
+    gold = bk.Conductor(bk.Spectrum.named("metal-Au-eta"), bk.Spectrum.named("metal-Au-k"), alpha=0.2)
+    assert by_path["gold"] == bk.Conductor(*(g.to_rgb("unbounded", illuminant=None) for g in (gold.eta, gold.k)),
+                                           alpha=0.2)
     assert bk.from_pbrt(str(scene_dir / "scene.pbrt"), skip_unsupported=True) == by_path
     # text: includes relative to the working directory
     monkeypatch.chdir(scene_dir)

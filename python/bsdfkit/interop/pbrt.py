@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..models import (BxDF, CoatedConductor, CoatedDiffuse, Conductor, Dielectric, Diffuse, DiffuseTransmission,
-                      METALS, ThinDielectric, roughness_to_alpha)
+                      ThinDielectric, roughness_to_alpha)
 from .spectra import spectrum_to_rgb
 
 __all__ = ["PBRT_GLASS_ETA", "PbrtParam", "PbrtMaterial", "PbrtSkipWarning", "PbrtMissingIncludeWarning",
@@ -29,10 +29,6 @@ PBRT_GLASS_ETA = {
     "glass-F10": 1.7335739960381,    # GlassSF10_eta
     "glass-F11": 1.7911193889629,    # GlassSF11_eta
 }
-
-
-#: pbrt-v4 named metal spectra bsdfkit has no data for.
-_PBRT_OTHER_METALS = ("CuZn", "MgO", "TiO2")
 
 
 #: Wavelength at which dielectric eta spectra are evaluated.
@@ -102,9 +98,10 @@ class PbrtMaterial:
         """Parameters present but left out of the BxDF (``displacement``, ``normalmap``)."""
         return tuple(p for p in self.params if p in _PBRT_IGNORED)
 
-    def to_bxdf(self) -> BxDF:
-        """The bsdfkit model of this material (``ValueError`` if not representable)."""
-        return _pbrt_bxdf(self)
+    def to_bxdf(self, *, spectral: bool = False, base_dir=None) -> BxDF:
+        """The bsdfkit model of this material (``ValueError`` if not representable).
+        ``spectral``, ``base_dir`` (where spectrum files are looked up): see :func:`from_pbrt`."""
+        return _pbrt_bxdf(self, {"spectral": bool(spectral), "base": None if base_dir is None else os.fspath(base_dir)})
 
 
 class _PbrtError(ValueError):
@@ -479,22 +476,68 @@ def _numbers(rec, p):
     return np.array(p.values, dtype=np.float64)
 
 
-def _named_metal(rec, p, name, part):
-    m = re.fullmatch(r"metal-(.+)-(eta|k)", name)
-    if m is None or m.group(1) not in METALS:
-        have = ", ".join(f"metal-{x}-eta/-k" for x in METALS)
-        other = ", ".join(f"metal-{x}" for x in _PBRT_OTHER_METALS)
+def _named_metal(rec, p, name, part, ctx):
+    """eta or k of a named metal spectrum: the table of ``bsdfkit.Spectrum.named`` (pbrt-v4's
+    ``metal-<X>-eta/k``, also Mitsuba's ``mitsuba-<X>-...`` and ``jc-<X>-...``), kept as a
+    Spectrum (``spectral=True``) or projected to RGB as ``Conductor`` projects a spectral eta / k
+    (CIE 1931 to linear sRGB, no illuminant)."""
+    from ..spectral.spectrum import Spectrum
+
+    if name not in Spectrum.names():
+        return _spectrum_file(rec, p, name, ctx, albedo=False)
+    m = re.fullmatch(r"(?:metal|mitsuba|jc)-(.+)-(eta|k)", name)
+    if m is None:
         extra = " (named glass spectra are only accepted for dielectric eta)" if name in PBRT_GLASS_ETA else ""
-        _pfail_param(rec, p, f"named spectrum {name!r} is not available{extra}; bsdfkit has {have} "
-                     f"(Mitsuba's RGB projections of Palik's data; pbrt's {other} are not included; "
-                     "spectrum files are not read)")
+        _pfail_param(rec, p, f"named spectrum {name!r} is not a metal's eta or k{extra}")
     if m.group(2) != part:
         _pfail_param(rec, p, f"named spectrum {name!r} is the {m.group(2)!r} part, not {part!r}")
-    return np.array(METALS[m.group(1)][0 if part == "eta" else 1], dtype=np.float64)
+    s = Spectrum.named(name)
+    return s if ctx.get("spectral") else np.asarray(s.to_rgb("unbounded", illuminant=None), dtype=np.float64)
 
 
-def _spectrum_param(rec, pname, *, albedo):
-    """RGB (3,) of a spectrum-valued parameter, or None if absent."""
+def _read_spd(rec, p, full):
+    """(wavelengths, values) of a pbrt spectrum file: whitespace-separated pairs, '#' comments."""
+    try:
+        with open(full, encoding="utf-8") as fh:
+            text = fh.read()
+    except (OSError, UnicodeDecodeError) as e:
+        _pfail_param(rec, p, f"cannot read the spectrum file {full!r} ({getattr(e, 'strerror', None) or e})")
+    words = " ".join(line.split("#", 1)[0] for line in text.splitlines()).split()
+    try:
+        v = np.array([float(w) for w in words], dtype=np.float64)
+    except ValueError:
+        _pfail_param(rec, p, f"spectrum file {full!r}: expected numbers (wavelength value pairs)")
+    if v.size == 0 or v.size % 2 or not np.all(np.isfinite(v)):
+        _pfail_param(rec, p, f"spectrum file {full!r}: expected (wavelength, value) pairs, got {v.size} numbers")
+    lam, val = v[0::2], v[1::2]
+    if np.any(np.diff(lam) <= 0):
+        _pfail_param(rec, p, f"spectrum file {full!r}: wavelengths must increase")
+    return lam, val
+
+
+def _spectrum_file(rec, p, name, ctx, *, albedo):
+    """A spectrum given by file name (pbrt-v4: a string that is not a named spectrum), relative to
+    the scene file's directory (pbrt-v4's search directory; the working directory for text)."""
+    from ..spectral.spectrum import Spectrum
+
+    base = ctx.get("base") or os.getcwd()
+    full = os.path.normpath(name if os.path.isabs(name) else os.path.join(base, name))
+    if not os.path.isfile(full):
+        _pfail_param(rec, p, f"{name!r} is neither a named spectrum (bsdfkit.Spectrum.names()) nor a spectrum "
+                     f"file (no file {full!r})")
+    lam, val = _read_spd(rec, p, full)
+    if ctx.get("spectral") and not albedo:
+        return Spectrum(lam, val)
+    try:
+        return spectrum_to_rgb(lam, val, d65=True, bounded=albedo)
+    except ValueError as e:
+        _pfail_param(rec, p, str(e))
+
+
+def _spectrum_param(rec, pname, *, albedo, ctx=None):
+    """RGB (3,) of a spectrum-valued parameter (a Spectrum for a named or file eta / k with
+    ``ctx["spectral"]``), or None if absent."""
+    ctx = ctx or {}
     p = rec.params.get(pname)
     if p is None:
         return None
@@ -519,10 +562,13 @@ def _spectrum_param(rec, pname, *, albedo):
         if p.values and all(isinstance(v, str) for v in p.values):
             if len(p.values) != 1:
                 _pfail_param(rec, p, "expected one spectrum name")
+            from ..spectral.spectrum import Spectrum
             if albedo:
-                _pfail_param(rec, p, f"named spectrum {p.values[0]!r} is not a reflectance; give rgb, "
-                             "float or wavelength/value pairs")
-            return _named_metal(rec, p, p.values[0], pname.rsplit(".", 1)[-1])
+                if p.values[0] in Spectrum.names():
+                    _pfail_param(rec, p, f"named spectrum {p.values[0]!r} is not a reflectance; give rgb, "
+                                 "float, wavelength/value pairs or a spectrum file")
+                return _spectrum_file(rec, p, p.values[0], ctx, albedo=True)
+            return _named_metal(rec, p, p.values[0], pname.rsplit(".", 1)[-1], ctx)
         v = _numbers(rec, p)
         if v.size % 2 or v.size == 0:
             _pfail_param(rec, p, f"a spectrum needs (wavelength, value) pairs, got {v.size} numbers")
@@ -535,37 +581,55 @@ def _spectrum_param(rec, pname, *, albedo):
     _pfail_param(rec, p, f"unsupported type {p.type!r}; expected rgb, spectrum or float")
 
 
-def _eta_param(rec, default=1.5, param="eta"):
-    """Scalar IOR of a dielectric: float, spectrum (value at 550 nm) or grey rgb."""
+def _eta_param(rec, default=1.5, param="eta", ctx=None):
+    """IOR of a dielectric: float, spectrum (value at 550 nm; with ``ctx["spectral"]`` the
+    Spectrum itself, for dispersion) or grey rgb."""
+    from ..spectral.spectrum import Spectrum
+
+    ctx = ctx or {}
     p = rec.params.get(param)
     if p is None:
         return default
     _check_texture(rec, p)
+    lam = None
     if p.type == "float":
         eta = float(_numbers(rec, p)[0])
     elif p.type == "spectrum" and p.values and isinstance(p.values[0], str):
         name = p.values[0]
-        if name not in PBRT_GLASS_ETA:
-            _pfail_param(rec, p, f"named spectrum {name!r} is not available; dielectric eta accepts "
-                         f"{', '.join(PBRT_GLASS_ETA)} (evaluated at 550 nm), a float or pairs")
-        eta = PBRT_GLASS_ETA[name]
+        if name in PBRT_GLASS_ETA:
+            if ctx.get("spectral"):
+                return Spectrum.named(name)
+            eta = PBRT_GLASS_ETA[name]
+        elif name in Spectrum.names():
+            _pfail_param(rec, p, f"named spectrum {name!r} is not a glass; dielectric eta accepts "
+                         f"{', '.join(PBRT_GLASS_ETA)} (evaluated at 550 nm), a float, pairs or a spectrum file")
+        else:
+            base = ctx.get("base") or os.getcwd()
+            full = os.path.normpath(name if os.path.isabs(name) else os.path.join(base, name))
+            if not os.path.isfile(full):
+                _pfail_param(rec, p, f"{name!r} is neither a named glass ({', '.join(PBRT_GLASS_ETA)}) nor a "
+                             f"spectrum file (no file {full!r})")
+            lam, val = _read_spd(rec, p, full)
     elif p.type == "spectrum":
         v = _numbers(rec, p)
         if v.size % 2 or v.size == 0:
             _pfail_param(rec, p, f"a spectrum needs (wavelength, value) pairs, got {v.size} numbers")
         lam, val = v[0::2], v[1::2]
+    if lam is not None:
         if np.any(np.diff(lam) <= 0):
             _pfail_param(rec, p, f"wavelengths must increase, got {lam.tolist()}")
         if not lam[0] <= _ETA_WAVELENGTH <= lam[-1]:
             _pfail_param(rec, p, f"the spectrum ({lam[0]:g}-{lam[-1]:g} nm) does not cover 550 nm, "
                          "where bsdfkit evaluates dielectric eta")
+        if ctx.get("spectral"):
+            return Spectrum(lam, val)
         eta = float(np.interp(_ETA_WAVELENGTH, lam, val))
     elif p.type == "rgb":
         v = _numbers(rec, p)
         if v.size != 3 or not np.all(v == v[0]):
             _pfail_param(rec, p, f"an rgb eta must be grey (bsdfkit's dielectrics have one eta), got {v.tolist()}")
         eta = float(v[0])
-    else:
+    elif p.type not in ("float", "spectrum"):
         _pfail_param(rec, p, f"unsupported type {p.type!r}; expected float or spectrum")
     if eta == 0:            # pbrt: "if (sampledEta == 0) sampledEta = 1"
         eta = 1.0
@@ -628,7 +692,8 @@ def _alphas(rec, prefix=""):
     return u, v
 
 
-def _pbrt_bxdf(rec):
+def _pbrt_bxdf(rec, ctx=None):
+    ctx = ctx or {}
     mtype = rec.type
     if mtype not in _PBRT_SUPPORTED:
         kind = "unsupported" if mtype in _PBRT_UNSUPPORTED else "unknown"
@@ -651,47 +716,54 @@ def _pbrt_bxdf(rec):
             return DiffuseTransmission(np.clip(s * r, 0, 1), np.clip(s * t, 0, 1))
         if mtype == "conductor":
             ax, ay = _alphas(rec)
-            refl = _spectrum_param(rec, "reflectance", albedo=True)
-            eta = _spectrum_param(rec, "eta", albedo=False)
-            k = _spectrum_param(rec, "k", albedo=False)
+            refl = _spectrum_param(rec, "reflectance", albedo=True, ctx=ctx)
+            eta = _spectrum_param(rec, "eta", albedo=False, ctx=ctx)
+            k = _spectrum_param(rec, "k", albedo=False, ctx=ctx)
             if refl is not None:
                 if eta is not None or k is not None:
                     _pfail(rec, "give either \"reflectance\" or \"eta\"/\"k\", not both (pbrt-v4 refuses it)")
                 return Conductor.from_reflectance(refl, alpha_x=ax, alpha_y=ay, masking="correlated")
-            eta = np.array(METALS["Cu"][0]) if eta is None else eta
-            k = np.array(METALS["Cu"][1]) if k is None else k
+            eta = _default_copper("eta", ctx) if eta is None else eta
+            k = _default_copper("k", ctx) if k is None else k
             return Conductor(eta, k, alpha_x=ax, alpha_y=ay, masking="correlated")
         if mtype == "dielectric":
             ax, ay = _alphas(rec)
-            return Dielectric(_eta_param(rec), alpha_x=ax, alpha_y=ay, masking="correlated")
+            return Dielectric(_eta_param(rec, ctx=ctx), alpha_x=ax, alpha_y=ay, masking="correlated")
         if mtype == "coateddiffuse":
             ax, ay = _alphas(rec)
-            r = _spectrum_param(rec, "reflectance", albedo=True)
+            r = _spectrum_param(rec, "reflectance", albedo=True, ctx=ctx)
             return CoatedDiffuse(0.5 if r is None else r, eta=_eta_param(rec), alpha_x=ax, alpha_y=ay,
                                  **_layer_kwargs(rec))
         if mtype == "coatedconductor":
             iax, iay = _alphas(rec, "interface.")
             cax, cay = _alphas(rec, "conductor.")
             ieta = _eta_param(rec, param="interface.eta")
-            refl = _spectrum_param(rec, "reflectance", albedo=True)
-            eta = _spectrum_param(rec, "conductor.eta", albedo=False)
-            k = _spectrum_param(rec, "conductor.k", albedo=False)
+            refl = _spectrum_param(rec, "reflectance", albedo=True, ctx=ctx)
+            eta = _spectrum_param(rec, "conductor.eta", albedo=False, ctx=ctx)
+            k = _spectrum_param(rec, "conductor.k", albedo=False, ctx=ctx)
             kw = dict(conductor_alpha_x=cax, conductor_alpha_y=cay, interface_eta=ieta, interface_alpha_x=iax,
                       interface_alpha_y=iay, **_layer_kwargs(rec))
             if refl is not None:
                 if eta is not None or k is not None:
                     _pfail(rec, "give either \"reflectance\" or \"conductor.eta\"/\"conductor.k\", not both")
                 return CoatedConductor.from_reflectance(refl, **kw)
-            eta = np.array(METALS["Cu"][0]) if eta is None else eta
-            k = np.array(METALS["Cu"][1]) if k is None else k
+            eta = _default_copper("eta", ctx) if eta is None else eta
+            k = _default_copper("k", ctx) if k is None else k
             return CoatedConductor(eta, k, **kw)
         if mtype == "hair":
             return _pbrt_hair(rec)
-        return ThinDielectric(_eta_param(rec))
+        return ThinDielectric(_eta_param(rec, ctx=ctx))
     except _PbrtError:
         raise
     except (ValueError, TypeError) as e:
         _pfail(rec, str(e))
+
+
+def _default_copper(part, ctx):
+    """pbrt-v4's default conductor: metal-Cu-eta / metal-Cu-k, from the named-spectra table."""
+    from ..spectral.spectrum import Spectrum
+    s = Spectrum.named(f"metal-Cu-{part}")
+    return s if ctx.get("spectral") else np.asarray(s.to_rgb("unbounded", illuminant=None), dtype=np.float64)
 
 
 def _pbrt_hair(rec):
@@ -719,7 +791,8 @@ def _pbrt_hair(rec):
     return Hair(sigma_a=sigma_a, **kw)
 
 
-def from_pbrt(source, *, skip_unsupported: bool = False, skip_missing_includes: bool = False) -> dict:
+def from_pbrt(source, *, skip_unsupported: bool = False, skip_missing_includes: bool = False,
+              spectral: bool = False) -> dict:
     """bsdfkit models for the materials of a pbrt-v4 scene: ``{name: BxDF}`` in file order.
 
     ``source``: scene text, or the path of a scene file (an ``os.PathLike``, or a ``str``
@@ -760,12 +833,19 @@ def from_pbrt(source, *, skip_unsupported: bool = False, skip_missing_includes: 
     Values: ``"rgb"`` (3 numbers, used as they are: pbrt's RGB-to-spectrum upsampling followed by
     a projection back to sRGB returns them up to the upsampling error), ``"float"`` (grey; pbrt itself only takes it for dielectric
     eta), ``"spectrum"`` as wavelength/value pairs (projected to linear sRGB as Mitsuba's RGB
-    variants do: CIE 1931 and D65, see :func:`spectrum_to_rgb`), or as a named spectrum:
-    ``metal-<X>-eta``/``metal-<X>-k`` for X in ``bsdfkit.METALS`` (Cu, Au, Ag, Al; Cr too,
-    which pbrt lacks) -- these are Mitsuba's RGB projections of Palik's measured data, not pbrt's
-    exact spectral tables, and pbrt's metal-CuZn, metal-MgO and metal-TiO2 are refused. Dielectric
-    eta is one number: a float, a grey rgb, a named glass (``PBRT_GLASS_ETA``) or pairs, the
-    spectra evaluated at 550 nm (pbrt renders them dispersively). ``displacement`` and
+    variants do: CIE 1931 and D65, see :func:`spectrum_to_rgb`), as a spectrum file (pbrt-v4: a
+    name that is not a named spectrum; whitespace-separated wavelength/value pairs, ``#``
+    comments; relative to the scene file's directory, pbrt-v4's search directory, or the working
+    directory for text; read as pairs), or as a named spectrum from the one table of
+    ``bsdfkit.Spectrum.named``: ``metal-<X>-eta``/``metal-<X>-k`` for every pbrt-v4 metal (Ag,
+    Al, Au, Cu, CuZn, MgO, TiO2; also ``mitsuba-<X>-...`` and ``jc-<X>-...``), projected to RGB
+    as ``Conductor`` projects a spectral eta / k (so RGB mode equals the spectral model's RGB
+    mode), and pbrt's glasses ``glass-<X>`` for dielectric eta. Dielectric eta is one number: a
+    float, a grey rgb, a named glass (``PBRT_GLASS_ETA``), pairs or a file, evaluated at 550 nm.
+    ``spectral=True`` keeps named and file spectra of metal eta / k and of dielectric /
+    thin-dielectric eta as ``bsdfkit.Spectrum`` values instead (a named glass then disperses in
+    spectral mode, as pbrt renders it; reflectances, the coats' interface eta and rgb values
+    stay RGB / scalar). ``displacement`` and
     ``normalmap`` change the geometry, not the BxDF, and are left out
     (``PbrtMaterial.ignored``).
 
@@ -777,11 +857,14 @@ def from_pbrt(source, *, skip_unsupported: bool = False, skip_missing_includes: 
     material naming it, its line and the reason (its ``material``, ``line`` and ``reason``
     attributes carry them); malformed text still raises.
     """
+    if not isinstance(spectral, (bool, np.bool_)):
+        raise TypeError(f"spectral: expected True or False, got {spectral!r}")
     text, path = _scene_source(source)
+    base = None if path is None else os.path.dirname(os.path.abspath(path))
     out = {}
     for rec in parse_pbrt_materials(text, path=path, skip_missing_includes=skip_missing_includes):
         try:
-            out[rec.name] = rec.to_bxdf()
+            out[rec.name] = rec.to_bxdf(spectral=spectral, base_dir=base)
         except _PbrtError as e:
             if not skip_unsupported:
                 raise

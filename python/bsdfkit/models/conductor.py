@@ -27,7 +27,10 @@ def _fresnel(f) -> str:
 
 # RGB eta / k of common metals: Mitsuba 3's RGB projection (CIE 1931 -> linear sRGB, no D65
 # weighting) of the measured spectral IOR data shipped in mitsuba-data/ior (Palik et al.
-# "Handbook of Optical Constants of Solids"). Checked against Mitsuba at test time.
+# "Handbook of Optical Constants of Solids"). Checked against Mitsuba at test time. These are the
+# presets from_mitsuba accepts by name; every named metal (spectral_metals(): 18, pbrt-v4's,
+# Mitsuba's and Johnson & Christy's, from the one table of Spectrum.named) is accepted by
+# Conductor.from_metal and, as pbrt's metal-<X>-eta / -k, by from_pbrt.
 METALS = {
     "Cu": ((0.201006, 0.923749, 1.102215), (3.913262, 2.453045, 2.142090)),
     "Au": ((0.143036, 0.375307, 1.442045), (3.982997, 2.385556, 1.603359)),
