@@ -69,3 +69,8 @@ def _bsdfkit_disk_cache(tmp_path_factory):
     its subprocesses (notebooks, CLI), unless BSDFKIT_CACHE_DIR already names one (CI may keep it)."""
     import os
     os.environ.setdefault("BSDFKIT_CACHE_DIR", str(tmp_path_factory.mktemp("bsdfkit-cache")))
+
+
+def pytest_configure(config):
+    # -m "not docs" leaves out the documentation build (tests/test_docs.py), ~20-50 s
+    config.addinivalue_line("markers", "docs: builds the Sphinx documentation (sphinx-build -W)")

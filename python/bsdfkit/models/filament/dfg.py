@@ -8,8 +8,9 @@ under :func:`cache_dir` (keyed by size, samples and the digest of the compiled b
 only the first process on a machine pays the few seconds it takes::
 
     >>> import bsdfkit as bk
-    >>> lut = bk.filament.dfg_lut(128)        # (128, 128, 3) float64, read-only
-    >>> lut[j, i]                             # (x, y, z) at roughness j / 127, NoV i / 127
+    >>> lut = bk.filament.dfg_lut(128)        # float64, read-only
+    >>> lut.shape                             # lut[j, i]: (x, y, z) at roughness j / 127, NoV i / 127
+    (128, 128, 3)
 
 Channels, with alpha = r**2 (r the perceptual roughness) and v at angle acos(NoV) from the normal:
 

@@ -1,0 +1,81 @@
+"""The documentation: the Sphinx site builds with warnings as errors, the README's models table is
+the one generated from the registry, and the examples of the README and of the self-contained
+docs pages run in a fresh process."""
+import importlib.util
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+# Pages whose ```python blocks form a complete program (the others show fragments of a workflow
+# that needs files, a cluster or minutes of fitting).
+RUNNABLE_PAGES = ["README.md", "docs/index.md", "docs/getting-started.md", "docs/howto/arrays.md",
+                  "docs/howto/interop.md"]
+
+
+def _ext():
+    spec = importlib.util.spec_from_file_location("bsdfkit_docs", DOCS / "_ext" / "bsdfkit_docs.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _env():
+    env = dict(os.environ, MPLBACKEND="Agg")
+    pkg = Path(__import__("bsdfkit").__file__).resolve().parents[1]   # the bsdfkit under test
+    env["PYTHONPATH"] = os.pathsep.join([str(pkg)] + [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p])
+    return env
+
+
+def test_readme_models_table_is_the_generated_one():
+    ext = _ext()
+    table = ext.readme_table()
+    assert table == ext.models_table(), "README.md's models table is stale: python docs/_ext/bsdfkit_docs.py --readme"
+    import bsdfkit as bk
+    names = re.findall(r"^\| `(\w+)` \|", table, re.M)
+    assert names == [cls.__name__ for cls in bk.MODELS]
+
+
+def test_readme_is_a_landing_page():
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert len(text.encode()) <= 8 * 1024
+    # the two commands, exactly
+    assert "scripts/demo" in text and "scripts/test" in text
+
+
+@pytest.mark.parametrize("page", RUNNABLE_PAGES)
+def test_page_examples_run_in_a_fresh_process(page, tmp_path):
+    blocks = re.findall(r"```python\n(.*?)```", (ROOT / page).read_text(encoding="utf-8"), re.S)
+    assert blocks, f"{page} has no python example"
+    script = tmp_path / "example.py"
+    script.write_text("\n".join(blocks))
+    r = subprocess.run([sys.executable, str(script)], cwd=tmp_path, env=_env(), capture_output=True, text=True,
+                       timeout=600)
+    assert r.returncode == 0, f"{page}'s example failed:\n{r.stderr[-3000:]}"
+
+
+@pytest.mark.docs
+def test_sphinx_build_has_no_warnings(tmp_path):
+    """scripts/docs' build (sphinx-build -W): every page, the API reference over bsdfkit.__all__
+    and the models reference generated from the registry, with its figures."""
+    pytest.importorskip("sphinx")
+    pytest.importorskip("myst_parser")
+    pytest.importorskip("furo")
+    out = tmp_path / "html"
+    r = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "html",
+                        "-d", str(tmp_path / "doctrees"), str(DOCS), str(out)],
+                       cwd=ROOT, env=_env(), capture_output=True, text=True, timeout=1200)
+    assert r.returncode == 0, f"sphinx-build -W failed:\n{r.stderr[-5000:]}"
+    models = (out / "reference" / "models.html").read_text(encoding="utf-8")
+    import bsdfkit as bk
+    for cls in bk.MODELS:   # every registered model has its section and its figure
+        assert f'id="model-{cls.__name__.lower()}"' in models, cls.__name__
+        assert f"model_{cls.__name__}.png" in models, cls.__name__
+    api = (out / "reference" / "api.html").read_text(encoding="utf-8")
+    for name in ("Conductor", "tradeoff", "simplify", "fit", "Spectrum"):
+        assert f"bsdfkit.{name}" in api
