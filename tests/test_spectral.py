@@ -462,10 +462,10 @@ def test_monte_carlo_colour_converges(method):
 def test_spectrum_to_rgb_terminated_and_bad_input():
     lam, pdf = bk.sample_wavelengths(np.array([0.3]))
     v = np.ones((1, 4))
-    full = bk.spectrum_to_rgb(v, lam, pdf, space="xyz")
+    full = bk.spectrum_to_rgb(v, lam, pdf, space="xyz", illuminant=None)
     pdf_t = pdf.copy()
     pdf_t[:, 1:] = 0                                       # pbrt's TerminateSecondary zeroes them
-    one = bk.spectrum_to_rgb(v, lam, pdf_t, space="xyz")
+    one = bk.spectrum_to_rgb(v, lam, pdf_t, space="xyz", illuminant=None)
     want = colorimetry.cmfs(lam[0, 0]) / pdf[0, 0] / 4 / colorimetry.cie_y_integral()
     np.testing.assert_allclose(one[0], want, rtol=1e-12)
     assert not np.allclose(one, full)
@@ -476,12 +476,12 @@ def test_spectrum_to_rgb_terminated_and_bad_input():
     with pytest.raises(ValueError, match="method"):
         bk.sample_wavelengths(0.5, method="hero")
     with pytest.raises(ValueError, match="wavelengths"):
-        bk.spectrum_to_rgb(v, lam + 500, pdf)
+        bk.spectrum_to_rgb(v, lam + 500, pdf, illuminant=None)
     with pytest.raises(ValueError, match="pdf"):
-        bk.spectrum_to_rgb(v, lam, -pdf)
+        bk.spectrum_to_rgb(v, lam, -pdf, illuminant=None)
     with pytest.raises(ValueError, match="values"):
-        bk.spectrum_to_rgb(np.full((1, 4), np.nan), lam, pdf)
+        bk.spectrum_to_rgb(np.full((1, 4), np.nan), lam, pdf, illuminant=None)
     with pytest.raises(ValueError, match="broadcast"):
-        bk.spectrum_to_rgb(np.ones((2, 3)), lam, pdf)
+        bk.spectrum_to_rgb(np.ones((2, 3)), lam, pdf, illuminant=None)
     with pytest.raises(ValueError, match="space"):
-        bk.spectrum_to_rgb(v, lam, pdf, space="lab")
+        bk.spectrum_to_rgb(v, lam, pdf, space="lab", illuminant=None)

@@ -62,7 +62,10 @@ def sample_wavelengths(u, method: str = "visible"):
     return lam, np.full(lam.shape, 1.0 / (hi - lo))
 
 
-def spectrum_to_rgb(values, wavelengths, pdf, *, space: str = "srgb", illuminant=None) -> np.ndarray:
+_REQUIRED = object()
+
+
+def spectrum_to_rgb(values, wavelengths, pdf, *, space: str = "srgb", illuminant=_REQUIRED) -> np.ndarray:
     """Monte Carlo estimate of the colour of spectral samples (pbrt-v4
     ``SampledSpectrum::ToXYZ`` / ``ToRGB``): XYZ = mean over the last axis of
     values * cmf(lambda) / pdf, divided by the integral of y-bar (pbrt-v4's 1 nm CIE 1931 table
@@ -70,10 +73,16 @@ def spectrum_to_rgb(values, wavelengths, pdf, *, space: str = "srgb", illuminant
 
     values, wavelengths, pdf: broadcast together, last axis = the wavelengths of one estimate
     (4 from :func:`sample_wavelengths`). space: "srgb" (linear, BT.709 primaries) or "xyz".
-    illuminant: None (``values`` are radiance) or "D65" (``values`` are reflectances lit by
-    D65 of unit luminance). Returns float64 (..., 3): one estimate per leading index; average
-    them for the pixel value.
+    illuminant (required, keyword): ``"D65"`` when ``values`` are reflectances or BSDF sampling
+    weights (``s.weight``: the colour of the material lit by white D65 light of unit luminance),
+    ``None`` when they are radiance (a rendered path's spectrum). There is no default: the
+    function cannot tell the two apart, and taking a clear glass's weights as radiance turns it
+    red ([0.558, 0.437, 0.416] instead of [0.463, 0.461, 0.458]). Returns float64 (..., 3): one
+    estimate per leading index; average them for the pixel value.
     """
+    if illuminant is _REQUIRED:
+        raise TypeError("illuminant: required: 'D65' if values are reflectances or BSDF weights (s.weight: the "
+                        "material under white light), None if they are radiance")
     if space not in ("srgb", "xyz"):
         raise ValueError(f"space: expected 'srgb' or 'xyz', got {space!r}")
     if illuminant not in (None, "D65"):
