@@ -33,13 +33,20 @@ def difference(a: BxDF, b: BxDF, view="polar", *, floor=1e-3, ax=None, **kwargs)
     ``"polar"`` (:func:`polar`), ``"hemisphere"`` (:func:`hemisphere`) or ``"halfdiff"``
     (:func:`halfdiff`); ``kwargs`` go to that view (theta_o, channel, log, ...). The plotted value
     is :func:`difference_model`'s ``|f_b - f_a| / max(|f_a|, floor max f_a)`` (1 = 100 %); delta
-    lobes are not compared (eval reports them as 0). Returns the view's Axes."""
+    lobes are not compared (eval reports them as 0). The colour bar / radius is labelled as that
+    relative difference (dimensionless), not as f; ``cosine=True`` is refused (a ratio has no
+    cosine factor). Returns the view's Axes."""
     from ._halfdiff import halfdiff
     from ._hemisphere import hemisphere
     from ._polar import polar
     fns = {"polar": polar, "hemisphere": hemisphere, "halfdiff": halfdiff}
     if view not in fns:
         raise ValueError(f"view: must be one of {', '.join(map(repr, _VIEWS))}, got {view!r}")
+    if kwargs.get("cosine"):
+        raise ValueError("cosine: the relative difference |f_b - f_a| / f_a is the same with or without the "
+                         "cosine factor; leave cosine unset")
+    kwargs.pop("cosine", None)
+    kwargs.setdefault("quantity", "|f_b − f_a| / f_a (relative, 1 = 100 %)")
     m = difference_model(a, b, floor)
     import textwrap
     kwargs.setdefault("title", "relative difference |f_b − f_a| / f_a\n" + "\n".join(

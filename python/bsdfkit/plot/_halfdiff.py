@@ -37,8 +37,9 @@ def _halfdiff_dirs(theta_h, theta_d, phi_h, phi_d):
 
 def halfdiff(model_or_list, phi_d=90.0, sqrt_theta_h=True, log=True, cosine=False, channel="luminance", ax=None,
              res=128, label=None, *, phi_h=0.0, title=None, legend=True, colorbar=True, cmap="inferno",
-             log_decades=4.0, vmax=None, grazing_deg=85.0, mode=TransportMode.Radiance):
-    """θh × θd image of ``f`` (or ``f |cos θi|``) in Rusinkiewicz half/difference coordinates at
+             log_decades=4.0, vmax=None, grazing_deg=85.0, mode=TransportMode.Radiance, quantity=None):
+    """θh × θd image of ``f`` (or ``f |cos θi|``; ``quantity``: its label with the unit, as in
+    :func:`hemisphere`) in Rusinkiewicz half/difference coordinates at
     a fixed ``phi_d`` (degrees; default 90°, Disney BRDF Explorer's slice) and ``phi_h``
     (degrees; matters for anisotropic models only).
 
@@ -116,7 +117,7 @@ def halfdiff(model_or_list, phi_d=90.0, sqrt_theta_h=True, log=True, cosine=Fals
         from matplotlib.patches import Patch
 
         handles.append(Patch(fc="0.85", ec="0.6", label="ωo or ωi below the horizon"))
-    q = _quantity(cosine)
+    q = _quantity(cosine) if quantity is None else str(quantity)
     cb = None
     if colorbar and im is not None:
         cb = ax.figure.colorbar(im, ax=ax, shrink=0.85, pad=0.02,

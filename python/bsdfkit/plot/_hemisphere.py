@@ -19,8 +19,10 @@ __all__ = ["hemisphere"]
 def hemisphere(model_or_list, theta_o=30.0, phi_o=0.0, projection="disk", log=False, cosine=False,
                channel="luminance", ax=None, res=121, label=None, *, side="auto", title=None, legend=True,
                colorbar=True, cmap="inferno", log_decades=4.0, mode=TransportMode.Radiance, n_delta=4096, seed=0,
-               magnify_below=0.04):
+               magnify_below=0.04, quantity=None):
     """Image of ``f(wo, wi)`` (or ``f |cos θi|`` with ``cosine=True``) over every direction wi.
+    ``quantity``: the label of the plotted value with its unit (default ``"f [1/sr]"`` or
+    ``"f·|cos θi| [1/sr]"``; :func:`difference` gives its relative difference's).
 
     ``wo = bk.direction(radians(theta_o), radians(phi_o))`` (degrees in, marked "ωo"; its mirror
     direction, azimuth ``phi_o + 180``, is marked "+").
@@ -182,14 +184,15 @@ def hemisphere(model_or_list, theta_o=30.0, phi_o=0.0, projection="disk", log=Fa
         handles.append(Line2D([], [], marker="*", ms=11, mfc="C0", mec="w", ls="none",
                               label="delta lobe (eval = 0; R/T = reflectance/transmittance)"))
 
-    q = _quantity(cosine)
+    q = _quantity(cosine) if quantity is None else str(quantity)
+    unit = " 1/sr" if quantity is None else ""
     cb = None
     if colorbar:
         cb = _colorbar(ax, im, f"{q}{' (log scale)' if log else ''}" + (f" — {entries[0]['label']}"
                                                                       if len(entries) > 1 else ""),
                        inset=projection == "disk")
         if cb is None and channel == "rgb":
-            ax.text(0.0, -0.02, f"RGB scaled so that {_fmt(vmax)} 1/sr is white", transform=ax.transAxes,
+            ax.text(0.0, -0.02, f"RGB scaled so that {_fmt(vmax)}{unit} is white", transform=ax.transAxes,
                     fontsize="x-small", va="top")
     if title is None:
         title = (f"{q} over ωi ({channel}{', log' if log else ''}), θo = {theta_o:g}°, φo = {phi_o:g}°\n"

@@ -65,7 +65,7 @@ def _weak_half(val, z, below):
 def polar(model_or_list, theta_o=30.0, phi_plane=0.0, log=False, cosine=False, channel="luminance",
           ax=None, n=721, label=None, *, title=None, legend=True, log_decades=4.0,
           mode=TransportMode.Radiance, n_delta=4096, seed=0, colors=None, linestyle="-",
-          annotate_delta=True, magnify_below=0.04):
+          annotate_delta=True, magnify_below=0.04, quantity=None):
     """In-plane slice of the lobe(s) over the full circle, in a polar Axes.
 
     Plots ``f(wo, wi)`` (or ``f(wo, wi) |cos θi|`` with ``cosine=True``) for ``wi`` in the plane of
@@ -84,7 +84,11 @@ def polar(model_or_list, theta_o=30.0, phi_plane=0.0, log=False, cosine=False, c
     factor (dotted, labelled "×factor") so that it does not vanish; 0 or None turns this off.
     log: radial axis logarithmic, covering ``log_decades`` decades below the largest value
     (values below are drawn at the centre; an overlaid curve lying entirely below the range of
-    the first call says so in its legend entry).
+    the first call says so in its legend entry). The radial range (linear or log) is set by the
+    values off the horizon: the samples at θi = ±90° exactly (cos θi = 0, where a value may be
+    singular) are drawn but clipped at the rim instead of setting the scale.
+    quantity: the label of the plotted value with its unit (default ``"f [1/sr]"`` or
+    ``"f·|cos θi| [1/sr]"``; :func:`difference` gives its relative difference's).
     ax: a polar Axes to draw into (created if None); calling again on the same Axes overlays
     and appends to its data (the radial mapping of the first call is kept).
 
@@ -122,6 +126,10 @@ def polar(model_or_list, theta_o=30.0, phi_plane=0.0, log=False, cosine=False, c
         return _select(f * cos_i[:, None] if cosine else f, channel)
 
     entries = _model_entries(models, labels, value, wo, xdir, n_delta, seed, mode, channel)
+    # the radial scale ignores the two samples exactly on the horizon (θi = ±90°, cos θi = 0),
+    # where a model's value may be singular: one such sample set the whole scale and flattened
+    # the plot (e.g. a relative difference where the reference is 0); they are clipped at the rim
+    off_horizon = cos_i > 1e-9
 
     data = getattr(ax, "bsdfkit_data", None)
     first = not (isinstance(data, dict) and data.get("kind") == "polar")
@@ -130,7 +138,7 @@ def polar(model_or_list, theta_o=30.0, phi_plane=0.0, log=False, cosine=False, c
                     wi=[], wo=[], theta_o=[], phi_plane=[], label=[], model=[], delta=[],
                     magnified=[])
         if log:
-            vmax = max([float(np.max(e["value"])) for e in entries]
+            vmax = max([float(np.max(e["value"][off_horizon])) for e in entries]
                        + [float(np.max(d["value"])) for e in entries for d in e["delta"]] + [0.0])
             vmax = vmax if vmax > 0 else 1.0
             data["log_floor"] = 10.0 ** (math.ceil(math.log10(vmax)) - float(log_decades))
@@ -219,7 +227,8 @@ def polar(model_or_list, theta_o=30.0, phi_plane=0.0, log=False, cosine=False, c
     ax.set_thetalim(0.0, 2 * math.pi)
     ticks = np.arange(0, 360, 30)
     ax.set_thetagrids(ticks, [f"{a if a <= 180 else a - 360}°" for a in ticks])
-    drawn = [float(np.max(rmap(v))) for v in data["value"]]
+    drawn = [float(np.max(rmap(v[np.abs(np.abs(np.asarray(td)) - 90.0) > 1e-9])))
+             for v, td in zip(data["value"], data["theta_deg"])]
     drawn += [float(np.max(rmap(d["value"]))) for ds in data["delta"] for d in ds]
     top = max(drawn + [0.0])
     if log:
@@ -251,9 +260,10 @@ def polar(model_or_list, theta_o=30.0, phi_plane=0.0, log=False, cosine=False, c
         ax.annotate("ωo", xy=(math.radians(-theta_o), ax.get_ylim()[1] * 0.9), fontsize="small",
                     xytext=(-4, 0), textcoords="offset points", ha="right", va="center",
                     bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.8))
-    quantity = "f·|cos θi|" if data["cosine"] else "f"
+    if quantity is None:
+        quantity = ("f·|cos θi|" if data["cosine"] else "f") + " [1/sr]"
     if title is None:
-        title = (f"{quantity} [1/sr]{' (log radius)' if log else ''} vs θi [°]\n"
+        title = (f"{quantity}{' (log radius)' if log else ''} vs θi [°]\n"
                  f"plane φ = {phi_plane:g}°, θo = {theta_o:g}°")
     if title:
         ax.set_title(title, fontsize="medium", pad=12)
