@@ -21,6 +21,7 @@ extensions = [
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
     "myst_parser",
+    "matplotlib.sphinxext.plot_directive",
     "bsdfkit_docs",
 ]
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
@@ -41,3 +42,9 @@ napoleon_numpy_docstring = True
 napoleon_google_docstring = False
 nitpicky = False
 suppress_warnings = ["myst.header"]
+
+# matplotlib's plot directive (the gallery): figures drawn at build time from the code shown
+plot_formats = [("png", 80)]
+plot_html_show_formats = False
+plot_html_show_source_link = False
+plot_rcparams = {"figure.max_open_warning": 0}

@@ -46,6 +46,7 @@ def test_readme_is_a_landing_page():
     assert len(text.encode()) <= 8 * 1024
     # the two commands, exactly
     assert "scripts/demo" in text and "scripts/test" in text
+    assert len((ROOT / "CONTRIBUTING.md").read_bytes()) <= 10 * 1024   # the checklist, not a log
 
 
 @pytest.mark.parametrize("page", RUNNABLE_PAGES)
@@ -76,6 +77,8 @@ def test_sphinx_build_has_no_warnings(tmp_path):
     for cls in bk.MODELS:   # every registered model has its section and its figure
         assert f'id="model-{cls.__name__.lower()}"' in models, cls.__name__
         assert f"model_{cls.__name__}.png" in models, cls.__name__
+    gallery = (out / "gallery.html").read_text(encoding="utf-8")
+    assert gallery.count("gallery-") >= 3   # the three figures drawn by the plot directive
     api = (out / "reference" / "api.html").read_text(encoding="utf-8")
     for name in ("Conductor", "tradeoff", "simplify", "fit", "Spectrum"):
         assert f"bsdfkit.{name}" in api

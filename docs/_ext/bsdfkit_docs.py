@@ -163,13 +163,13 @@ def _render_figures(app) -> dict:
         path = outdir / f"model_{cls.__name__}.png"
         try:
             m = parse_spec(spec)
-            fig, axes = plt.subplots(1, 2, figsize=(8, 3.2), subplot_kw=None)
-            fig.delaxes(axes[0])
-            fig.delaxes(axes[1])
+            fig = plt.figure(figsize=(9, 4.2))
             ax0 = fig.add_subplot(1, 2, 1, projection="polar")
-            bkplot.polar(m, theta_o=40, ax=ax0)
+            bkplot.polar(m, theta_o=40, log=True, ax=ax0)
+            ax0.set_title("f in the plane of incidence (log radius), θo = 40°", fontsize=9)
             ax1 = fig.add_subplot(1, 2, 2)
             bkplot.albedo(m, ax=ax1)
+            ax1.set_title("directional albedo", fontsize=9)
             fig.suptitle(f"{cls.__name__}: {label}", fontsize=10)
             fig.tight_layout()
             fig.savefig(path, dpi=80)
