@@ -124,3 +124,13 @@ def test_value_semantics_and_bad_input():
             bk.NormalizedFresnel(bad)
     with pytest.raises(TypeError, match="eta"):
         bk.NormalizedFresnel("1.5")
+
+
+@pytest.mark.parametrize("eta, bound", [(1.1, 3e-4), (1.33, 3e-4), (1.5, 3e-4), (2.0, 3e-4), (3.0, 1e-3),
+                                        (0.5, 6e-3), (0.75, 6e-3), (0.9, 6e-3)])
+def test_importance_albedo_bound_stated_in_the_docstring(eta, bound):
+    """The docstring's bounds on the Importance-mode albedo (issue 50, item 11): 1 only up to
+    pbrt-v4's FresnelMoment1 polynomial, which is worst for eta < 1 (1.004 at eta 0.5)."""
+    wo = bk.direction(theta=0.5, phi=0.0)
+    a = bk.NormalizedFresnel(eta).albedo(wo, n_samples=1 << 20, seed=1, mode=bk.TransportMode.Importance)
+    assert np.all(np.abs(a - 1) <= bound), a

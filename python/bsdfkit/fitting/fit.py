@@ -29,7 +29,9 @@ class FitReport:
     max(f_target |cos|, floor) over the fitted pairs; albedo_error: max over the albedo directions
     and channels of |albedo - albedo_target| (Monte Carlo, ``None`` for raw-sample targets);
     nfev / njev: residual and Jacobian evaluations (all starts); time: seconds; starts: number of
-    starting points; success / message: scipy's for the best start.
+    starting points; success / message: scipy's for the best start -- whether the optimizer
+    converged, not whether the fit is good (a converged fit of the wrong family can have a p99
+    error of 0.8): judge the fit by rel_p99 / rel_max / albedo_error.
     """
 
     model: object
@@ -59,7 +61,9 @@ class FitReport:
                  ("rel. error p99", _rgb_txt(self.rel_p99)),
                  ("albedo error", "n/a (raw samples)" if self.albedo_error is None else f"{self.albedo_error:.3g}"),
                  ("evaluations", f"{self.nfev} residuals, {self.njev} Jacobians, {self.starts} start(s)"),
-                 ("time", f"{self.time:.3g} s"), ("status", ("ok: " if self.success else "FAILED: ") + self.message)]
+                 ("time", f"{self.time:.3g} s"),
+                 ("optimizer", ("converged: " if self.success else "FAILED: ") + self.message
+                  + " (convergence only; how well the family fits is the errors above)")]
         return rows
 
     def __repr__(self):

@@ -103,6 +103,8 @@ class Conductor(BxDF):
     )
 
     def __init__(self, eta, k, alpha=None, alpha_x=None, alpha_y=None, masking="correlated", fresnel="exact"):
+        """A Conductor: the parameters are described in the class docstring (``help(bsdfkit.Conductor)``);
+        a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
         ax, ay = _alphas(alpha, alpha_x, alpha_y)
         super().__init__(eta=_sp.spectrum_or_rgb(eta, "eta", lo=0.0, lo_open=True),
                          k=_sp.spectrum_or_rgb(k, "k", lo=0.0),

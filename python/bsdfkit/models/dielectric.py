@@ -49,6 +49,8 @@ class Dielectric(BxDF):
     knobs = (masking_knob(_dielectric_masking_moot),)
 
     def __init__(self, eta=1.5, alpha=None, alpha_x=None, alpha_y=None, masking="correlated"):
+        """A Dielectric: the parameters are described in the class docstring (``help(bsdfkit.Dielectric)``);
+        a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
         ax, ay = _alphas(alpha, alpha_x, alpha_y)
         super().__init__(eta=_sp.spectrum_or_scalar(eta, "eta", lo=0.0, lo_open=True), alpha_x=ax, alpha_y=ay,
                          masking=_masking(masking))
@@ -125,6 +127,8 @@ class ThinDielectric(BxDF):
     mitsuba = "thindielectric"
 
     def __init__(self, eta=1.5):
+        """A ThinDielectric: the parameters are described in the class docstring (``help(bsdfkit.ThinDielectric)``);
+        a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
         super().__init__(eta=_sp.spectrum_or_scalar(eta, "eta", lo=0.0, lo_open=True))
 
     @classmethod

@@ -28,6 +28,8 @@ class Diffuse(BxDF):
     param_ranges = {"reflectance": (0.0, 1.0)}  # fitting bounds (bk.fit)
 
     def __init__(self, reflectance=0.5):
+        """A Diffuse: the parameters are described in the class docstring (``help(bsdfkit.Diffuse)``);
+        a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
         super().__init__(reflectance=_sp.spectrum_or_rgb(reflectance, "reflectance", lo=0.0, hi=1.0))
 
     @classmethod
@@ -72,6 +74,8 @@ class DiffuseTransmission(BxDF):
     param_ranges = {"reflectance": (0.0, 1.0), "transmittance": (0.0, 1.0)}  # fitting bounds (bk.fit)
 
     def __init__(self, reflectance=0.25, transmittance=0.25):
+        """A DiffuseTransmission: the parameters are described in the class docstring (``help(bsdfkit.DiffuseTransmission)``);
+        a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
         super().__init__(reflectance=_sp.spectrum_or_rgb(reflectance, "reflectance", lo=0.0, hi=1.0),
                          transmittance=_sp.spectrum_or_rgb(transmittance, "transmittance", lo=0.0, hi=1.0))
 

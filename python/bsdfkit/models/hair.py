@@ -173,6 +173,8 @@ class Hair(BxDF):
         return mitsuba_dict(dict(self._params, sigma_a=_sigma_a_rgb(self._params["sigma_a"])))
 
     def __init__(self, sigma_a=None, eta=1.55, beta_m=0.3, beta_n=0.3, alpha=2.0, h=0.0, nodes=64):
+        """A Hair: the parameters are described in the class docstring (``help(bsdfkit.Hair)``);
+        a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
         if sigma_a is None:  # pbrt-v4's default: eumelanin 1.3
             sigma_a = sigma_a_from_concentration(1.3, 0.0)
         super().__init__(sigma_a=_sp.spectrum_or_rgb(sigma_a, "sigma_a", lo=0.0),

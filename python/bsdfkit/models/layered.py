@@ -138,6 +138,8 @@ class _ByMethod:
     (the analytic method is an exact, reciprocal closed form)."""
 
     def __init__(self, stochastic: bool, analytic: bool):
+        """A None: the parameters are described in the class docstring (``help(bsdfkit.None)``);
+        a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
         self.stochastic, self.analytic = stochastic, analytic
 
     def __get__(self, obj, cls=None):
@@ -194,7 +196,7 @@ class _AnalyticSpectral:
 
 
 class CoatedDiffuse(_AnalyticSpectral, BxDF):
-    """Diffuse base under a dielectric coating with an optional scattering medium between them:
+    __doc__ = """Diffuse base under a dielectric coating with an optional scattering medium between them:
     pbrt-v4's ``CoatedDiffuseBxDF`` (``LayeredBxDF<DielectricBxDF, DiffuseBxDF, true>``).
 
     reflectance: albedo of the Lambertian base, scalar or RGB in [0, 1].
@@ -232,6 +234,8 @@ class CoatedDiffuse(_AnalyticSpectral, BxDF):
     def __init__(self, reflectance=0.5, eta=1.5, alpha=None, alpha_x=None, alpha_y=None, thickness=0.01,
                  albedo=0.0, g=0.0, max_depth=10, n_samples=1, seed=0, masking="correlated", mis="pbrt",
                  method="stochastic"):
+        """A CoatedDiffuse: the parameters are described in the class docstring (``help(bsdfkit.CoatedDiffuse)``);
+        a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
         ax, ay = _alphas(alpha, alpha_x, alpha_y)
         super().__init__(reflectance=_sp.spectrum_or_rgb(reflectance, "reflectance", lo=0.0, hi=1.0),
                          eta=_scalar(eta, "eta", lo=0.0, lo_open=True), alpha_x=ax, alpha_y=ay,
@@ -277,7 +281,7 @@ class CoatedDiffuse(_AnalyticSpectral, BxDF):
 
 
 class CoatedConductor(_AnalyticSpectral, BxDF):
-    """Metal under a dielectric coating with an optional scattering medium between them
+    __doc__ = """Metal under a dielectric coating with an optional scattering medium between them
     (car paint, lacquered metal): pbrt-v4's ``CoatedConductorBxDF``
     (``LayeredBxDF<DielectricBxDF, ConductorBxDF, true>``).
 
@@ -324,6 +328,8 @@ class CoatedConductor(_AnalyticSpectral, BxDF):
                  conductor_alpha_y=None, interface_eta=1.5, interface_alpha=0.0, interface_alpha_x=None,
                  interface_alpha_y=None, thickness=0.01, albedo=0.0, g=0.0, max_depth=10, n_samples=1, seed=0,
                  masking="correlated", mis="pbrt", method="stochastic"):
+        """A CoatedConductor: the parameters are described in the class docstring (``help(bsdfkit.CoatedConductor)``);
+        a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
         cax, cay = _named_alphas(conductor_alpha, conductor_alpha_x, conductor_alpha_y, "conductor_alpha")
         iax, iay = _named_alphas(interface_alpha, interface_alpha_x, interface_alpha_y, "interface_alpha")
         super().__init__(conductor_eta=_sp.spectrum_or_rgb(conductor_eta, "conductor_eta", lo=0.0, lo_open=True),

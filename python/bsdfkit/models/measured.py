@@ -246,6 +246,8 @@ class MERL(BxDF):
     __slots__ = ("_keep",)
 
     def __init__(self, path, interpolation="nearest", *, digest=None):
+        """A MERL: the parameters are described in the class docstring (``help(bsdfkit.MERL)``);
+        a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
         if not isinstance(interpolation, str) or interpolation not in _INTERPOLATION:
             raise ValueError(f"interpolation: must be 'nearest' or 'linear', got {interpolation!r}")
         if digest is not None and not isinstance(digest, str):
@@ -675,6 +677,8 @@ class Measured(BxDF):
     __slots__ = ("_keep", "__weakref__")
 
     def __init__(self, path=None, *, digest=None, data=None):
+        """A Measured: the parameters are described in the class docstring (``help(bsdfkit.Measured)``);
+        a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
         if (path is None) == (data is None):
             raise ValueError("path, data: give exactly one of them")
         if data is not None:

@@ -106,6 +106,8 @@ class Plastic(BxDF):
 
     def __init__(self, reflectance=0.5, eta=1.49, alpha=0.0, nonlinear=False, masking="correlated",
                  specular_reflectance=1.0):
+        """A Plastic: the parameters are described in the class docstring (``help(bsdfkit.Plastic)``);
+        a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
         eta = _scalar(eta, "eta", lo=0.0, lo_open=True)
         if eta == 1.0:
             raise ValueError("eta: must differ from 1 (an index-matched coating is not a plastic; "
