@@ -323,7 +323,9 @@ def test_from_pbrt_coated_materials():
     MakeNamedMaterial "r" "string type" "coatedconductor" "rgb reflectance" [0.9 0.5 0.3]
     '''
     m = bk.from_pbrt(text)
-    au_eta, au_k = bk.METALS["Au"]
+    # pbrt-v4's named gold, from the table of Spectrum.named, projected as Conductor projects spectra
+    au_eta, au_k = (bk.Spectrum.named(f"metal-Au-{p}").to_rgb("unbounded", illuminant=None) for p in ("eta", "k"))
+    np.testing.assert_allclose([au_eta, au_k], bk.METALS["Au"], rtol=5e-6)   # = Mitsuba's preset to 6 digits
     assert m["paint"] == bk.CoatedConductor(au_eta, au_k, conductor_alpha_x=0.3, conductor_alpha_y=0.2,
                                             interface_eta=1.4, interface_alpha=0.1, albedo=[0.5, 0.1, 0.1],
                                             thickness=0.1, max_depth=20, n_samples=4, g=0.3)
