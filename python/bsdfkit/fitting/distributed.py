@@ -209,9 +209,15 @@ def fit_many(targets, family, client=None, *, n_workers=None, progress=None, lab
         raise TypeError("targets: expected a sequence (list or tuple) of targets")
     targets = list(targets)
     try:
-        inspect.signature(fit).bind(None, family, **fit_kwargs)
+        bound = inspect.signature(fit).bind(None, family, **fit_kwargs)
     except TypeError as e:
         raise TypeError(f"fit_many: {e} (keywords are passed to bk.fit)") from None
+    # the same for every target: checked here, before any cluster starts (a typo in params
+    # failed every target, after a cluster had started)
+    from .fit import _family_setup
+    bound.apply_defaults()
+    a = bound.arguments
+    _family_setup(family, a["params"], a["init"], a["fixed"], a["loss"], a["starts"])
     if labels is None:
         labels = [_label(t, i) for i, t in enumerate(targets)]
     else:

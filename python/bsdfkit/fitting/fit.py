@@ -205,6 +205,26 @@ def _residuals(loss, y_t, floor, w):
     return (lambda y: w * (np.log(y + floor) - lt)), (lambda y: w / (y + floor))
 
 
+def _family_setup(family, params, init, fixed, loss, starts):
+    """Everything of ``fit``'s arguments that does not depend on the target, checked (ValueError
+    naming the argument): (starting model, params, column names, columns, lower, upper bounds).
+    ``fit_many`` calls it before it starts a cluster."""
+    if loss not in _LOSSES:
+        raise ValueError(f"loss: must be one of {_LOSSES}, got {loss!r}")
+    if isinstance(starts, bool) or not isinstance(starts, int) or starts < 1:
+        raise ValueError(f"starts: must be an integer >= 1, got {starts!r}")
+    m0 = _start_model(family, init, fixed)
+    if params is None:
+        fixed_names = set(fixed or ())
+        iso = [p for p in differentiable_params(m0) if p.endswith("alpha") and p + "_x" in m0._params]
+        params = [p for p in differentiable_params(m0) if p not in fixed_names and p not in iso
+                  and (m0._params.get(p, 0) is not None or hasattr(m0, "effective_" + p))
+                  and not any(p in (a + "_x", a + "_y") and a in fixed_names for a in iso)]
+    names, cols = _columns(m0, params)
+    lo, hi = _bounds(family, names)
+    return m0, params, names, cols, lo, hi
+
+
 def fit(target, family, params=None, init=None, fixed=None, directions=None, loss="log", weights=None, *,
         starts=1, n=4096, seed=0, max_nfev=200, tol=1e-12, albedo=True):
     """Fit the model class ``family`` to ``target`` by least squares on f |cos theta_i|.
@@ -231,20 +251,8 @@ def fit(target, family, params=None, init=None, fixed=None, directions=None, los
     """
     from scipy.optimize import least_squares
     t0 = time.perf_counter()
-    if loss not in _LOSSES:
-        raise ValueError(f"loss: must be one of {_LOSSES}, got {loss!r}")
-    if isinstance(starts, bool) or not isinstance(starts, int) or starts < 1:
-        raise ValueError(f"starts: must be an integer >= 1, got {starts!r}")
+    m0, params, names, cols, lo, hi = _family_setup(family, params, init, fixed, loss, starts)
     wo, wi, y_t, target_model = _target_samples(target, directions, n, seed)
-    m0 = _start_model(family, init, fixed)
-    if params is None:
-        fixed_names = set(fixed or ())
-        iso = [p for p in differentiable_params(m0) if p.endswith("alpha") and p + "_x" in m0._params]
-        params = [p for p in differentiable_params(m0) if p not in fixed_names and p not in iso
-                  and (m0._params.get(p, 0) is not None or hasattr(m0, "effective_" + p))
-                  and not any(p in (a + "_x", a + "_y") and a in fixed_names for a in iso)]
-    names, cols = _columns(m0, params)
-    lo, hi = _bounds(family, names)
     cos_i = np.abs(wi[:, 2:3])
     floor = FLOOR_FRACTION * float(np.mean(y_t))
     if not floor > 0:

@@ -217,7 +217,29 @@ def _op(model) -> str:
     return "sample" if _all_delta(model) else "eval"
 
 
-def _measure(configs, op, n_timing, repeats, rounds, seed):
+#: Wall time (s) the live timing of tradeoff aims at when n_timing is left to its default.
+TIMING_BUDGET_S = 15.0
+#: Fewest pairs per timed call the budget may reduce n_timing to.
+MIN_AUTO_TIMING = 64
+
+
+def _budgeted_n_timing(configs, op, n_timing, repeats, rounds, seed, budget=TIMING_BUDGET_S):
+    """n_timing reduced so that timing every configuration (each call beside a reference call,
+    ``repeats`` + 2 calls each, ``rounds`` times) stays within ``budget`` seconds, estimated
+    from one call of the most accurate (slowest) configuration; at least MIN_AUTO_TIMING."""
+    inputs = _timing_inputs(configs[0].model, n_timing, seed)
+    call = _timed_call(configs[0], op, inputs)
+    call()
+    t0 = time.perf_counter()
+    call()
+    t = time.perf_counter() - t0
+    est = t * len(configs) * 2 * (repeats + 2) * rounds
+    if est <= budget:
+        return n_timing
+    return max(MIN_AUTO_TIMING, int(n_timing * budget / est))
+
+
+def _measure(configs, op, n_timing, repeats, rounds, seed, progress=False):
     """Live throughput: every configuration timed right after the most accurate one (``repeats``
     repeats each), in ``rounds`` interleaved rounds; returns (evals/s, speedup, spread) lists,
     speedup = smallest reference time of the run / smallest time of the configuration (a load
@@ -227,11 +249,17 @@ def _measure(configs, op, n_timing, repeats, rounds, seed):
     calls = [_timed_call(c, op, inputs) for c in configs]
     ref_times = []
     times = [[] for _ in configs]
-    for _ in range(rounds):
-        for i, call in enumerate(calls):
-            ref_times += time_repeats(calls[0], repeats)
-            if i:
-                times[i] += time_repeats(call, repeats)
+    from ._progress import Progress
+    prog = Progress(progress, rounds * len(calls), "timing configuration")
+    try:
+        for r in range(rounds):
+            for i, call in enumerate(calls):
+                ref_times += time_repeats(calls[0], repeats)
+                if i:
+                    times[i] += time_repeats(call, repeats)
+                prog(r * len(calls) + i + 1)
+    finally:
+        prog.close()
     times[0] = ref_times
     t = [min(x) for x in times]
     t_ref = t[0]

@@ -360,7 +360,8 @@ class _Evaluation:
     configuration (``reference="accurate"``, :func:`tradeoff`) or the input model itself, called
     in float64 (``reference="input"``, :func:`simplify`). ``allow`` as in :func:`configurations`."""
 
-    def __init__(self, model, directions, n, seed, n_albedo, *, allow="all", reference="accurate"):
+    def __init__(self, model, directions, n, seed, n_albedo, *, allow="all", reference="accurate", progress=False,
+                 what="tradeoff"):
         self.model = model
         self.configs = configurations(model, allow)
         if isinstance(reference, BxDF):   # a user's reference (e.g. a bk.Custom), called in float64
@@ -401,25 +402,35 @@ class _Evaluation:
             self.reference_noise = relative_rms(v_ref, v_ref + np.concatenate([d, 0 * v_ref[len(d):]]) / np.sqrt(2.0))
         ref_noise = self.reference_noise or 0.0
         self.errors = []
-        for c in self.configs:
-            v, a = (v_ref, a_ref) if (c is self.reference and self.converged is None) else _values(c, prep)
-            e = relative_error(v_ref, v, self.floor)
-            row = {"max_err": float(np.max(e)) if e.size else 0.0,
-                   "p99_err": float(np.quantile(e, 0.99)) if e.size else 0.0,
-                   "albedo_err": float(np.max(np.abs(a - a_ref))) if a.size else 0.0,
-                   "rms_err": relative_rms(v_ref, v), "noise": None, "bias": None}
-            if self.stochastic:
-                # noise: the RMS difference of two realizations (seeds) / sqrt 2; bias: the rest
-                if is_stochastic(c.model):
-                    c2 = Config(c.labels, c.index, _reseeded(c.model, 1), c.dtype, c.key)
-                    v2 = np.concatenate([_eval_cos(c2.model, c.dtype, self.directions.wo, self.directions.wi),
-                                         v[len(self.directions.wo):]])
-                    noise = relative_rms(v_ref, v_ref + (v - v2) / np.sqrt(2.0))
-                else:
-                    noise = 0.0
-                row["noise"] = noise
-                row["bias"] = float(np.sqrt(max(0.0, row["rms_err"] ** 2 - noise ** 2 - ref_noise ** 2)))
-            self.errors.append(row)
+        from ._progress import Progress
+        prog = Progress(progress, len(self.configs), "errors of configuration", what)
+        try:
+            for i, c in enumerate(self.configs):
+                self.errors.append(self._row(c, prep, v_ref, a_ref, ref_noise))
+                prog(i + 1)
+        finally:
+            prog.close()
+
+    def _row(self, c, prep, v_ref, a_ref, ref_noise):
+        """Error columns of configuration ``c`` against the reference values."""
+        v, a = (v_ref, a_ref) if (c is self.reference and self.converged is None) else _values(c, prep)
+        e = relative_error(v_ref, v, self.floor)
+        row = {"max_err": float(np.max(e)) if e.size else 0.0,
+               "p99_err": float(np.quantile(e, 0.99)) if e.size else 0.0,
+               "albedo_err": float(np.max(np.abs(a - a_ref))) if a.size else 0.0,
+               "rms_err": relative_rms(v_ref, v), "noise": None, "bias": None}
+        if self.stochastic:
+            # noise: the RMS difference of two realizations (seeds) / sqrt 2; bias: the rest
+            if is_stochastic(c.model):
+                c2 = Config(c.labels, c.index, _reseeded(c.model, 1), c.dtype, c.key)
+                v2 = np.concatenate([_eval_cos(c2.model, c.dtype, self.directions.wo, self.directions.wi),
+                                     v[len(self.directions.wo):]])
+                noise = relative_rms(v_ref, v_ref + (v - v2) / np.sqrt(2.0))
+            else:
+                noise = 0.0
+            row["noise"] = noise
+            row["bias"] = float(np.sqrt(max(0.0, row["rms_err"] ** 2 - noise ** 2 - ref_noise ** 2)))
+        return row
 
 
 def _check_comparable(model, reference) -> None:

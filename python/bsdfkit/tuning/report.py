@@ -10,7 +10,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..models import BxDF
-from .costs import SPREAD_WARN, _check_costs, _costs_for, _measure, _op, _pick, _threads
+from ._progress import check_progress
+from .costs import SPREAD_WARN, _budgeted_n_timing, _check_costs, _costs_for, _measure, _op, _pick, _threads
 from .errors import STOCHASTIC_N, _Evaluation, _check_int, is_stochastic
 from .configs import _check_allow, _check_model, _knobs_from, _label, _specs, family
 
@@ -236,7 +237,7 @@ def _stochastic_defaults(sto, n, n_albedo, ref_sto=False):
 
 def tradeoff(model, directions=None, n: int | None = None, seed: int = 0, *, n_albedo: int | None = None,
              measure: bool = True, n_timing: int | None = None, repeats: int = 5, rounds: int = 1,
-             costs: dict | None = None, reference=None) -> Table:
+             costs: dict | None = None, reference=None, progress=None) -> Table:
     """Throughput and error of every reachable knob configuration of ``model``.
 
     directions: ``None`` (the default set, :func:`direction_set` with ``n`` rows and ``seed``),
@@ -249,7 +250,13 @@ def tradeoff(model, directions=None, n: int | None = None, seed: int = 0, *, n_a
     Throughput (``measure=True``): each configuration's ``eval`` (``sample`` for models made only
     of delta lobes) on ``n_timing`` pairs with a preallocated ``out=``, timed back to back with
     the most accurate configuration, best of ``repeats`` (over ``rounds`` rounds), at the current
-    ``bsdfkit.set_num_threads``; ``speedup`` is that same-run ratio. ``expected_speedup`` is what
+    ``bsdfkit.set_num_threads``; ``speedup`` is that same-run ratio. With ``n_timing`` left to
+    its default (65536 pairs, 4096 for stochastic models) it is reduced, down to 64, so that the
+    timing takes about ``TIMING_BUDGET_S`` (15 s) at most, estimated from one call of the most
+    accurate configuration (``Table.info["n_timing"]`` says what was used); pass ``n_timing=``
+    for a fixed size. progress: None (a progress line on stderr when it is a terminal, a bar in
+    Jupyter), True, False, or a callable ``progress(done, total, stage)``; Ctrl-C stops between
+    two calls (KeyboardInterrupt). ``expected_speedup`` is what
     the shipped cost table predicts (the number :func:`simplify` ranks by; see the module
     docstring for why simplify does not use the live figure). DFG tables are built before timing.
     costs: a cost table in the :func:`knob_costs` format to use instead of the shipped one.
@@ -271,7 +278,9 @@ def tradeoff(model, directions=None, n: int | None = None, seed: int = 0, *, n_a
     proportional to the density; 64 when only the configurations are stochastic).
     """
     _check_model(model)
+    progress = check_progress(progress)
     sto = _any_stochastic(model)
+    auto_timing = n_timing is None
     from .configs import configurations
     ref_sto = is_stochastic(configurations(model)[0].model if reference is None else reference)
     n, n_albedo = _stochastic_defaults(sto, n, n_albedo, ref_sto)
@@ -282,10 +291,13 @@ def tradeoff(model, directions=None, n: int | None = None, seed: int = 0, *, n_a
                                  _check_int(rounds, "rounds", 1))
     if reference is not None:
         _check_model(reference, "reference")
-    ev = _Evaluation(model, directions, n, seed, n_albedo, reference="accurate" if reference is None else reference)
+    ev = _Evaluation(model, directions, n, seed, n_albedo, reference="accurate" if reference is None else reference,
+                     progress=progress)
     rates = speedups = spreads = None
     if measure:
-        rates, speedups, spreads = _measure(ev.configs, _op(model), n_timing, repeats, rounds, seed)
+        if auto_timing:   # the default stays within TIMING_BUDGET_S of live timing (690 s for CoatedDiffuse before)
+            n_timing = _budgeted_n_timing(ev.configs, _op(model), n_timing, repeats, rounds, seed)
+        rates, speedups, spreads = _measure(ev.configs, _op(model), n_timing, repeats, rounds, seed, progress)
         worst = max(spreads)
         if worst > SPREAD_WARN:
             warnings.warn(f"tradeoff: live timings are noisy (spread median/min of repeats up to {worst:.2f}x, "
@@ -427,7 +439,7 @@ def _same_value(a, b) -> bool:
 
 def simplify(model, tol, metric: str | None = None, directions=None, seed: int = 0, *, n: int | None = None,
              n_albedo: int | None = None, costs: dict | None = None, allow=(), margin: float | None = None,
-             families=None):
+             families=None, progress=None):
     """The cheapest configuration of ``model`` whose error against ``model`` itself (called in
     float64) is <= ``tol``: returns ``(simplified_model, SimplifyReport)``.
 
@@ -486,6 +498,7 @@ def simplify(model, tol, metric: str | None = None, directions=None, seed: int =
     dominates when the set happens to contain one: for such materials the figure varies by a
     factor of several between direction sets (car paint, alpha 0.02: 0.07 on simplify's 512
     stratified pairs, 0.009 on 400 uniform pairs with one highlight pair, same n_samples = 64).
+    progress: as in :func:`tradeoff` (one step per configuration measured).
     """
     if families is not None:  # measured -> analytic (bsdfkit.fitting; one hook)
         from ..fitting.simplify import simplify_families
@@ -505,7 +518,8 @@ def simplify(model, tol, metric: str | None = None, directions=None, seed: int =
     table = _check_costs(costs)
     if isinstance(margin, bool) or not isinstance(margin, (int, float)) or not 0 < margin <= 1:
         raise ValueError(f"margin: must be a number in (0, 1], got {margin!r}")
-    ev = _Evaluation(model, directions, n, seed, n_albedo, allow=allowed, reference="input")
+    ev = _Evaluation(model, directions, n, seed, n_albedo, allow=allowed, reference="input",
+                     progress=check_progress(progress), what="simplify")
     costs = _costs_for(model, ev.configs, table)
     ref_i = next(i for i, c in enumerate(ev.configs) if c is ev.reference)
     cands = [i for i, e in enumerate(ev.errors) if e[col] <= margin * tol] if tol > 0 else [ref_i]
