@@ -84,6 +84,8 @@ def test_sphinx_build_has_no_warnings(tmp_path):
         assert f"model_{cls.__name__}.png" in models, cls.__name__
     gallery = (out / "gallery.html").read_text(encoding="utf-8")
     assert gallery.count("gallery-") >= 3   # the three figures drawn by the plot directive
+    reports = sorted(p.name for p in (out / "reports").glob("*.html"))   # every committed report has a page
+    assert len(reports) == len(list((ROOT / "bench").glob("*.md"))) + len(list((ROOT / "tools/perf/results").glob("*.md")))
     api = (out / "reference" / "api.html").read_text(encoding="utf-8")
     for name in ("Conductor", "tradeoff", "simplify", "fit", "Spectrum"):
         assert f"bsdfkit.{name}" in api

@@ -143,6 +143,41 @@ def api_rst() -> str:
     return "\n".join(lines)
 
 
+REPORT_DIRS = ("bench", "tools/perf/results")
+
+
+def report_pages() -> dict:
+    """{page name: (report path relative to the repository, its title)} of every committed
+    benchmark report (bench/*.md, tools/perf/results/*.md), for the docs' reports pages."""
+    pages = {}
+    for d in REPORT_DIRS:
+        for f in sorted((ROOT / d).glob("*.md")):
+            title = next((line.lstrip("# ").strip() for line in f.read_text(encoding="utf-8").splitlines()
+                          if line.startswith("# ")), f.stem)
+            if "_" in f.stem:   # RESULTS_zen4.md: the same report from another kind of host
+                title += f" ({f.stem.split('_', 1)[1]} host)"
+            pages[f"{'perf' if d.startswith('tools') else 'bench'}-{f.stem}"] = (f.relative_to(ROOT).as_posix(), title)
+    return pages
+
+
+def _write_if_changed(path: Path, text: str) -> None:
+    if not path.exists() or path.read_text(encoding="utf-8") != text:
+        path.write_text(text, encoding="utf-8")
+
+
+def _write_reports(srcdir: Path) -> None:
+    """docs/reports/<name>.md: one page per committed report, its text included as generated."""
+    out = srcdir / "reports"
+    out.mkdir(exist_ok=True)
+    pages = report_pages()
+    for stale in out.glob("*.md"):
+        if stale.stem not in pages:
+            stale.unlink()
+    for name, (rel, title) in pages.items():
+        _write_if_changed(out / f"{name}.md", f"# {title}\n\n`{rel}`, as its script generated it.\n\n"
+                          f"```{{include}} ../../{rel}\n:start-line: 1\n```\n")
+
+
 # ------------------------------------------------------------------------------------ Sphinx
 
 def _render_figures(app) -> dict:
@@ -191,6 +226,7 @@ def _builder_inited(app):
     text = api_rst()
     if not api.exists() or api.read_text() != text:
         api.write_text(text)
+    _write_reports(srcdir)
     figures = _render_figures(app) if app.config.bsdfkit_model_figures else {}
     models = srcdir / "reference" / "models_generated.rst.inc"
     body = models_rst(figures)
