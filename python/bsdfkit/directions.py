@@ -9,9 +9,35 @@ __all__ = ["direction", "hemisphere_grid", "random_directions"]
 
 
 def direction(theta, phi=0.0) -> np.ndarray:
-    """Unit direction(s) from polar angle ``theta`` (from +z, radians) and azimuth ``phi``
-    (from +x towards +y, radians); broadcasts, returns float64 (..., 3). Raises TypeError for
-    non-numeric input and ValueError naming ``theta`` or ``phi`` for NaN or infinite angles."""
+    """Unit direction(s) in the local shading frame from spherical angles.
+
+    Parameters
+    ----------
+    theta : float or array_like
+        Polar angle from +z (the normal), in radians.
+    phi : float or array_like, optional
+        Azimuth from +x towards +y, in radians (default 0). Broadcasts with ``theta``.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, shape ``broadcast(theta, phi).shape + (3,)``.
+
+    Raises
+    ------
+    TypeError
+        For non-numeric input.
+    ValueError
+        Naming ``theta`` or ``phi`` for NaN or infinite angles.
+
+    Examples
+    --------
+    >>> import numpy as np, bsdfkit as bk
+    >>> bk.direction(np.pi / 2, 0.0).round(12)
+    array([1., 0., 0.])
+    >>> bk.direction(np.radians([0.0, 40.0, 80.0])).shape
+    (3, 3)
+    """
     theta, phi = _finite_angles(theta, "theta"), _finite_angles(phi, "phi")
     st = np.sin(theta)
     return np.stack(np.broadcast_arrays(st * np.cos(phi), st * np.sin(phi), np.cos(theta)), axis=-1)
@@ -25,8 +51,34 @@ def _finite_angles(x, name: str) -> np.ndarray:
 
 
 def hemisphere_grid(n_theta: int, n_phi: int, *, sphere: bool = False) -> np.ndarray:
-    """Cell-centred directions on the upper hemisphere (or the whole sphere), float64
-    (n_theta * n_phi, 3), theta-major: theta in (0, pi/2) (or (0, pi)), phi in (0, 2 pi)."""
+    """Cell-centred directions on the upper hemisphere (or the whole sphere).
+
+    Parameters
+    ----------
+    n_theta, n_phi : int
+        Number of cells in the polar angle and in the azimuth (at most 2**28 directions).
+    sphere : bool, optional
+        The whole sphere (theta in (0, pi)) instead of the upper hemisphere (theta in (0, pi/2)).
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, shape ``(n_theta * n_phi, 3)``, theta-major, phi in (0, 2 pi).
+
+    Raises
+    ------
+    ValueError
+        Naming ``n_theta`` or ``n_phi`` when it is not a positive integer, or when the grid is too large.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> wi = bk.hemisphere_grid(90, 180)
+    >>> wi.shape
+    (16200, 3)
+    >>> bool((wi[:, 2] > 0).all())
+    True
+    """
     for v, name in ((n_theta, "n_theta"), (n_phi, "n_phi")):
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
             raise ValueError(f"{name}: must be a positive integer, got {v!r}")
