@@ -13,13 +13,13 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 # Pages whose ```python blocks form a complete program, with how many of their blocks (None: all;
-# the fitting page's later blocks need a Dask cluster, the measured page needs data files). The
+# the fitting page's later blocks need a Dask cluster). The
 # spectral page (fits the uplift table in a fresh cache: ~1-2 min) and the plots page (~20 s,
 # the views are the notebooks' subject too) also run as a whole; they are left out to keep the suite quick.
 RUNNABLE_PAGES = {"README.md": None, "docs/index.md": None, "docs/getting-started.md": None,
                   "docs/howto/arrays.md": None, "docs/howto/interop.md": None,
                   "docs/howto/speed-accuracy.md": None, "docs/howto/render.md": None,
-                  "docs/howto/fitting.md": 1}
+                  "docs/howto/measured.md": None, "docs/howto/fitting.md": 1}
 
 
 def _ext():
