@@ -246,6 +246,8 @@ def _mi_bsdf(d, where):
     if not isinstance(d, dict):
         raise TypeError(f"from_mitsuba: {where or 'd'}: expected a Mitsuba plugin dict, got {type(d).__name__}")
     kind = d.get("type")
+    if not isinstance(kind, str):
+        raise _MiError(f"from_mitsuba: {where or 'd'}: 'type': expected a plugin name (str), got {kind!r}")
     label = f"{where} ({kind!r})" if where else f"plugin {kind!r}"
     if kind not in _MI_SUPPORTED:
         _mi_fail(label, "unsupported plugin; supported: " + ", ".join(_MI_SUPPORTED))
@@ -253,7 +255,8 @@ def _mi_bsdf(d, where):
         models = []
         for key, sub in _mi_nested(d, label):
             subkind = sub.get("type")
-            if subkind not in ("diffuse", "conductor", "roughconductor", "plastic", "roughplastic"):
+            if not isinstance(subkind, str) or subkind not in ("diffuse", "conductor", "roughconductor", "plastic",
+                                                              "roughplastic"):
                 _mi_fail(label, f"nested plugin {subkind!r} is not supported inside twosided (only the "
                          "reflection-only diffuse, conductor, roughconductor, plastic and roughplastic are)")
             models.append(_mi_bsdf(sub, f"{label}.{key}"))
@@ -318,15 +321,21 @@ def _mi_hair(d, where):
     if "sigma_a" in d and has_pig:
         _mi_fail(where, "give either 'sigma_a' or 'eumelanin'/'pheomelanin', not both (Mitsuba refuses it)")
     scale = _mi_float(d.get("scale", 1.0), where, "scale")
+    if not (math.isfinite(scale) and scale >= 0):
+        _mi_fail(where, f"parameter 'scale': must be finite and >= 0, got {scale}")
     if "sigma_a" in d:
-        sigma_a = scale * _mi_color(d["sigma_a"], where, "sigma_a", bounded=False)
+        with np.errstate(over="ignore", invalid="ignore"):   # an inf product is refused by Hair, named
+            sigma_a = scale * _mi_color(d["sigma_a"], where, "sigma_a", bounded=False)
     else:
         if "scale" in d and scale != 1.0:
             _mi_fail(where, "'scale' only applies to 'sigma_a' (Mitsuba ignores it for pigments)")
         ce = _mi_float(d.get("eumelanin", 1.3), where, "eumelanin")
         cp = _mi_float(d.get("pheomelanin", 0.2), where, "pheomelanin")
         sigma_a = _mi_build(where, lambda: sigma_a_from_concentration(ce, cp))
-    eta = _mi_ior(d, where, "int_ior", "amber") / _mi_ior(d, where, "ext_ior", "air")
+    ext = _mi_ior(d, where, "ext_ior", "air")
+    if ext == 0:
+        _mi_fail(where, "parameter 'ext_ior': must be > 0")
+    eta = _mi_ior(d, where, "int_ior", "amber") / ext
     bm = _mi_float(d.get("longitudinal_roughness", 0.3), where, "longitudinal_roughness")
     bn = _mi_float(d.get("azimuthal_roughness", 0.3), where, "azimuthal_roughness")
     alpha = _mi_float(d.get("scale_tilt", 2.0), where, "scale_tilt")
