@@ -43,10 +43,15 @@ fi
 
 # Rebuild only when a source file changed since the last install.
 stamp_dir=build; mkdir -p "$stamp_dir"
-hash=$(cat CMakeLists.txt pyproject.toml $(find cpp python -type f \( -name '*.h' -o -name '*.cpp' -o -name '*.py' -o -name '*.pyi' -o -name 'py.typed' -o -name '*.json' \) | sort) | sha1sum | cut -d' ' -f1)
+hash=$(cat CMakeLists.txt pyproject.toml $(find cpp python -type f \( -name '*.h' -o -name '*.cpp' -o -name '*.py' -o -name '*.pyi' -o -name 'py.typed' -o -name '*.json' -o -name '*.npz' \) | sort) | sha1sum | cut -d' ' -f1)
 if [ "$(cat "$stamp_dir/.installed" 2>/dev/null)" != "$hash" ] || ! $PY -c "import bsdfkit._core" 2>/dev/null; then
   echo "[setup] building and installing bsdfkit"
+  # ccache, when installed, keeps a rebuild after a clean (or of an unchanged file) quick; CMake
+  # reads the launcher from the environment on a build directory's first configuration.
+  if command -v ccache >/dev/null 2>&1; then export CMAKE_CXX_COMPILER_LAUNCHER=${CMAKE_CXX_COMPILER_LAUNCHER:-ccache}; fi
   $PY -m pip install -q --disable-pip-version-check --no-build-isolation --no-deps .
+  # the renderer and image I/O (bsdfkit._render) are optional at build time: say so if skipped
+  $PY -c "import bsdfkit._render" 2>/dev/null || echo "[setup] NOTE: bsdfkit._render (bk.render, bk.io) was not built or does not load: install Embree 3 and OpenImageIO (apt-get install libembree-dev libopenimageio-dev) and run setup again"
   # the typing stub of the compiled module is generated from it, never written by hand
   bash scripts/gen_stubs "$PY"
   echo "$hash" > "$stamp_dir/.installed"

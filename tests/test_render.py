@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import bsdfkit as bk
-from bsdfkit import _core
+from bsdfkit import _render
 from bsdfkit import render as R
 from bsdfkit.io import read_image, write_image
 
@@ -167,7 +167,7 @@ def test_env_sampling_chi2_matches_luminance_distribution():
     import scipy.stats as scipy_stats
     img = env_image()
     h, w = img.shape[:2]
-    s = _core.RenderScene()
+    s = _render.RenderScene()
     s.set_environment_latlong(img)
     n = 400_000
     rng = np.random.default_rng(11)
@@ -204,7 +204,7 @@ def test_env_sampling_chi2_matches_luminance_distribution():
 
 def test_env_pdf_integrates_to_one_and_bilinear_lookup():
     img = env_image()
-    s = _core.RenderScene()
+    s = _render.RenderScene()
     s.set_environment_latlong(img)
     # integrate pdf over the sphere on a fine (u, v) grid: dw = 2 pi^2 sin(theta) du dv
     nu, nv = 960, 480
@@ -232,7 +232,7 @@ def test_env_orientation_convention():
     img[h // 2, w // 2 - 1: w // 2 + 1] = [1, 0, 0]   # u = 0.5 (between these centres) -> +z
     img[h // 2, w // 4 - 1: w // 4 + 1] = [0, 1, 0]   # u = 0.25 -> +x
     img[0, :] = [0, 0, 1]                 # top row -> +y
-    s = _core.RenderScene()
+    s = _render.RenderScene()
     s.set_environment_latlong(img)
     v = (h // 2 + 0.5) / h
     st, ct = math.sin(math.pi * v), math.cos(math.pi * v)
@@ -442,8 +442,8 @@ def test_bad_meshes_raise_value_error():
         sc.add_sphere(bk.Diffuse(0.5), radius=0.0)
     with pytest.raises(ValueError):
         sc.add_sphere(bk.Diffuse(0.5), center=(0, np.nan, 0))
-    # the compiled core validates too (a misuse of _core raises, never reads out of bounds)
-    s = _core.RenderScene()
+    # the compiled renderer validates too (a misuse of _render raises, never reads out of bounds)
+    s = _render.RenderScene()
     mi = s.add_material(bk.Diffuse(0.5))
     with pytest.raises(ValueError):
         s.add_mesh(v.astype(np.float32), np.array([[0, 1, 99]]), mi, mi, 0.0)

@@ -199,8 +199,8 @@ def test_bad_curve_arguments():
                       (dict(points_per_fibre=1), "points_per_fibre")):
         with pytest.raises(ValueError, match=match):
             R.hair_swatch(**kw)
-    from bsdfkit import _core
-    s = _core.RenderScene()
+    from bsdfkit import _render
+    s = _render.RenderScene()
     m = s.add_material(bk.Hair())
     pts = np.zeros((5, 4), np.float32)
     pts[:, 3] = 0.1

@@ -151,7 +151,7 @@ def test_bad_input():
     with pytest.raises(NotImplementedError, match="FilamentCloth"):
         R.preview(bk.FilamentCloth([0.6, 0.3, 0.2], roughness=0.6), width=8, height=8, spp=1, progress=False,
                   spectral=True)
-    s = bk._core.RenderScene()
+    s = bk._render_ext.load().RenderScene()
     s.add_material(bk.Diffuse(0.5))
     with pytest.raises(ValueError, match="material"):
         s.set_spectral_material(3, object())

@@ -1,4 +1,6 @@
-// bsdfkit._core: thread pool control, model bindings and the image I/O / Embree glue.
+// bsdfkit._core: thread pool control and the model bindings (models, batch kernels, gradients,
+// spectral). No Embree, OpenImageIO or Assimp: the renderer and image I/O are the optional
+// extension bsdfkit._render (render.cpp), which reaches the models through _core._render_abi.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
@@ -8,7 +10,6 @@
 #include <thread>
 
 #include "block_cache.h"
-#include "bsdfkit/io.h"
 #include "bsdfkit/pool.h"
 
 namespace py = pybind11;
@@ -25,7 +26,7 @@ void bind_measured_models(py::module_ &m);
 void bind_plastic_extras(py::module_ &m);
 void bind_hair_models(py::module_ &m);
 void bind_grad_models(py::module_ &m);
-void bind_render(py::module_ &m);
+void bind_render_abi(py::module_ &m);  // render_abi.cpp: the table bsdfkit._render calls
 void bind_spectral(py::module_ &m);  // spectral.cpp: wavelengths= (issue 15)
 void bind_spectral_hair(py::module_ &m);  // spectral_hair.cpp: Hair, HairFarField, FilamentCloth spectral
 void bind_spectral_measured(py::module_ &m);  // spectral_measured.cpp: Measured, MERL, stochastic coated
@@ -58,33 +59,9 @@ PYBIND11_MODULE(_core, m) {
     py_bind::bind_plastic_extras(m);
     py_bind::bind_hair_models(m);
     py_bind::bind_grad_models(m);  // eval_grad on the bound classes (after bind_all)
-    py_bind::bind_render(m);
     py_bind::bind_spectral(m);
     py_bind::bind_spectral_hair(m);
     py_bind::bind_spectral_measured(m);
 
-    m.def("read_image", [](const std::string &path) {
-        io::Image img;
-        std::string err;
-        {
-            py::gil_scoped_release release;
-            err = io::read_image(path, img);
-        }
-        if (!err.empty()) throw std::runtime_error(err);
-        py::array_t<float> a({img.height, img.width, img.channels});
-        std::copy(img.pixels.begin(), img.pixels.end(), a.mutable_data());
-        return a;
-    });
-    m.def("write_image", [](const std::string &path, py::array_t<float, py::array::c_style | py::array::forcecast> a) {
-        if (a.ndim() != 3) throw py::value_error("img: expected an (H, W, C) array");
-        int h = int(a.shape(0)), w = int(a.shape(1)), c = int(a.shape(2));
-        std::string err;
-        {
-            py::gil_scoped_release release;
-            err = io::write_image(path, a.data(), w, h, c);
-        }
-        if (!err.empty()) throw std::runtime_error(err);
-    });
-    m.def("embree_version", &io::embree_version);
-    m.def("openimageio_version", &io::openimageio_version);
+    py_bind::bind_render_abi(m);
 }

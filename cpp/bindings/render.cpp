@@ -1,51 +1,66 @@
-// Bindings of the preview renderer (bsdfkit.render is the public API). Materials arrive as the
-// model objects' `_core` (PyModel<X>) and are copied, float precision, into the renderer's
-// variant. Arrays are validated here too: bad input raises ValueError, it never crashes.
+// bsdfkit._render: the preview renderer (bsdfkit.render is the public API), image I/O (bsdfkit.io)
+// and mesh files; the optional extension that links Embree, OpenImageIO and Assimp, imported on
+// first use. Materials arrive as the model objects' `_core` (PyModel<X> of bsdfkit._core) and are
+// converted, float precision, into the renderer's variant by _core itself (render_abi.h), so this
+// module compiles none of the model bindings. Arrays are validated here too: bad input raises
+// ValueError, it never crashes.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <memory>
+#include <string>
 #include <utility>
 
-#include "bind_model.h"
+#include "bsdfkit/io.h"
 #include "bsdfkit/render/render.h"
 #include "bsdfkit/render/spectral.h"
+#include "render_abi.h"
+
+namespace py = pybind11;
 
 namespace bsdfkit::py_bind {
 
 using namespace bsdfkit::render;
 
-// cpp/bindings/spectral.cpp: the float adapter of a _core.<Model>Spectral (false: not one).
-bool spectral_render_material(const py::handle &h, render::SpectralMaterial *out);
 using V3 = std::array<double, 3>;
 template <typename T> using carray = py::array_t<T, py::array::c_style | py::array::forcecast>;
 
 namespace {
 
-template <typename T> struct type_tag {
-    using type = T;
-};
+[[noreturn]] void value_error(const std::string &msg) { throw py::value_error(msg); }
 
-// The bound model of `h` (a PyModel<M> for one M of AllModels, bxdfs/all.h), float precision.
-template <template <typename> class... Ms>
-bool to_material_impl(const py::handle &h, Material *out, ModelList<Ms...> *) {
-    auto one = [&](auto tag) {
-        using P = typename decltype(tag)::type;
-        if (!py::isinstance<P>(h)) return false;
-        *out = h.cast<const P &>().template get<Float>();
-        return true;
-    };
-    return (one(type_tag<PyModel<Ms>>{}) || ...);
+// _core's table (render_abi.h), checked at import.
+const RenderAbi *g_abi = nullptr;
+
+void load_abi() {
+    py::object cap = py::module_::import("bsdfkit._core").attr("_render_abi");
+    auto *abi = static_cast<const RenderAbi *>(PyCapsule_GetPointer(cap.ptr(), kRenderAbiCapsule));
+    if (!abi) throw py::error_already_set();
+    if (abi->version != kRenderAbiVersion || abi->material_size != abi_size<Material>() ||
+        abi->material_align != abi_align<Material>() || abi->spectral_size != abi_size<SpectralMaterial>() ||
+        abi->spectral_align != abi_align<SpectralMaterial>())
+        throw py::import_error("bsdfkit._render does not match bsdfkit._core (built from different sources or "
+                               "flags): rebuild and reinstall bsdfkit (pip install .)");
+    g_abi = abi;
+    cap.inc_ref();  // the table is static in _core; keep _core's capsule (and module) alive
 }
+
+int num_threads() { return g_abi->num_threads(); }
+
 Material to_material(const py::object &model) {
     py::object core = py::hasattr(model, "_core") ? model.attr("_core") : model;
     Material m;
-    if (!to_material_impl(core, &m, static_cast<AllModels *>(nullptr)))
+    if (!g_abi->material(core.ptr(), &m))
         throw py::type_error("material: expected a bsdfkit model, got " + std::string(py::str(py::type::of(model))));
     return m;
+}
+
+bool spectral_render_material(const py::handle &h, SpectralMaterial *out) {
+    return g_abi->spectral_material(h.ptr(), out);
 }
 
 Vec3f to_vec(const V3 &a, const char *name) {
@@ -404,7 +419,7 @@ struct PyScene {
 
 } // namespace
 
-void bind_render(py::module_ &m) {
+static void bind_render(py::module_ &m) {
     py::class_<PyScene>(m, "RenderScene")
         .def(py::init<>())
         .def("add_material", &PyScene::add_material)
@@ -443,3 +458,36 @@ void bind_render(py::module_ &m) {
 }
 
 } // namespace bsdfkit::py_bind
+
+using namespace bsdfkit;
+
+PYBIND11_MODULE(_render, m) {
+    m.doc() = "bsdfkit renderer and image I/O (Embree, OpenImageIO); use bsdfkit.render / bsdfkit.io";
+    py_bind::load_abi();
+    py_bind::bind_render(m);
+
+    m.def("read_image", [](const std::string &path) {
+        io::Image img;
+        std::string err;
+        {
+            py::gil_scoped_release release;
+            err = io::read_image(path, img);
+        }
+        if (!err.empty()) throw std::runtime_error(err);
+        py::array_t<float> a({img.height, img.width, img.channels});
+        std::copy(img.pixels.begin(), img.pixels.end(), a.mutable_data());
+        return a;
+    });
+    m.def("write_image", [](const std::string &path, py::array_t<float, py::array::c_style | py::array::forcecast> a) {
+        if (a.ndim() != 3) throw py::value_error("img: expected an (H, W, C) array");
+        int h = int(a.shape(0)), w = int(a.shape(1)), c = int(a.shape(2));
+        std::string err;
+        {
+            py::gil_scoped_release release;
+            err = io::write_image(path, a.data(), w, h, c);
+        }
+        if (!err.empty()) throw std::runtime_error(err);
+    });
+    m.def("embree_version", &io::embree_version);
+    m.def("openimageio_version", &io::openimageio_version);
+}

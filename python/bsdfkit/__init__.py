@@ -20,20 +20,45 @@ Subpackages, by concern:
 ``testing``   independent references (Dr.Jit float64 oracles, the Mitsuba 3 harness)
 ``io``        images in and out
 
-This module only re-exports.
+This module only re-exports. The model classes are imported with the package; the subpackages
+above and the functions re-exported from them (``bk.tradeoff``, ``bk.fit``, ``bk.from_pbrt``, ...)
+are imported on first access, so ``import bsdfkit`` stays quick. The renderer and image I/O live in
+the optional compiled extension ``bsdfkit._render`` (Embree, OpenImageIO), loaded on first use.
 """
-from . import _core, filament, fitting, interop, io, models, plot, render, tuning  # noqa: F401
+import importlib as _importlib
+
+from . import _core  # noqa: F401  (the compiled models: no Embree / OpenImageIO)
 from ._enums import BxDFFlags, ReflTrans, TransportMode
-from ._version import __version__
 from .directions import direction, hemisphere_grid
-from .interop import from_mitsuba, from_pbrt, parse_pbrt_materials
+from . import models  # noqa: F401
 from .models import *  # noqa: F401,F403  (every model class; a new family is re-exported by models/__init__.py)
 from .models.custom import Custom
-from . import measured  # noqa: E402  (writers and tabulation of measured materials: bk.measured)
 from .spectral import Spectrum, sample_wavelengths, spectrum_to_rgb
 from .threads import get_num_threads, release_memory, set_num_threads
-from .tuning import Table, knobs, simplify, tradeoff
-from .fitting import FitReport, fit, fit_many
+
+# Imported on first access (PEP 562): subpackages, and names re-exported from them.
+_LAZY_MODULES = ("filament", "fitting", "interop", "io", "measured", "plot", "render", "tuning", "testing")
+_LAZY_NAMES = {
+    "from_mitsuba": "interop", "from_pbrt": "interop", "parse_pbrt_materials": "interop",
+    "Table": "tuning", "knobs": "tuning", "simplify": "tuning", "tradeoff": "tuning",
+    "FitReport": "fitting", "fit": "fitting", "fit_many": "fitting",
+    "__version__": "_version",
+}
+
+
+def __getattr__(name):
+    if name in _LAZY_MODULES:
+        return _importlib.import_module(f".{name}", __name__)
+    if name in _LAZY_NAMES:
+        value = getattr(_importlib.import_module(f".{_LAZY_NAMES[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'bsdfkit' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY_MODULES) | set(_LAZY_NAMES))
+
 
 __all__ = models.__all__ + [
     "BxDFFlags", "ReflTrans", "TransportMode", "direction", "get_num_threads", "hemisphere_grid", "release_memory", "set_num_threads",

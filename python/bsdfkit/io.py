@@ -1,11 +1,15 @@
-"""Image input/output through OpenImageIO (EXR/HDR linear float; PNG/JPEG 8-bit sRGB)."""
+"""Image input/output through OpenImageIO (EXR/HDR linear float; PNG/JPEG 8-bit sRGB).
+
+Reading and writing files uses the optional compiled extension ``bsdfkit._render``, imported on
+the first call (ImportError naming what to install if this build of bsdfkit has none); the
+transfer curves are plain numpy."""
 from __future__ import annotations
 
 import os
 
 import numpy as np
 
-from . import _core
+from . import _render_ext
 from ._arrays import check_real
 
 __all__ = ["read_image", "write_image", "linear_to_srgb", "srgb_to_linear"]
@@ -27,13 +31,13 @@ def srgb_to_linear(x: np.ndarray) -> np.ndarray:
 
 def read_image(path, *, linear: bool = True) -> np.ndarray:
     """Reads an image as float32 (H, W, C). LDR formats are decoded from sRGB to linear unless
-    ``linear=False``. Raises FileNotFoundError for a missing file and OSError with
-    OpenImageIO's reason for an unreadable one."""
+    ``linear=False``. Raises FileNotFoundError for a missing file, OSError with
+    OpenImageIO's reason for an unreadable one and ImportError if this build has no image I/O."""
     path = os.fspath(path)
     if not os.path.exists(path):
         raise FileNotFoundError(f"path: no such image file: {path}")
     try:
-        img = _core.read_image(path)
+        img = _render_ext.load().read_image(path)
     except RuntimeError as e:
         raise OSError(f"cannot read image {e}") from None
     if linear and path.lower().endswith(_LDR):
@@ -64,6 +68,6 @@ def write_image(path, img, *, exposure: float = 0.0) -> None:
         a[..., :c] = linear_to_srgb(a[..., :c] * 2.0 ** exposure)
         a = np.clip(a, 0.0, 1.0)
     try:
-        _core.write_image(path, np.ascontiguousarray(a))
+        _render_ext.load().write_image(path, np.ascontiguousarray(a))
     except RuntimeError as e:
         raise OSError(f"cannot write image {e}") from None

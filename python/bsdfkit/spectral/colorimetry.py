@@ -1,5 +1,7 @@
 """Colorimetry: CIE 1931 colour-matching functions, the D65 illuminant and the projection of a
-spectrum to linear sRGB, all from colour-science's tables.
+spectrum to linear sRGB, all from colour-science's tables (the few used here are kept in the
+package, ``data/cie1931_d65.npz``, written from colour-science by :func:`write_table_file`: importing
+colour-science takes seconds, reading the file a millisecond; the tests check the file against it).
 
 Two discretisations of the projection (the spectrum times the CMFs, times D65 for reflectances,
 summed over wavelength, then Mitsuba's / pbrt's XYZ -> linear sRGB matrix):
@@ -16,6 +18,7 @@ summed over wavelength, then Mitsuba's / pbrt's XYZ -> linear sRGB matrix):
 from __future__ import annotations
 
 import functools
+from pathlib import Path
 
 import numpy as np
 
@@ -45,15 +48,33 @@ _MI_D65_NORMALIZATION = 1.0 / 98.99741751876255
 _N_GRID = 1000   # Mitsuba's integration points over [360, 830] nm
 
 
+#: The package's copy of the colour-science tables :func:`_tables` returns.
+TABLE_FILE = Path(__file__).resolve().parent.parent / "data" / "cie1931_d65.npz"
+_TABLE_KEYS = ("w5", "cmf5", "d65_5", "w1", "cmf1")
+
+
 @functools.lru_cache(maxsize=None)
 def _tables():
     """(5 nm wavelengths (95,), CMFs (95, 3), D65 (95,), 1 nm wavelengths (471,), CMFs (471, 3)),
-    read-only float64, from colour-science.
+    read-only float64: colour-science's tables (:func:`tables_from_colour`) as kept in
+    :data:`TABLE_FILE`; from colour-science itself if the file is missing."""
+    try:
+        with np.load(TABLE_FILE) as z:
+            out = tuple(np.array(z[k], dtype=np.float64) for k in _TABLE_KEYS)
+    except FileNotFoundError:
+        out = tables_from_colour()
+    for a in out:
+        a.setflags(write=False)
+    return out
+
+
+def tables_from_colour():
+    """The tables of :func:`_tables` computed from colour-science (imports it: seconds).
 
     D65: colour-science tabulates CIE D65 from 300 to 780 nm; 785-830 nm come from its CIE
     daylight series at 6504 K (M1, M2 rounded as CIE 015 does), which reproduces the CIE table
     there to 5e-5 (of ~60)."""
-    import colour  # a few hundred ms: only on first use
+    import colour
 
     w5 = np.arange(360.0, 830.5, 5.0)
     w1 = np.arange(360.0, 830.5, 1.0)
@@ -64,10 +85,13 @@ def _tables():
     inside = w5 <= tab.wavelengths[-1]
     series = colour.sd_CIE_illuminant_D_series(colour.temperature.CCT_to_xy_CIE_D(6500.0 * 1.4388 / 1.4380))
     d = np.where(inside, np.asarray(tab[np.where(inside, w5, 360.0)]), np.asarray(series[w5]) * 100.0 / series[560])
-    out = (w5, c5, d, w1, c1)
-    for a in out:
-        a.setflags(write=False)
-    return out
+    return (w5, c5, np.asarray(d, dtype=np.float64), w1, c1)
+
+
+def write_table_file(path=None):
+    """Writes :func:`tables_from_colour` to ``path`` (default :data:`TABLE_FILE`); run it when
+    colour-science's tables change (tests/test_spectral_tables.py fails then)."""
+    np.savez(TABLE_FILE if path is None else path, **dict(zip(_TABLE_KEYS, tables_from_colour())))
 
 
 def _lerp_table(w, table, lam):
