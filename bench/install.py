@@ -34,7 +34,7 @@ import textwrap
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _machine import summary  # noqa: E402
+from _host import cpu_model, load, simd_isa  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -199,7 +199,7 @@ def main(argv=None):
     ap.add_argument("--json", help="write the figures to this file too")
     args = ap.parse_args(argv)
 
-    report = dict(machine=summary())
+    report = dict(machine=f"{cpu_model()} ({simd_isa()}), {os.cpu_count()} CPUs, load {load()[0]:.2f}")
     print(f"# bsdfkit install and start-up\n\nMachine: {report['machine']}\n")
     if args.ab:
         rows = kernel_ab(*args.ab, args.rounds)

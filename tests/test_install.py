@@ -121,3 +121,41 @@ def test_lazy_attributes_and_dir():
     lines = out.split("\n")
     assert lines[0] == "False True True True True", out
     assert "no_such_name" in lines[1], out
+
+
+def _configure(tmp_path, *options):
+    import shutil
+    if shutil.which("cmake") is None:
+        pytest.fail("cmake is needed to build bsdfkit (scripts/setup.sh installs it)")
+    import pybind11
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    r = subprocess.run(["cmake", "-S", root, "-B", str(tmp_path / "b"), f"-Dpybind11_DIR={pybind11.get_cmake_dir()}",
+                        f"-DPython_EXECUTABLE={sys.executable}", *options], capture_output=True, text=True, timeout=300)
+    ninja = (tmp_path / "b" / "build.ninja")
+    makefile = (tmp_path / "b" / "Makefile")
+    generated = (ninja if ninja.exists() else makefile).read_text() if r.returncode == 0 else ""
+    return r, generated
+
+
+def test_build_without_embree_and_openimageio_configures_the_core_alone(tmp_path):
+    # what a machine without the apt packages gets: CMake cannot find them
+    r, generated = _configure(tmp_path, "-DCMAKE_DISABLE_FIND_PACKAGE_embree=ON",
+                              "-DCMAKE_DISABLE_FIND_PACKAGE_OpenImageIO=ON")
+    assert r.returncode == 0, r.stderr[-3000:]
+    text = " ".join((r.stdout + r.stderr).split())   # CMake wraps its messages
+    assert text.count("SKIPPED") == 1, text[-3000:]
+    assert "Embree 3 (Debian/Ubuntu: libembree-dev)" in text and "OpenImageIO (Debian/Ubuntu: libopenimageio-dev)" in text
+    assert "_core" in generated and "_render" not in generated
+
+
+def test_render_on_without_its_libraries_stops_the_configure(tmp_path):
+    r, _ = _configure(tmp_path, "-DBSDFKIT_RENDER=ON", "-DCMAKE_DISABLE_FIND_PACKAGE_embree=ON")
+    assert r.returncode != 0 and "BSDFKIT_RENDER=ON but not found: Embree 3" in " ".join(r.stderr.split()), \
+        r.stderr[-3000:]
+
+
+def test_default_configure_has_no_lto_and_both_modules(tmp_path):
+    r, generated = _configure(tmp_path)
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert "_render" in generated and "_core" in generated
+    assert "-flto" not in generated
