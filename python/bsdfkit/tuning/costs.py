@@ -239,7 +239,12 @@ def _budgeted_n_timing(configs, op, n_timing, repeats, rounds, seed, budget=TIMI
     return max(MIN_AUTO_TIMING, int(n_timing * budget / est))
 
 
-def _measure(configs, op, n_timing, repeats, rounds, seed, progress=False):
+#: Shortest repeat (s) of a budgeted timing (time_repeats' min_time; 5 ms otherwise): 340
+#: configurations x 2 x 5 repeats of >= 5 ms alone would take 17 s.
+BUDGET_MIN_TIME = 0.001
+
+
+def _measure(configs, op, n_timing, repeats, rounds, seed, progress=False, min_time=0.005):
     """Live throughput: every configuration timed right after the most accurate one (``repeats``
     repeats each), in ``rounds`` interleaved rounds; returns (evals/s, speedup, spread) lists,
     speedup = smallest reference time of the run / smallest time of the configuration (a load
@@ -254,9 +259,9 @@ def _measure(configs, op, n_timing, repeats, rounds, seed, progress=False):
     try:
         for r in range(rounds):
             for i, call in enumerate(calls):
-                ref_times += time_repeats(calls[0], repeats)
+                ref_times += time_repeats(calls[0], repeats, min_time)
                 if i:
-                    times[i] += time_repeats(call, repeats)
+                    times[i] += time_repeats(call, repeats, min_time)
                 prog(r * len(calls) + i + 1)
     finally:
         prog.close()

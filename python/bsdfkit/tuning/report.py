@@ -11,7 +11,7 @@ import numpy as np
 
 from ..models import BxDF
 from ._progress import check_progress
-from .costs import SPREAD_WARN, _budgeted_n_timing, _check_costs, _costs_for, _measure, _op, _pick, _threads
+from .costs import BUDGET_MIN_TIME, SPREAD_WARN, _budgeted_n_timing, _check_costs, _costs_for, _measure, _op, _pick, _threads
 from .errors import STOCHASTIC_N, _Evaluation, _check_int, is_stochastic
 from .configs import _check_allow, _check_model, _knobs_from, _label, _specs, family
 
@@ -253,8 +253,8 @@ def tradeoff(model, directions=None, n: int | None = None, seed: int = 0, *, n_a
     ``bsdfkit.set_num_threads``; ``speedup`` is that same-run ratio. With ``n_timing`` left to
     its default (65536 pairs, 4096 for stochastic models) it is reduced, down to 64, so that the
     timing takes about ``TIMING_BUDGET_S`` (15 s) at most, estimated from one call of the most
-    accurate configuration (``Table.info["n_timing"]`` says what was used); pass ``n_timing=``
-    for a fixed size. progress: None (a progress line on stderr when it is a terminal, a bar in
+    accurate configuration, and its repeats then last >= 1 ms instead of 5 ms
+    (``Table.info["n_timing"]`` says what was used); pass ``n_timing=`` for a fixed size. progress: None (a progress line on stderr when it is a terminal, a bar in
     Jupyter), True, False, or a callable ``progress(done, total, stage)``; Ctrl-C stops between
     two calls (KeyboardInterrupt). ``expected_speedup`` is what
     the shipped cost table predicts (the number :func:`simplify` ranks by; see the module
@@ -295,9 +295,13 @@ def tradeoff(model, directions=None, n: int | None = None, seed: int = 0, *, n_a
                      progress=progress)
     rates = speedups = spreads = None
     if measure:
+        min_time = 0.005
         if auto_timing:   # the default stays within TIMING_BUDGET_S of live timing (690 s for CoatedDiffuse before)
-            n_timing = _budgeted_n_timing(ev.configs, _op(model), n_timing, repeats, rounds, seed)
-        rates, speedups, spreads = _measure(ev.configs, _op(model), n_timing, repeats, rounds, seed, progress)
+            n_auto = _budgeted_n_timing(ev.configs, _op(model), n_timing, repeats, rounds, seed)
+            if n_auto < n_timing:
+                n_timing, min_time = n_auto, BUDGET_MIN_TIME
+        rates, speedups, spreads = _measure(ev.configs, _op(model), n_timing, repeats, rounds, seed, progress,
+                                            min_time)
         worst = max(spreads)
         if worst > SPREAD_WARN:
             warnings.warn(f"tradeoff: live timings are noisy (spread median/min of repeats up to {worst:.2f}x, "
