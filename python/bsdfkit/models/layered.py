@@ -14,6 +14,14 @@ from .registry import KnobDecl
 __all__ = ["CoatedDiffuse", "CoatedConductor"]
 
 _LAYER_DOC = """
+    Energy under a rough coat: the coat is pbrt-v4's rough dielectric interface, whose
+    single-scattering microfacet model loses energy, most of it from inside beyond the critical
+    angle. A white, lossless CoatedDiffuse (reflectance 1, medium albedo 1, eta 1.5) reflects
+    1.000 with a smooth coat, 0.975 at alpha 0.05 and 0.694 at alpha 0.3 (theta_o = 46 deg); the
+    interface's own loss, measured from both sides, predicts these to 1e-4 (the walk loses
+    nothing else; ``tests/models/test_layered_energy.py``). No energy compensation covers the
+    dielectric interface yet.
+
     Layer and estimator parameters (both models):
 
     thickness: slab thickness in mean free paths of the medium (sigma_t = 1), >= 0; pbrt-v4
