@@ -65,10 +65,18 @@ def rng():
 
 @pytest.fixture(autouse=True, scope="session")
 def _bsdfkit_disk_cache(tmp_path_factory):
-    """The suite's on-disk cache (Filament DFG tables): a fresh directory per session, shared by
-    its subprocesses (notebooks, CLI), unless BSDFKIT_CACHE_DIR already names one (CI may keep it)."""
+    """The suite's on-disk cache (the RGB -> spectrum uplift table, Filament DFG tables): a fresh
+    directory per run, shared by the xdist workers of that run and their subprocesses (notebooks,
+    CLI), unless BSDFKIT_CACHE_DIR already names one (CI may keep it). Entries are keyed by content
+    (spectral/uplift.py, models/filament/dfg.py) and written atomically; the uplift fit holds a file
+    lock, so of two workers wanting the table one fits it (~1 min of CPU) and the other reads it."""
     import os
-    os.environ.setdefault("BSDFKIT_CACHE_DIR", str(tmp_path_factory.mktemp("bsdfkit-cache")))
+    base = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        base = base.parent   # xdist gives each worker <run basetemp>/<worker id>: share the run's
+    d = base / "bsdfkit-cache"
+    d.mkdir(exist_ok=True)
+    os.environ.setdefault("BSDFKIT_CACHE_DIR", str(d))
 
 
 def pytest_configure(config):
