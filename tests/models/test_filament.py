@@ -153,14 +153,17 @@ def test_sample_agrees_with_eval_and_pdf(name, dtype):
 
 def test_pdf_integrates_to_one():
     """Midpoint rule over the sphere: the mixture pdf integrates to 1 minus the fraction of
-    samples that leave the upper hemisphere (reflected below the horizon, then invalid)."""
+    samples that leave the upper hemisphere (reflected below the horizon, then invalid).
+    Every registered example is checked by the generic contract (tests/contract/test_contract.py,
+    test_pdf_integrates_to_at_most_one, tolerance 3e-3); this case stays here because the
+    registered examples with the "doc" clear-coat layering have a coat too narrow for its grid."""
     nt, npp = 800, 400
     t = (np.arange(nt) + 0.5) * (np.pi / 2) / nt
     p = (np.arange(npp) + 0.5) * 2 * np.pi / npp
     T, P = np.meshgrid(t, p, indexing="ij")
     g = bk.direction(T, P).reshape(-1, 3)
     dw = (np.sin(T) * (np.pi / 2 / nt) * (2 * np.pi / npp)).reshape(-1)
-    for name in ("dielectric", "aniso", "coat_sheen_doc", "cloth", "cloth_ss", "lowq"):
+    for name in ("coat_sheen_doc",):
         m = CASES[name]()
         for th in (0.2, 1.0, 1.4):
             wo = bk.direction(th, 0.4)

@@ -51,7 +51,7 @@ MIN_N_DOT_V = 1e-4
 #: Filament's ``FILAMENT_DFG_LUT_SIZE`` default.
 DFG_LUT_SIZE = 128
 #: Quasi-Monte Carlo samples per texel and strategy used by the models (error <= 1.2e-4 for x, y
-#: and <= 2.5e-4 for z against quadrature; see tests/test_filament_dfg.py).
+#: and <= 2.5e-4 for z against quadrature; see tests/models/test_filament_dfg.py).
 DFG_LUT_SAMPLES = 1024
 
 #: Names accepted by :func:`term` and their arguments.
