@@ -171,6 +171,73 @@ def test_albedo_bounded(cls, spec):
         assert np.all(a <= 1 + 5 / np.sqrt(n)), a
 
 
+# ------------------------------------------------------------------ pdf normalisation
+
+PDF_NT, PDF_NP, PDF_SAMPLES = 800, 400, 200_000
+PDF_TOL = 3e-3
+
+
+def _narrow_lobe(m) -> bool:
+    """A glossy lobe narrower than the quadrature below resolves (alpha in [1e-3, 0.06): at
+    alpha 0.05 / 0.02 the midpoint rule is off by 5e-3 / 0.17, measured). Such lobes are
+    checked in magnified domains by the model-specific chi-square files."""
+    p = m._params
+    alphas = [v for k, v in p.items() if k.endswith(("alpha", "alpha_x", "alpha_y"))]   # incl. layered interface_*
+    alphas += [p[k] ** 2 for k in ("roughness", "clear_coat_roughness", "sheen_roughness") if k in p and
+               (k != "clear_coat_roughness" or p.get("clear_coat", 0) > 0)]
+    return any(a is not None and 1e-3 <= np.min(a) < 0.06 for a in alphas)
+
+
+def _pdf_cases():
+    out = []
+    for p in cases(lambda c, m: has_smooth_lobe(m) and m.exact_eval and not _narrow_lobe(m)):
+        cls = p.values[0]
+        if cls is bk.NormalizedFresnel:   # from below, half its samples come back invalid (see reason)
+            p = pytest.param(*p.values, id=p.id, marks=pytest.mark.xfail(strict=True, reason=(
+                "known bug: NormalizedFresnel.sample with wo.z < 0 returns ~49 % invalid samples "
+                "(pdf integrates to 1 there, so the check fails); C++ sampler, reported to the lead")))
+        out.append(p)
+    return out
+
+
+def _sphere_quadrature(upper_only):
+    """Midpoint rule in (theta, phi): 800 x 400 cells per hemisphere (the per-family copies'
+    grid this replaces); directions (M, 3) and solid-angle weights (M,)."""
+    nt = PDF_NT if upper_only else 2 * PDF_NT
+    th_max = np.pi / 2 if upper_only else np.pi
+    t = (np.arange(nt) + 0.5) * th_max / nt
+    ph = (np.arange(PDF_NP) + 0.5) * 2 * np.pi / PDF_NP
+    T, P = np.meshgrid(t, ph, indexing="ij")
+    return bk.direction(T, P).reshape(-1, 3), (np.sin(T) * (th_max / nt) * (2 * np.pi / PDF_NP)).reshape(-1)
+
+
+@pytest.mark.parametrize("cls, spec", _pdf_cases())
+def test_pdf_integrates_to_at_most_one(cls, spec):
+    """pdf(wo, .) is the density of sample()'s non-delta lobes: over the sphere it integrates to
+    the fraction of samples that are valid and not delta (<= 1: samples below the horizon after a
+    reflection, or picks of a delta lobe, are the mass it lacks). Quadrature: midpoint rule, 800 x
+    400 cells per hemisphere (the whole sphere for transmitting or two-sided classes); the
+    fraction from 200,000 seeded samples (standard error <= 1.1e-3). Tolerance 3e-3 (measured
+    worst 1.8e-3, Dielectric separable masking). Exception, on the low side only: Hair's pdf
+    integrates 3.3-3.9e-3 short for these examples (pbrt-v4's 10-term I0 series in Mp, see
+    tests/models/test_hair.py::test_white_furnace), allowed 5e-3. Stochastic classes (exact_eval
+    False) are left out: their pdf() is an estimate, only proportional to the density (see
+    tests/models/test_layered.py::test_pdf_positive_and_integrates_to_about_one)."""
+    m = model_of(spec)
+    zs = [0.95, 0.5, 0.17] + ([-0.5] if cls.two_sided else [])
+    wo = bk.direction(np.arccos(zs), 0.4)
+    g, dw = _sphere_quadrature(upper_only=not (cls.transmission or cls.two_sided))
+    integral = (m.pdf(wo[:, None, :], g[None]) * dw).sum(-1)
+    kept = []
+    for w in wo:
+        s = m.sample(w, n=PDF_SAMPLES, seed=3)
+        kept.append(np.mean(s.valid & ((s.flags & bk.BxDFFlags.Specular) == 0)))
+    kept = np.array(kept)
+    low = 5e-3 if cls is bk.Hair else PDF_TOL
+    assert np.all(integral <= kept + PDF_TOL), (zs, integral, kept)
+    assert np.all(integral >= kept - low), (zs, integral, kept)
+
+
 # ------------------------------------------------------------------ numerics
 
 COS = [0.0, 1e-30, -1e-30, 1e-12, -1e-12, 1e-7, -1e-7, 1e-4, -1e-4, 0.5, -0.5, 1.0, -1.0]
