@@ -180,7 +180,7 @@ def _write_reports(srcdir: Path) -> None:
 
 # ------------------------------------------------------------------------------------ Sphinx
 
-def _render_figures(app) -> dict:
+def _render_figures(srcdir: Path) -> dict:
     """One polar plot per model (its first registered example), drawn at build time."""
     import matplotlib
 
@@ -190,7 +190,7 @@ def _render_figures(app) -> dict:
     from bsdfkit import plot as bkplot
     from bsdfkit.models.spec import parse_spec
 
-    outdir = Path(app.srcdir) / "_generated"
+    outdir = srcdir / "_generated"
     outdir.mkdir(exist_ok=True)
     figures = {}
     for cls in _classes():
@@ -219,19 +219,17 @@ def _render_figures(app) -> dict:
     return figures
 
 
-def _builder_inited(app):
+def _generate_sources(app, config):
+    """Writes every generated source file (reference/api.rst, reference/models_generated.rst.inc,
+    reports/*.md, _generated/*.png) at ``config-inited``: before Sphinx lists the source files
+    (``env.found_docs``, which autosummary's ``builder-inited`` handler reads to write its stubs),
+    so a fresh clone builds with -W on the first run."""
     srcdir = Path(app.srcdir)
     (srcdir / "reference").mkdir(exist_ok=True)
-    api = srcdir / "reference" / "api.rst"
-    text = api_rst()
-    if not api.exists() or api.read_text() != text:
-        api.write_text(text)
+    _write_if_changed(srcdir / "reference" / "api.rst", api_rst())
     _write_reports(srcdir)
-    figures = _render_figures(app) if app.config.bsdfkit_model_figures else {}
-    models = srcdir / "reference" / "models_generated.rst.inc"
-    body = models_rst(figures)
-    if not models.exists() or models.read_text() != body:
-        models.write_text(body)
+    figures = _render_figures(srcdir) if config.bsdfkit_model_figures else {}
+    _write_if_changed(srcdir / "reference" / "models_generated.rst.inc", models_rst(figures))
 
 
 # Docstrings not (yet) written as reStructuredText: |cos θi| read as a substitution, prose
@@ -297,8 +295,9 @@ def setup(app):
     app.add_config_value("bsdfkit_model_figures", True, "env")
     app.connect("autodoc-process-docstring", _process_docstring, priority=900)   # after napoleon
     app.connect("build-finished", _build_finished)
-    # before autosummary's own builder-inited handler, which reads reference/api.rst
-    app.connect("builder-inited", _builder_inited, priority=100)
+    # config-inited, not builder-inited: by builder-inited Sphinx has already listed the sources,
+    # and autosummary would find no reference/api.rst to write stubs for on a fresh clone
+    app.connect("config-inited", _generate_sources)
     return {"parallel_read_safe": True, "version": "1"}
 
 
