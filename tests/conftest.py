@@ -82,3 +82,7 @@ def _bsdfkit_disk_cache(tmp_path_factory):
 def pytest_configure(config):
     # -m "not docs" leaves out the documentation build (tests/test_docs.py), ~20-50 s
     config.addinivalue_line("markers", "docs: builds the Sphinx documentation (sphinx-build -W)")
+    # -m "not slow" leaves out slow tests whose check is also made, more cheaply, by another test;
+    # scripts/test (the README's command, and CI) runs them: no check is dropped by default
+    config.addinivalue_line("markers", "slow: slow, and its check is also made more cheaply elsewhere "
+                                       "(deselect with -m 'not slow'; the default suite runs it)")
