@@ -2,9 +2,9 @@
 //
 // Why: glibc serves an allocation above its mmap threshold (dynamic, 32 MiB at most on 64-bit)
 // with fresh pages and unmaps them on free, so a 35 MiB float32 sample block at N = 1e6 was
-// page-faulted again on every call: 6-12 ms of faults for a 3 ms kernel (bench/RESULTS.md: plain
-// sample 164 M/s vs 303 M/s with preallocated outputs). A block returned here keeps its pages;
-// the next call of a similar size gets them warm.
+// page-faulted again on every call: 6-12 ms of faults for a 3 ms kernel (bench/RESULTS.md of
+// commit b815202, now tools/perf/results/: plain sample 164 M/s vs 303 M/s with preallocated
+// outputs). A block returned here keeps its pages; the next call of a similar size gets them warm.
 //
 // Bounds: blocks below kMinBytes are not cached (malloc reuses those itself); at most kMaxKept
 // blocks and kMaxKeptBytes are held while unused (the most recently returned win). Everything

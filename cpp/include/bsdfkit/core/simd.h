@@ -22,8 +22,8 @@
 
 namespace bsdfkit {
 
-// Lanes per packet of the batch kernels (measured on Zen 3 / AVX2: 16 lanes = two ymm
-// registers per value beat 8 on the rough conductor eval, see bench/RESULTS.md).
+// Lanes per packet of the batch kernels (measured on Zen 3 / AVX2: 16 lanes = two ymm registers
+// per value beat 8 on the rough conductor eval; docs/dev/performance.md, "Keep 16 lanes").
 inline constexpr size_t kPacketWidth = 16;
 
 template <typename T> using Packet = drjit::Packet<T, kPacketWidth>;
@@ -215,7 +215,7 @@ template <typename V> inline V exp_finite(const V &x) {
 // intermediate then costs nothing instead of a microcode assist (~100+ cycles each on Intel). Only
 // values below the smallest normal number (1.2e-38 in float) change, to 0. Hair declares it: its
 // lobes' exponentials reach the denormals on ordinary pairs (narrow Mp tails times Np), and FTZ |
-// DAZ made its eval kernel 14-21 % faster with identical outputs on bench/throughput.py's inputs. A
+// DAZ made its eval kernel 14-21 % faster with identical outputs on tools/perf/throughput.py's inputs. A
 // model that declares it must tolerate a denormal operand read as 0 (no division by a value that
 // can be denormal without a mask).
 template <typename M, typename = void> struct flushes_denormals : std::false_type {};
