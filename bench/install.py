@@ -161,9 +161,10 @@ rng = np.random.default_rng(1)
 n = 1 << 16
 wo = bk.direction(np.arccos(rng.random(n)), 2 * np.pi * rng.random(n))
 wi = bk.direction(np.arccos(rng.random(n)), 2 * np.pi * rng.random(n))
+uc, u = rng.random(n), rng.random((n, 2))
 out = {}
 for name, m in models.items():
-    for op, fn in (("eval", lambda: m.eval(wo, wi)), ("sample", lambda: m.sample(wo, seed=1))):
+    for op, fn in (("eval", lambda: m.eval(wo, wi)), ("sample", lambda: m.sample(wo, uc=uc, u=u))):
         fn()
         best = float("inf")
         for _ in range(7):
