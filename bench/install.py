@@ -76,6 +76,10 @@ _TIMED = {
 
 
 def time_first_use(repeats):
+    import bsdfkit
+    # bytecode as pip writes it at install (PYTHONDONTWRITEBYTECODE would time the compiler instead)
+    subprocess.run([sys.executable, "-m", "compileall", "-q", str(Path(bsdfkit.__file__).parent)],
+                   stdout=subprocess.DEVNULL, check=False)
     rows = {}
     for label, (setup, stmt) in _TIMED.items():
         code = (f"import time\n{setup}\nt0 = time.perf_counter()\n{stmt}\n"
@@ -138,6 +142,8 @@ def parse_timing(log):
         if len(parts) != 5 or not parts[0].replace(".", "").isdigit():
             continue
         wall, user, sys_, rss, out = parts
+        if "cmTC_" in out:   # CMake's configure-time try-compiles
+            continue
         target = "_render" if "_render" in out else "_core"
         units.append(dict(output=out.split("CMakeFiles/")[-1], target=target, wall=float(wall),
                           cpu=float(user) + float(sys_), rss_mb=int(rss) / 1024))
