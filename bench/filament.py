@@ -109,7 +109,7 @@ def calls(m, d):
     core = m._core
     return {"eval": lambda: m.eval(d["wo"], d["wi"], out=out3),
             "pdf": lambda: m.pdf(d["wo"], d["wi"], out=out1),
-            "sample": lambda: core.sample(d["wo"], d["uc"], d["u"], 0, 3, *bufs)}
+            "sample": lambda: core.sample(d["wo"], d["uc"], d["u"], 0, 3, bufs)}
 
 
 def throughput(rows, inputs, repeats, rounds):

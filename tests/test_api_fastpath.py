@@ -1,6 +1,6 @@
-"""The compiled fast entry points (bind_model.h *_fast, issue 10 per-call overhead, issue 17
-item 3): on plain ndarrays they take the whole call, on anything else the Python general path
-does. Both must give the same values and the same errors; uniforms are checked by the kernel;
+"""The compiled door (bind_model.h eval / pdf / sample / albedo; issue 10 per-call overhead, issue 17
+item 3, issue 46 one door): plain ndarrays go straight to the kernels, anything else is converted in
+the same call. Both must give the same values and the same errors; uniforms are checked by the kernel;
 sample's outputs are views of one block; sample accepts out=."""
 import numpy as np
 import pytest
@@ -142,8 +142,8 @@ def test_sample_out_argument(rng):
 
 
 def test_sample_out_on_the_fast_path(rng):
-    # plain arrays and a SampleResult of plain arrays (not views of one block): the compiled entry
-    # writes into them and returns out; anything else leaves the call to the general path (None)
+    # plain arrays and a SampleResult of plain arrays (not views of one block): the compiled door
+    # writes into them and returns out; outputs that do not fit are worded by the door, naming them
     m = bk.Plastic(0.4, alpha=0.2)
     n = 300
     wo, uc, u = _dirs(rng, n).astype(np.float32), rng.random(n, dtype=np.float32), rng.random((n, 2), dtype=np.float32)
@@ -156,7 +156,7 @@ def test_sample_out_on_the_fast_path(rng):
                                pdf_is_proportional=np.ones(n, bool))
 
     out = fresh()
-    assert m._core.sample_fast(wo, uc, u, 0, 3, out) is out
+    assert m._core.sample(wo, uc, u, 0, 3, out) is out
     for k in ("wi", "f", "pdf", "flags", "eta", "valid", "pdf_is_proportional"):
         np.testing.assert_array_equal(getattr(out, k), getattr(want, k))
     out = fresh()
@@ -166,16 +166,16 @@ def test_sample_out_on_the_fast_path(rng):
     one = m.sample(wo[7], uc, u)
     assert m.sample(wo[7], uc, u, out=out) is out
     np.testing.assert_array_equal(out.wi, one.wi)
-    # outputs that do not fit: not taken by the compiled entry, worded by the general path
+    # outputs that do not fit: worded by the door
     bad = fresh()
     object.__setattr__(bad, "flags", np.zeros(n, np.int8))
-    assert m._core.sample_fast(wo, uc, u, 0, 3, bad) is None
+    with pytest.raises(TypeError, match="out.flags: dtype must be uint8"):
+        m._core.sample(wo, uc, u, 0, 3, bad)
     with pytest.raises(TypeError, match="out.flags: dtype"):
         m.sample(wo, uc, u, out=bad)
     bad = fresh()
     object.__setattr__(bad, "wi", np.zeros((3, n), np.float32).T)
-    assert m._core.sample_fast(wo, uc, u, 0, 3, bad) is None
-    with pytest.raises(ValueError, match="out.wi"):
+    with pytest.raises(ValueError, match="out.wi: must be a writeable C-contiguous array"):
         m.sample(wo, uc, u, out=bad)
     # bad uniforms raise on the compiled path too, naming the argument
     with pytest.raises(ValueError, match="uc: 1 sample value"):
@@ -197,8 +197,6 @@ def test_sample_takes_planes_on_the_fast_path(rng, dtype):
     assert wo_f.flags.f_contiguous and not wo_f.flags.c_contiguous and not u_f.flags.c_contiguous
     want = m.sample(wo, uc, u)
     for a, b in ((wo_f, u), (wo, u_f), (wo_f, u_f)):
-        r = m._core.sample_fast(a, uc, b, 0, 3)
-        assert r is not None
         got = m.sample(a, uc, b)
         for k in SAMPLE_FIELDS:
             np.testing.assert_array_equal(getattr(got, k), getattr(want, k), err_msg=k)
@@ -232,7 +230,6 @@ def test_sample_planes_across_chunks_equal_rows(rng, name, n, dtype):
     for threads in (1, 2):  # conftest restores the thread count
         bk.set_num_threads(threads)
         for a, b in ((np.asfortranarray(wo), u), (wo, np.asfortranarray(u)), (np.asfortranarray(wo), np.asfortranarray(u))):
-            assert m._core.sample_fast(a, uc, b, 0, 3) is not None
             got = m.sample(a, uc, b)
             for k in SAMPLE_FIELDS:
                 np.testing.assert_array_equal(getattr(got, k), getattr(want, k), err_msg=f"{k}, {threads} thread(s)")

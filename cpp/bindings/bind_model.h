@@ -1,13 +1,12 @@
 // Generic pybind11 binding of one model: holds a float and a double instance and dispatches on
-// the dtype of the arrays. Two sets of entry points:
-// - eval_fast / pdf_fast / sample_fast / albedo_fast take the user's arguments as given and do
-//   the whole call when they are plain (Plain below): the shape and dtype decisions, the output
-//   allocation, the kernel (which counts non-unit directions and out-of-range uniforms) and the
-//   ValueError for a bad value. Anything else returns None; the Python layer (models/base.py)
-//   then converts and broadcasts the arguments, words every argument error, and calls
-// - eval / pdf / sample / albedo, which take validated row arrays and preallocated outputs and
-//   return the counts of bad values. Their checks are a second line of defence: a misuse of
-//   _core raises, it never reads out of bounds.
+// the dtype of the arrays. One door per operation: eval / pdf / sample / albedo each take the
+// user's arguments as given. Plain arguments (Plain below: float32 / float64 ndarrays in the
+// layouts the kernels read) go straight to the kernels: the shape and dtype decisions, the output
+// allocation, the kernel (which counts non-unit directions and out-of-range uniforms) and the
+// ValueError for a bad value. Anything else (Python scalars, lists, other dtypes, broadcasting
+// shapes, n= / seed=) is converted with numpy's C API in the same call (door.h), where every
+// argument error is worded once, naming the argument, and then runs the same kernels. The
+// Python layer (models/base.py) only dispatches (spectral, Dask).
 #pragma once
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -18,6 +17,7 @@
 #include <vector>
 
 #include "block_cache.h"
+#include "door.h"
 #include "bsdfkit/batch.h"
 #include "bsdfkit/core/microfacet.h"
 
@@ -142,12 +142,11 @@ inline void raise_bad(const BadCounts &bad, bool dirs_wi, bool uniforms) {
     if (bu) value_error(bad_message("u", bu));
 }
 
-// ---- "plain" arguments of the fast entry points (PyModel::*_fast) ----
-// An argument is plain when it is exactly a numpy.ndarray of float32 or float64, C-contiguous,
-// with the expected trailing axis. The fast entries take the whole call on plain arguments and
-// return None on anything else; the Python layer then takes its general path (conversion,
-// broadcasting, and the wording of every argument error). Reads the array struct directly: a
-// call on one direction pair should cost a few microseconds, not tens.
+// ---- "plain" arguments of the door's fast path (PyModel::eval / pdf / sample / albedo) ----
+// An argument is plain when it is exactly a numpy.ndarray of float32 or float64, C-contiguous
+// (or (N, 3) / (N, 2) Fortran-order planes where the kernels read them), with the expected
+// trailing axis. The door converts anything else first (door.h). Reads the array struct
+// directly: a call on one direction pair should cost about a microsecond.
 struct Plain {
     PyObject *obj = nullptr;
     int type = 0;  // npy type number
@@ -309,6 +308,10 @@ template <template <typename> class Model> struct PyModel {
     Model<double> m64;
     typename Model<double>::Params params;
 
+    // albedo's n_samples: 2**40 samples per direction run for hours already (Python's twin:
+    // _arrays.MAX_ALBEDO_SAMPLES).
+    static constexpr long long kMaxAlbedoSamples = 1LL << 40;
+
     template <typename F> const Model<F> &get() const {
         if constexpr (std::is_same_v<F, float>) return m32; else return m64;
     }
@@ -376,33 +379,11 @@ template <template <typename> class Model> struct PyModel {
         return std::move(res);
     }
 
-    py::object eval_fast(py::handle wo, py::handle wi, py::handle mode, py::handle out) const {
-        Plain o, i;
-        const Plain *big;
-        int md = small_int(mode, 0, 1);
-        if (md < 0 || !plain(wo, 1, 3, o, true) || !plain(wi, 1, 3, i, true) || o.type != i.type ||
-            !simple_batch(o, 1, i, 1, big))
-            return py::none();
-        return o.type == py::detail::npy_api::NPY_FLOAT_
-                   ? pair_plain<float, true>(o, i, *big, TransportMode(md), 0, out)
-                   : pair_plain<double, true>(o, i, *big, TransportMode(md), 0, out);
-    }
-
-    py::object pdf_fast(py::handle wo, py::handle wi, py::handle mode, py::handle sflags, py::handle out) const {
-        Plain o, i;
-        const Plain *big;
-        int md = small_int(mode, 0, 1), sf = small_int(sflags, 0, 3);
-        if (md < 0 || sf < 0 || !plain(wo, 1, 3, o, true) || !plain(wi, 1, 3, i, true) || o.type != i.type ||
-            !simple_batch(o, 1, i, 1, big))
-            return py::none();
-        return o.type == py::detail::npy_api::NPY_FLOAT_
-                   ? pair_plain<float, false>(o, i, *big, TransportMode(md), uint8_t(sf), out)
-                   : pair_plain<double, false>(o, i, *big, TransportMode(md), uint8_t(sf), out);
-    }
 
     // sample's out=: the seven arrays of a SampleResult (its fields, SampleResult order), each of
     // this call's shape, dtype and C order and writeable, as the kernel's outputs, held in keep for
-    // the call; false when any is not (the Python layer then words the error).
+    // the call; false when any is not (the door has worded the error before: check_sample_out).
+    // res may also be a tuple of the seven arrays (the benchmarks' preallocated outputs).
     template <typename F>
     static bool sample_out_of(py::handle res, const std::vector<py::ssize_t> &batch, SampleOut<F> &o,
                               py::object (&keep)[7]) {
@@ -411,12 +392,10 @@ template <template <typename> class Model> struct PyModel {
         std::vector<py::ssize_t> b3(batch);
         b3.push_back(3);
         void *p[7];
-        static const char *const names[7] = {"wi", "f", "pdf", "flags", "eta", "valid", "pdf_is_proportional"};
         const int types[7] = {t, t, t, api::NPY_UBYTE_, t, api::NPY_BOOL_, api::NPY_BOOL_};
         for (int k = 0; k < 7; ++k) {
-            PyObject *a = PyObject_GetAttrString(res.ptr(), names[k]);
-            if (!a) { PyErr_Clear(); return false; }
-            keep[k] = py::reinterpret_steal<py::object>(a);  // alive for the call, whatever res's fields become
+            keep[k] = sample_out_field(res, k);  // alive for the call, whatever res's fields become
+            PyObject *a = keep[k].ptr();
             p[k] = plain_out_data(a, types[k], k < 2 ? b3 : batch);
             if (!p[k]) return false;
         }
@@ -429,6 +408,7 @@ template <template <typename> class Model> struct PyModel {
         o.proportional = static_cast<bool *>(p[6]);
         return true;
     }
+
 
     // The outputs in a new SampleBlock (res None: returns its arrays) or in res's arrays (returns
     // res; None when they do not fit: sample_out_of).
@@ -484,23 +464,6 @@ template <template <typename> class Model> struct PyModel {
         return ret;
     }
 
-    // uc of the batch shape, u of the batch shape + (2,), wo of the batch shape + (3,) or one
-    // direction. Returns the SampleResult fields (wi, f, pdf, flags, eta, valid, pdf_is_proportional),
-    // or, given out (a SampleResult whose arrays fit: sample_out_of), out after writing into it.
-    py::object sample_fast(py::handle wo, py::handle uc, py::handle u, py::handle mode, py::handle sflags,
-                           py::handle out) const {
-        Plain o, c, w;
-        const Plain *big;
-        int md = small_int(mode, 0, 1), sf = small_int(sflags, 0, 3);
-        if (md < 0 || sf < 0 || !plain(wo, 1, 3, o, true) || !plain(uc, 0, 0, c) || !plain(u, 1, 2, w, true) ||
-            c.type != o.type || w.type != o.type || w.ndim != c.ndim + 1 || !std::equal(c.shape, c.shape + c.ndim, w.shape) ||
-            !simple_batch(c, 0, o, 1, big) || big != &c)  // uc's shape is the batch (equal shapes: c)
-            return py::none();
-        return o.type == py::detail::npy_api::NPY_FLOAT_
-                   ? sample_plain<float>(o, c, w, TransportMode(md), uint8_t(sf), out)
-                   : sample_plain<double>(o, c, w, TransportMode(md), uint8_t(sf), out);
-    }
-
     template <typename F> py::object albedo_plain(const Plain &o, int64_t n_samples, uint64_t seed, TransportMode md) const {
         py::array_t<F> res(batch_shape(o, 1, {3}));
         if (o.rows == 0) return std::move(res);
@@ -515,109 +478,203 @@ template <template <typename> class Model> struct PyModel {
         return std::move(res);
     }
 
-    // n_samples >= 1 and seed >= 0 plain ints (the Python layer words their errors).
-    py::object albedo_fast(py::handle wo, py::handle n_samples, py::handle seed, py::handle mode) const {
+    // ---- the door: one entry per operation (see the top of this file) ----
+    // The plain arguments take the fast path above; anything else is converted and checked here
+    // (door.h), in the same call, and then runs the same kernels.
+
+    template <bool Eval>
+    py::object pair_door(py::handle wo, py::handle wi, py::handle mode, py::handle sflags, py::handle out) const {
+        {
+            Plain o, i;
+            const Plain *big;
+            int md = small_int(mode, 0, 1), sf = Eval ? 0 : small_int(sflags, 0, 3);
+            if (md >= 0 && sf >= 0 && plain(wo, 1, 3, o, true) && plain(wi, 1, 3, i, true) && o.type == i.type &&
+                simple_batch(o, 1, i, 1, big)) {
+                py::object r = o.type == py::detail::npy_api::NPY_FLOAT_
+                                   ? pair_plain<float, Eval>(o, i, *big, TransportMode(md), uint8_t(sf), out)
+                                   : pair_plain<double, Eval>(o, i, *big, TransportMode(md), uint8_t(sf), out);
+                if (!r.is_none()) return r;
+            }
+        }
+        using door::Shape;
+        const int md = door::mode_arg(mode), sf = Eval ? 0 : door::sflags_arg(sflags);
+        py::array a = door::dirs(wo, "wo"), b = door::dirs(wi, "wi");
+        const int type = door::is_f32(a) && door::is_f32(b) ? py::detail::npy_api::NPY_FLOAT_
+                                                            : py::detail::npy_api::NPY_DOUBLE_;
+        const Shape batch = door::broadcast({"wo", "wi"}, {door::lead(door::shape_of(a), 1), door::lead(door::shape_of(b), 1)});
+        const Shape shape = Eval ? door::cat(batch, {3}) : batch;
+        // eval's result order (numpy's order='K'): Fortran when the batch is 1-D of more than one
+        // element and every direction array of the whole batch is Fortran-ordered (N, 3) planes.
+        bool f_order = false;
+        if (Eval && batch.size() == 1 && batch[0] > 1) {
+            bool any = false, all = true;
+            for (const py::array *x : {&a, &b})
+                if (door::lead(door::shape_of(*x), 1) == batch) {
+                    any = true;
+                    all = all && (x->flags() & py::array::f_style) && !(x->flags() & py::array::c_style);
+                }
+            f_order = any && all;
+        }
+        py::object target = py::reinterpret_borrow<py::object>(out);
+        if (!out.is_none()) door::check_out(out, shape, type, Eval && batch.size() == 1);
+        else if (f_order) target = py::array(py::dtype(type), shape, std::vector<py::ssize_t>{py::ssize_t(py::dtype(type).itemsize()),
+                                                                                         py::ssize_t(py::dtype(type).itemsize()) * batch[0]});
+        a = door::rows(a, batch, 1, type);
+        b = door::rows(b, batch, 1, type);
+        if (door::prod(door::lead(door::shape_of(a), 1)) == door::prod(batch)) door::shape_batch(a, batch, 1);
+        else door::shape_batch(b, batch, 1);
+        Plain o, i;
+        const Plain *big = nullptr;
+        if (!plain(a, 1, 3, o) || !plain(b, 1, 3, i) || !simple_batch(o, 1, i, 1, big))
+            throw std::logic_error("bsdfkit: the door's converted arguments are not plain");  // cannot happen
+        auto run = [&](py::handle res) {
+            return type == py::detail::npy_api::NPY_FLOAT_
+                       ? pair_plain<float, Eval>(o, i, *big, TransportMode(md), uint8_t(sf), res)
+                       : pair_plain<double, Eval>(o, i, *big, TransportMode(md), uint8_t(sf), res);
+        };
+        if (target.is_none()) return run(py::none());
+        py::object r = run(target);
+        if (!r.is_none()) return r;
+        // an out= the kernels cannot write directly (Fortran-order planes of a model without
+        // packets): computed in C order, then copied
+        py::object tmp = run(py::none());
+        if (py::detail::npy_api::get().PyArray_CopyInto_(target.ptr(), tmp.ptr()) != 0) throw py::error_already_set();
+        return target;
+    }
+
+    py::object eval(py::handle wo, py::handle wi, py::handle mode, py::handle out) const {
+        return pair_door<true>(wo, wi, mode, py::none(), out);
+    }
+    py::object pdf(py::handle wo, py::handle wi, py::handle mode, py::handle sflags, py::handle out) const {
+        return pair_door<false>(wo, wi, mode, sflags, out);
+    }
+
+    // One of sample's out= arrays (k in SampleResult order): the attribute of a SampleResult, or
+    // the k-th item of a tuple of seven arrays.
+    static py::object sample_out_field(py::handle res, int k) {
+        static const char *const names[7] = {"wi", "f", "pdf", "flags", "eta", "valid", "pdf_is_proportional"};
+        if (PyTuple_Check(res.ptr()) && PyTuple_GET_SIZE(res.ptr()) == 7)
+            return py::reinterpret_borrow<py::object>(PyTuple_GET_ITEM(res.ptr(), k));
+        PyObject *a = PyObject_GetAttrString(res.ptr(), names[k]);
+        if (!a) {
+            PyErr_Clear();
+            door::type_error("out: expected a SampleResult (e.g. an earlier result of sample), got " + door::type_name(res));
+        }
+        return py::reinterpret_steal<py::object>(a);
+    }
+
+    // sample's out= in numpy's words, each array named (out.wi, out.f, ...).
+    static void check_sample_out(py::handle res, const door::Shape &batch, int type) {
+        using api = py::detail::npy_api;
+        static const char *const names[7] = {"out.wi", "out.f", "out.pdf", "out.flags", "out.eta", "out.valid",
+                                             "out.pdf_is_proportional"};
+        const int types[7] = {type, type, type, api::NPY_UBYTE_, type, api::NPY_BOOL_, api::NPY_BOOL_};
+        for (int k = 0; k < 7; ++k)
+            door::check_out(sample_out_field(res, k), k < 2 ? door::cat(batch, {3}) : batch, types[k], false, names[k]);
+    }
+
+    // Seeded uniforms: uc, u of element i from a counter hash of (seed, i), as albedo's (batch.h):
+    // the same values for any thread count, chunking or array position.
+    template <typename F> static void fill_uniforms(uint64_t seed, F *uc, F *u, int64_t n) {
+        parallel_chunks(n, num_threads(), int64_t(1) << 15, [&](int64_t b, int64_t e) {
+            for (int64_t i = b; i < e; ++i) {
+                uint64_t h = hash3(seed, uint64_t(i), 0x5a3d1e);
+                uc[i] = uniform_from_bits<F>(mix64(h ^ 1));
+                u[2 * i] = uniform_from_bits<F>(mix64(h ^ 2));
+                u[2 * i + 1] = uniform_from_bits<F>(mix64(h ^ 3));
+            }
+        });
+    }
+
+    // uc of the batch shape, u of the batch shape + (2,), wo of the batch shape + (3,) or one
+    // direction (plain), or anything numpy broadcasts to that, or n (and seed) instead of uc, u.
+    // Returns the SampleResult fields (wi, f, pdf, flags, eta, valid, pdf_is_proportional), or,
+    // given out (a SampleResult of this call's shapes and dtypes), out after writing into it.
+    py::object sample(py::handle wo, py::handle uc, py::handle u, py::handle mode, py::handle sflags, py::handle out,
+                      py::handle n, py::handle seed) const {
+        if (n.is_none()) {
+            Plain o, c, w;
+            const Plain *big;
+            int md = small_int(mode, 0, 1), sf = small_int(sflags, 0, 3);
+            if (md >= 0 && sf >= 0 && plain(wo, 1, 3, o, true) && plain(uc, 0, 0, c) && plain(u, 1, 2, w, true) &&
+                c.type == o.type && w.type == o.type && w.ndim == c.ndim + 1 &&
+                std::equal(c.shape, c.shape + c.ndim, w.shape) && simple_batch(c, 0, o, 1, big) && big == &c) {
+                py::object r = o.type == py::detail::npy_api::NPY_FLOAT_
+                                   ? sample_plain<float>(o, c, w, TransportMode(md), uint8_t(sf), out)
+                                   : sample_plain<double>(o, c, w, TransportMode(md), uint8_t(sf), out);
+                if (!r.is_none()) return r;
+            }
+        }
+        using door::Shape;
+        const int md = door::mode_arg(mode), sf = door::sflags_arg(sflags);
+        py::array a = door::dirs(wo, "wo"), c, w;
+        Shape batch;
+        int type;
+        if (!n.is_none()) {
+            if (!uc.is_none() || !u.is_none()) door::value_error("n: give either n (and seed) or the uniforms uc and u, not both");
+            const long long nn = door::int_arg(n, "n", 0);
+            batch = door::broadcast({"wo", "n"}, {door::lead(door::shape_of(a), 1), Shape{py::ssize_t(nn)}});
+            type = door::is_f32(a) ? py::detail::npy_api::NPY_FLOAT_ : py::detail::npy_api::NPY_DOUBLE_;
+            const uint64_t sd = door::seed_arg(seed);
+            c = py::array(py::dtype(type), batch);
+            w = py::array(py::dtype(type), door::cat(batch, {2}));
+            {
+                py::gil_scoped_release release;
+                if (type == py::detail::npy_api::NPY_FLOAT_)
+                    fill_uniforms<float>(sd, static_cast<float *>(c.mutable_data()), static_cast<float *>(w.mutable_data()), c.size());
+                else
+                    fill_uniforms<double>(sd, static_cast<double *>(c.mutable_data()), static_cast<double *>(w.mutable_data()), c.size());
+            }
+            raise_if_interrupted();
+        } else {
+            if (uc.is_none() || u.is_none()) door::value_error("uc, u: pass both uniforms, or n= and seed=");
+            c = door::uniforms(uc, "uc", false);
+            w = door::uniforms(u, "u", true);
+            // a Python float (or int) uc is weak, as numpy's scalars (NEP 50): m.sample(wo32, 0.5, u32)
+            // runs the float32 kernels
+            const bool uc_weak = PyFloat_CheckExact(uc.ptr()) || (PyLong_CheckExact(uc.ptr()));
+            type = door::is_f32(a) && (uc_weak || door::is_f32(c)) && door::is_f32(w) ? py::detail::npy_api::NPY_FLOAT_
+                                                                                     : py::detail::npy_api::NPY_DOUBLE_;
+            batch = door::broadcast({"wo", "uc", "u"}, {door::lead(door::shape_of(a), 1), door::shape_of(c),
+                                                        door::lead(door::shape_of(w), 1)});
+            c = door::rows(c, batch, 0, type, true);
+            w = door::rows(w, batch, 1, type, true);
+        }
+        if (!out.is_none()) check_sample_out(out, batch, type);
+        a = door::rows(a, batch, 1, type);
+        Plain o, pc, pw;
+        if (!plain(a, 1, 3, o) || !plain(c, 0, 0, pc) || !plain(w, 1, 2, pw))
+            throw std::logic_error("bsdfkit: the door's converted arguments are not plain");  // cannot happen
+        py::object r = type == py::detail::npy_api::NPY_FLOAT_ ? sample_plain<float>(o, pc, pw, TransportMode(md), uint8_t(sf), out)
+                                                               : sample_plain<double>(o, pc, pw, TransportMode(md), uint8_t(sf), out);
+        if (r.is_none()) door::value_error("out: its arrays must be this call's outputs (see SampleResult)");
+        return r;
+    }
+
+    py::object albedo(py::handle wo, py::handle n_samples, py::handle seed, py::handle mode) const {
+        {
+            Plain o;
+            int md = small_int(mode, 0, 1);
+            if (md >= 0 && plain(wo, 1, 3, o) && PyLong_CheckExact(n_samples.ptr()) && PyLong_CheckExact(seed.ptr())) {
+                long long ns = PyLong_AsLongLong(n_samples.ptr()), sd = PyLong_AsLongLong(seed.ptr());
+                if (PyErr_Occurred()) PyErr_Clear();
+                else if (ns >= 1 && ns <= kMaxAlbedoSamples && sd >= 0)
+                    return o.type == py::detail::npy_api::NPY_FLOAT_
+                               ? albedo_plain<float>(o, ns, uint64_t(sd), TransportMode(md))
+                               : albedo_plain<double>(o, ns, uint64_t(sd), TransportMode(md));
+            }
+        }
+        const int md = door::mode_arg(mode);
+        py::array a = door::dirs(wo, "wo");
+        const long long ns = door::int_arg(n_samples, "n_samples", 1, kMaxAlbedoSamples);
+        if (seed.is_none()) door::type_error("seed: expected an integer, got NoneType");
+        const uint64_t sd = door::seed_arg(seed);
+        const int type = door::is_f32(a) ? py::detail::npy_api::NPY_FLOAT_ : py::detail::npy_api::NPY_DOUBLE_;
+        a = door::rows(a, door::lead(door::shape_of(a), 1), 1, type);
         Plain o;
-        int md = small_int(mode, 0, 1);
-        if (md < 0 || !plain(wo, 1, 3, o) || !PyLong_CheckExact(n_samples.ptr()) || !PyLong_CheckExact(seed.ptr()))
-            return py::none();
-        long long n = PyLong_AsLongLong(n_samples.ptr()), sd = PyLong_AsLongLong(seed.ptr());
-        if (PyErr_Occurred()) { PyErr_Clear(); return py::none(); }  // beyond 64 bits: the general path
-        // beyond _arrays.MAX_ALBEDO_SAMPLES (2**40; its twin) the Python layer words the error
-        if (n < 1 || n > (int64_t(1) << 40) || sd < 0) return py::none();
-        return o.type == py::detail::npy_api::NPY_FLOAT_ ? albedo_plain<float>(o, n, uint64_t(sd), TransportMode(md))
-                                                         : albedo_plain<double>(o, n, uint64_t(sd), TransportMode(md));
-    }
-
-    template <typename F>
-    py::tuple eval_t(const py::array &wo, const py::array &wi, int mode, py::array &out) const {
-        int64_t no, ni, nout;
-        const F *po = checked<F>(wo, "wo", {3}, &no), *pi = checked<F>(wi, "wi", {3}, &ni);
-        F *pout = checked<F>(out, "out", {3}, &nout, true);
-        int64_t n = broadcast_rows(no, ni, "wo", "wi");
-        if (nout != n) value_error("out: wrong shape");
-        check_out_no_overlap(out, wo, wi);
-        TransportMode md = to_mode(mode);
-        BadCounts bad;
-        {
-            py::gil_scoped_release release;
-            const Model<F> &m = get<F>();
-            int nt = num_threads();
-            if (no == n && ni == n) eval_batch<3, 3>(m, po, pi, n, md, pout, nt, bad);
-            else if (no == n) eval_batch<3, 0>(m, po, pi, n, md, pout, nt, bad);
-            else if (ni == n) eval_batch<0, 3>(m, po, pi, n, md, pout, nt, bad);
-            else eval_batch<0, 0>(m, po, pi, n, md, pout, nt, bad);
-        }
-        raise_if_interrupted();
-        return py::make_tuple(bad.wo.load(), bad.wi.load());
-    }
-
-    template <typename F>
-    py::tuple pdf_t(const py::array &wo, const py::array &wi, int mode, int sf, py::array &out) const {
-        int64_t no, ni, nout;
-        const F *po = checked<F>(wo, "wo", {3}, &no), *pi = checked<F>(wi, "wi", {3}, &ni);
-        F *pout = checked<F>(out, "out", {}, &nout, true);
-        int64_t n = broadcast_rows(no, ni, "wo", "wi");
-        if (nout != n) value_error("out: wrong shape");
-        check_out_no_overlap(out, wo, wi);
-        TransportMode md = to_mode(mode);
-        uint8_t s = to_sflags(sf);
-        BadCounts bad;
-        {
-            py::gil_scoped_release release;
-            const Model<F> &m = get<F>();
-            int nt = num_threads();
-            if (no == n && ni == n) pdf_batch<3, 3>(m, po, pi, n, md, s, pout, nt, bad);
-            else if (no == n) pdf_batch<3, 0>(m, po, pi, n, md, s, pout, nt, bad);
-            else if (ni == n) pdf_batch<0, 3>(m, po, pi, n, md, s, pout, nt, bad);
-            else pdf_batch<0, 0>(m, po, pi, n, md, s, pout, nt, bad);
-        }
-        raise_if_interrupted();
-        return py::make_tuple(bad.wo.load(), bad.wi.load());
-    }
-
-    template <typename F>
-    py::tuple sample_t(const py::array &wo, const py::array &uc, const py::array &u, int mode, int sf,
-                     py::array &wi_out, py::array &f_out, py::array &pdf_out, py::array &flags_out,
-                     py::array &eta_out, py::array &valid_out, py::array &prop_out) const {
-        int64_t no, nuc, nu;
-        const F *po = checked<F>(wo, "wo", {3}, &no);
-        const F *puc = checked<F>(uc, "uc", {}, &nuc);
-        const F *pu = checked<F>(u, "u", {2}, &nu);
-        if (nuc != nu) value_error("uc and u must have the same length");
-        int64_t n = broadcast_rows(no, nuc, "wo", "uc");
-        if (nuc != n) value_error("uc: wrong length");
-        SampleOut<F> o;
-        checked_sample_out<3, F>(n, o, wi_out, f_out, pdf_out, flags_out, eta_out, valid_out, prop_out);
-        check_sample_no_overlap({&wo, &uc, &u, &wi_out, &f_out, &pdf_out, &flags_out, &eta_out, &valid_out, &prop_out}, 3);
-        TransportMode md = to_mode(mode);
-        uint8_t s = to_sflags(sf);
-        BadCounts bad;
-        {
-            py::gil_scoped_release release;
-            const Model<F> &m = get<F>();
-            if (no == n) sample_batch<3>(m, po, puc, pu, n, md, s, o, num_threads(), bad);
-            else sample_batch<0>(m, po, puc, pu, n, md, s, o, num_threads(), bad);
-        }
-        raise_if_interrupted();
-        return py::make_tuple(bad.wo.load(), bad.uc.load(), bad.u.load());
-    }
-
-    template <typename F>
-    int64_t albedo_t(const py::array &wo, int64_t n_samples, uint64_t seed, int mode, py::array &out) const {
-        int64_t no, nout;
-        const F *po = checked<F>(wo, "wo", {3}, &no);
-        F *pout = checked<F>(out, "out", {3}, &nout, true);
-        if (nout != no) value_error("out: wrong shape");
-        if (n_samples <= 0) value_error("n_samples: must be positive");
-        TransportMode md = to_mode(mode);
-        BadCounts bad;
-        {
-            py::gil_scoped_release release;
-            albedo_batch(get<F>(), po, no, n_samples, seed, md, pout, num_threads(), bad);
-        }
-        raise_if_interrupted();
-        return bad.wo.load();
+        if (!plain(a, 1, 3, o)) throw std::logic_error("bsdfkit: the door's converted arguments are not plain");
+        return type == py::detail::npy_api::NPY_FLOAT_ ? albedo_plain<float>(o, ns, sd, TransportMode(md))
+                                                       : albedo_plain<double>(o, ns, sd, TransportMode(md));
     }
 };
 
@@ -625,30 +682,13 @@ template <template <typename> class Model>
 py::class_<PyModel<Model>> bind_model(py::module_ &m, const char *name) {
     using P = PyModel<Model>;
     py::class_<P> c(m, name);
-    c.def("eval", [](const P &self, py::array wo, py::array wi, int mode, py::array out) {
-         return is_dtype<float>(wo) ? self.template eval_t<float>(wo, wi, mode, out)
-                                    : self.template eval_t<double>(wo, wi, mode, out);
-     })
-        .def("pdf", [](const P &self, py::array wo, py::array wi, int mode, int sf, py::array out) {
-            return is_dtype<float>(wo) ? self.template pdf_t<float>(wo, wi, mode, sf, out)
-                                       : self.template pdf_t<double>(wo, wi, mode, sf, out);
-        })
-        .def("sample", [](const P &self, py::array wo, py::array uc, py::array u, int mode, int sf, py::array wi,
-                          py::array f, py::array pdf, py::array flags, py::array eta, py::array valid,
-                          py::array prop) {
-            return is_dtype<float>(wo)
-                       ? self.template sample_t<float>(wo, uc, u, mode, sf, wi, f, pdf, flags, eta, valid, prop)
-                       : self.template sample_t<double>(wo, uc, u, mode, sf, wi, f, pdf, flags, eta, valid, prop);
-        })
-        .def("albedo", [](const P &self, py::array wo, int64_t n, uint64_t seed, int mode, py::array out) {
-            return is_dtype<float>(wo) ? self.template albedo_t<float>(wo, n, seed, mode, out)
-                                       : self.template albedo_t<double>(wo, n, seed, mode, out);
-        })
-        .def("eval_fast", &P::eval_fast)
-        .def("pdf_fast", &P::pdf_fast)
-        .def("sample_fast", &P::sample_fast, py::arg("wo"), py::arg("uc"), py::arg("u"), py::arg("mode"),
-             py::arg("sflags"), py::arg("out") = py::none())
-        .def("albedo_fast", &P::albedo_fast)
+    c.def("eval", &P::eval, py::arg("wo"), py::arg("wi"), py::arg("mode") = 0, py::arg("out") = py::none())
+        .def("pdf", &P::pdf, py::arg("wo"), py::arg("wi"), py::arg("mode") = 0, py::arg("sflags") = 3,
+             py::arg("out") = py::none())
+        .def("sample", &P::sample, py::arg("wo"), py::arg("uc") = py::none(), py::arg("u") = py::none(),
+             py::arg("mode") = 0, py::arg("sflags") = 3, py::arg("out") = py::none(), py::arg("n") = py::none(),
+             py::arg("seed") = py::none())
+        .def("albedo", &P::albedo, py::arg("wo"), py::arg("n_samples") = 65536, py::arg("seed") = 0, py::arg("mode") = 0)
         .def_property_readonly("flags", [](const P &self) { return int(self.m64.flags()); });
     return c;
 }

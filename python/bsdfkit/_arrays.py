@@ -127,27 +127,63 @@ def check_int(x, name: str, lo: int, hi: int | None = None) -> int:
 
 
 # albedo's n_samples: 2**40 samples per direction run for hours already; beyond 2**63 the C++
-# side cannot even take the number. Its twin: bind_model.h albedo_fast defers above it.
+# side cannot even take the number. Its twin: bind_model.h PyModel::kMaxAlbedoSamples.
 MAX_ALBEDO_SAMPLES = 2 ** 40
 
 
+_M64 = np.uint64(0xFFFFFFFFFFFFFFFF)
+#: The stream constant of seeded ``sample`` uniforms (cpp/bindings/bind_model.h fill_uniforms).
+_SAMPLE_STREAM = 0x5A3D1E
+
+
+def _mix64(z: np.ndarray) -> np.ndarray:
+    """SplitMix64's finaliser (Steele, Lea, Flood 2014) on uint64 arrays (wrapping arithmetic),
+    the hash of cpp/include/bsdfkit/core/rng.h mix64."""
+    z = z + np.uint64(0x9E3779B97F4A7C15)
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
+def seeded_uniforms(seed, batch: tuple, dtype):
+    """``sample(n=, seed=)``'s uniforms ``uc`` (batch) and ``u`` (batch + (2,)) of element i from a
+    counter hash of (seed, i), as the compiled door draws them (bind_model.h fill_uniforms): the
+    same values in RGB and spectral mode, for any thread count. ``seed``: an integer >= 0 (used
+    modulo 2**64) or None (drawn from the system's entropy)."""
+    import secrets
+    if seed is None:
+        seed = secrets.randbits(64)
+    elif isinstance(seed, bool) or not isinstance(seed, numbers.Integral):
+        raise TypeError(f"seed: expected a non-negative integer or None, got {type(seed).__name__}")
+    elif seed < 0:
+        raise ValueError(f"seed: must be >= 0 (or None), got {seed}")
+    dtype = np.dtype(dtype)
+    n = math.prod(batch)
+    with np.errstate(over="ignore"):
+        s = _mix64(np.array([int(seed) & 0xFFFFFFFFFFFFFFFF], np.uint64))
+        h = _mix64(_mix64(s ^ np.arange(n, dtype=np.uint64)) ^ np.uint64(_SAMPLE_STREAM))
+        bits = [_mix64(h ^ np.uint64(k)) for k in (1, 2, 3)]
+    if dtype == np.float32:
+        uni = [(b >> np.uint64(40)).astype(np.float32) * np.float32(2.0 ** -24) for b in bits]
+    else:
+        uni = [(b >> np.uint64(11)).astype(np.float64) * 2.0 ** -53 for b in bits]
+    return uni[0].reshape(batch), np.stack(uni[1:], -1).reshape(batch + (2,))
+
+
 def sample_uniforms(wo: np.ndarray, uc, u, n, seed, names: tuple = (), shapes: tuple = ()):
-    """The uniforms of a ``sample`` call: drawn from ``seed`` when ``n`` is given, else the user's
-    ``uc``, ``u`` (their ranges are counted by the kernel). ``names``/``shapes``: further batch
-    inputs besides ``wo`` (e.g. wavelengths). Returns (uc, u, dtype, batch)."""
+    """The uniforms of a ``sample`` call: drawn from ``seed`` when ``n`` is given
+    (:func:`seeded_uniforms`), else the user's ``uc``, ``u`` (their ranges are counted by the
+    kernel). ``names``/``shapes``: further batch inputs besides ``wo`` (e.g. wavelengths).
+    Returns (uc, u, dtype, batch). The RGB models' door does this in C++ (bind_model.h); the
+    spectral calls and ``Custom`` use this one."""
     if n is not None:
         if uc is not None or u is not None:
             raise ValueError("n: give either n (and seed) or the uniforms uc and u, not both")
         n = check_int(n, "n", 0)
         batch = broadcast_batch(("wo",) + names + ("n",), wo.shape[:-1], *shapes, (n,))
         dtype = kernel_dtype(wo)
-        if isinstance(seed, numbers.Integral) and not isinstance(seed, bool) and seed < 0:
-            raise ValueError(f"seed: must be >= 0 (or None), got {seed}")
-        try:
-            rng = np.random.default_rng(seed)
-        except (TypeError, ValueError) as e:
-            raise type(e)(f"seed: {e}") from None
-        return rng.random(batch, dtype=dtype), rng.random(batch + (2,), dtype=dtype), dtype, batch
+        uc, u = seeded_uniforms(seed, batch, dtype)
+        return uc, u, dtype, batch
     if uc is None or u is None:
         raise ValueError("uc, u: pass both uniforms, or n= and seed=")
     uc, u = as_uniform(uc, "uc", ()), as_uniform(u, "u", (2,))

@@ -357,6 +357,8 @@ def test_to_mitsuba_round_trip_or_refusal(cls, spec):
     if cls.mitsuba is None:
         with pytest.raises(NotImplementedError):
             m.to_mitsuba()
+        with pytest.raises(NotImplementedError):   # nothing nearer either, and the same keyword everywhere
+            m.to_mitsuba(approximate=True)
         return
     try:
         d = m.to_mitsuba()

@@ -49,12 +49,12 @@ def _large(m, n: int, repeats: int) -> dict:
     uc, u = rng.random(n), rng.random((n, 2))
     core = m._core
     f, p = np.empty((n, 3)), np.empty(n)
-    bufs = [np.empty((n, 3)), np.empty((n, 3)), np.empty(n), np.empty(n, np.uint8), np.empty(n), np.empty(n, bool),
-            np.empty(n, bool)]
+    bufs = (np.empty((n, 3)), np.empty((n, 3)), np.empty(n), np.empty(n, np.uint8), np.empty(n), np.empty(n, bool),
+            np.empty(n, bool))
     pairs = {
         "eval": (lambda: m.eval(wo, wi), lambda: core.eval(wo, wi, 0, f)),
         "pdf": (lambda: m.pdf(wo, wi), lambda: core.pdf(wo, wi, 0, 3, p)),
-        "sample": (lambda: m.sample(wo, uc, u), lambda: core.sample(wo, uc, u, 0, 3, *bufs)),
+        "sample": (lambda: m.sample(wo, uc, u), lambda: core.sample(wo, uc, u, 0, 3, bufs)),
     }
     res = {}
     for name, (plain, kernel) in pairs.items():

@@ -209,7 +209,7 @@ def bk_calls(m, op, d, transmissive):
     r = m.sample(wo, uc, u)
     bufs = (r.wi, r.f, r.pdf, r.flags, r.eta, r.valid, r.pdf_is_proportional)  # the compiled call's order
     core = m._core  # the compiled kernel with preallocated outputs (what m.sample calls)
-    return {"kernel": lambda: core.sample(wo, uc, u, 0, 3, *bufs), "plain": lambda: m.sample(wo, uc, u)}
+    return {"kernel": lambda: core.sample(wo, uc, u, 0, 3, bufs), "plain": lambda: m.sample(wo, uc, u)}
 
 
 def io_split(op, n, itemsize):

@@ -34,10 +34,12 @@ DENSE_WAVELENGTHS.setflags(write=False)
 #: RGB-mode eta of a dispersive dielectric: its value here (pbrt-v4 RGB renders have no dispersion).
 RGB_ETA_WAVELENGTH = 550.0
 
-_SPECTRAL_MODELS = ("Diffuse, DiffuseTransmission, Conductor, Dielectric, ThinDielectric, Plastic, NormalizedFresnel, "
-                    "FilamentStandard, CoatedDiffuse / CoatedConductor (both methods), Measured (spectral "
-                    "tensor files), MERL")
-_SPECTRAL_MODELS += ", Hair, FilamentCloth"
+def spectral_model_names() -> str:
+    """The registered models with a spectral kernel (a ``_make_spectral_core``), from the registry:
+    no hand-kept list. Some of them have it for some parameters only (``_has_spectral_kernel``,
+    e.g. Measured: spectral tensor files)."""
+    from . import registry
+    return ", ".join(c.__name__ for c in registry.classes() if getattr(c, "_make_spectral_core", None) is not None)
 
 
 # ------------------------------------------------------------------------------- parameters
@@ -172,7 +174,7 @@ def _spectral_core(model):
     if factory is None or not getattr(model, "_has_spectral_kernel", lambda: True)():
         raise NotImplementedError(
             f"wavelengths: spectral mode is not implemented for {type(model).__name__} yet "
-            f"(models with wavelengths=: {_SPECTRAL_MODELS}); call without wavelengths= for RGB")
+            f"(models with wavelengths=: {spectral_model_names()}); call without wavelengths= for RGB")
     key = (type(model), model._key())
     core = _CACHE.get(key)
     if core is None:

@@ -7,8 +7,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._arrays import (MAX_ALBEDO_SAMPLES, as_dirs, broadcast_batch, c_buffer, check_int, check_out, flatten_to, kernel_dtype,
-                       planes_order, sample_uniforms)
 from .._dask import dask_eval, is_dask_array
 from .._enums import BxDFFlags, ReflTrans, TransportMode
 from . import _spectral
@@ -177,37 +175,6 @@ def _sample_result(arrays) -> SampleResult:
     return r
 
 
-def _new_sample_result(batch, dtype) -> SampleResult:
-    """Uninitialized outputs of the batch shape in one allocation, the arrays views of it (as the
-    compiled fast path makes them): wi, f, pdf, eta as ``dtype``, then flags, valid,
-    pdf_is_proportional as bytes. The kernel's threads first-touch it."""
-    n, s = math.prod(batch), dtype.itemsize
-    blk = np.empty(8 * n * s + 3 * n, np.uint8)
-    fl = blk[: 8 * n * s].view(dtype)
-    by = blk[8 * n * s:]
-    return _sample_result((fl[: 3 * n].reshape(batch + (3,)), fl[3 * n: 6 * n].reshape(batch + (3,)),
-                           fl[6 * n: 7 * n].reshape(batch), by[:n].reshape(batch),
-                           fl[7 * n:].reshape(batch), by[n: 2 * n].view(bool).reshape(batch),
-                           by[2 * n:].view(bool).reshape(batch)))
-
-
-def _check_sample_out(out, batch, dtype) -> SampleResult:
-    """A user-supplied ``out=`` for sample: a SampleResult whose arrays have the shapes and dtypes
-    this call produces (e.g. the result of an earlier call of the same size), writeable, C-contiguous."""
-    if not isinstance(out, SampleResult):
-        raise TypeError(f"out: expected a SampleResult (e.g. an earlier result of sample), got {type(out).__name__}")
-    want = {"wi": (batch + (3,), dtype), "f": (batch + (3,), dtype), "pdf": (batch, dtype),
-            "flags": (batch, np.dtype(np.uint8)), "eta": (batch, dtype), "valid": (batch, np.dtype(bool)),
-            "pdf_is_proportional": (batch, np.dtype(bool))}
-    for name, (shape, dt) in want.items():
-        a = getattr(out, name)
-        try:
-            check_out(a, shape, dt)
-        except (TypeError, ValueError) as e:
-            raise type(e)(f"out.{name}: {str(e)[len('out: '):]}") from None
-    return out
-
-
 def _mode(mode) -> int:
     if isinstance(mode, str) and mode.capitalize() in TransportMode.__members__:
         return int(TransportMode[mode.capitalize()])
@@ -238,15 +205,6 @@ def _bad_message(name: str, count: int) -> str:
 def _raise_bad(name: str, count: int) -> None:
     if count:
         raise ValueError(_bad_message(name, count))
-
-
-def _checked(counts, names) -> None:
-    """Raises for the first nonzero count of bad values a core call returned (one per name)."""
-    if isinstance(counts, tuple):
-        for name, c in zip(names, counts):
-            _raise_bad(name, c)
-    else:
-        _raise_bad(names[0], counts)
 
 
 class BxDF:
@@ -289,9 +247,11 @@ class BxDF:
         rest = to_spec(self).split()[1:]
         return type(self).__name__ + (" " + ", ".join(rest) if rest else "")
 
-    def to_mitsuba(self) -> dict:
+    def to_mitsuba(self, approximate: bool = False) -> dict:
         """The Mitsuba 3 plugin dictionary (``mi.load_dict``) of this model. Raises
-        NotImplementedError naming the reason when Mitsuba has no equivalent plugin."""
+        NotImplementedError naming the reason when Mitsuba has no equivalent plugin (models that
+        have a nearest one export it with ``approximate=True`` and a warning stating the
+        difference; this one has none)."""
         raise NotImplementedError(f"{type(self).__name__}: Mitsuba 3 has no equivalent plugin")
 
     def __init__(self, **params):
@@ -339,10 +299,9 @@ class BxDF:
         """The lobes this model has (``BxDFFlags``)."""
         return BxDFFlags(self._core.flags)
 
-    # array API. Each op first offers the arguments as given to the compiled core's fast entry
-    # (cpp/bindings/bind_model.h: it takes the whole call when they are plain ndarrays and returns
-    # None otherwise); the general path then converts, broadcasts and checks them, words every
-    # argument error, and calls the core's row-array entry (whose bad-value counts _checked raises).
+    # array API. Each op is one call of the compiled core's door (cpp/bindings/bind_model.h): it
+    # takes the arguments as given, converts and checks what is not a plain array, words every
+    # argument error and runs the kernels. Python only dispatches: spectral mode, Dask arrays.
     def eval(self, wo, wi, mode=TransportMode.Radiance, out=None, *, wavelengths=None) -> np.ndarray:
         """BSDF value f(wo, wi), cosine excluded, per RGB channel: shape (..., 3).
         ``wavelengths``: (..., 4) nm in [360, 830], broadcast with the directions: spectral mode,
@@ -362,20 +321,9 @@ class BxDF:
         """
         if wavelengths is not None:
             return _spectral.eval(self, wo, wi, wavelengths, mode, out)
-        r = self._core.eval_fast(wo, wi, mode, out)
-        if r is not None:
-            return r
-        if is_dask_array(wo) or is_dask_array(wi):  # a lazy Dask array, blockwise (bsdfkit._dask)
-            return dask_eval(self, "eval", wo, wi, mode, out=out)
-        wo, wi, batch, dtype = self._pair(wo, wi)
-        out = check_out(out, batch + (3,), dtype, order=planes_order(batch, wo, wi), fortran_ok=len(batch) == 1)
-        if out.size:
-            buf = c_buffer(out)
-            _checked(self._core.eval(flatten_to(wo, batch, (3,), dtype), flatten_to(wi, batch, (3,), dtype),
-                                     _mode(mode), buf.reshape(-1, 3)), ("wo", "wi"))
-            if buf is not out:
-                np.copyto(out, buf)
-        return out
+        if (type(wo) is not np.ndarray or type(wi) is not np.ndarray) and (is_dask_array(wo) or is_dask_array(wi)):
+            return dask_eval(self, "eval", wo, wi, mode, out=out)  # a lazy Dask array, blockwise (bsdfkit._dask)
+        return self._core.eval(wo, wi, mode, out)
 
     def pdf(self, wo, wi, mode=TransportMode.Radiance, sample_flags=ReflTrans.All, out=None, *,
             wavelengths=None) -> np.ndarray:
@@ -385,55 +333,31 @@ class BxDF:
         without transposition, with bit-identical values (see ``eval``)."""
         if wavelengths is not None:
             return _spectral.pdf(self, wo, wi, wavelengths, mode, sample_flags, out)
-        r = self._core.pdf_fast(wo, wi, mode, sample_flags, out)
-        if r is not None:
-            return r
-        if is_dask_array(wo) or is_dask_array(wi):
+        if (type(wo) is not np.ndarray or type(wi) is not np.ndarray) and (is_dask_array(wo) or is_dask_array(wi)):
             return dask_eval(self, "pdf", wo, wi, mode, sample_flags, out=out)
-        wo, wi, batch, dtype = self._pair(wo, wi)
-        out = check_out(out, batch, dtype)
-        if out.size:
-            _checked(self._core.pdf(flatten_to(wo, batch, (3,), dtype), flatten_to(wi, batch, (3,), dtype),
-                                    _mode(mode), _sflags(sample_flags), out.reshape(-1)), ("wo", "wi"))
-        return out
-
-    @staticmethod
-    def _pair(wo, wi):
-        wo, wi = as_dirs(wo, "wo"), as_dirs(wi, "wi")
-        return wo, wi, broadcast_batch(("wo", "wi"), wo.shape[:-1], wi.shape[:-1]), kernel_dtype(wo, wi)
+        return self._core.pdf(wo, wi, mode, sample_flags, out)
 
     def sample(self, wo, uc=None, u=None, *, n=None, seed=None, mode=TransportMode.Radiance,
                sample_flags=ReflTrans.All, out=None, wavelengths=None) -> SampleResult:
         """Importance-sample wi given wo.
 
         Either pass the uniforms ``uc`` (...) (lobe choice) and ``u`` (..., 2) (direction), in
-        [0, 1], or pass ``n`` (number of samples) and an optional integer ``seed``; then uniforms
-        come from ``numpy.random.default_rng(seed)`` and the batch shape is broadcast(wo, (n,)).
+        [0, 1], broadcast with wo's leading axes (a Python float for ``uc`` is fine), or pass ``n``
+        (number of samples) and an optional non-negative integer ``seed``: the batch shape is then
+        broadcast(wo, (n,)) and the uniforms come from a counter-based hash of (seed, element
+        index), the generator ``albedo`` uses, so the values do not depend on the thread count
+        (``seed=None`` draws a seed from the system's entropy).
         ``out``: a SampleResult of this call's shapes and dtypes (e.g. an earlier result) to
         write into instead of allocating; it is returned.
         ``wavelengths`` (..., 4): spectral mode (f per wavelength, ``terminated``; see SampleResult).
         """
         if wavelengths is not None:
             return _spectral.sample(self, wo, uc, u, n, seed, wavelengths, mode, sample_flags, out)
-        if n is None and out is None:
-            r = self._core.sample_fast(wo, uc, u, mode, sample_flags)
-            if r is not None:
-                return _sample_result(r)
-        elif n is None and type(out) is SampleResult:
-            # out's arrays of this call's shapes and dtypes: written in place by the compiled path
-            if self._core.sample_fast(wo, uc, u, mode, sample_flags, out) is not None:
-                return out
-        wo = as_dirs(wo, "wo")
-        uc, u, dtype, batch = sample_uniforms(wo, uc, u, n, seed)
-        md, sf = _mode(mode), _sflags(sample_flags)
-        res = _new_sample_result(batch, dtype) if out is None else _check_sample_out(out, batch, dtype)
-        if res.pdf.size:
-            ucf = np.ascontiguousarray(np.broadcast_to(uc, batch), dtype=dtype).reshape(-1)
-            uf = np.ascontiguousarray(np.broadcast_to(u, batch + (2,)), dtype=dtype).reshape(-1, 2)
-            _checked(self._core.sample(flatten_to(wo, batch, (3,), dtype), ucf, uf, md, sf,
-                                       *(getattr(res, k).reshape((-1, 3) if k in ("wi", "f") else -1)
-                                         for k in _SAMPLE_FIELDS)), ("wo", "uc", "u"))
-        return res
+        if out is not None:
+            if type(out) is not SampleResult:
+                raise TypeError(f"out: expected a SampleResult (e.g. an earlier result of sample), got {type(out).__name__}")
+            return self._core.sample(wo, uc, u, mode, sample_flags, out, n, seed)
+        return _sample_result(self._core.sample(wo, uc, u, mode, sample_flags, None, n, seed))
 
     def albedo(self, wo, n_samples: int = 65536, seed: int = 0, mode=TransportMode.Radiance, *,
                wavelengths=None) -> np.ndarray:
@@ -446,18 +370,7 @@ class BxDF:
         """
         if wavelengths is not None:
             return _spectral.albedo(self, wo, wavelengths, n_samples, seed, mode)
-        r = self._core.albedo_fast(wo, n_samples, seed, mode)
-        if r is not None:
-            return r
-        wo = as_dirs(wo, "wo")
-        n_samples = check_int(n_samples, "n_samples", 1, MAX_ALBEDO_SAMPLES)
-        seed = check_int(seed, "seed", 0)
-        batch, dtype = wo.shape[:-1], kernel_dtype(wo)
-        out = np.empty(batch + (3,), dtype)
-        if out.size:
-            _checked(self._core.albedo(np.ascontiguousarray(wo, dtype=dtype).reshape(-1, 3), n_samples,
-                                       seed & 0xFFFFFFFFFFFFFFFF, _mode(mode), out.reshape(-1, 3)), ("wo",))
-        return out
+        return self._core.albedo(wo, n_samples, seed, mode)
 
     # ---- parameter gradients (bsdfkit.fitting; kept as one block)
     #: Fitting bounds of the differentiable parameters, name -> (lo, hi) (bsdfkit.fitting.fit).

@@ -25,8 +25,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._arrays import (MAX_ALBEDO_SAMPLES, as_dirs, broadcast_batch, c_buffer, check_int, check_out, flatten_to,
+                       kernel_dtype, planes_order, sample_uniforms)
 from .._enums import BxDFFlags, ReflTrans
-from .base import BxDF
+from .base import SampleResult, BxDF, _mode, _raise_bad, _sample_result, _sflags
 
 __all__ = ["Custom"]
 
@@ -51,19 +53,90 @@ def _check_fits(v: np.ndarray, dtype, what: str) -> None:
                          f"(the call's dtype)")
 
 
+def _raise_counts(counts, names) -> None:
+    for name, c in zip(names, counts if isinstance(counts, tuple) else (counts,)):
+        _raise_bad(name, c)
+
+
+def _new_sample_out(batch, dtype) -> SampleResult:
+    def a(shape, dt):
+        return np.empty(shape, dt)
+    return _sample_result((a(batch + (3,), dtype), a(batch + (3,), dtype), a(batch, dtype), a(batch, np.uint8),
+                           a(batch, dtype), a(batch, bool), a(batch, bool)))
+
+
 class _PyCore:
-    """The ``_core`` model interface (eval / pdf / sample / albedo into preallocated outputs)
-    implemented in numpy around the user's functions, so BxDF's argument handling is shared."""
+    """The ``_core`` model interface implemented in numpy around the user's functions: its door
+    (eval / pdf / sample / albedo taking the arguments as given, as cpp/bindings/bind_model.h's)
+    converts and checks them with bsdfkit._arrays, then runs the row functions below, which
+    write into preallocated outputs."""
 
     def __init__(self, p):
         self.p = p
         self.flags = int(BxDFFlags.GlossyReflection | (BxDFFlags.GlossyTransmission if p["transmission"] else 0))
 
-    # no fast entry points (bind_model.h's *_fast): every call takes BxDF's general path
-    def eval_fast(self, *args):
-        return None
+    # ---- the door
+    @staticmethod
+    def _pair(wo, wi):
+        wo, wi = as_dirs(wo, "wo"), as_dirs(wi, "wi")
+        return wo, wi, broadcast_batch(("wo", "wi"), wo.shape[:-1], wi.shape[:-1]), kernel_dtype(wo, wi)
 
-    pdf_fast = sample_fast = albedo_fast = eval_fast
+    def eval(self, wo, wi, mode=0, out=None):
+        md = _mode(mode)
+        wo, wi, batch, dtype = self._pair(wo, wi)
+        out = check_out(out, batch + (3,), dtype, order=planes_order(batch, wo, wi), fortran_ok=len(batch) == 1)
+        if out.size:
+            buf = c_buffer(out)
+            _raise_counts(self._eval_rows(flatten_to(wo, batch, (3,), dtype), flatten_to(wi, batch, (3,), dtype), md,
+                                          buf.reshape(-1, 3)), ("wo", "wi"))
+            if buf is not out:
+                np.copyto(out, buf)
+        return out
+
+    def pdf(self, wo, wi, mode=0, sflags=3, out=None):
+        md, sf = _mode(mode), _sflags(sflags)
+        wo, wi, batch, dtype = self._pair(wo, wi)
+        out = check_out(out, batch, dtype)
+        if out.size:
+            _raise_counts(self._pdf_rows(flatten_to(wo, batch, (3,), dtype), flatten_to(wi, batch, (3,), dtype), md, sf,
+                                         out.reshape(-1)), ("wo", "wi"))
+        return out
+
+    def sample(self, wo, uc=None, u=None, mode=0, sflags=3, out=None, n=None, seed=None):
+        md, sf = _mode(mode), _sflags(sflags)
+        wo = as_dirs(wo, "wo")
+        uc, u, dtype, batch = sample_uniforms(wo, uc, u, n, seed)
+        res = _new_sample_out(batch, dtype) if out is None else out
+        if out is not None:
+            want = {"wi": (batch + (3,), dtype), "f": (batch + (3,), dtype), "pdf": (batch, dtype),
+                    "flags": (batch, np.dtype(np.uint8)), "eta": (batch, dtype), "valid": (batch, np.dtype(bool)),
+                    "pdf_is_proportional": (batch, np.dtype(bool))}
+            for name, (shape, dt) in want.items():
+                try:
+                    check_out(getattr(out, name), shape, dt)
+                except (TypeError, ValueError) as e:
+                    raise type(e)(f"out.{name}: {str(e)[len('out: '):]}") from None
+        if res.pdf.size:
+            ucf = np.ascontiguousarray(np.broadcast_to(uc, batch), dtype=dtype).reshape(-1)
+            uf = np.ascontiguousarray(np.broadcast_to(u, batch + (2,)), dtype=dtype).reshape(-1, 2)
+            _raise_counts(self._sample_rows(flatten_to(wo, batch, (3,), dtype), ucf, uf, md, sf,
+                                            *(getattr(res, k).reshape((-1, 3) if k in ("wi", "f") else -1)
+                                              for k in ("wi", "f", "pdf", "flags", "eta", "valid",
+                                                        "pdf_is_proportional"))), ("wo", "uc", "u"))
+        return res if out is not None else tuple(getattr(res, k) for k in ("wi", "f", "pdf", "flags", "eta", "valid",
+                                                                           "pdf_is_proportional"))
+
+    def albedo(self, wo, n_samples=65536, seed=0, mode=0):
+        md = _mode(mode)
+        wo = as_dirs(wo, "wo")
+        n_samples = check_int(n_samples, "n_samples", 1, MAX_ALBEDO_SAMPLES)
+        seed = check_int(seed, "seed", 0)
+        batch, dtype = wo.shape[:-1], kernel_dtype(wo)
+        out = np.empty(batch + (3,), dtype)
+        if out.size:
+            _raise_counts(self._albedo_rows(np.ascontiguousarray(wo, dtype=dtype).reshape(-1, 3), n_samples,
+                                            seed & 0xFFFFFFFFFFFFFFFF, md, out.reshape(-1, 3)), ("wo",))
+        return out
 
     def _f(self, wo, wi, dtype=np.float64):
         v = np.asarray(self.p["f"](wo, wi), dtype=np.float64)
@@ -103,14 +176,14 @@ class _PyCore:
     # Each entry point counts the bad inputs first and returns the counts (BxDF raises naming the
     # input) before calling the user's functions: a non-unit wo would otherwise come back as a
     # complaint about what the functions returned.
-    def eval(self, wo, wi, mode, out):
+    def _eval_rows(self, wo, wi, mode, out):
         bad = _bad(wo), _bad(wi)
         if any(bad):
             return bad
         out[...] = self._f(wo.astype(np.float64), wi.astype(np.float64), out.dtype)
         return bad
 
-    def pdf(self, wo, wi, mode, sf, out):
+    def _pdf_rows(self, wo, wi, mode, sf, out):
         bad = _bad(wo), _bad(wi)
         if any(bad):
             return bad
@@ -135,7 +208,7 @@ class _PyCore:
             side = np.where(uc < 0.5, side, -side)
         return np.stack([r * np.cos(phi), r * np.sin(phi), side * z], -1)
 
-    def sample(self, wo, uc, u, mode, sf, wi_out, f_out, pdf_out, flags_out, eta_out, valid_out, prop_out):
+    def _sample_rows(self, wo, uc, u, mode, sf, wi_out, f_out, pdf_out, flags_out, eta_out, valid_out, prop_out):
         bad = _bad(wo), _bad_uniform(uc), _bad_uniform(u)
         if any(bad):
             return bad
@@ -158,7 +231,7 @@ class _PyCore:
         prop_out[...] = False
         return bad
 
-    def albedo(self, wo, n_samples, seed, mode, out):
+    def _albedo_rows(self, wo, n_samples, seed, mode, out):
         bad = _bad(wo)
         if bad:
             return bad

@@ -210,7 +210,7 @@ def _timed_call(cfg: Config, op: str, inputs):
     bufs = (np.empty((n, 3), dt), np.empty((n, 3), dt), np.empty(n, dt), np.empty(n, np.uint8), np.empty(n, dt),
             np.empty(n, bool), np.empty(n, bool))
     core = m._core
-    return lambda: core.sample(d["wo"], d["uc"], d["u"], 0, 3, *bufs)
+    return lambda: core.sample(d["wo"], d["uc"], d["u"], 0, 3, bufs)
 
 
 def _op(model) -> str:
