@@ -16,7 +16,7 @@
 //            horizon: sin(theta_h) = s_max u^(a / (2 a + 1)), s_max = sqrt(1 - NoV^2 / 4);
 //   horizon: l directly, with cos(theta_l) = u^2 (pdf 1 / (4 pi sqrt(cos theta_l))), which
 //            resolves the ramp NoL / (NoL + NoV - NoL NoV) of V_Neubelt <NoL> at grazing angles.
-// Accuracy against Gauss-Legendre quadrature (tests/test_filament_dfg.py), 1024 samples: <= 1.2e-4
+// Accuracy against Gauss-Legendre quadrature (tests/models/test_filament_dfg.py), 1024 samples: <= 1.2e-4
 // for x and y, <= 2.5e-4 for z (relative where z > 1).
 #include <algorithm>
 #include <cmath>

@@ -535,7 +535,7 @@ template <typename F> inline Dirs<F> shifted(const Dirs<F> &d, int64_t h) {
 inline constexpr int64_t kPrefetchAhead = 256;
 // Calls below this many elements keep their inputs in L2 (1 MiB per Zen 4 core: 65536 (N, 3)
 // float32 rows are 768 KiB per direction) and skip the prefetches, which there are only
-// instructions (0-6 % on the lightest in-cache kernels, bench/loop_ab.py --n 16384).
+// instructions (0-6 % on the lightest in-cache kernels, tools/perf/loop_ab.py --n 16384).
 inline constexpr int64_t kPrefetchMinN = int64_t(1) << 16;
 // The 64-byte lines of [p, p + bytes).
 inline void prefetch_span(const void *p, size_t bytes) {
@@ -567,7 +567,7 @@ template <int S, typename F> inline void prefetch_dirs(const Dirs<F> &d, int64_t
 // only how they are stored. AVX-512 and AVX2 float32 with GCC's vector extensions (the register
 // groups above); elsewhere plain stores.
 // Only models that declare `static constexpr bool StreamOutputs = true` stream: the kernels
-// limited by memory traffic. Measured on Zen 4 (bench/loop_ab.py, N = 1e6, outputs on lines,
+// limited by memory traffic. Measured on Zen 4 (tools/perf/loop_ab.py, N = 1e6, outputs on lines,
 // session 21): Diffuse eval 1.21-1.33x, sample 1.16-1.31x (1 / 2 threads); the delta lobes'
 // eval (smooth Conductor and Dielectric, ThinDielectric; session 22, the installed library)
 // 1.23-1.50x, their pdf 0.96-1.09x, their samplers not (below). With every model
@@ -888,7 +888,7 @@ void pdf_batch(const Model &m, const F *wo, const F *wi, int64_t n, TransportMod
 // at compile time, whose outputs stream as pair_rows_loop's rows do (a model with StreamOutputs,
 // a call whose bytes reach kStreamMinBytes, out on a line): through the run-time layout path,
 // with its per-packet layout branches and plain stores, planes ran slower than rows on Zen 4
-// (SoA / rows 0.77-0.91x for Diffuse, bench/RESULTS_zen4.md of session 23). Other mixes take the
+// (SoA / rows 0.77-0.91x for Diffuse, tools/perf/results/RESULTS_zen4.md of session 23). Other mixes take the
 // run-time layout path, with plain stores.
 // The SoA call's loop: stream_or_plain_loop on planes, streaming from the first element whose first
 // output plane starts on a line.
@@ -1132,7 +1132,7 @@ inline void sample_chunk_packet(const Model &m, const Sampler &smp, bool model_o
 // A chunk's whole packets run in a loop whose lane count is the constant kPacketWidth, its last,
 // partial packet (the array's padded tail) out of line through the same model code: in the loop
 // with a run-time count every load and store kept its tail branch and GCC spilled around them.
-// Zen 4, bench/loop_ab.py harness, 1 thread, medians of 5 alternating runs (session 24): float32
+// Zen 4, tools/perf/loop_ab.py harness, 1 thread, medians of 5 alternating runs (session 24): float32
 // in cache 1.01-1.13x (Diffuse 1.12x, DiffuseTransmission 1.13x, NormalizedFresnel 1.07x, rough
 // Dielectric 0.99x), N = 1e6 1.00-1.17x; float64 in cache 0.96-1.15x (smooth Dielectric 0.96x,
 // Diffuse / Hair 1.15x); an AVX2 build (x86-64-v3) 0.97-1.06x. Bit-identical: the same packets.
