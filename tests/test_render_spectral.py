@@ -48,6 +48,9 @@ GREY_SPLIT_CHANNEL = {
                bk.CoatedConductor((1.4, 1.4, 1.4), (3.0, 3.0, 3.0), conductor_alpha=0.3, interface_alpha=0.1,
                                   method="analytic"),
                bk.Plastic(0.4)),
+    # spectral forms the renderer gained from the model list (before, its hand list lacked them)
+    "cloth-farfield": (bk.FilamentCloth(0.6, roughness=0.6), bk.Hair(sigma_a=(0.4, 0.4, 0.4), h=None),
+                       bk.Diffuse(0.5)),
 }
 
 
@@ -147,10 +150,11 @@ def test_directional_light_uplifted():
 def test_bad_input():
     with pytest.raises(TypeError, match="spectral"):
         R.preview(bk.Diffuse(0.5), width=8, height=8, spp=1, progress=False, spectral="yes")
-    # a model without a spectral kernel: a clear error naming it (no silent RGB fallback)
-    with pytest.raises(NotImplementedError, match="FilamentCloth"):
-        R.preview(bk.FilamentCloth([0.6, 0.3, 0.2], roughness=0.6), width=8, height=8, spp=1, progress=False,
-                  spectral=True)
+    # a model without a spectral form for its parameters (a tensor file of RGB data): a clear
+    # error naming it (no silent RGB fallback)
+    tab = bk.measured.tabulate(bk.Conductor.from_metal("Cu", alpha=0.3), resolution=16)
+    with pytest.raises(NotImplementedError, match="Measured"):
+        R.preview(tab, width=8, height=8, spp=1, progress=False, spectral=True)
     s = bk._render_ext.load().RenderScene()
     s.add_material(bk.Diffuse(0.5))
     with pytest.raises(ValueError, match="material"):
@@ -170,11 +174,17 @@ def test_cli_spectral(tmp_path, capsys):
                  "--spectral", "-q"]) == 0
     img = read_image(str(exr))
     assert img.shape == (12, 16, 3) and np.all(np.isfinite(img)) and img.mean() > 0
-    # a model without a spectral kernel: exit status 1 and the reason on stderr
+    # every compiled model renders spectrally (the renderer's materials come from the model list)
     assert main(["render", "filament_cloth", "-o", str(tmp_path / "c.png"), "--width", "8", "--height", "8",
+                 "--spp", "1", "--spectral", "-q"]) == 0
+    capsys.readouterr()
+    # a model without a spectral form for its data (a tensor file of RGB): exit status 1 and the
+    # reason on stderr
+    path = bk.measured.tabulate(bk.Conductor.from_metal("Cu", alpha=0.3), resolution=16).save(tmp_path / "cu.bsdf")
+    assert main(["render", f"measured {path}", "-o", str(tmp_path / "m.png"), "--width", "8", "--height", "8",
                  "--spp", "1", "--spectral", "-q"]) == 1
-    err = capsys.readouterr().err   # (FilamentCloth has a spectral kernel since session 7, no renderer entry)
-    assert "FilamentCloth" in err and "no spectral" in err
+    err = capsys.readouterr().err
+    assert "Measured" in err and "no spectral" in err
 
 
 def test_colours_multiply_per_wavelength():

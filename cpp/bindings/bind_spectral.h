@@ -1,19 +1,19 @@
-// Shared pieces of the spectral bindings (issue 15): _core.SpectralParam's storage, the
-// PySpectral<SM> holder of a spectral adapter's float and double instances with its row-array
-// eval / pdf / sample / albedo entries, and bind_spectral_model<SM>(), which binds those entries.
-// spectral.cpp binds the pbrt-core, Plastic, Filament and analytic coated adapters; other model
-// families bind theirs in their own translation unit with the same helper.
+// The spectral forms' bindings (issue 15; core/bxdf.h `Spectral`): _core.SpectralParam's storage,
+// the PySpectral<Model> holder of a form's float and double instances with its row-array
+// eval / pdf / sample / albedo entries, and bind_spectral_form<Model>(), which bind_all.h calls
+// for every model of the list that declares a spectral form (in that model family's unit).
 #pragma once
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "bind_all.h"
 #include "bind_model.h"
-#include "bsdfkit/batch_spectral.h"
+#include "bind_params.h"
+#include "bsdfkit/spectral/all.h"
 
 namespace bsdfkit::py_bind {
 
@@ -34,12 +34,81 @@ inline std::string kind_name(SpectralParam::Kind k) {
     return k == SpectralParam::Constant ? "constant" : k == SpectralParam::Sigmoid ? "sigmoid" : "table";
 }
 
-template <template <typename> class SM> struct PySpectral {
-    SM<float> m32;
-    SM<double> m64;
-    std::vector<PySpectralParam> keep;  // owners of the tables the adapters point into
+// A bound handle of a shared immutable table (the spectra of a measured model). (Not a bare
+// std::shared_ptr: pybind11 reads a shared_ptr<T> argument as the holder of a bound T.)
+template <typename T> struct TableHandle {
+    std::shared_ptr<const T> p;
+    TableHandle(std::shared_ptr<const T> q) : p(std::move(q)) {}
+    const T *operator->() const { return p.get(); }
+    explicit operator bool() const { return bool(p); }
+};
 
-    template <typename F> const SM<F> &get() const {
+// The named inputs of a spectral form's make() (core/bxdf.h `Spectral`): the `spectral` dict of
+// the constructor, {field: SpectralParam} for each of the form's kFields plus the few extra
+// inputs it reads (flags, numbers, tables). A missing or unknown name, or a value of the wrong
+// type, raises TypeError naming it. The SpectralParams and tables are read in place: the bound
+// object keeps the dict (and so them) alive.
+struct SpectralKw {
+    py::dict d;
+    std::string what;  // "<Name>Spectral"
+    mutable std::vector<std::string> used;
+
+    py::handle get(const char *name) const {
+        if (!d.contains(name)) throw py::type_error(what + ": missing spectral input '" + name + "'");
+        used.emplace_back(name);
+        return d[name];
+    }
+    const SpectralParam &param(const char *name) const {
+        py::handle h = get(name);
+        if (!py::isinstance<PySpectralParam>(h))
+            throw py::type_error(what + "." + name + ": expected a _core.SpectralParam, got " + bind_detail::type_name(h));
+        return h.cast<const PySpectralParam &>().p;
+    }
+    bool flag(const char *name) const {
+        bool v = false;
+        bind_detail::from_py(get(name), v, what + "." + name);
+        return v;
+    }
+    double number(const char *name) const {
+        double v = 0;
+        bind_detail::from_py(get(name), v, what + "." + name);
+        return v;
+    }
+    template <typename T> const T &table(const char *name) const {
+        py::handle h = get(name);
+        if (!py::isinstance<TableHandle<T>>(h)) throw py::type_error(what + "." + name + ": wrong table type, got " + bind_detail::type_name(h));
+        const TableHandle<T> &t = h.cast<const TableHandle<T> &>();
+        if (!t) throw py::value_error(what + "." + name + ": must not be empty");
+        return *t.p;
+    }
+    void check_all_used() const {
+        for (auto item : d) {
+            std::string k = py::str(item.first);
+            if (std::find(used.begin(), used.end(), k) == used.end())
+                throw py::type_error(what + ": unexpected spectral input '" + k + "'");
+        }
+    }
+};
+
+// A form's spectral fields: its kFields, or spectral_fields() when the form derives them (the
+// generic ColourSpectral walks the Params).
+template <typename S, typename = void> struct has_fields_fn : std::false_type {};
+template <typename S> struct has_fields_fn<S, std::void_t<decltype(S::spectral_fields())>> : std::true_type {};
+template <typename S> std::vector<SpectralField> spectral_fields_of() {
+    if constexpr (has_fields_fn<S>::value) return S::spectral_fields();
+    else return std::vector<SpectralField>(std::begin(S::kFields), std::end(S::kFields));
+}
+
+// The bound spectral form of a model (_core.<Name>Spectral): its float and double instances
+// and the Python objects they point into.
+template <template <typename> class Model> struct PySpectral {
+    using S32 = typename Model<float>::Spectral;
+    using S64 = typename Model<double>::Spectral;
+    S32 m32;
+    S64 m64;
+    py::object keep;  // the constructor's spectral inputs and keyword arguments
+
+    template <typename F> const auto &get() const {
         if constexpr (std::is_same_v<F, float>) return m32; else return m64;
     }
 
@@ -138,9 +207,32 @@ template <template <typename> class SM> struct PySpectral {
     }
 };
 
-template <template <typename> class SM> inline py::class_<PySpectral<SM>> bind_spectral_model(py::module_ &m, const char *name) {
-    using P = PySpectral<SM>;
-    py::class_<P> c(m, name);
+// Binds _core.<Name>Spectral, the spectral form of Model, with its one constructor:
+//   <Name>Spectral(spectral: dict, **params)
+// params: the model's keyword arguments (its RGB Params, bind_all.h: what stays
+// wavelength-independent, as the RGB projection); spectral: the form's named inputs (SpectralKw).
+template <template <typename> class Model> inline void bind_spectral_form(py::module_ &m) {
+    using P = PySpectral<Model>;
+    using Params = typename Model<double>::Params;
+    const std::string name = std::string(Model<double>::Name) + "Spectral";
+    py::class_<P> c(m, name.c_str());
+    c.def(py::init([name](const py::dict &spectral, const py::kwargs &kw) {
+             Params p = bind_detail::params_from_kwargs<Params>(Model<double>::Name, py::args(), kw);
+             SpectralKw a{spectral, name, {}};
+             P o;
+             o.m32 = P::S32::make(p, a);
+             o.m64 = P::S64::make(p, a);
+             a.check_all_used();
+             o.keep = py::make_tuple(spectral, kw);
+             return o;
+         }),
+         py::arg("spectral"),
+         ("Spectral form of " + std::string(Model<double>::Name) +
+          " (core/bxdf.h): spectral = {field: SpectralParam, ...} for spectral_fields plus its extra inputs; "
+          "keyword arguments: the model's (their colours as the RGB projection).").c_str());
+    py::list fields;
+    for (const SpectralField &f : spectral_fields_of<typename P::S64>()) fields.append(py::make_tuple(f.name, f.kind));
+    c.attr("spectral_fields") = py::tuple(fields);
     // packets=False: the scalar per-element path (the packet path's reference in the tests).
     c.def("eval", [](const P &self, py::array wo, py::array wi, py::array lam, int mode, py::array out, bool packets) {
          return is_dtype<float>(out) ? self.template eval_t<float>(wo, wi, lam, mode, out, packets)
@@ -166,7 +258,6 @@ template <template <typename> class SM> inline py::class_<PySpectral<SM>> bind_s
                                         : self.template albedo_t<double>(wo, lam, n, seed, mode, out);
         })
         .def_property_readonly("dispersive", [](const P &self) { return self.m64.dispersive(); });
-    return c;
 }
 
 } // namespace bsdfkit::py_bind

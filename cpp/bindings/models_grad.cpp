@@ -1,7 +1,7 @@
 // eval_grad: f(wo, wi) and its derivatives with respect to the model's continuous parameters,
 // from the same per-element model code instantiated with F = Dual<double, K> (core/dual.h).
 //
-// For each model of GradModels below, the bound class (bind_model.h's PyModel) gains
+// For each model of bxdfs/all.h with `GradColumns` (core/bxdf.h), the bound class (bind_model.h's PyModel) gains
 //   eval_grad(wo, wi, mode, columns, out_f, out_grad) -> (bad wo count, bad wi count)
 //     wo, wi       float64 (N or 1, 3) rows, validated and broadcast by Python
 //     columns      list of P gradient columns; a column is a list of (field, channel) pairs whose
@@ -158,23 +158,20 @@ template <template <typename> class Model, int MaxK> void add_eval_grad(py::modu
     cls.attr("grad_max_columns") = MaxK;
 }
 
+// eval_grad for every model of the list that declares GradColumns (core/bxdf.h).
+struct GradBinder {
+    py::module_ &m;
+    template <template <typename> class Model> void apply() {
+        constexpr int K = grad_columns<Model<double>>::value;
+        if constexpr (K > 0) {
+            static_assert(K == 4 || K == 8 || K == 16, "GradColumns: 4, 8 or 16");
+            add_eval_grad<Model, K>(m);
+        }
+    }
+};
+
 } // namespace
 
-void bind_grad_models(py::module_ &m) {
-    add_eval_grad<DiffuseBxDF, 4>(m);
-    add_eval_grad<DiffuseTransmissionBxDF, 8>(m);
-    add_eval_grad<ConductorBxDF, 8>(m);
-    add_eval_grad<ConductorSchlickBxDF, 8>(m);
-    add_eval_grad<ConductorF82BxDF, 8>(m);
-    add_eval_grad<DielectricBxDF, 4>(m);
-    add_eval_grad<FilamentStandardBxDF, 16>(m);
-    add_eval_grad<FilamentStandardCoatBxDF, 16>(m);
-    add_eval_grad<FilamentStandardSheenBxDF, 16>(m);
-    add_eval_grad<FilamentStandardCoatSheenBxDF, 16>(m);
-    add_eval_grad<FilamentClothBxDF, 16>(m);
-    add_eval_grad<CoatedDiffuseAnalyticBxDF, 16>(m);
-    add_eval_grad<CoatedConductorAnalyticBxDF, 16>(m);
-    add_eval_grad<PlasticBxDF, 8>(m);
-}
+void bind_grad_models(py::module_ &m) { AllModels::for_each(GradBinder{m}); }
 
 } // namespace bsdfkit::py_bind

@@ -27,9 +27,8 @@ void bind_plastic_extras(py::module_ &m);
 void bind_hair_models(py::module_ &m);
 void bind_grad_models(py::module_ &m);
 void bind_render_abi(py::module_ &m);  // render_abi.cpp: the table bsdfkit._render calls
-void bind_spectral(py::module_ &m);  // spectral.cpp: wavelengths= (issue 15)
-void bind_spectral_hair(py::module_ &m);  // spectral_hair.cpp: Hair, HairFarField, FilamentCloth spectral
-void bind_spectral_measured(py::module_ &m);  // spectral_measured.cpp: Measured, MERL, stochastic coated
+void bind_spectral(py::module_ &m);  // spectral.cpp: SpectralParam (the forms are bound with their models)
+void bind_spectral_measured(py::module_ &m);  // spectral_measured.cpp: the measured forms' tables
 
 } // namespace bsdfkit::py_bind
 
@@ -60,7 +59,6 @@ PYBIND11_MODULE(_core, m) {
     py_bind::bind_hair_models(m);
     py_bind::bind_grad_models(m);  // eval_grad on the bound classes (after bind_all)
     py_bind::bind_spectral(m);
-    py_bind::bind_spectral_hair(m);
     py_bind::bind_spectral_measured(m);
 
     py_bind::bind_render_abi(m);

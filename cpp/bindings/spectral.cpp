@@ -1,8 +1,8 @@
-// Spectral mode bindings (issue 15): _core.SpectralParam and one _core.<Model>Spectral class per
-// model family with a spectral adapter (batch_spectral.h). The Python layer (models/_spectral.py)
-// validates, broadcasts and flattens the arguments and calls the row-array entries below; as in
-// bind_model.h, the checks here are a second line of defence (a misuse raises, never reads out
-// of bounds). Wavelengths: float64 rows of 4 (for both precisions), nm, finite and in [360, 830];
+// Spectral mode bindings (issue 15): _core.SpectralParam, and the preview renderer's conversion
+// of a bound spectral form (_core.<Name>Spectral, bound with its model by bind_all.h). The Python
+// layer (models/_spectral.py) validates, broadcasts and flattens the arguments and calls the
+// row-array entries (bind_spectral.h); as in bind_model.h, the checks there are a second line of
+// defence. Wavelengths: float64 rows of 4 (for both precisions), nm, finite and in [360, 830];
 // the kernels count the bad ones and the entries return the counts (the Python layer raises).
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -15,72 +15,6 @@
 #include "bsdfkit/render/spectral_material.h"
 
 namespace bsdfkit::py_bind {
-
-namespace {
-
-Masking to_masking(int v) {
-    if (v != 0 && v != 1) value_error("masking: must be 0 (correlated) or 1 (separable)");
-    return Masking(v);
-}
-
-template <typename F> TrowbridgeReitz<F> make_mfd(double ax, double ay, int masking) {
-    return TrowbridgeReitz<F>(F(ax), F(ay), to_masking(masking));
-}
-
-template <ConductorFresnel FR, template <typename> class SM>
-void bind_conductor(py::module_ &m, const char *name) {
-    bind_spectral_model<SM>(m, name).def(
-        py::init([](const PySpectralParam &eta, const PySpectralParam &k, double ax, double ay, int masking) {
-            PySpectral<SM> r;
-            r.m32.eta = r.m64.eta = eta.p;
-            r.m32.k = r.m64.k = k.p;
-            r.m32.mfd = make_mfd<float>(ax, ay, masking);
-            r.m64.mfd = make_mfd<double>(ax, ay, masking);
-            r.keep = {eta, k};
-            return r;
-        }),
-        py::arg("eta"), py::arg("k"), py::arg("alpha_x"), py::arg("alpha_y"), py::arg("masking"));
-}
-
-template <typename Fm> void check_plastic(double eta, double alpha, double w) {
-    if (!(eta > 0) || eta == 1 || !std::isfinite(eta)) value_error("eta: must be finite, > 0 and != 1");
-    if (!(alpha >= 0) || !std::isfinite(alpha)) value_error("alpha: must be finite and >= 0");
-    if (!(w >= 0 && w <= 1)) value_error("spec_weight: must be in [0, 1]");
-}
-
-// The analytic coated models: Params from the keyword arguments (the RGB projection, as the RGB
-// binding), the spectral parameters beside them.
-template <template <typename> class SM, template <typename> class Model>
-PySpectral<SM> coated_spectral(const char *name, const py::kwargs &kw) {
-    using Params = typename Model<double>::Params;
-    Params p = bind_detail::params_from_kwargs<Params>(name, py::args(), kw);
-    PySpectral<SM> o;
-    o.m32.proto = Model<float>::make(p);
-    o.m64.proto = Model<double>::make(p);
-    o.m32.internal = AnalyticInternal::of(o.m32.proto.top, o.m32.proto.thickness);
-    o.m64.internal = AnalyticInternal::of(o.m64.proto.top, o.m64.proto.thickness);
-    return o;
-}
-
-template <template <typename> class SM, bool Coat, bool Sheen> void bind_filament(py::module_ &m, const char *name) {
-    bind_spectral_model<SM>(m, name).def(
-        py::init([](const PySpectralParam &base, const PySpectralParam &sheen, const py::kwargs &kw) {
-            FilamentStandardParams p = bind_detail::params_from_kwargs<FilamentStandardParams>("FilamentStandard", py::args(), kw);
-            PySpectral<SM> o;
-            o.m32.proto = FilamentStandardT<float, Coat, Sheen>::make(p);   // the kernel part
-            o.m64.proto = FilamentStandardT<double, Coat, Sheen>::make(p);
-            o.m32.params = o.m64.params = p;  // owns the DFG table the kernels point into
-            o.m32.base_color = o.m64.base_color = base.p;
-            o.m32.sheen_color = o.m64.sheen_color = sheen.p;
-            o.keep = {base, sheen};
-            return o;
-        }),
-        // positional (no names): the keyword arguments carry base_color / sheen_color's RGB projection
-        "FilamentStandard spectral kernel: (base_color, sheen_color) as SpectralParam, then the FilamentStandard "
-        "keyword arguments (base_color / sheen_color as their RGB projection).");
-}
-
-} // namespace
 
 void bind_spectral(py::module_ &m) {
     py::class_<PySpectralParam>(m, "SpectralParam",
@@ -146,137 +80,31 @@ void bind_spectral(py::module_ &m) {
             for (py::ssize_t i = 0; i < l.size(); ++i) po[i] = s.p(pl[i]);
             return out;
         }, py::arg("wavelengths"), "Values at wavelengths (nm), float64, as the kernels evaluate them.");
-
-    bind_spectral_model<DiffuseSpectral>(m, "DiffuseSpectral")
-        .def(py::init([](const PySpectralParam &r) {
-                 PySpectral<DiffuseSpectral> o;
-                 o.m32.reflectance = o.m64.reflectance = r.p;
-                 o.keep = {r};
-                 return o;
-             }),
-             py::arg("reflectance"));
-    bind_spectral_model<DiffuseTransmissionSpectral>(m, "DiffuseTransmissionSpectral")
-        .def(py::init([](const PySpectralParam &r, const PySpectralParam &t) {
-                 PySpectral<DiffuseTransmissionSpectral> o;
-                 o.m32.reflectance = o.m64.reflectance = r.p;
-                 o.m32.transmittance = o.m64.transmittance = t.p;
-                 o.keep = {r, t};
-                 return o;
-             }),
-             py::arg("reflectance"), py::arg("transmittance"));
-    bind_conductor<ConductorFresnel::Exact, ConductorSpectral>(m, "ConductorSpectral");
-    bind_conductor<ConductorFresnel::Schlick, ConductorSchlickSpectral>(m, "ConductorSchlickSpectral");
-    bind_conductor<ConductorFresnel::F82, ConductorF82Spectral>(m, "ConductorF82Spectral");
-    bind_spectral_model<DielectricSpectral>(m, "DielectricSpectral")
-        .def(py::init([](const PySpectralParam &eta, double ax, double ay, int masking, bool dispersive) {
-                 PySpectral<DielectricSpectral> o;
-                 o.m32.eta = o.m64.eta = eta.p;
-                 o.m32.mfd = make_mfd<float>(ax, ay, masking);
-                 o.m64.mfd = make_mfd<double>(ax, ay, masking);
-                 o.m32.disp = o.m64.disp = dispersive;
-                 o.keep = {eta};
-                 return o;
-             }),
-             py::arg("eta"), py::arg("alpha_x"), py::arg("alpha_y"), py::arg("masking"), py::arg("dispersive"));
-    bind_spectral_model<ThinDielectricSpectral>(m, "ThinDielectricSpectral")
-        .def(py::init([](const PySpectralParam &eta, bool dispersive) {
-                 PySpectral<ThinDielectricSpectral> o;
-                 o.m32.eta = o.m64.eta = eta.p;
-                 o.m32.disp = o.m64.disp = dispersive;
-                 o.keep = {eta};
-                 return o;
-             }),
-             py::arg("eta"), py::arg("dispersive"));
-    bind_spectral_model<PlasticSpectral>(m, "PlasticSpectral")
-        .def(py::init([](const PySpectralParam &r, const PySpectralParam &ks, double eta, double alpha, bool nonlinear,
-                         int masking, double spec_weight, bool has_diffuse) {
-                 check_plastic<double>(eta, alpha, spec_weight);
-                 PlasticParams p;
-                 p.eta = eta;
-                 p.alpha = alpha;
-                 p.nonlinear = nonlinear;
-                 p.masking = to_masking(masking);
-                 PlasticTables tab = PlasticBxDF<double>::tables(p);
-                 double fdr = PlasticBxDF<double>::is_rough(p) ? tab.fdr : FresnelDiffuseReflectance(1 / eta);
-                 PySpectral<PlasticSpectral> o;
-                 o.m32.proto = PlasticBxDF<float>::make(p, tab);
-                 o.m64.proto = PlasticBxDF<double>::make(p, tab);
-                 o.m32.proto.spec_weight = float(spec_weight);
-                 o.m64.proto.spec_weight = spec_weight;
-                 o.m32.proto.has_diffuse = o.m64.proto.has_diffuse = has_diffuse;
-                 o.m32.reflectance = o.m64.reflectance = r.p;
-                 o.m32.specular = o.m64.specular = ks.p;
-                 o.m32.fdr = o.m64.fdr = fdr;
-                 o.m32.eta = o.m64.eta = eta;
-                 o.m32.nonlinear = o.m64.nonlinear = nonlinear;
-                 o.keep = {r, ks};
-                 return o;
-             }),
-             py::arg("reflectance"), py::arg("specular_reflectance"), py::arg("eta"), py::arg("alpha"),
-             py::arg("nonlinear"), py::arg("masking"), py::arg("spec_weight"), py::arg("has_diffuse"));
-    bind_filament<FilamentStandardSpectral, false, false>(m, "FilamentStandardSpectral");
-    bind_filament<FilamentStandardCoatSpectral, true, false>(m, "FilamentStandardCoatSpectral");
-    bind_filament<FilamentStandardSheenSpectral, false, true>(m, "FilamentStandardSheenSpectral");
-    bind_filament<FilamentStandardCoatSheenSpectral, true, true>(m, "FilamentStandardCoatSheenSpectral");
-    bind_spectral_model<CoatedDiffuseAnalyticSpectral>(m, "CoatedDiffuseAnalyticSpectral")
-        .def(py::init([](const PySpectralParam &r, const PySpectralParam &albedo, const py::kwargs &kw) {
-                 auto o = coated_spectral<CoatedDiffuseAnalyticSpectral, CoatedDiffuseAnalyticBxDF>(
-                     "CoatedDiffuseAnalytic", kw);
-                 o.m32.reflectance = o.m64.reflectance = r.p;
-                 o.m32.albedo = o.m64.albedo = albedo.p;
-                 o.keep = {r, albedo};
-                 return o;
-             }),
-             "CoatedDiffuseAnalytic spectral kernel: (reflectance, albedo) as SpectralParam, then the "
-             "CoatedDiffuseAnalytic keyword arguments (reflectance / albedo as their RGB projection).");
-    bind_spectral_model<CoatedConductorAnalyticSpectral>(m, "CoatedConductorAnalyticSpectral")
-        .def(py::init([](const PySpectralParam &eta, const PySpectralParam &k, const PySpectralParam &albedo,
-                         const py::kwargs &kw) {
-                 auto o = coated_spectral<CoatedConductorAnalyticSpectral, CoatedConductorAnalyticBxDF>(
-                     "CoatedConductorAnalytic", kw);
-                 double ie = bind_detail::params_from_kwargs<CoatedConductorParams>("CoatedConductorAnalytic", py::args(), kw).interface_eta;
-                 o.m32.eta = o.m64.eta = eta.p;
-                 o.m32.k = o.m64.k = k.p;
-                 o.m32.albedo = o.m64.albedo = albedo.p;
-                 o.m32.interface_eta = o.m64.interface_eta = ie;
-                 o.m32.init_quadrature();
-                 o.m64.init_quadrature();
-                 o.keep = {eta, k, albedo};
-                 return o;
-             }),
-             "CoatedConductorAnalytic spectral kernel: (conductor_eta, conductor_k, albedo) as SpectralParam, then "
-             "the CoatedConductorAnalytic keyword arguments (the same as their RGB projection).");
-    bind_spectral_model<NormalizedFresnelSpectral>(m, "NormalizedFresnelSpectral")
-        .def(py::init([](const PySpectralParam &eta) {
-                 PySpectral<NormalizedFresnelSpectral> o;
-                 o.m32.eta = o.m64.eta = eta.p;
-                 o.keep = {eta};
-                 return o;
-             }),
-             py::arg("eta"));
 }
 
-// For the preview renderer's spectral mode (cpp/bindings/render.cpp): the float adapter of a bound
-// spectral model (a _core.<Model>Spectral); false if h is none of them. The caller keeps h alive
-// (the adapter points into its tables).
-template <template <typename> class SM> static bool spectral_as(const py::handle &h, render::SpectralMaterial *out) {
-    if (!py::isinstance<PySpectral<SM>>(h)) return false;
-    *out = h.cast<const PySpectral<SM> &>().m32;
-    return true;
-}
-bool spectral_hair_render_material(const py::handle &h, render::SpectralMaterial *out);  // spectral_hair.cpp
-bool spectral_measured_render_material(const py::handle &h, render::SpectralMaterial *out);  // spectral_measured.cpp
+// For the preview renderer's spectral mode (cpp/bindings/render.cpp): the float form of a bound
+// spectral model (a _core.<Name>Spectral of any model of the list); false if h is none of them.
+// The caller keeps h alive (the form points into its tables).
+namespace {
+struct SpectralCaster {
+    const py::handle &h;
+    render::SpectralMaterial *out;
+    bool found = false;
+    template <template <typename> class Model> void apply() {
+        if constexpr (has_spectral<Model<double>>::value) {
+            if (!found && py::isinstance<PySpectral<Model>>(h)) {
+                *out = h.cast<const PySpectral<Model> &>().m32;
+                found = true;
+            }
+        }
+    }
+};
+} // namespace
+
 bool spectral_render_material(const py::handle &h, render::SpectralMaterial *out) {
-    return spectral_measured_render_material(h, out) || spectral_as<DiffuseSpectral>(h, out) || spectral_as<DiffuseTransmissionSpectral>(h, out) ||
-           spectral_as<ConductorSpectral>(h, out) || spectral_as<ConductorSchlickSpectral>(h, out) ||
-           spectral_as<ConductorF82Spectral>(h, out) || spectral_as<DielectricSpectral>(h, out) ||
-           spectral_as<ThinDielectricSpectral>(h, out) || spectral_as<PlasticSpectral>(h, out) ||
-           spectral_as<FilamentStandardSpectral>(h, out) || spectral_as<FilamentStandardCoatSpectral>(h, out) ||
-           spectral_as<FilamentStandardSheenSpectral>(h, out) ||
-           spectral_as<FilamentStandardCoatSheenSpectral>(h, out) ||
-           spectral_as<CoatedDiffuseAnalyticSpectral>(h, out) ||
-           spectral_as<CoatedConductorAnalyticSpectral>(h, out) || spectral_as<NormalizedFresnelSpectral>(h, out) ||
-           spectral_hair_render_material(h, out);
+    SpectralCaster c{h, out};
+    AllModels::for_each(c);
+    return c.found;
 }
 
 } // namespace bsdfkit::py_bind

@@ -1,10 +1,8 @@
-// Spectral mode bindings of the measured models and the stochastic coated walk (issue 15):
-// _core.MeasuredSpectraTable / MeasuredSpectral (RGL tensor files, from the file's spectra),
-// _core.MERLSpectralTable / MERLNearestSpectral / MERLLinearSpectral (MERL RGB bins uplifted),
-// _core.CoatedDiffuseSpectral / CoatedConductorSpectral (the random walk with 4 channels).
-// Adapters: bsdfkit/spectral/measured_spectral.h and layered_spectral.h. The Python layer
-// (models/measured.py, models/layered.py) validates the files and parameters; the checks here are
-// the second line of defence. Tables are held by the Python objects passed in (keep_alive).
+// The tables of the measured models' spectral forms (issue 15): _core.MeasuredSpectraTable (the
+// spectra of an RGL tensor file) and _core.MERLSpectralTable (every MERL bin's RGB uplifted),
+// the `spectra` / `coefficients` inputs of _core.MeasuredSpectral / MERL*Spectral (bound with their
+// models, bind_all.h; forms in bsdfkit/spectral/measured_spectral.h). The Python layer
+// (models/measured.py) validates the files; the checks here are the second line of defence.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -15,55 +13,13 @@
 #include <vector>
 
 #include "bind_spectral.h"
-#include "bsdfkit/render/spectral_material.h"
-#include "bsdfkit/spectral/layered_spectral.h"
-#include "bsdfkit/spectral/measured_spectral.h"
 
 namespace bsdfkit::py_bind {
 
 namespace {
-
-// A bound handle of a shared immutable table. (Not a bare std::shared_ptr: pybind11 reads a
-// shared_ptr<T> argument as the holder of a bound T, which these are not.)
-template <typename T> struct TableHandle {
-    std::shared_ptr<const T> p;
-    TableHandle(std::shared_ptr<const T> q) : p(std::move(q)) {}
-    const T *operator->() const { return p.get(); }
-    explicit operator bool() const { return bool(p); }
-};
 using PyMeasuredSpectra = TableHandle<MeasuredSpectraTable>;
 using PyMERLSpectral = TableHandle<MERLSpectralTable>;
 using Arr = py::array_t<double, py::array::c_style | py::array::forcecast>;
-
-template <template <typename> class SM, bool Linear> void bind_merl(py::module_ &m, const char *name) {
-    bind_spectral_model<SM>(m, name).def(
-        py::init([](const SharedTable<MERLTable> &table, const PyMERLSpectral &coef) {
-            if (!table || !coef) value_error("table, coefficients: must not be empty");
-            PySpectral<SM> o;
-            o.m32.kern = MERLT<float, Linear>::make({table});
-            o.m64.kern = MERLT<double, Linear>::make({table});
-            o.m32.coef = o.m64.coef = coef->coef.data();
-            return o;
-        }),
-        py::arg("table"), py::arg("coefficients"), py::keep_alive<1, 2>(), py::keep_alive<1, 3>());
-}
-
-// The walk's coating, layer and estimator settings from the RGB model's keyword arguments.
-template <template <typename> class SM, template <typename> class RGBModel>
-PySpectral<SM> coated_walk(const char *name, bool has_albedo, const py::kwargs &kw) {
-    using Params = typename RGBModel<double>::Params;
-    Params p = bind_detail::params_from_kwargs<Params>(name, py::args(), kw);
-    PySpectral<SM> o;
-    auto fill = [&](auto &proto, auto rgb) {
-        proto.top = rgb.top;
-        proto.set_layer(p.layer);
-        proto.has_albedo = has_albedo;
-    };
-    fill(o.m32.proto, RGBModel<float>::make(p));
-    fill(o.m64.proto, RGBModel<double>::make(p));
-    return o;
-}
-
 } // namespace
 
 void bind_spectral_measured(py::module_ &m) {
@@ -98,22 +54,6 @@ void bind_spectral_measured(py::module_ &m) {
             return py::int_(t->spectra.data64.size() * 8 + t->spectra.data32.size() * 4);
         });
 
-    bind_spectral_model<MeasuredSpectral>(m, "MeasuredSpectral")
-        .def(py::init([](const SharedTable<MeasuredTable> &table, const PyMeasuredSpectra &spectra) {
-                 if (!table || !spectra) value_error("table, spectra: must not be empty");
-                 if (table->vndf.param_size != spectra->spectra.param_size)
-                     value_error("spectra: its (phi_i, theta_i) grid differs from the table's");
-                 PySpectral<MeasuredSpectral> o;
-                 o.m32.kern = MeasuredBxDF<float>::make({table});
-                 o.m64.kern = MeasuredBxDF<double>::make({table});
-                 o.m32.spectra = Warp2D<float, 2>(spectra->spectra);
-                 o.m64.spectra = Warp2D<double, 2>(spectra->spectra);
-                 o.m32.wl = o.m64.wl = spectra->wavelengths.data();
-                 o.m32.n_wl = o.m64.n_wl = int(spectra->wavelengths.size());
-                 return o;
-             }),
-             py::arg("table"), py::arg("spectra"), py::keep_alive<1, 2>(), py::keep_alive<1, 3>());
-
     py::class_<PyMERLSpectral>(m, "MERLSpectralTable",
                                "Every MERL bin's RGB uplifted to pbrt-v4's RGBUnboundedSpectrum: (c0, c1, c2, scale) "
                                "float32 per bin (spectral/measured_spectral.h).")
@@ -133,54 +73,6 @@ void bind_spectral_measured(py::module_ &m) {
              }),
              py::arg("coefficients"))
         .def_property_readonly("nbytes", [](const PyMERLSpectral &t) { return py::int_(t->coef.size() * 4); });
-    bind_merl<MERLNearestSpectral, false>(m, "MERLNearestSpectral");
-    bind_merl<MERLLinearSpectral, true>(m, "MERLLinearSpectral");
-
-    bind_spectral_model<CoatedDiffuseSpectral>(m, "CoatedDiffuseSpectral")
-        .def(py::init([](const PySpectralParam &r, const PySpectralParam &albedo, bool has_albedo,
-                         const py::kwargs &kw) {
-                 auto o = coated_walk<CoatedDiffuseSpectral, CoatedDiffuseBxDF>("CoatedDiffuse", has_albedo, kw);
-                 o.m32.reflectance = o.m64.reflectance = r.p;
-                 o.m32.albedo = o.m64.albedo = albedo.p;
-                 o.keep = {r, albedo};
-                 return o;
-             }),
-             "CoatedDiffuse (stochastic walk) spectral kernel: (reflectance, albedo) as SpectralParam, has_albedo "
-             "(the albedo spectrum is not 0), then the CoatedDiffuse keyword arguments (reflectance / albedo as "
-             "their RGB projection).");
-    bind_spectral_model<CoatedConductorSpectral>(m, "CoatedConductorSpectral")
-        .def(py::init([](const PySpectralParam &eta, const PySpectralParam &k, const PySpectralParam &albedo,
-                         bool has_albedo, const py::kwargs &kw) {
-                 auto o = coated_walk<CoatedConductorSpectral, CoatedConductorBxDF>("CoatedConductor",
-                                                                                           has_albedo, kw);
-                 CoatedConductorParams p =
-                     bind_detail::params_from_kwargs<CoatedConductorParams>("CoatedConductor", py::args(), kw);
-                 o.m32.proto.bottom.mfd = TrowbridgeReitz<float>(float(p.conductor_alpha_x), float(p.conductor_alpha_y),
-                                                                 p.masking);
-                 o.m64.proto.bottom.mfd = TrowbridgeReitz<double>(p.conductor_alpha_x, p.conductor_alpha_y, p.masking);
-                 o.m32.eta = o.m64.eta = eta.p;
-                 o.m32.k = o.m64.k = k.p;
-                 o.m32.albedo = o.m64.albedo = albedo.p;
-                 o.m32.interface_eta = o.m64.interface_eta = p.interface_eta;
-                 o.keep = {eta, k, albedo};
-                 return o;
-             }),
-             "CoatedConductor (stochastic walk) spectral kernel: (conductor_eta, conductor_k, albedo) as "
-             "SpectralParam, has_albedo, then the CoatedConductor keyword arguments (the same as their RGB "
-             "projection).");
-}
-
-// For the preview renderer's spectral mode (spectral.cpp's spectral_render_material asks here
-// too): the float adapter of one of the models above; false if h is none of them.
-template <template <typename> class SM> static bool measured_as(const py::handle &h, render::SpectralMaterial *out) {
-    if (!py::isinstance<PySpectral<SM>>(h)) return false;
-    *out = h.cast<const PySpectral<SM> &>().m32;
-    return true;
-}
-bool spectral_measured_render_material(const py::handle &h, render::SpectralMaterial *out) {
-    return measured_as<MeasuredSpectral>(h, out) || measured_as<MERLNearestSpectral>(h, out) ||
-           measured_as<MERLLinearSpectral>(h, out) || measured_as<CoatedDiffuseSpectral>(h, out) ||
-           measured_as<CoatedConductorSpectral>(h, out);
 }
 
 } // namespace bsdfkit::py_bind

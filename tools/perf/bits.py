@@ -7,7 +7,7 @@
 
 For every registered example (bsdfkit.models.registry, the contract suite's models) one SHA-256
 over eval, pdf and sample (wi, f, pdf, eta, flags, valid) in float32 and float64, and over the
-spectral eval (wavelengths=), on fixed random directions with horizon, pole and below-horizon
+spectral eval, pdf, sample and albedo (wavelengths=), on fixed random directions with horizon, pole and below-horizon
 rows and uniforms at 1 mixed in; then a small RGB and a small spectral render of
 bench/render.py's scene. --compare lists the entries that differ from an earlier file (exit
 status 1 if any). A kernel change meant to keep the bits (CONTRIBUTING, "Speed of a model's
@@ -71,6 +71,11 @@ def fingerprints(n: int = 40000, render: bool = True, only: str = "", spectral: 
         try:
             if spectral:
                 add(m.eval(wo, wi, wavelengths=lam))
+                add(m.pdf(wo, wi, wavelengths=lam))
+                s = m.sample(wo, uc, u, wavelengths=lam)
+                for f in ("wi", "f", "pdf", "eta", "flags", "valid", "terminated"):
+                    add(getattr(s, f))
+                add(m.albedo(wo[600:616], n_samples=256, wavelengths=lam[600:616]))
         except (TypeError, ValueError, NotImplementedError) as e:  # a model without a spectral form
             h.update(type(e).__name__.encode())
         out[f"{cls.__name__}-{label}"] = h.hexdigest()[:16]

@@ -26,6 +26,7 @@
 // Kept apart from batch.h so that the RGB kernels' translation units do not recompile for it.
 #pragma once
 #include <atomic>
+#include <stdexcept>
 #include <cstdint>
 #include <vector>
 
@@ -46,6 +47,11 @@ namespace bsdfkit {
 // ---- Adapters. Each has: dispersive(), f(wo, wi, lambda, mode) (BSDF-level rules applied),
 // pdf(wo, wi, lambda, mode, sf), sample(wo, uc, u, lambda, mode, sf, &terminated) (bsdf_sample's
 // rules: an invalid sample has f = pdf = 0 and wi = +z). lambda: the element's 4 wavelengths.
+// Each is its model's `Spectral` form (core/bxdf.h) and is built by
+//   template <class A> static X make(const Params &p, const A &a)
+// from the model's RGB Params (the RGB projection, for what stays wavelength-independent) and
+// `a`, the binding's named inputs: a.param(name) the SpectralParam of each of kFields,
+// a.flag(name) / a.number(name) / a.template table<T>(name) the few extra inputs a model needs.
 
 // The 4 wavelengths of kPacketWidth elements: l[i] holds wavelength i of every lane (nm, float64).
 struct LambdaLanes {
@@ -90,29 +96,90 @@ template <typename Derived, typename F> struct PerElementModel {
     const Derived &self() const { return static_cast<const Derived &>(*this); }
 };
 
-template <typename F> struct DiffuseSpectral : PerElementModel<DiffuseSpectral<F>, F> {
+// ---- The generic spectral form (parameter kinds): a model whose wavelength-dependent
+// parameters are exactly its colour fields (std::array<S, 3> in Params; every other field a
+// scalar or a knob) is its own spectral form. Per element its make() runs on the Params with
+// each colour at the element's 4 wavelengths (Params::WithColours<4, double>), so the model is
+// M<F, 4>; on packets, with each colour per lane (WithColours<4, Packet<double>>, the model
+// M<F, 4, Packet<F>>). The model: a template M<F, NC, C> whose Params template takes the colour
+// channel count and type (DiffuseParamsT) and whose make() is written for any of them
+// (to_channels<C>). Colours uplift as reflectances (RGBAlbedoSpectrum). The special cases keep
+// their own forms below (the conductors' per-lane F0, the dielectrics' hero wavelength, the
+// split-channel and measured forms).
+template <template <typename, int, typename> class M, typename F>
+struct ColourSpectral : PerElementModel<ColourSpectral<M, F>, F> {
     static constexpr bool kPackets = true;
-    SpectralParam reflectance;
-    DiffuseBxDF<F, 4> at(const double *lam) const { return {reflectance.at<F>(lam)}; }
-    DiffuseBxDF<F, 4, Packet<F>> lanes(const LambdaLanes &lam) const { return {reflectance.at_lanes<Packet<F>>(lam.l)}; }
-};
+    using Params = typename M<double, 3, double>::Params;
+    static constexpr int kMaxColours = 8;
+    Params p;                            // the RGB Params: every field but the colours
+    SpectralParam colour[kMaxColours];   // the colour fields, in field order
+    int n_colours = 0;
 
-template <typename F> struct DiffuseTransmissionSpectral : PerElementModel<DiffuseTransmissionSpectral<F>, F> {
-    static constexpr bool kPackets = true;
-    SpectralParam reflectance, transmittance;
-    DiffuseTransmissionBxDF<F, 4> at(const double *lam) const {
-        return {reflectance.at<F>(lam), transmittance.at<F>(lam)};
+    template <typename T> static constexpr bool is_colour = std::is_same_v<T, std::array<double, 3>>;
+
+    // kFields, from the Params walk: the colour fields.
+    static std::vector<SpectralField> spectral_fields() {
+        std::vector<SpectralField> r;
+        Params q;
+        q.fields([&](const char *name, auto &f) {
+            if constexpr (is_colour<std::decay_t<decltype(f)>>) r.push_back({name, "reflectance"});
+        });
+        return r;
     }
-    DiffuseTransmissionBxDF<F, 4, Packet<F>> lanes(const LambdaLanes &lam) const {
-        return {reflectance.at_lanes<Packet<F>>(lam.l), transmittance.at_lanes<Packet<F>>(lam.l)};
+    template <class A> static ColourSpectral make(const Params &p, const A &a) {
+        ColourSpectral s;
+        s.p = p;
+        Params q = p;
+        q.fields([&](const char *name, auto &f) {
+            if constexpr (is_colour<std::decay_t<decltype(f)>>) {
+                if (s.n_colours == kMaxColours) throw std::invalid_argument("ColourSpectral: too many colour fields");
+                s.colour[s.n_colours++] = a.param(name);
+            }
+        });
+        return s;
+    }
+
+    // The Params at 4 channels of type Col: colour i from value(colour[i]), the rest copied.
+    template <typename Col, typename Value> typename Params::template WithColours<4, Col> params4(const Value &value) const {
+        typename Params::template WithColours<4, Col> q;
+        const void *src[64];
+        int n = 0, c = 0, i = 0;
+        const_cast<Params &>(p).fields([&](const char *, auto &f) { src[n++] = &f; });
+        q.fields([&](const char *, auto &f) {
+            using T = std::decay_t<decltype(f)>;
+            if constexpr (std::is_same_v<T, std::array<Col, 4>>) f = value(colour[c++]);
+            else f = *static_cast<const T *>(src[i]);
+            ++i;
+        });
+        return q;
+    }
+
+    M<F, 4, F> at(const double *lam) const {
+        return M<F, 4, F>::make(params4<double>([&](const SpectralParam &sp) {
+            return std::array<double, 4>{sp(lam[0]), sp(lam[1]), sp(lam[2]), sp(lam[3])};
+        }));
+    }
+    M<F, 4, Packet<F>> lanes(const LambdaLanes &lam) const {
+        using D = Packet<double>;
+        return M<F, 4, Packet<F>>::make(params4<D>([&](const SpectralParam &sp) {
+            return std::array<D, 4>{sp.lanes(lam.l[0]), sp.lanes(lam.l[1]), sp.lanes(lam.l[2]), sp.lanes(lam.l[3])};
+        }));
     }
 };
 
 template <typename F, ConductorFresnel FR>
 struct ConductorSpectralT : PerElementModel<ConductorSpectralT<F, FR>, F> {
     static constexpr bool kPackets = true;
+    static constexpr SpectralField kFields[] = {{"eta", "unbounded"}, {"k", "unbounded"}};
     SpectralParam eta, k;
     TrowbridgeReitz<F> mfd;
+    template <class A> static ConductorSpectralT make(const ConductorParams &p, const A &a) {
+        ConductorSpectralT s;
+        s.eta = a.param("eta");
+        s.k = a.param("k");
+        s.mfd = TrowbridgeReitz<F>(F(p.alpha_x), F(p.alpha_y), p.masking);
+        return s;
+    }
     ConductorBxDF<F, FR, 4> at(const double *lam) const { return ConductorBxDF<F, FR, 4>(mfd, eta.at<F>(lam), k.at<F>(lam)); }
     // As the constructor, per lane: F0 and the F82 coefficient in double from eta, k at the
     // model's precision (unused by Exact).
@@ -182,9 +249,18 @@ inline BSDFSample<V, 4> hero_sample(const Model &m0, bool model_ok, const Vec3<V
 // is a per-model switch of DielectricBxDF); otherwise the scalar path.
 template <typename F> struct DielectricSpectral {
     static constexpr bool kPackets = true;
+    static constexpr SpectralField kFields[] = {{"eta", "unbounded"}};
     SpectralParam eta;
     TrowbridgeReitz<F> mfd;
     bool disp = false;
+    // a.flag("dispersive"): eta is a non-constant spectrum (Python's rule, models/_spectral.py)
+    template <class A> static DielectricSpectral make(const DielectricParams &p, const A &a) {
+        DielectricSpectral s;
+        s.eta = a.param("eta");
+        s.mfd = TrowbridgeReitz<F>(F(p.alpha_x), F(p.alpha_y), p.masking);
+        s.disp = a.flag("dispersive");
+        return s;
+    }
 
     bool dispersive() const { return disp; }
     DielectricBxDF<F> at1(double e) const { return {F(e), mfd}; }
@@ -276,8 +352,15 @@ template <typename F> struct DielectricSpectral {
 // lane (ThinDielectricBxDF<F, Packet<F>>), any parameter.
 template <typename F> struct ThinDielectricSpectral {
     static constexpr bool kPackets = true;
+    static constexpr SpectralField kFields[] = {{"eta", "unbounded"}};
     SpectralParam eta;
     bool disp = false;
+    template <class A> static ThinDielectricSpectral make(const ThinDielectricParams &, const A &a) {
+        ThinDielectricSpectral s;
+        s.eta = a.param("eta");
+        s.disp = a.flag("dispersive");
+        return s;
+    }
 
     bool dispersive() const { return false; }
     ThinDielectricBxDF<F> at1(double e) const { return {F(e)}; }
@@ -392,9 +475,28 @@ template <typename Derived, typename F, typename M> struct SplitChannelModel {
 // Texture::mean() in its spectral variants), set by the binding in proto.spec_weight.
 template <typename F> struct PlasticSpectral : SplitChannelModel<PlasticSpectral<F>, F, PlasticBxDF<F>> {
     static constexpr bool kSharedChoice = true;  // the choice reads spec_weight, eta, the table
+    static constexpr SpectralField kFields[] = {{"reflectance", "reflectance"},
+                                                {"specular_reflectance", "reflectance"}};
     SpectralParam reflectance, specular;
     double fdr = 0, eta = 1.49;
     bool nonlinear = false;
+    // a.number("spec_weight"): the lobe weight from the spectral means (Python computes it);
+    // a.flag("has_diffuse"): the reflectance spectrum is not 0.
+    template <class A> static PlasticSpectral make(const PlasticParams &p, const A &a) {
+        double w = a.number("spec_weight");
+        if (!(w >= 0 && w <= 1)) throw std::invalid_argument("spec_weight: must be in [0, 1]");
+        PlasticTables tab = PlasticBxDF<double>::tables(p);
+        PlasticSpectral s;
+        s.proto = PlasticBxDF<F>::make(p, tab);
+        s.proto.spec_weight = F(w);
+        s.proto.has_diffuse = a.flag("has_diffuse");
+        s.reflectance = a.param("reflectance");
+        s.specular = a.param("specular_reflectance");
+        s.fdr = PlasticBxDF<double>::is_rough(p) ? tab.fdr : FresnelDiffuseReflectance(1 / p.eta);
+        s.eta = p.eta;
+        s.nonlinear = p.nonlinear;
+        return s;
+    }
     struct Chan {
         double scale;  // R / (1 - {Fdr | R Fdr}) (PlasticBxDF::make)
         F Ks;
@@ -417,8 +519,17 @@ struct FilamentStandardSpectralT
     : SplitChannelModel<FilamentStandardSpectralT<F, Coat, Sheen>, F, FilamentStandardKernel<F, Coat, Sheen>> {
     using Model = FilamentStandardT<F, Coat, Sheen>;
     static constexpr bool kSharedChoice = false;  // lobes() reads f0 per channel
+    static constexpr SpectralField kFields[] = {{"base_color", "reflectance"}, {"sheen_color", "reflectance"}};
     SpectralParam base_color, sheen_color;
     FilamentStandardParams params;  // keeps the DFG table alive (proto points into it)
+    template <class A> static FilamentStandardSpectralT make(const FilamentStandardParams &p, const A &a) {
+        FilamentStandardSpectralT s;
+        s.proto = Model::make(p);  // the kernel part
+        s.params = p;
+        s.base_color = a.param("base_color");
+        s.sheen_color = a.param("sheen_color");
+        return s;
+    }
     struct Chan {
         F f0, diffuse, sheen;
     };
@@ -456,8 +567,17 @@ template <typename F>
 struct CoatedDiffuseAnalyticSpectral
     : SplitChannelModel<CoatedDiffuseAnalyticSpectral<F>, F, CoatedDiffuseAnalyticBxDF<F>> {
     static constexpr bool kSharedChoice = true;
+    static constexpr SpectralField kFields[] = {{"reflectance", "reflectance"}, {"albedo", "reflectance"}};
     SpectralParam reflectance, albedo;
     AnalyticInternal internal;
+    template <class A> static CoatedDiffuseAnalyticSpectral make(const CoatedDiffuseParams &p, const A &a) {
+        CoatedDiffuseAnalyticSpectral s;
+        s.proto = CoatedDiffuseAnalyticBxDF<F>::make(p);
+        s.internal = AnalyticInternal::of(s.proto.top, s.proto.thickness);
+        s.reflectance = a.param("reflectance");
+        s.albedo = a.param("albedo");
+        return s;
+    }
     struct Chan {
         F R, multi, albedo;
     };
@@ -476,10 +596,23 @@ template <typename F>
 struct CoatedConductorAnalyticSpectral
     : SplitChannelModel<CoatedConductorAnalyticSpectral<F>, F, CoatedConductorAnalyticBxDF<F>> {
     static constexpr bool kSharedChoice = true;
+    static constexpr SpectralField kFields[] = {
+        {"conductor_eta", "unbounded"}, {"conductor_k", "unbounded"}, {"albedo", "reflectance"}};
     SpectralParam eta, k, albedo;
     double interface_eta = 1.5;
     AnalyticInternal internal;
     double gl_x[64] = {}, gl_w[64] = {};  // CosineWeightedMean's Gauss-Legendre rule, computed once
+    template <class A> static CoatedConductorAnalyticSpectral make(const CoatedConductorParams &p, const A &a) {
+        CoatedConductorAnalyticSpectral s;
+        s.proto = CoatedConductorAnalyticBxDF<F>::make(p);
+        s.internal = AnalyticInternal::of(s.proto.top, s.proto.thickness);
+        s.eta = a.param("conductor_eta");
+        s.k = a.param("conductor_k");
+        s.albedo = a.param("albedo");
+        s.interface_eta = p.interface_eta;
+        s.init_quadrature();
+        return s;
+    }
 
     void init_quadrature() { GaussLegendre(64, gl_x, gl_w); }
     struct Chan {
@@ -510,7 +643,13 @@ struct CoatedConductorAnalyticSpectral
 // lambda0's model's and f_i is model i's value at that direction.
 template <typename F> struct NormalizedFresnelSpectral {
     static constexpr bool kPackets = true;
+    static constexpr SpectralField kFields[] = {{"eta", "unbounded"}};
     SpectralParam eta;
+    template <class A> static NormalizedFresnelSpectral make(const NormalizedFresnelParams &, const A &a) {
+        NormalizedFresnelSpectral s;
+        s.eta = a.param("eta");
+        return s;
+    }
 
     bool dispersive() const { return false; }
     static NormalizedFresnelBxDF<F> at1(double e) { return NormalizedFresnelBxDF<F>::make({e}); }

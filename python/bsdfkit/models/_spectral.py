@@ -34,12 +34,26 @@ DENSE_WAVELENGTHS.setflags(write=False)
 #: RGB-mode eta of a dispersive dielectric: its value here (pbrt-v4 RGB renders have no dispersion).
 RGB_ETA_WAVELENGTH = 550.0
 
-def spectral_model_names() -> str:
-    """The registered models with a spectral kernel (a ``_make_spectral_core``), from the registry:
-    no hand-kept list. Some of them have it for some parameters only (``_has_spectral_kernel``,
-    e.g. Measured: spectral tensor files)."""
+def spectral_classes() -> tuple:
+    """The registered model classes with a spectral form, read from ``_core``: a compiled model
+    ``X`` has one when ``_core.XSpectral`` exists (core/bxdf.h ``Spectral``), and it belongs to
+    the registered class whose name is the longest prefix of ``X`` (``ConductorF82`` to
+    ``Conductor``, ``MERLLinear`` to ``MERL``). No hand-kept list. Some of them have it for some
+    parameters only (``_has_spectral_kernel``, e.g. Measured: spectral tensor files)."""
     from . import registry
-    return ", ".join(c.__name__ for c in registry.classes() if getattr(c, "_make_spectral_core", None) is not None)
+    names = [c.__name__ for c in registry.classes()]
+    found = set()
+    for core_name in _core.model_names():
+        if hasattr(_core, core_name + "Spectral"):
+            owners = [n for n in names if core_name.startswith(n)]
+            if owners:
+                found.add(max(owners, key=len))
+    return tuple(c for c in registry.classes() if c.__name__ in found)
+
+
+def spectral_model_names() -> str:
+    """The registered models with a spectral form (:func:`spectral_classes`), comma-separated."""
+    return ", ".join(c.__name__ for c in spectral_classes())
 
 
 # ------------------------------------------------------------------------------- parameters
@@ -168,17 +182,16 @@ _CACHE_SIZE = 256
 
 def _spectral_core(model):
     """The model's ``_core.<Model>Spectral`` (built once per distinct model: the RGB uplift
-    polishes each colour, ~1-15 ms). Models without a spectral kernel (no ``_make_spectral_core``,
-    or ``_has_spectral_kernel()`` false) raise NotImplementedError."""
-    factory = getattr(type(model), "_make_spectral_core", None)
-    if factory is None or not getattr(model, "_has_spectral_kernel", lambda: True)():
+    polishes each colour, ~1-15 ms). Models without a spectral form (``_has_spectral_kernel()``
+    false) raise NotImplementedError."""
+    if not model._has_spectral_kernel():
         raise NotImplementedError(
             f"wavelengths: spectral mode is not implemented for {type(model).__name__} yet "
             f"(models with wavelengths=: {spectral_model_names()}); call without wavelengths= for RGB")
     key = (type(model), model._key())
     core = _CACHE.get(key)
     if core is None:
-        core = factory(model)
+        core = model._make_spectral_core()
         _CACHE[key] = core
         if len(_CACHE) > _CACHE_SIZE:
             _CACHE.popitem(last=False)

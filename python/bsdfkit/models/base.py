@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import _core
 from .._dask import dask_eval, is_dask_array
 from .._enums import BxDFFlags, ReflTrans, TransportMode
 from . import _spectral
@@ -260,6 +261,34 @@ class BxDF:
 
     def _make_core(self):
         raise NotImplementedError
+
+    # ---- spectral form (core/bxdf.h `Spectral`): one generic construction for every model
+    def _has_spectral_kernel(self) -> bool:
+        """Whether the compiled model has a spectral form (``_core.<Name>Spectral``): read from
+        ``_core``, not declared here."""
+        return hasattr(_core, type(self._core).__name__ + "Spectral")
+
+    def _spectral_inputs(self) -> dict:
+        """The spectral form's inputs that are not a field's own value: a field's value computed
+        from others (uplifted like the field), and the form's extra inputs (flags, numbers,
+        tables), passed as they are. The few models with such inputs override it."""
+        return {}
+
+    def _spectral_core_kwargs(self) -> dict:
+        """The spectral form's keyword arguments: the compiled RGB model's parameters (what
+        stays wavelength-independent, and the colours' RGB projection)."""
+        return self._core.params
+
+    def _make_spectral_core(self):
+        """``_core.<Name>Spectral`` of this model: each of its ``spectral_fields`` (declared by
+        the C++ form) as a ``_core.SpectralParam`` of the field's value, uplifted by the field's
+        kind, plus ``_spectral_inputs()``."""
+        cls = getattr(_core, type(self._core).__name__ + "Spectral")
+        extra = dict(self._spectral_inputs())
+        spectral = {name: _spectral.spectral_param(extra.pop(name) if name in extra else self._params[name], kind)
+                    for name, kind in cls.spectral_fields}
+        spectral.update(extra)
+        return cls(spectral, **self._spectral_core_kwargs())
 
     # immutability, value semantics, pickling
     def __setattr__(self, k, v):

@@ -177,12 +177,6 @@ class Conductor(BxDF):
         return core_cls(eta=_sp.rgb_of(p["eta"], "unbounded").tolist(), k=_sp.rgb_of(p["k"], "unbounded").tolist(),
                         alpha_x=p["alpha_x"], alpha_y=p["alpha_y"], masking=_MASKING[p["masking"]])
 
-    def _make_spectral_core(self):
-        p = self._params
-        core_cls = getattr(_core, _FRESNEL[p["fresnel"]][0] + "Spectral")
-        return core_cls(_sp.spectral_param(p["eta"], "unbounded"), _sp.spectral_param(p["k"], "unbounded"),
-                        p["alpha_x"], p["alpha_y"], _MASKING[p["masking"]])
-
     def cost_family(self) -> str:
         return "Conductor" + ("/smooth" if is_smooth(self._params) else "/rough")
 

@@ -64,10 +64,8 @@ class Dielectric(BxDF):
         return _core.Dielectric(eta=_sp.scalar_of(p["eta"]), alpha_x=p["alpha_x"], alpha_y=p["alpha_y"],
                                 masking=_MASKING[p["masking"]])
 
-    def _make_spectral_core(self):
-        p = self._params
-        return _core.DielectricSpectral(_sp.spectral_param(p["eta"], "unbounded"), p["alpha_x"], p["alpha_y"],
-                                        _MASKING[p["masking"]], _sp.is_dispersive(p["eta"]))
+    def _spectral_inputs(self) -> dict:
+        return {"dispersive": _sp.is_dispersive(self._params["eta"])}  # DielectricSpectral: hero wavelength
 
     def cost_family(self) -> str:
         p = self._params
@@ -138,9 +136,8 @@ class ThinDielectric(BxDF):
     def _make_core(self):
         return _core.ThinDielectric(eta=_sp.scalar_of(self._params["eta"]))
 
-    def _make_spectral_core(self):
-        p = self._params
-        return _core.ThinDielectricSpectral(_sp.spectral_param(p["eta"], "unbounded"), _sp.is_dispersive(p["eta"]))
+    def _spectral_inputs(self) -> dict:
+        return {"dispersive": _sp.is_dispersive(self._params["eta"])}
 
     def describe(self) -> str:
         return f"ThinDielectric η={_sp.fmt_param(self._params['eta'])}"

@@ -39,9 +39,6 @@ class Diffuse(BxDF):
     def _make_core(self):
         return _core.Diffuse(reflectance=_sp.rgb_of(self._params["reflectance"], "reflectance").tolist())
 
-    def _make_spectral_core(self):
-        return _core.DiffuseSpectral(_sp.spectral_param(self._params["reflectance"], "reflectance"))
-
     def describe(self) -> str:
         return f"Diffuse R={_sp.fmt_param(self._params['reflectance'])}"
 
@@ -87,11 +84,6 @@ class DiffuseTransmission(BxDF):
         p = self._params
         return _core.DiffuseTransmission(reflectance=_sp.rgb_of(p["reflectance"], "reflectance").tolist(),
                                          transmittance=_sp.rgb_of(p["transmittance"], "reflectance").tolist())
-
-    def _make_spectral_core(self):
-        p = self._params
-        return _core.DiffuseTransmissionSpectral(_sp.spectral_param(p["reflectance"], "reflectance"),
-                                                 _sp.spectral_param(p["transmittance"], "reflectance"))
 
     def describe(self) -> str:
         p = self._params

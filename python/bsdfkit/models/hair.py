@@ -235,8 +235,3 @@ class Hair(BxDF):
     def _make_core(self):
         return (_core.HairFarField if self._params["h"] is None else _core.Hair)(**self._core_kwargs())
 
-    def _make_spectral_core(self):
-        # the fibre of _make_core with sigma_a per wavelength (spectral/hair_spectral.h)
-        p = self._params
-        cls = _core.HairFarFieldSpectral if p["h"] is None else _core.HairSpectral
-        return cls(_sp.spectral_param(p["sigma_a"], "unbounded"), **self._core_kwargs())

@@ -264,14 +264,10 @@ class CoatedDiffuse(_AnalyticSpectral, BxDF):
         return dict(reflectance=_sp.rgb_of(p["reflectance"], "reflectance").tolist(), eta=p["eta"],
                     alpha_x=p["alpha_x"], alpha_y=p["alpha_y"], masking=_MASKING[p["masking"]], **_layer_kw(p))
 
-    def _make_spectral_core(self):
-        # reflectance and albedo per wavelength: batch_spectral.h CoatedDiffuseAnalyticSpectral
-        # (analytic), spectral/layered_spectral.h CoatedDiffuseSpectral (the walk)
-        p = self._params
-        r, a = _sp.spectral_param(p["reflectance"], "reflectance"), _sp.spectral_param(p["albedo"], "reflectance")
-        if p["method"] == "analytic":
-            return _core.CoatedDiffuseAnalyticSpectral(r, a, **self._core_kwargs())
-        return _core.CoatedDiffuseSpectral(r, a, self._has_medium(), **self._core_kwargs())
+    def _spectral_inputs(self) -> dict:
+        # the walk (spectral/layered_spectral.h) samples the medium only where the whole albedo
+        # spectrum is not 0; the analytic form (batch_spectral.h) has no such input
+        return {} if self._params["method"] == "analytic" else {"has_albedo": self._has_medium()}
 
     @staticmethod
     def relative_cost(params, dtype=None) -> float:
@@ -383,15 +379,8 @@ class CoatedConductor(_AnalyticSpectral, BxDF):
                     interface_eta=p["interface_eta"], interface_alpha_x=p["interface_alpha_x"],
                     interface_alpha_y=p["interface_alpha_y"], masking=_MASKING[p["masking"]], **_layer_kw(p))
 
-    def _make_spectral_core(self):
-        # the metal's eta, k and the albedo per wavelength: batch_spectral.h
-        # CoatedConductorAnalyticSpectral (analytic), spectral/layered_spectral.h CoatedConductorSpectral (the walk)
-        p = self._params
-        e, k = _sp.spectral_param(p["conductor_eta"], "unbounded"), _sp.spectral_param(p["conductor_k"], "unbounded")
-        a = _sp.spectral_param(p["albedo"], "reflectance")
-        if p["method"] == "analytic":
-            return _core.CoatedConductorAnalyticSpectral(e, k, a, **self._core_kwargs())
-        return _core.CoatedConductorSpectral(e, k, a, self._has_medium(), **self._core_kwargs())
+    def _spectral_inputs(self) -> dict:
+        return {} if self._params["method"] == "analytic" else {"has_albedo": self._has_medium()}
 
     @staticmethod
     def relative_cost(params, dtype=None) -> float:

@@ -280,12 +280,9 @@ class MERL(BxDF):
     def _make_core(self):
         return getattr(_core, _INTERPOLATION[self._params["interpolation"]])(table=self._keep[0])
 
-    def _make_spectral_core(self):
+    def _spectral_inputs(self) -> dict:
         # spectral/measured_spectral.h MERLNearestSpectral / MERLLinearSpectral: every bin uplifted once
-        table = self._keep[0]
-        coef = _merl_spectral_table(self._params["digest"], table)
-        return getattr(_core, _INTERPOLATION[self._params["interpolation"]] + "Spectral")(table=table,
-                                                                                          coefficients=coef)
+        return {"coefficients": _merl_spectral_table(self._params["digest"], self._keep[0])}
 
     @property
     def values(self) -> np.ndarray:
@@ -750,15 +747,15 @@ class Measured(BxDF):
     def _make_core(self):
         return _core.Measured(table=self._entry()[2])
 
-    def _make_spectral_core(self):
+    def _spectral_inputs(self) -> dict:
         # spectral/measured_spectral.h MeasuredSpectral: the file's spectra per wavelength
-        fields, info, table, _ = self._entry()
+        fields, info, _, _ = self._entry()
         if not info["spectral"]:
             raise NotImplementedError(
                 "wavelengths: this tensor file holds RGB data (an `rgb` field, e.g. *_rgb.bsdf or "
                 "bsdfkit.measured.tabulate); spectral mode needs a spectral file (`spectra` and `wavelengths` "
                 "fields, *_spec.bsdf), as pbrt-v4 and Mitsuba's spectral variants do; call without wavelengths=")
-        return _core.MeasuredSpectral(table=table, spectra=_measured_spectra(self._params["digest"], fields, info))
+        return {"spectra": _measured_spectra(self._params["digest"], fields, info)}
 
     @property
     def fields(self) -> dict:

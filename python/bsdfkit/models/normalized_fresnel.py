@@ -68,6 +68,3 @@ class NormalizedFresnel(BxDF):
 
     def _make_core(self):
         return _core.NormalizedFresnel(eta=_sp.scalar_of(self._params["eta"]))
-
-    def _make_spectral_core(self):
-        return _core.NormalizedFresnelSpectral(_sp.spectral_param(self._params["eta"], "unbounded"))

@@ -128,17 +128,20 @@ class Plastic(BxDF):
                              alpha=p["alpha"], nonlinear=p["nonlinear"], masking=_MASKING[p["masking"]],
                              specular_reflectance=_sp.rgb_of(p["specular_reflectance"], "reflectance").tolist())
 
-    def _make_spectral_core(self):
+    def _spectral_inputs(self) -> dict:
         # batch_spectral.h PlasticSpectral: R and Ks per wavelength; the lobe weight from their
         # means over [360, 830] nm (Mitsuba's Texture::mean() in its spectral variants)
         p = self._params
         r, ks = p["reflectance"], p["specular_reflectance"]
         rm, sm = _sp.spectral_mean(r, "reflectance"), _sp.spectral_mean(ks, "reflectance")
-        w = sm / (rm + sm) if rm + sm > 0 else 0.5
-        return _core.PlasticSpectral(_sp.spectral_param(r, "reflectance"), _sp.spectral_param(ks, "reflectance"),
-                                     eta=p["eta"], alpha=p["alpha"] if p["alpha"] >= SMOOTH_ALPHA else 0.0,
-                                     nonlinear=p["nonlinear"], masking=_MASKING[p["masking"]], spec_weight=w,
-                                     has_diffuse=_sp.spectral_max(r, "reflectance") > 0)
+        return dict(spec_weight=sm / (rm + sm) if rm + sm > 0 else 0.5,
+                    has_diffuse=_sp.spectral_max(r, "reflectance") > 0)
+
+    def _spectral_core_kwargs(self) -> dict:
+        kw = self._core.params
+        if kw["alpha"] < SMOOTH_ALPHA:
+            kw["alpha"] = 0.0  # the smooth coat
+        return kw
 
     def cost_family(self) -> str:
         return "Plastic" + ("/smooth" if self._params["alpha"] < SMOOTH_ALPHA else "/rough")

@@ -12,6 +12,7 @@ import numpy as np
 
 from .. import _render_ext
 from .._arrays import _as_real_array, check_real
+from ..models import _spectral as _spectral_forms
 from .environment import _environment
 
 
@@ -343,10 +344,9 @@ class Scene:
         return s
 
 
-#: Models the spectral renderer accepts (those with a spectral kernel, batch_spectral.h).
-SPECTRAL_MODELS = ("Diffuse", "DiffuseTransmission", "Conductor", "Dielectric", "ThinDielectric", "Plastic",
-                   "FilamentStandard", "NormalizedFresnel", "CoatedDiffuse", "CoatedConductor",
-                   "Measured (spectral tensor files)", "MERL", "Hair (a single h; not the far field h=None)")
+#: Models the spectral renderer accepts: those with a spectral form, read from ``_core`` (the
+#: renderer's spectral material is the variant over every model's form, bxdfs/all.h).
+SPECTRAL_MODELS = tuple(c.__name__ for c in _spectral_forms.spectral_classes())
 
 
 @functools.lru_cache(maxsize=1)

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..models import BxDF
+from ..models import _spectral as _sp
 
 __all__ = ["Knob", "family", "Config", "configurations", "knobs", "COLOR_SETTINGS", "has_spectral_params"]
 
@@ -85,7 +86,7 @@ def _color_spec(model):
     cls = type(model)
 
     def moot(q):
-        ok = getattr(cls, "_make_spectral_core", None) is not None and getattr(cls, "_spectral_ok", lambda _q: True)(q)
+        ok = cls in _sp.spectral_classes() and getattr(cls, "_spectral_ok", lambda _q: True)(q)
         return None if ok else "no spectral kernel for this configuration (wavelengths= not implemented)"
     return _Spec("color", "approximation", COLOR_SETTINGS, COLOR_SETTINGS, None, moot,
                  "colour: spectral mode (per wavelength, integrated to linear sRGB under D65) or RGB mode "

@@ -20,6 +20,7 @@
 namespace bsdfkit {
 
 enum class ConductorFresnel : uint8_t { Exact = 0, Schlick = 1, F82 = 2 };
+template <typename F, ConductorFresnel FR> struct ConductorSpectralT;  // its spectral form (batch_spectral.h / spectral/)
 
 // S: the parameters' scalar type, double (core/math.h param_t; a Dual for gradients, core/dual.h).
 template <typename S = double> struct ConductorParamsT {
@@ -44,6 +45,8 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3,
     static constexpr const char *Name = FR == ConductorFresnel::Schlick ? "ConductorSchlick"
                                         : FR == ConductorFresnel::F82   ? "ConductorF82"
                                                                         : "Conductor";
+    using Spectral = ConductorSpectralT<F, FR>;  // its spectral form (core/bxdf.h)
+    static constexpr int GradColumns = 8;  // eval_grad columns at most
     TrowbridgeReitz<F> mfd;
     Spectrum<C, NC> eta, k;
     // Per-channel Schlick F0 and F82-tint a, computed in double at construction (unused by Exact);

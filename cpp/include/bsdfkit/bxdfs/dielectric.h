@@ -13,6 +13,8 @@
 
 namespace bsdfkit {
 
+template <typename F> struct DielectricSpectral;  // its spectral form (batch_spectral.h / spectral/)
+
 // S: the parameters' scalar type, double (core/math.h param_t; a Dual for gradients, core/dual.h).
 template <typename S = double> struct DielectricParamsT {
     S eta = 1.5, alpha_x = 0, alpha_y = 0;
@@ -31,6 +33,8 @@ using DielectricParams = DielectricParamsT<>;
 template <typename F, typename Eta = F> struct DielectricBxDF {
     using Params = DielectricParamsT<param_t<F>>;
     static constexpr const char *Name = "Dielectric";
+    using Spectral = DielectricSpectral<F>;  // its spectral form (core/bxdf.h)
+    static constexpr int GradColumns = 4;  // eval_grad columns at most
     Eta eta;
     TrowbridgeReitz<F> mfd;
 

@@ -8,10 +8,15 @@
 
 namespace bsdfkit {
 
+template <template <typename, int, typename> class M, typename F> struct ColourSpectral;  // batch_spectral.h
+
 // S: the parameters' scalar type, double (core/math.h param_t; a Dual for gradients, core/dual.h).
-template <typename S = double> struct DiffuseParamsT {
-    std::array<S, 3> reflectance{0.5, 0.5, 0.5};
+// N, Col: the colours' channel count and type (4 and double or Packet<double> in spectral mode,
+// core/math.h colour_param_t; the generic spectral form ColourSpectral rebinds them).
+template <typename S = double, int N = 3, typename Col = S> struct DiffuseParamsT {
+    std::array<Col, N> reflectance{Col(0.5), Col(0.5), Col(0.5)};
     template <class V> void fields(V &&v) { v("reflectance", reflectance); }
+    template <int N2, typename Col2> using WithColours = DiffuseParamsT<S, N2, Col2>;
 };
 using DiffuseParams = DiffuseParamsT<>;
 
@@ -19,11 +24,13 @@ using DiffuseParams = DiffuseParamsT<>;
 // parameters evaluated at that element's wavelengths: core/spectral.h, batch_spectral.h).
 // C: the channel values' type, F; or Packet<F> for a spectral packet (a value per lane).
 template <typename F, int NC = 3, typename C = F> struct DiffuseBxDF {
-    using Params = DiffuseParamsT<param_t<F>>;
+    using Params = DiffuseParamsT<param_t<F>, NC, colour_param_t<F, C>>;
     static constexpr const char *Name = "Diffuse";
+    using Spectral = ColourSpectral<DiffuseBxDF, F>;  // its spectral form (core/bxdf.h): the generic one
+    static constexpr int GradColumns = 4;  // eval_grad columns at most
     Spectrum<C, NC> R;
 
-    static DiffuseBxDF make(const Params &p) { return {to_spectrum<F>(p.reflectance)}; }
+    static DiffuseBxDF make(const Params &p) { return {to_channels<C>(p.reflectance)}; }
 
     uint8_t flags() const { return R.is_black() ? Unset : DiffuseReflection; }
 

@@ -9,13 +9,17 @@
 
 namespace bsdfkit {
 
+template <template <typename, int, typename> class M, typename F> struct ColourSpectral;  // batch_spectral.h
+
 // S: the parameters' scalar type, double (core/math.h param_t; a Dual for gradients, core/dual.h).
-template <typename S = double> struct DiffuseTransmissionParamsT {
-    std::array<S, 3> reflectance{0.25, 0.25, 0.25}, transmittance{0.25, 0.25, 0.25};
+// N, Col: the colours' channel count and type (DiffuseParamsT).
+template <typename S = double, int N = 3, typename Col = S> struct DiffuseTransmissionParamsT {
+    std::array<Col, N> reflectance{Col(0.25), Col(0.25), Col(0.25)}, transmittance{Col(0.25), Col(0.25), Col(0.25)};
     template <class V> void fields(V &&v) {
         v("reflectance", reflectance);
         v("transmittance", transmittance);
     }
+    template <int N2, typename Col2> using WithColours = DiffuseTransmissionParamsT<S, N2, Col2>;
 };
 using DiffuseTransmissionParams = DiffuseTransmissionParamsT<>;
 
@@ -24,12 +28,14 @@ using DiffuseTransmissionParams = DiffuseTransmissionParamsT<>;
 // C: the channel values' type, F; or Packet<F> for a spectral packet (a value per lane, and so
 // per-lane lobe weights).
 template <typename F, int NC = 3, typename C = F> struct DiffuseTransmissionBxDF {
-    using Params = DiffuseTransmissionParamsT<param_t<F>>;
+    using Params = DiffuseTransmissionParamsT<param_t<F>, NC, colour_param_t<F, C>>;
     static constexpr const char *Name = "DiffuseTransmission";
+    using Spectral = ColourSpectral<DiffuseTransmissionBxDF, F>;  // its spectral form (core/bxdf.h): the generic one
+    static constexpr int GradColumns = 8;  // eval_grad columns at most
     Spectrum<C, NC> R, T;
 
     static DiffuseTransmissionBxDF make(const Params &p) {
-        return {to_spectrum<F>(p.reflectance), to_spectrum<F>(p.transmittance)};
+        return {to_channels<C>(p.reflectance), to_channels<C>(p.transmittance)};
     }
 
     uint8_t flags() const {

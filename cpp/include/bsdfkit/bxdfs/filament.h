@@ -54,6 +54,10 @@
 
 namespace bsdfkit {
 
+template <typename F> struct FilamentClothSpectral;  // its spectral form (batch_spectral.h / spectral/)
+
+template <typename F, bool Coat, bool Sheen> struct FilamentStandardSpectralT;  // its spectral form (batch_spectral.h / spectral/)
+
 namespace filament {
 
 inline constexpr double kMinNoV = 1e-4;                   // MIN_N_DOT_V (common_material.fs)
@@ -437,6 +441,8 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardT : Filament
     using Params = FilamentStandardParamsT<param_t<F>>;
     static constexpr const char *Name = Coat ? (Sheen ? "FilamentStandardCoatSheen" : "FilamentStandardCoat")
                                              : (Sheen ? "FilamentStandardSheen" : "FilamentStandard");
+    using Spectral = FilamentStandardSpectralT<F, Coat, Sheen>;  // its spectral form (core/bxdf.h)
+    static constexpr int GradColumns = 16;  // eval_grad columns at most
     SharedTable<FilamentDFG> dfg;  // keeps the table alive
 
     // One colour channel's f0 and diffuse colour from its base colour (surface_shading_lit.fs
@@ -631,6 +637,8 @@ template <typename F> struct FilamentClothBxDF : FilamentClothKernel<F> {
     using Kernel = FilamentClothKernel<F>;
     using Params = FilamentClothParamsT<param_t<F>>;
     static constexpr const char *Name = "FilamentCloth";
+    using Spectral = FilamentClothSpectral<F>;  // its spectral form (core/bxdf.h)
+    static constexpr int GradColumns = 16;  // eval_grad columns at most
     SharedTable<FilamentDFG> dfg;  // keeps the table alive
 
     // Derived parameters in S = param_t<F> (a Dual for gradients: the roughness clamp is one-sided,

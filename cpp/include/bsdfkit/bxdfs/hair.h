@@ -21,6 +21,10 @@
 
 namespace bsdfkit {
 
+template <typename F> struct HairFarFieldSpectral;  // its spectral form (batch_spectral.h / spectral/)
+
+template <typename F> struct HairSpectral;  // its spectral form (batch_spectral.h / spectral/)
+
 namespace hair {
 
 inline constexpr int PMax = 3;
@@ -181,6 +185,7 @@ inline void GaussLegendre(int n, double *x, double *w) {
 template <typename F, int NC = 3> struct HairBxDF {
     using Params = HairParams;
     static constexpr const char *Name = "Hair";
+    using Spectral = HairSpectral<F>;  // its spectral form (core/bxdf.h)
     static constexpr int P = hair::PMax;
 
     // All derived at construction (in double).
@@ -434,6 +439,7 @@ template <typename F, int NC = 3> struct HairBxDF {
 template <typename F, int NC = 3> struct HairFarFieldBxDF {
     static constexpr int MaxNodes = 64;
     static constexpr const char *Name = "HairFarField";
+    using Spectral = HairFarFieldSpectral<F>;  // its spectral form (core/bxdf.h)
     using Params = HairFarFieldParams;
     using Base = HairBxDF<F, NC>;
     Base base;

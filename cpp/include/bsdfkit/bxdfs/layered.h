@@ -40,6 +40,10 @@
 
 namespace bsdfkit {
 
+template <typename F> struct CoatedConductorSpectral;  // its spectral form (batch_spectral.h / spectral/)
+
+template <typename F> struct CoatedDiffuseSpectral;  // its spectral form (batch_spectral.h / spectral/)
+
 // ---------------------------------------------------------------- medium and walk helpers
 
 // Henyey-Greenstein 1941 phase function in pbrt-v4's convention (wo, wi both pointing away
@@ -489,6 +493,7 @@ template <typename F, typename Bottom, int NC = 3> struct LayeredBxDF {
 template <typename F> struct CoatedDiffuseBxDF : LayeredBxDF<F, DiffuseBxDF<F>> {
     using Params = CoatedDiffuseParams;
     static constexpr const char *Name = "CoatedDiffuse";
+    using Spectral = CoatedDiffuseSpectral<F>;  // its spectral form (core/bxdf.h)
 
     static CoatedDiffuseBxDF make(const Params &p) {
         CoatedDiffuseBxDF m;
@@ -503,6 +508,7 @@ template <typename F> struct CoatedDiffuseBxDF : LayeredBxDF<F, DiffuseBxDF<F>> 
 template <typename F> struct CoatedConductorBxDF : LayeredBxDF<F, ConductorBxDF<F>> {
     using Params = CoatedConductorParams;
     static constexpr const char *Name = "CoatedConductor";
+    using Spectral = CoatedConductorSpectral<F>;  // its spectral form (core/bxdf.h)
 
     static CoatedConductorBxDF make(const Params &p) {
         CoatedConductorBxDF m;

@@ -43,6 +43,10 @@
 
 namespace bsdfkit {
 
+template <typename F> struct CoatedConductorAnalyticSpectral;  // its spectral form (batch_spectral.h / spectral/)
+
+template <typename F> struct CoatedDiffuseAnalyticSpectral;  // its spectral form (batch_spectral.h / spectral/)
+
 // 2 int_0^1 g(mu) mu dmu by Gauss-Legendre on [a, 1] (g = 1 on [0, a], the total internal
 // reflection range of a Fresnel reflectance). T: double, or a Dual (make() of a gradient model),
 // whose derivative is that of the quadrature.
@@ -276,6 +280,8 @@ template <typename F, typename Bottom> struct AnalyticLayeredBxDF {
 template <typename F> struct CoatedDiffuseAnalyticBxDF : AnalyticLayeredBxDF<F, DiffuseBxDF<F>> {
     using Params = CoatedDiffuseParamsT<param_t<F>>;
     static constexpr const char *Name = "CoatedDiffuseAnalytic";
+    using Spectral = CoatedDiffuseAnalyticSpectral<F>;  // its spectral form (core/bxdf.h)
+    static constexpr int GradColumns = 16;  // eval_grad columns at most
 
     static CoatedDiffuseAnalyticBxDF make(const Params &p) {
         using S = param_t<F>;
@@ -297,6 +303,8 @@ template <typename F> struct CoatedDiffuseAnalyticBxDF : AnalyticLayeredBxDF<F, 
 template <typename F> struct CoatedConductorAnalyticBxDF : AnalyticLayeredBxDF<F, ConductorBxDF<F>> {
     using Params = CoatedConductorParamsT<param_t<F>>;
     static constexpr const char *Name = "CoatedConductorAnalytic";
+    using Spectral = CoatedConductorAnalyticSpectral<F>;  // its spectral form (core/bxdf.h)
+    static constexpr int GradColumns = 16;  // eval_grad columns at most
 
     static CoatedConductorAnalyticBxDF make(const Params &p) {
         using S = param_t<F>;

@@ -33,6 +33,8 @@
 
 namespace bsdfkit {
 
+template <typename F> struct MeasuredSpectral;  // its spectral form (batch_spectral.h / spectral/)
+
 struct MeasuredTable {
     Warp2DData ndf, sigma, vndf, luminance, rgb;
     bool isotropic = true, jacobian = true;
@@ -240,6 +242,7 @@ template <typename F> struct MeasuredBxDF : MeasuredKernel<F> {
     SharedTable<MeasuredTable> table;  // keeps the data alive
 
     static constexpr const char *Name = "Measured";
+    using Spectral = MeasuredSpectral<F>;  // its spectral form (core/bxdf.h)
 
     static MeasuredBxDF make(const Params &p) {
         MeasuredBxDF m;

@@ -41,6 +41,8 @@
 
 namespace bsdfkit {
 
+template <typename F, bool Linear> struct MERLSpectralT;  // its spectral form (batch_spectral.h / spectral/)
+
 namespace merl {
 inline constexpr int kThetaH = 90, kThetaD = 90, kPhiD = 180;
 inline constexpr int kSize = kThetaH * kThetaD * kPhiD;        // bins per channel
@@ -312,6 +314,7 @@ template <typename F, bool Linear> struct MERLT : MERLKernel<F, Linear> {
     SharedTable<MERLTable> table;  // keeps the data alive
 
     static constexpr const char *Name = Linear ? "MERLLinear" : "MERLNearest";
+    using Spectral = MERLSpectralT<F, Linear>;  // its spectral form (core/bxdf.h)
 
     static MERLT make(const Params &p) {
         MERLT m;

@@ -16,6 +16,8 @@
 
 namespace bsdfkit {
 
+template <typename F> struct NormalizedFresnelSpectral;  // its spectral form (batch_spectral.h / spectral/)
+
 // pbrt-v4 FresnelMoment1: polynomial fit of the first Fresnel moment, int_0^1 Fr(mu, 1/eta) mu dmu.
 // T: double, or a packet of double (per lane, spectral mode: batch_spectral.h).
 template <typename T> inline T FresnelMoment1(T eta) {
@@ -34,6 +36,7 @@ struct NormalizedFresnelParams {
 template <typename F, typename C = F> struct NormalizedFresnelBxDF {
     using Params = NormalizedFresnelParams;
     static constexpr const char *Name = "NormalizedFresnel";
+    using Spectral = NormalizedFresnelSpectral<F>;  // its spectral form (core/bxdf.h)
 
     C eta;
     C inv_c_pi;  // 1 / (c pi)

@@ -40,6 +40,8 @@
 
 namespace bsdfkit {
 
+template <typename F> struct PlasticSpectral;  // its spectral form (batch_spectral.h / spectral/)
+
 // Mitsuba's MI_ROUGH_TRANSMITTANCE_RES: cosines at which the rough transmittance is tabulated.
 inline constexpr int kPlasticTableRes = 64;
 
@@ -288,6 +290,8 @@ template <typename F> struct PlasticBxDF {
     using Params = PlasticParamsT<param_t<F>>;
     using S = param_t<F>;
     static constexpr const char *Name = "Plastic";
+    using Spectral = PlasticSpectral<F>;  // its spectral form (core/bxdf.h)
+    static constexpr int GradColumns = 8;  // eval_grad columns at most
 
     Spectrum<F> Ks{F(1)};
     Spectrum<F> diffuse{F(0)};  // R / (1 - {Fdr | R Fdr}) / (pi eta^2), the base's constant factor

@@ -10,6 +10,8 @@
 
 namespace bsdfkit {
 
+template <typename F> struct ThinDielectricSpectral;  // its spectral form (batch_spectral.h / spectral/)
+
 struct ThinDielectricParams {
     double eta = 1.5;
     template <class V> void fields(V &&v) { v("eta", eta); }
@@ -19,6 +21,7 @@ struct ThinDielectricParams {
 template <typename F, typename Eta = F> struct ThinDielectricBxDF {
     using Params = ThinDielectricParams;
     static constexpr const char *Name = "ThinDielectric";
+    using Spectral = ThinDielectricSpectral<F>;  // its spectral form (core/bxdf.h)
     Eta eta;
 
     static ThinDielectricBxDF make(const Params &p) { return {F(p.eta)}; }

@@ -29,6 +29,16 @@
 // from a trivially copyable `using Kernel = ...` base that has every method above, and adds
 // the SharedTable that keeps the resource alive (core/table.h; bxdfs/filament.h does this).
 // Stochastic models also set BSDFSample::pdf_is_proportional.
+// Capabilities, each a trait the one list (bxdfs/all.h) reads, never a second list of models:
+//   using Spectral = XSpectral<F>;            its spectral form (wavelengths= calls and the
+//                                             spectral renderer): an adapter with the shape of
+//                                             batch_spectral.h's, built by
+//                                             `template <class A> static XSpectral make(const Params &, const A &)`
+//                                             (A: the spectral parameters by name, spectral/args.h).
+//                                             The bindings create _core.<Name>Spectral from it and
+//                                             the renderer's SpectralMaterial is the variant over them.
+//   static constexpr int GradColumns = K;     eval_grad with up to K gradient columns (its
+//                                             Params templated on param_t<F>; cpp/bindings/models_grad.cpp).
 //
 // check_bxdf<Model>() states each rule as a static_assert with a readable message; bxdfs/all.h
 // applies it to every model of the list.
@@ -60,6 +70,15 @@ struct has_split_sample<M, std::void_t<decltype(&M::is_smooth)>> : std::true_typ
 // Vectorized = true;` and every method a template on the evaluation type V (core/simd.h).
 template <typename M, typename = void> struct is_vectorized : std::false_type {};
 template <typename M> struct is_vectorized<M, std::void_t<decltype(M::Vectorized)>> : std::bool_constant<M::Vectorized> {};
+
+// Whether a model declares a spectral form (`using Spectral = ...`; above).
+template <typename M, typename = void> struct has_spectral : std::false_type {};
+template <typename M> struct has_spectral<M, std::void_t<typename M::Spectral>> : std::true_type {};
+
+// The largest number of gradient columns of a differentiable model (`GradColumns`), 0 for others.
+template <typename M, typename = void> struct grad_columns : std::integral_constant<int, 0> {};
+template <typename M>
+struct grad_columns<M, std::void_t<decltype(M::GradColumns)>> : std::integral_constant<int, int(M::GradColumns)> {};
 
 // An enum field of a Params struct names its values by an overload found by argument-dependent
 // lookup:  inline constexpr std::array<const char *, 2> enum_names(Masking) { return {...}; }
@@ -170,8 +189,20 @@ template <template <typename> class M> constexpr bool check_bxdf() {
 
 // A list of models (pbrt-v4's TaggedPointer<...> type list): the variant over them and a
 // compile-time loop over them. bxdfs/all.h defines THE list, AllModels.
+// VariantAppendIf<std::variant<std::monostate>, Models<F>...>::type: the variant of the Spectral form of
+// each model that declares one...> (the spectral renderer's material).
+template <typename V, typename... T> struct VariantAppendIf;
+template <typename... A> struct VariantAppendIf<std::variant<A...>> { using type = std::variant<A...>; };
+template <typename... A, typename M, typename... Rest> struct VariantAppendIf<std::variant<A...>, M, Rest...> {
+    template <typename X, bool = has_spectral<X>::value> struct add { using type = std::variant<A...>; };
+    template <typename X> struct add<X, true> { using type = std::variant<A..., typename X::Spectral>; };
+    using type = typename VariantAppendIf<typename add<M>::type, Rest...>::type;
+};
+
 template <template <typename> class... Models> struct ModelList {
     template <typename F> using Variant = std::variant<Models<F>...>;
+    template <typename F>
+    using SpectralVariant = typename VariantAppendIf<std::variant<std::monostate>, Models<F>...>::type;
     static constexpr int size = int(sizeof...(Models));
 
     // fn.template apply<Model>() for each model in order. (A visitor with a member template,
@@ -196,5 +227,16 @@ template <template <typename> class... A, template <typename> class... B, class.
 struct ModelListCat<ModelList<A...>, ModelList<B...>, Rest...> {
     using type = typename ModelListCat<ModelList<A..., B...>, Rest...>::type;
 };
+
+// ModelListSplit<ModelList<M...>, N>: ::head = the first N models, ::tail = the rest (the
+// bindings split a large family over translation units without naming its models again).
+template <class L, int N, class Head = ModelList<>, bool More = (N > 0)> struct ModelListSplit;
+template <class L, class Head> struct ModelListSplit<L, 0, Head, false> {
+    using head = Head;
+    using tail = L;
+};
+template <template <typename> class M0, template <typename> class... T, int N, template <typename> class... H>
+struct ModelListSplit<ModelList<M0, T...>, N, ModelList<H...>, true>
+    : ModelListSplit<ModelList<T...>, N - 1, ModelList<H..., M0>> {};
 
 } // namespace bsdfkit

@@ -53,6 +53,11 @@ using std::sqrt;
 // through the preprocessing. (scalar_t<V>, core/simd.h, is the scalar under V; a Dual's value type.)
 template <typename F> struct ParamOf { using type = double; };
 template <typename F> using param_t = typename ParamOf<F>::type;
+// The type a colour field of Params holds for a model whose channel values are C: param_t<F>
+// when C is F; Packet<double> when C is a packet (a value per lane: the generic spectral form,
+// batch_spectral.h ColourSpectral, evaluates the colours at each lane's wavelengths in double).
+template <typename F, typename C>
+using colour_param_t = std::conditional_t<is_packet_v<C>, Packet<double>, param_t<F>>;
 // x without derivatives, and whether x carries any (plain numbers: itself, false; core/dual.h).
 template <typename T> constexpr T value_of(T x) { return x; }
 template <typename T> constexpr bool is_variable(T) { return false; }

@@ -100,6 +100,15 @@ struct SpectralParam {
     }
 };
 
+// A spectral form's declaration of one spectral parameter (core/bxdf.h `Spectral`): the Params
+// field it replaces and how Python uplifts that field's RGB value: "reflectance" (in [0, 1]:
+// pbrt-v4 RGBAlbedoSpectrum) or "unbounded" (RGBUnboundedSpectrum). An adapter lists them in
+// `static constexpr SpectralField kFields[]`; the bindings expose them as spectral_fields.
+struct SpectralField {
+    const char *name;
+    const char *kind;
+};
+
 // Whether a wavelength is one the kernels accept: finite and in [360, 830] nm (NaN fails both).
 inline bool valid_wavelength(double l) { return (l >= kLambdaMin) & (l <= kLambdaMax); }
 

@@ -43,4 +43,11 @@ template <typename Float, typename S> inline Spectrum<Float> to_spectrum(const s
     return s;
 }
 
+// A colour parameter of any channel count at the channel type C (the model's F, or a packet).
+template <typename C, typename S, size_t N> inline Spectrum<C, int(N)> to_channels(const std::array<S, N> &a) {
+    Spectrum<C, int(N)> s;
+    for (size_t i = 0; i < N; ++i) s[int(i)] = C(a[i]);
+    return s;
+}
+
 } // namespace bsdfkit

@@ -24,8 +24,15 @@ namespace bsdfkit {
 template <typename F> struct HairSpectral : PerElementModel<HairSpectral<F>, F> {
     using Model = HairBxDF<F, kSpectralN>;
     static constexpr bool FlushDenormals = true; // as HairBxDF (core/simd.h, DenormalsFlushed)
+    static constexpr SpectralField kFields[] = {{"sigma_a", "unbounded"}};
     SpectralParam sigma_a;
     Model proto;
+    template <class A> static HairSpectral make(const HairParams &p, const A &a) {
+        HairSpectral s;
+        s.proto = Model::make_fibre(p);
+        s.sigma_a = a.param("sigma_a");
+        return s;
+    }
 
     Model at(const double *lam) const {
         Model m = proto;
@@ -42,8 +49,15 @@ template <typename F> struct HairSpectral : PerElementModel<HairSpectral<F>, F> 
 template <typename F> struct HairFarFieldSpectral : PerElementModel<HairFarFieldSpectral<F>, F> {
     using Model = HairFarFieldBxDF<F, kSpectralN>;
     static constexpr bool FlushDenormals = true; // as HairBxDF (core/simd.h, DenormalsFlushed)
+    static constexpr SpectralField kFields[] = {{"sigma_a", "unbounded"}};
     SpectralParam sigma_a;
     Model proto;
+    template <class A> static HairFarFieldSpectral make(const HairFarFieldParams &p, const A &a) {
+        HairFarFieldSpectral s;
+        s.proto = Model::make(p);
+        s.sigma_a = a.param("sigma_a");
+        return s;
+    }
 
     Model at(const double *lam) const {
         Model m = proto;
@@ -64,6 +78,19 @@ struct FilamentClothSpectral : SplitChannelModel<FilamentClothSpectral<F>, F, Fi
     SpectralParam base_color, sheen_color, subsurface_color;
     bool sheen_from_base = false;   // sheen_color = sqrt(base_color(lambda)) (Filament's default)
     SharedTable<FilamentDFG> dfg;   // keeps the DFG table alive (proto's dfg_row points into it)
+    static constexpr SpectralField kFields[] = {
+        {"base_color", "reflectance"}, {"sheen_color", "reflectance"}, {"subsurface_color", "reflectance"}};
+    // a.flag("sheen_from_base"): no sheen colour given (Filament's sqrt(baseColor) per wavelength)
+    template <class A> static FilamentClothSpectral make(const FilamentClothParams &p, const A &a) {
+        FilamentClothSpectral s;
+        s.proto = FilamentClothBxDF<F>::make(p);  // the kernel part
+        s.dfg = p.dfg;
+        s.base_color = a.param("base_color");
+        s.sheen_color = a.param("sheen_color");
+        s.subsurface_color = a.param("subsurface_color");
+        s.sheen_from_base = a.flag("sheen_from_base");
+        return s;
+    }
 
     struct Chan {
         F base, sheen, subsurface;

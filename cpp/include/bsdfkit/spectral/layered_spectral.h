@@ -23,7 +23,18 @@ namespace bsdfkit {
 template <typename F> struct CoatedDiffuseSpectral : PerElementModel<CoatedDiffuseSpectral<F>, F> {
     using Walk = LayeredBxDF<F, DiffuseBxDF<F, 4>, 4>;
     Walk proto;  // coating, layer and estimator settings (base and albedo set per element)
+    static constexpr SpectralField kFields[] = {{"reflectance", "reflectance"}, {"albedo", "reflectance"}};
     SpectralParam reflectance, albedo;
+    // a.flag("has_albedo"): the walk samples the medium (the whole albedo spectrum is not 0)
+    template <class A> static CoatedDiffuseSpectral make(const CoatedDiffuseParams &p, const A &a) {
+        CoatedDiffuseSpectral s;
+        s.proto.top = CoatedDiffuseBxDF<F>::make(p).top;
+        s.proto.set_layer(p.layer);
+        s.proto.has_albedo = a.flag("has_albedo");
+        s.reflectance = a.param("reflectance");
+        s.albedo = a.param("albedo");
+        return s;
+    }
 
     Walk at(const double *lam) const {
         Walk m = proto;
@@ -36,8 +47,22 @@ template <typename F> struct CoatedDiffuseSpectral : PerElementModel<CoatedDiffu
 template <typename F> struct CoatedConductorSpectral : PerElementModel<CoatedConductorSpectral<F>, F> {
     using Walk = LayeredBxDF<F, ConductorBxDF<F, ConductorFresnel::Exact, 4>, 4>;
     Walk proto;  // coating, the metal's roughness (proto.bottom.mfd), layer and estimator settings
+    static constexpr SpectralField kFields[] = {
+        {"conductor_eta", "unbounded"}, {"conductor_k", "unbounded"}, {"albedo", "reflectance"}};
     SpectralParam eta, k, albedo;
     double interface_eta = 1.5;
+    template <class A> static CoatedConductorSpectral make(const CoatedConductorParams &p, const A &a) {
+        CoatedConductorSpectral s;
+        s.proto.top = CoatedConductorBxDF<F>::make(p).top;
+        s.proto.set_layer(p.layer);
+        s.proto.has_albedo = a.flag("has_albedo");
+        s.proto.bottom.mfd = TrowbridgeReitz<F>(F(p.conductor_alpha_x), F(p.conductor_alpha_y), p.masking);
+        s.eta = a.param("conductor_eta");
+        s.k = a.param("conductor_k");
+        s.albedo = a.param("albedo");
+        s.interface_eta = p.interface_eta;
+        return s;
+    }
 
     Walk at(const double *lam) const {
         Walk m = proto;

@@ -21,7 +21,9 @@
 // bins' spectra at lambda (linear: the same weights as the RGB model's interpolation of their RGB
 // values). pdf and sampling are the RGB model's (luminance-based, wavelength-independent).
 #pragma once
+#include <array>
 #include <memory>
+#include <stdexcept>
 #include <vector>
 
 #include "../batch_spectral.h"
@@ -43,6 +45,21 @@ template <typename F> struct MeasuredSpectral {
     Warp2D<F, 2> spectra;
     const double *wl = nullptr;         // the file's wavelengths
     int n_wl = 1;
+    static constexpr std::array<SpectralField, 0> kFields{};  // the spectra come from the file
+    // a.template table<MeasuredSpectraTable>("spectra"): the file's spectra (the caller keeps the
+    // tables alive: kern and spectra point into them)
+    template <class A> static MeasuredSpectral make(const MeasuredParams &p, const A &a) {
+        const MeasuredSpectraTable &t = a.template table<MeasuredSpectraTable>("spectra");
+        if (!p.table) throw std::invalid_argument("table: must not be empty");
+        if (p.table->vndf.param_size != t.spectra.param_size)
+            throw std::invalid_argument("spectra: its (phi_i, theta_i) grid differs from the table's");
+        MeasuredSpectral s;
+        s.kern = MeasuredBxDF<F>::make(p);
+        s.spectra = Warp2D<F, 2>(t.spectra);
+        s.wl = t.wavelengths.data();
+        s.n_wl = int(t.wavelengths.size());
+        return s;
+    }
 
     bool dispersive() const { return false; }
 
@@ -110,6 +127,14 @@ inline double merl_uplift(const float *c, double lambda) {
 template <typename F, bool Linear> struct MERLSpectralT {
     MERLKernel<F, Linear> kern;         // pdf and sampling (the RGB model's)
     const float *coef = nullptr;
+    static constexpr std::array<SpectralField, 0> kFields{};  // every bin uplifted: a.table("coefficients")
+    template <class A> static MERLSpectralT make(const MERLParams &p, const A &a) {
+        if (!p.table) throw std::invalid_argument("table: must not be empty");
+        MERLSpectralT s;
+        s.kern = MERLT<F, Linear>::make(p);
+        s.coef = a.template table<MERLSpectralTable>("coefficients").coef.data();
+        return s;
+    }
 
     bool dispersive() const { return false; }
 

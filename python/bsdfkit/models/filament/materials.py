@@ -292,17 +292,6 @@ class FilamentStandard(BxDF):
                (False, True): _core.FilamentStandardSheen, (True, True): _core.FilamentStandardCoatSheen}[coat, sheen]
         return cls(**self._core_kwargs())
 
-    def _make_spectral_core(self):
-        # the variant of _make_core with base_color / sheen_color per wavelength (batch_spectral.h
-        # FilamentStandardSpectralT); f90, the lobe weights and max(sheenColor) of the sheen
-        # scaling are those of the RGB projection
-        p = self._params
-        cls = {(False, False): _core.FilamentStandardSpectral, (True, False): _core.FilamentStandardCoatSpectral,
-               (False, True): _core.FilamentStandardSheenSpectral,
-               (True, True): _core.FilamentStandardCoatSheenSpectral}[self._core_variant_key()]
-        return cls(_sp.spectral_param(p["base_color"], "reflectance"),
-                   _sp.spectral_param(p["sheen_color"], "reflectance"), **self._core_kwargs())
-
     def _core_kwargs(self) -> dict:
         p = self._params
         return dict(base_color=_proj(p["base_color"]).tolist(), metallic=p["metallic"], roughness=p["roughness"],
@@ -410,16 +399,13 @@ class FilamentCloth(BxDF):
     def _make_core(self):
         return _core.FilamentCloth(**self._core_kwargs())
 
-    def _make_spectral_core(self):
-        # the kernel of _make_core with the colours per wavelength (spectral/hair_spectral.h
-        # FilamentClothSpectral); the lobe weights are those of the RGB projection
+    def _spectral_inputs(self) -> dict:
+        # FilamentClothSpectral (spectral/hair_spectral.h): a colour not given is 0 and, for the
+        # sheen, Filament's sqrt(baseColor) per wavelength (sheen_from_base)
         p = self._params
         sheen, ss = p["sheen_color"], p["subsurface_color"]
-        return _core.FilamentClothSpectral(
-            _sp.spectral_param(p["base_color"], "reflectance"),
-            _sp.spectral_param(0.0 if sheen is None else sheen, "reflectance"),
-            _sp.spectral_param(0.0 if ss is None else ss, "reflectance"), sheen is None, **self._core_kwargs())
-
+        return dict(sheen_color=0.0 if sheen is None else sheen, subsurface_color=0.0 if ss is None else ss,
+                    sheen_from_base=sheen is None)
 
 def examples() -> dict:
     """Representative Filament materials by name, one per lobe and knob family (for galleries,
