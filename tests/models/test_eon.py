@@ -3,9 +3,11 @@ float64 numpy reference ``bsdfkit.testing.eon_ref`` (written from the paper's fo
 the C++):
 
 * eval on random and grazing direction pairs, both sides of the surface: relative error p99.9
-  <= 1e-6 (required) and max <= 1e-9 (what float64 evaluation of these closed forms gives: every
-  term is well conditioned, the measured error is ~1e-15; a larger one means a different formula,
-  e.g. the paper's fast polynomial E_FON fit, 6e-4 off, or its eps clamps, 1e-7 at r = 0);
+  <= 1e-6 (required), and max <= 1e-9 of the error over the size of the summed terms (float64
+  evaluation of these closed forms gives ~1e-15; the plain relative error can only exceed that
+  where 1 + r s/t cancels, both directions grazing in opposite azimuths at r = 1). A larger error
+  means a different formula, e.g. the paper's fast polynomial E_FON fit (6e-4 off) or its eps
+  clamps (1e-7 at r = 0);
 * r = 0 is exactly Lambert (bk.Diffuse);
 * white furnace: the reference's hemisphere quadrature gives albedo 1 (to 1e-12; measured 4e-14) and bk.EON's Monte
   Carlo albedo agrees with the quadrature within 6 standard errors (the standard deviation of
@@ -72,10 +74,23 @@ def test_eval_matches_reference(rho, r, rng):
     pos = want > 0
     assert np.array_equal(got > 0, pos)
     rel = np.abs(got[pos] - want[pos]) / want[pos]
-    p999, mx = np.quantile(rel, 0.999), rel.max()
-    print(f"rho={rho} r={r}: rel err p99.9 {p999:.2e}, max {mx:.2e}")
+    # the same error over the size of the terms summed: 1 + r s/t cancels when both directions graze
+    # in opposite azimuths at r = 1 (f -> 0 there), where even a perfect float64 evaluation of s is
+    # ~1e-16 / (1 + r s/t) off relatively; this measure is what a correct implementation bounds
+    scaled = np.abs(got - want)[pos] / _term_scale(wo, wi, rho, r)[pos]
+    p999 = np.quantile(rel, 0.999)
+    print(f"rho={rho} r={r}: rel err p99.9 {p999:.2e}, max {rel.max():.2e}; scaled max {scaled.max():.2e}")
     assert p999 <= 1e-6
-    assert mx <= 1e-9
+    assert scaled.max() <= 1e-9
+
+
+def _term_scale(wo, wi, rho, r):
+    """rho/pi A (1 + r |s/t|) + f_ms: the magnitudes of the terms whose sum is f."""
+    mu_o, mu_i, s, same = ref._frame(wo, wi)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sot = np.where(s > 0, s / np.maximum(mu_i, mu_o), s)
+    ss = np.where(same, ref.coeff_a(r) * (1.0 + r * np.abs(sot)) / np.pi, 0.0)[:, None] * np.asarray(rho, float)
+    return ss + ref.eval_ms(wo, wi, rho, r)
 
 
 def test_eval_float32_close_to_reference(rng):
@@ -240,7 +255,8 @@ def test_spectral_grey_equals_rgb(rng):
         assert f.shape == (n, 4)
         rgb = bk.EON(0.6, roughness=0.45).eval(wo, wi)
         np.testing.assert_allclose(f, np.repeat(rgb[:, :1], 4, axis=1), rtol=1e-12, atol=0)
-        np.testing.assert_array_equal(m.pdf(wo, wi, wavelengths=lam), bk.EON(0.6, roughness=0.45).pdf(wo, wi))
+        np.testing.assert_allclose(m.pdf(wo, wi, wavelengths=lam), bk.EON(0.6, roughness=0.45).pdf(wo, wi),
+                                   rtol=1e-12, atol=0)
 
 
 def test_spectral_varying_reflectance_per_wavelength(rng):
