@@ -1,15 +1,17 @@
 """The models: the base class (``base``), the registry (``registry``), then one module per family.
 
-``diffuse`` (Diffuse, DiffuseTransmission), ``conductor`` (Conductor, METALS, conductor_fresnel),
-``dielectric`` (Dielectric, ThinDielectric), ``filament`` (FilamentStandard, FilamentCloth, the
-DFG table), ``measured`` (MERL, Measured: measured tables and tensor files), ``plastic`` (Plastic),
-``layered`` (CoatedDiffuse, CoatedConductor), ``normalized_fresnel`` (NormalizedFresnel, fresnel_moment1),
-``hair`` (Hair and its sigma_a helpers). A new family is a new module here whose classes subclass :class:`BxDF`.
+``diffuse`` (Diffuse, DiffuseTransmission), ``eon`` (EON: energy-preserving Oren-Nayar), ``conductor``
+(Conductor, METALS, conductor_fresnel), ``dielectric`` (Dielectric, ThinDielectric), ``filament``
+(FilamentStandard, FilamentCloth, the DFG table), ``measured`` (MERL, Measured: measured tables and
+tensor files), ``plastic`` (Plastic), ``layered`` (CoatedDiffuse, CoatedConductor),
+``normalized_fresnel`` (NormalizedFresnel, fresnel_moment1), ``hair`` (Hair and its sigma_a helpers).
+A new family is a new module here whose classes subclass :class:`BxDF`.
 """
 from . import registry
 from .base import BxDF, SampleResult, roughness_to_alpha
 # families in registration (= gallery) order; a new family adds one line here
 from .diffuse import Diffuse, DiffuseTransmission  # noqa: I001
+from .eon import EON
 from .conductor import METALS, Conductor, conductor_fresnel
 from .dielectric import Dielectric, ThinDielectric
 from .filament import FilamentCloth, FilamentStandard
@@ -21,5 +23,5 @@ from .hair import Hair
 from .registry import MODELS, KnobDecl
 
 __all__ = ["BxDF", "SampleResult", "roughness_to_alpha", "METALS", "Conductor", "conductor_fresnel", "Dielectric",
-           "ThinDielectric", "Diffuse", "DiffuseTransmission", "FilamentStandard", "FilamentCloth", "MERL", "Measured",
-           "Plastic", "CoatedDiffuse", "CoatedConductor", "NormalizedFresnel", "Hair", "MODELS", "KnobDecl"]
+           "ThinDielectric", "Diffuse", "DiffuseTransmission", "EON", "FilamentStandard", "FilamentCloth", "MERL",
+           "Measured", "Plastic", "CoatedDiffuse", "CoatedConductor", "NormalizedFresnel", "Hair", "MODELS", "KnobDecl"]
