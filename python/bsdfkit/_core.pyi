@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['CoatedConductor', 'CoatedConductorAnalytic', 'CoatedConductorAnalyticSpectral', 'CoatedConductorSpectral', 'CoatedDiffuse', 'CoatedDiffuseAnalytic', 'CoatedDiffuseAnalyticSpectral', 'CoatedDiffuseSpectral', 'Conductor', 'ConductorF82', 'ConductorF82Spectral', 'ConductorSchlick', 'ConductorSchlickSpectral', 'ConductorSpectral', 'Dielectric', 'DielectricSpectral', 'Diffuse', 'DiffuseSpectral', 'DiffuseTransmission', 'DiffuseTransmissionSpectral', 'FilamentCloth', 'FilamentClothSpectral', 'FilamentDFG', 'FilamentStandard', 'FilamentStandardCoat', 'FilamentStandardCoatSheen', 'FilamentStandardCoatSheenSpectral', 'FilamentStandardCoatSpectral', 'FilamentStandardSheen', 'FilamentStandardSheenSpectral', 'FilamentStandardSpectral', 'Hair', 'HairFarField', 'HairFarFieldSpectral', 'HairSpectral', 'MERLLinear', 'MERLLinearSpectral', 'MERLNearest', 'MERLNearestSpectral', 'MERLSpectralTable', 'MERLTable', 'Measured', 'MeasuredSpectraTable', 'MeasuredSpectral', 'MeasuredTable', 'NormalizedFresnel', 'NormalizedFresnelSpectral', 'Plastic', 'PlasticSpectral', 'SpectralParam', 'ThinDielectric', 'ThinDielectricSpectral', 'Warp2D', 'cached_bytes', 'conductor_fresnel', 'filament_dfg_rows', 'filament_term', 'fresnel_diffuse_reflectance', 'fresnel_moment1', 'get_num_threads', 'hardware_concurrency', 'model_names', 'release_memory', 'set_num_threads']
+__all__: list[str] = ['CoatedConductor', 'CoatedConductorAnalytic', 'CoatedConductorAnalyticSpectral', 'CoatedConductorSpectral', 'CoatedDiffuse', 'CoatedDiffuseAnalytic', 'CoatedDiffuseAnalyticSpectral', 'CoatedDiffuseSpectral', 'Conductor', 'ConductorF82', 'ConductorF82Spectral', 'ConductorSchlick', 'ConductorSchlickSpectral', 'ConductorSpectral', 'Dielectric', 'DielectricSpectral', 'Diffuse', 'DiffuseSpectral', 'DiffuseTransmission', 'DiffuseTransmissionSpectral', 'EON', 'EONSpectral', 'FilamentCloth', 'FilamentClothSpectral', 'FilamentDFG', 'FilamentStandard', 'FilamentStandardCoat', 'FilamentStandardCoatSheen', 'FilamentStandardCoatSheenSpectral', 'FilamentStandardCoatSpectral', 'FilamentStandardSheen', 'FilamentStandardSheenSpectral', 'FilamentStandardSpectral', 'Hair', 'HairFarField', 'HairFarFieldSpectral', 'HairSpectral', 'MERLLinear', 'MERLLinearSpectral', 'MERLNearest', 'MERLNearestSpectral', 'MERLSpectralTable', 'MERLTable', 'Measured', 'MeasuredSpectraTable', 'MeasuredSpectral', 'MeasuredTable', 'NormalizedFresnel', 'NormalizedFresnelSpectral', 'Plastic', 'PlasticSpectral', 'SpectralParam', 'ThinDielectric', 'ThinDielectricSpectral', 'Warp2D', 'cached_bytes', 'conductor_fresnel', 'filament_dfg_rows', 'filament_term', 'fresnel_diffuse_reflectance', 'fresnel_moment1', 'get_num_threads', 'hardware_concurrency', 'model_names', 'release_memory', 'set_num_threads']
 class FilamentDFG:
     def __eq__(self, arg0: typing.Any) -> bool:
         ...
@@ -346,6 +346,48 @@ class ThinDielectricSpectral:
     def __init__(self, spectral: dict, **kwargs) -> None:
         """
         Spectral form of ThinDielectric (core/bxdf.h): spectral = {field: SpectralParam, ...} for spectral_fields plus its extra inputs; keyword arguments: the model's (their colours as the RGB projection).
+        """
+    def albedo(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: typing.SupportsInt | typing.SupportsIndex, arg5: numpy.ndarray) -> tuple:
+        ...
+    def eval(self, wo: numpy.ndarray, wi: numpy.ndarray, wavelengths: numpy.ndarray, mode: typing.SupportsInt | typing.SupportsIndex, out: numpy.ndarray, packets: bool = True) -> tuple:
+        ...
+    def pdf(self, wo: numpy.ndarray, wi: numpy.ndarray, wavelengths: numpy.ndarray, mode: typing.SupportsInt | typing.SupportsIndex, sample_flags: typing.SupportsInt | typing.SupportsIndex, out: numpy.ndarray, packets: bool = True) -> tuple:
+        ...
+    def sample(self, wo: numpy.ndarray, uc: numpy.ndarray, u: numpy.ndarray, wavelengths: numpy.ndarray, mode: typing.SupportsInt | typing.SupportsIndex, sample_flags: typing.SupportsInt | typing.SupportsIndex, wi: numpy.ndarray, f: numpy.ndarray, pdf: numpy.ndarray, flags: numpy.ndarray, eta: numpy.ndarray, valid: numpy.ndarray, pdf_is_proportional: numpy.ndarray, terminated: numpy.ndarray, packets: bool = True) -> tuple:
+        ...
+    @property
+    def dispersive(self) -> bool:
+        ...
+class EON:
+    """
+    bsdfkit model EON (bxdfs/all.h); keyword arguments: reflectance, roughness (a missing one keeps its C++ Params default).
+    """
+    fields: typing.ClassVar[tuple] = ('reflectance', 'roughness')
+    grad_fields: typing.ClassVar[tuple] = (('reflectance', 3), ('roughness', 1))
+    grad_max_columns: typing.ClassVar[int] = 4
+    def __init__(self, *args, **kwargs) -> None:
+        ...
+    def albedo(self, wo: typing.Any, n_samples: typing.Any = 65536, seed: typing.Any = 0, mode: typing.Any = 0) -> typing.Any:
+        ...
+    def eval(self, wo: typing.Any, wi: typing.Any, mode: typing.Any = 0, out: typing.Any = None) -> typing.Any:
+        ...
+    def eval_grad(self, wo: numpy.ndarray, wi: numpy.ndarray, mode: typing.SupportsInt | typing.SupportsIndex, columns: collections.abc.Sequence[collections.abc.Sequence[tuple[str, typing.SupportsInt | typing.SupportsIndex]]], out_f: numpy.ndarray, out_grad: numpy.ndarray) -> tuple[int, int]:
+        ...
+    def pdf(self, wo: typing.Any, wi: typing.Any, mode: typing.Any = 0, sflags: typing.Any = 3, out: typing.Any = None) -> typing.Any:
+        ...
+    def sample(self, wo: typing.Any, uc: typing.Any = None, u: typing.Any = None, mode: typing.Any = 0, sflags: typing.Any = 3, out: typing.Any = None, n: typing.Any = None, seed: typing.Any = None) -> typing.Any:
+        ...
+    @property
+    def flags(self) -> int:
+        ...
+    @property
+    def params(self) -> dict:
+        ...
+class EONSpectral:
+    spectral_fields: typing.ClassVar[tuple] = (('reflectance', 'reflectance'))
+    def __init__(self, spectral: dict, **kwargs) -> None:
+        """
+        Spectral form of EON (core/bxdf.h): spectral = {field: SpectralParam, ...} for spectral_fields plus its extra inputs; keyword arguments: the model's (their colours as the RGB projection).
         """
     def albedo(self, arg0: numpy.ndarray, arg1: numpy.ndarray, arg2: typing.SupportsInt | typing.SupportsIndex, arg3: typing.SupportsInt | typing.SupportsIndex, arg4: typing.SupportsInt | typing.SupportsIndex, arg5: numpy.ndarray) -> tuple:
         ...

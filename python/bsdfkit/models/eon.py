@@ -88,10 +88,6 @@ class EON(BxDF):
         return _core.EON(reflectance=_sp.rgb_of(self._params["reflectance"], "reflectance").tolist(),
                          roughness=self._params["roughness"])
 
-    def _make_spectral_core(self):
-        return _core.EONSpectral(_sp.spectral_param(self._params["reflectance"], "reflectance"),
-                                 self._params["roughness"])
-
     def describe(self) -> str:
         p = self._params
         return f"EON R={_sp.fmt_param(p['reflectance'])}, r={p['roughness']:g}"

@@ -8,6 +8,7 @@
 #include "../core/bxdf.h"
 #include "conductor.h"
 #include "dielectric.h"
+#include "eon.h"
 #include "diffuse.h"
 #include "diffuse_transmission.h"
 #include "filament.h"
@@ -30,7 +31,8 @@ using PbrtModels = ModelList<DiffuseBxDF,
                              ConductorSchlickBxDF,
                              ConductorF82BxDF,
                              DielectricBxDF,
-                             ThinDielectricBxDF>;
+                             ThinDielectricBxDF,
+                             EONBxDF>;                  // energy-preserving Oren-Nayar (OpenPBR's diffuse)
 using FilamentModels = ModelList<FilamentStandardBxDF,  // with / without the clear-coat and sheen lobes
                                  FilamentStandardCoatBxDF,
                                  FilamentStandardSheenBxDF,
