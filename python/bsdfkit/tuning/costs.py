@@ -152,7 +152,7 @@ def time_repeats(fn, repeats=5, min_time=0.005, warmup=1) -> list:
 def best_time(fn, repeats=5, min_time=0.005, warmup=1):
     """Min over ``repeats`` of the mean time of ``inner`` back-to-back calls of ``fn`` after
     ``warmup`` calls (:func:`time_repeats`).
-    Also the timer of ``tools/perf/throughput.py`` and ``bench/filament.py``."""
+    Also the timer of ``tools/perf/throughput.py`` and ``tools/perf/filament.py``."""
     return min(time_repeats(fn, repeats, min_time, warmup))
 
 
