@@ -20,75 +20,6 @@ PUBLIC_MODULES = ("bsdfkit", "bsdfkit.plot", "bsdfkit.io", "bsdfkit.render", "bs
 #: Methods of each registered model class checked besides its constructor (the class docstring).
 MODEL_METHODS = ("eval", "pdf", "sample", "albedo", "eval_grad")
 
-#: Not converted yet (prose docstrings that still describe every parameter, to be restructured).
-#: This set only shrinks: a callable listed here that gains its sections fails the test until it
-#: is removed, and a new public callable is never added to it.
-NOT_YET = {
-    "bsdfkit.FitReport",
-    "bsdfkit.KnobDecl",
-    "bsdfkit.SampleResult",
-    "bsdfkit.Spectrum",
-    "bsdfkit.Table",
-    "bsdfkit.fit",
-    "bsdfkit.fit_many",
-    "bsdfkit.fitting.FamilySimplifyReport",
-    "bsdfkit.fitting.FitManyResult",
-    "bsdfkit.fitting.FitOutcome",
-    "bsdfkit.fitting.simplify_families",
-    "bsdfkit.from_mitsuba",
-    "bsdfkit.from_pbrt",
-    "bsdfkit.knobs",
-    "bsdfkit.parse_pbrt_materials",
-    "bsdfkit.plot.Explorer",
-    "bsdfkit.plot.albedo",
-    "bsdfkit.plot.describe",
-    "bsdfkit.plot.difference",
-    "bsdfkit.plot.difference_model",
-    "bsdfkit.plot.explore",
-    "bsdfkit.plot.gallery",
-    "bsdfkit.plot.hair_lobe3d",
-    "bsdfkit.plot.hair_lobes",
-    "bsdfkit.plot.halfdiff",
-    "bsdfkit.plot.hemisphere",
-    "bsdfkit.plot.lobe3d",
-    "bsdfkit.plot.luminance",
-    "bsdfkit.plot.overview",
-    "bsdfkit.plot.pareto",
-    "bsdfkit.plot.polar",
-    "bsdfkit.plot.sample_stats",
-    "bsdfkit.plot.samples",
-    "bsdfkit.render.Camera",
-    "bsdfkit.render.Scene",
-    "bsdfkit.render.default_environment",
-    "bsdfkit.render.default_scene",
-    "bsdfkit.render.dispersion_scene",
-    "bsdfkit.render.gallery_scene",
-    "bsdfkit.render.hair_row_scene",
-    "bsdfkit.render.hair_scene",
-    "bsdfkit.render.hair_swatch",
-    "bsdfkit.render.load_mesh",
-    "bsdfkit.render.parse_spec",
-    "bsdfkit.render.preview",
-    "bsdfkit.render.procedural_environment",
-    "bsdfkit.render.render",
-    "bsdfkit.render.stripes_environment",
-    "bsdfkit.render.write_dispersion",
-    "bsdfkit.render.write_gallery",
-    "bsdfkit.render.write_hair",
-    "bsdfkit.simplify",
-    "bsdfkit.tradeoff",
-    "bsdfkit.tuning.Config",
-    "bsdfkit.tuning.DirectionSet",
-    "bsdfkit.tuning.Knob",
-    "bsdfkit.tuning.SimplifyReport",
-    "bsdfkit.tuning.best_time",
-    "bsdfkit.tuning.configurations",
-    "bsdfkit.tuning.direction_set",
-    "bsdfkit.tuning.family",
-    "bsdfkit.tuning.knob_costs",
-    "bsdfkit.tuning.relative_error",
-}
-
 _SECTION = r"^{}\n-{{3,}}\s*$"
 
 
@@ -161,14 +92,7 @@ def test_the_public_api_is_all_there():
 @pytest.mark.parametrize("name", sorted(CALLABLES))
 def test_numpydoc_sections(name):
     lack = missing(CALLABLES[name])
-    if name in NOT_YET:
-        assert lack, f"{name} has its numpydoc sections now: remove it from NOT_YET"
-        pytest.skip("not converted yet (NOT_YET)")
     assert not lack, f"{name}: its docstring has no {' / '.join(lack)} section (numpydoc)"
-
-
-def test_not_yet_lists_only_public_callables():
-    assert NOT_YET <= set(CALLABLES), sorted(NOT_YET - set(CALLABLES))
 
 
 if __name__ == "__main__":

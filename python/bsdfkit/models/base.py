@@ -151,18 +151,30 @@ def roughness_to_alpha(roughness):
 
 @dataclass(frozen=True)
 class SampleResult:
-    """Sampled directions and their values; arrays share the batch shape of the inputs.
+    """Sampled directions and their values (``BxDF.sample``); arrays share the batch shape of
+    the inputs.
 
-    wi: (..., 3) sampled directions (outward, local frame); f: (..., 3) BSDF value (cosine
-    excluded); pdf: (...) solid-angle density, or the discrete probability for a specular lobe;
-    flags: (...) uint8 ``BxDFFlags`` of the sampled lobe; eta: (...) relative IOR along wi
-    (1 for reflection); valid: (...) bool, False where no sample exists (then f = pdf = 0,
-    wi = (0, 0, 1), the shading normal, and eta = 1: every wi is a valid ``eval`` / ``pdf`` input);
-    pdf_is_proportional: (...) bool (layered models only).
-    Spectral mode (``sample(..., wavelengths=)``): f is (..., 4), one value per wavelength, and
-    terminated: (...) bool is True where a refraction through a dispersive dielectric kept the
-    first (hero) wavelength only (f of the others is 0; apply pbrt-v4's TerminateSecondary to the
-    wavelength pdfs, ``bsdfkit.spectral.terminate_secondary``); None in RGB mode.
+    Attributes
+    ----------
+    wi : numpy.ndarray, shape (..., 3)
+        Sampled directions (outward, local frame).
+    f : numpy.ndarray, shape (..., 3)
+        BSDF value (cosine excluded); (..., 4), one value per wavelength, in spectral mode.
+    pdf : numpy.ndarray, shape (...)
+        Solid-angle density, or the discrete probability for a specular lobe.
+    flags : numpy.ndarray of uint8, shape (...)
+        ``BxDFFlags`` of the sampled lobe.
+    eta : numpy.ndarray, shape (...)
+        Relative IOR along wi (1 for reflection).
+    valid : numpy.ndarray of bool, shape (...)
+        False where no sample exists (then f = pdf = 0, wi = (0, 0, 1), the shading normal, and
+        eta = 1: every wi is a valid ``eval`` / ``pdf`` input).
+    pdf_is_proportional : numpy.ndarray of bool, shape (...)
+        True where pdf is only proportional to the density (the stochastic layered models).
+    terminated : numpy.ndarray of bool or None
+        Spectral mode: True where a refraction through a dispersive dielectric kept the first
+        (hero) wavelength only (f of the others is 0; apply pbrt-v4's TerminateSecondary to the
+        wavelength pdfs, ``bsdfkit.spectral.terminate_secondary``); None in RGB mode.
     """
 
     wi: np.ndarray
