@@ -106,7 +106,7 @@ def main():
             lines.append(f"| {r['case']} | {op} | {r[f'{op}_f32'] / 1e6:.2f} | {r[f'{op}_f64'] / 1e6:.2f} | "
                          f"{r[f'mitsuba_{op}'] / 1e6:.2f} | {r[f'{op}_f32'] / r[f'mitsuba_{op}']:.2f} |")
     lines.append(NOTE)
-    # The far-field sections below the table are written by hand and bench/hair_nodes.py: keep them.
+    # The far-field sections below the table are written by hand and tools/perf/hair_nodes.py: keep them.
     path = os.path.join(here, "HAIR.md")
     if os.path.exists(path):
         old = open(path).read()

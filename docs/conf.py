@@ -1,4 +1,5 @@
 """Sphinx configuration of bsdfkit's documentation (built by scripts/docs with -W)."""
+import os
 import sys
 from pathlib import Path
 
@@ -40,6 +41,7 @@ autodoc_member_order = "bysource"
 autodoc_typehints = "description"
 napoleon_numpy_docstring = True
 napoleon_google_docstring = False
+napoleon_use_ivar = True   # Attributes as fields: no second description of a dataclass's fields
 nitpicky = False
 suppress_warnings = ["myst.header"]
 
@@ -48,3 +50,8 @@ plot_formats = [("png", 80)]
 plot_html_show_formats = False
 plot_html_show_source_link = False
 plot_rcparams = {"figure.max_open_warning": 0}
+
+# The notebook gallery (docs/gallery/, generated): scripts/docs --gallery executes the notebooks
+# (BSDFKIT_DOCS_GALLERY=1, a few minutes); other builds reuse their last executed copies
+# (docs/_build/executed/) or show them without outputs.
+bsdfkit_execute_notebooks = os.environ.get("BSDFKIT_DOCS_GALLERY", "") == "1"

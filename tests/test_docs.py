@@ -86,6 +86,34 @@ def test_sphinx_build_has_no_warnings(tmp_path):
     assert gallery.count("gallery-") >= 3   # the three figures drawn by the plot directive
     reports = sorted(p.name for p in (out / "reports").glob("*.html"))   # every committed report has a page
     assert len(reports) == len(list((ROOT / "bench").glob("*.md"))) + len(list((ROOT / "tools/perf/results").glob("*.md")))
+    for nb in sorted((ROOT / "notebooks").glob("*.ipynb")):   # the notebook gallery: a page per notebook
+        page = (out / "gallery" / f"{nb.stem}.html").read_text(encoding="utf-8")
+        assert f"notebooks/{nb.stem}.ipynb" in page
     api = (out / "reference" / "api.html").read_text(encoding="utf-8")
     for name in ("Conductor", "tradeoff", "simplify", "fit", "Spectrum"):
         assert f"bsdfkit.{name}" in api
+
+
+def test_notebook_page_embeds_the_executed_outputs(tmp_path):
+    """The gallery's converter (docs/_ext/bsdfkit_docs.py) on a small executed notebook: its
+    figure becomes a PNG file linked from the page, its printed text a text block, its
+    Markdown stays Markdown; without outputs the page says how to get them."""
+    import base64
+
+    import nbformat
+
+    ext = _ext()
+    nb = nbformat.v4.new_notebook()
+    png = base64.b64decode("iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mP8z8BQDwAEhQGAhKmMIQAAAABJRU5ErkJggg==")
+    code = nbformat.v4.new_code_cell("print('peak 1.8')\nfig")
+    code.outputs = [nbformat.v4.new_output("stream", name="stdout", text="peak 1.8\n"),
+                    nbformat.v4.new_output("display_data", data={"image/png": base64.b64encode(png).decode(),
+                                                                 "text/plain": "<Figure size 640x480 with 1 Axes>"})]
+    nb.cells = [nbformat.v4.new_markdown_cell("# Title\n\nSome *text*."), code]
+    text = ext.notebook_markdown(nb, "99_test", tmp_path, "/_generated/gallery", executed=True)
+    assert text.startswith("# Title") and "```python\nprint('peak 1.8')\nfig\n```" in text
+    assert "```text\npeak 1.8\n```" in text and "<Figure" not in text
+    figs = list(tmp_path.glob("99_test_*.png"))
+    assert len(figs) == 1 and figs[0].read_bytes() == png and f"(/_generated/gallery/{figs[0].name})" in text
+    bare = ext.notebook_markdown(nb, "99_test", tmp_path, "/_generated/gallery", executed=False)
+    assert "scripts/docs --gallery" in bare and "peak 1.8\n```" not in bare

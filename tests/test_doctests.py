@@ -23,6 +23,8 @@ def _modules_with_examples():
 
 
 MODULES = _modules_with_examples()
+NUMPY_PRINT_DEFAULTS = dict(edgeitems=3, threshold=1000, floatmode="maxprec", precision=8, suppress=False,
+                            linewidth=75, nanstr="nan", infstr="inf", sign="-", formatter=None, legacy=False)
 
 
 def test_there_are_examples():
@@ -37,7 +39,10 @@ def test_docstring_examples(name, tmp_path, monkeypatch):
     runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
     tests = [t for t in finder.find(mod, name, globs={"np": np}) if t.examples]
     assert tests, f"{name}: no examples found"
-    for t in tests:
-        runner.run(t)
+    # numpy's default print options: the examples show arrays as a user sees them, and a library
+    # imported earlier in the suite may have changed them (a legacy "1.13" sign pad: "[ 1.,  0.]")
+    with np.printoptions(**NUMPY_PRINT_DEFAULTS):
+        for t in tests:
+            runner.run(t)
     res = runner.summarize(verbose=False)
     assert res.failed == 0, f"{name}: {res.failed} of {res.attempted} doctest examples failed (see the output above)"

@@ -1,5 +1,6 @@
 """Pages generated from the code, never written by hand: the models reference and table (from
-the registry, ``bsdfkit.models.registry``) and the API reference list (``bsdfkit.__all__``).
+the registry, ``bsdfkit.models.registry``), the API reference list (``bsdfkit.__all__``) and the
+notebook gallery (``notebooks/*.ipynb`` with the figures of their execution).
 
 Used by docs/conf.py (a Sphinx extension: the ``bsdfkit-models`` directive) and by the README:
 
@@ -185,6 +186,124 @@ def _write_reports(srcdir: Path) -> None:
                           f"```{{include}} ../../{rel}\n:start-line: 1\n```\n")
 
 
+# ------------------------------------------------------------------------- notebook gallery
+
+NOTEBOOKS = ROOT / "notebooks"
+#: Executed copies of the notebooks (``scripts/docs --gallery``), keyed by the source's hash, so a
+#: build without --gallery shows the figures of the last executed run of the same notebook.
+EXECUTED = ROOT / "docs" / "_build" / "executed"
+_STREAM_LINES = 40   # longest printed output shown per cell (the rest is elided)
+
+
+def _nb_hash(path: Path) -> str:
+    import hashlib
+
+    return hashlib.sha256(path.read_bytes()).hexdigest()[:16]
+
+
+def execute_notebook(path: Path, timeout: int = 600):
+    """Runs the notebook top to bottom with nbclient (headless, Agg) in the notebooks folder and
+    stores the executed copy under ``EXECUTED``; returns it. Raises on the first failing cell."""
+    import os
+
+    import nbclient
+    import nbformat
+
+    nb = nbformat.read(path, as_version=4)
+    # the kernel inherits this process's environment: Jupyter's inline backend, so that every
+    # figure a cell shows becomes a PNG output (scripts/docs sets Agg for the build itself)
+    saved = os.environ.get("MPLBACKEND")
+    os.environ["MPLBACKEND"] = "module://matplotlib_inline.backend_inline"
+    try:
+        nbclient.NotebookClient(nb, timeout=timeout, kernel_name="python3",
+                                resources={"metadata": {"path": str(path.parent)}}).execute()
+    finally:
+        if saved is None:
+            os.environ.pop("MPLBACKEND", None)
+        else:
+            os.environ["MPLBACKEND"] = saved
+    EXECUTED.mkdir(parents=True, exist_ok=True)
+    for old in EXECUTED.glob(f"{path.stem}-*.ipynb"):
+        old.unlink()
+    nbformat.write(nb, EXECUTED / f"{path.stem}-{_nb_hash(path)}.ipynb")
+    return nb
+
+
+def _executed(path: Path):
+    """The executed copy of this exact notebook source, or None."""
+    import nbformat
+
+    f = EXECUTED / f"{path.stem}-{_nb_hash(path)}.ipynb"
+    return nbformat.read(f, as_version=4) if f.exists() else None
+
+
+def notebook_markdown(nb, stem: str, figdir: Path, figurl: str, executed: bool) -> str:
+    """A MyST page of one notebook: its Markdown cells as they are, its code cells as Python
+    blocks, and (executed) their outputs: PNG figures written to ``figdir`` (linked as
+    ``figurl``/name) and printed text. Returns the page's text."""
+    import base64
+
+    out = []
+    for i, cell in enumerate(nb.cells):
+        if cell.cell_type == "markdown":
+            out += [cell.source, ""]
+            if i == 0:
+                out += [f"*The notebook* `notebooks/{stem}.ipynb`" + (
+                    ", executed when this page was built." if executed else
+                    ": its figures are drawn by `scripts/docs --gallery`, which executes the notebooks "
+                    "(this build did not)."), ""]
+            continue
+        if cell.cell_type != "code" or not cell.source.strip():
+            continue
+        out += ["```python", cell.source.rstrip(), "```", ""]
+        if not executed:
+            continue
+        for k, o in enumerate(cell.get("outputs", [])):
+            data = o.get("data", {})
+            if "image/png" in data:
+                name = f"{stem}_{i:02d}_{k}.png"
+                (figdir / name).write_bytes(base64.b64decode(data["image/png"]))
+                out += [f"![output of cell {i}]({figurl}/{name})", ""]
+            elif o.get("output_type") == "stream" and o.get("name") == "stdout" or "text/plain" in data:
+                text = o.get("text", "") if o.get("output_type") == "stream" else data["text/plain"]
+                if o.get("output_type") != "stream" and text.startswith("<Figure"):
+                    continue   # the repr of a figure shown above
+                lines = text.rstrip().splitlines()
+                if len(lines) > _STREAM_LINES:
+                    lines = lines[:_STREAM_LINES] + [f"... ({len(lines) - _STREAM_LINES} more lines)"]
+                if lines:
+                    out += ["```text", *lines, "```", ""]
+    return "\n".join(out)
+
+
+def _write_gallery(srcdir: Path, execute: bool) -> None:
+    """docs/gallery/<notebook>.md for every notebook (executed now with ``execute``, else from the
+    last executed copy of the same source, else without outputs) and docs/gallery/index.md."""
+    import nbformat
+
+    out = srcdir / "gallery"
+    figdir = srcdir / "_generated" / "gallery"
+    out.mkdir(exist_ok=True)
+    figdir.mkdir(parents=True, exist_ok=True)
+    for old in figdir.glob("*.png"):
+        old.unlink()
+    paths = sorted(NOTEBOOKS.glob("*.ipynb"))
+    for stale in out.glob("*.md"):
+        if stale.stem != "index" and stale.stem not in {p.stem for p in paths}:
+            stale.unlink()
+    entries = []
+    for path in paths:
+        nb = execute_notebook(path) if execute else _executed(path)
+        executed = nb is not None
+        nb = nb or nbformat.read(path, as_version=4)
+        _write_if_changed(out / f"{path.stem}.md", notebook_markdown(nb, path.stem, figdir, "/_generated/gallery",
+                                                                      executed))
+        entries.append(path.stem)
+    _write_if_changed(out / "index.md", "# Notebooks\n\nThe notebooks of `notebooks/`, with the figures of their "
+                      "last execution (`scripts/docs --gallery` runs them; the test suite runs them too).\n\n"
+                      "```{toctree}\n:maxdepth: 1\n\n" + "".join(f"{e}\n" for e in entries) + "```\n")
+
+
 # ------------------------------------------------------------------------------------ Sphinx
 
 def _render_figures(srcdir: Path) -> dict:
@@ -241,6 +360,7 @@ def _generate_sources(app, config):
         if stub.stem not in current:
             stub.unlink()
     _write_reports(srcdir)
+    _write_gallery(srcdir, execute=bool(config.bsdfkit_execute_notebooks))
     figures = _render_figures(srcdir) if config.bsdfkit_model_figures else {}
     _write_if_changed(srcdir / "reference" / "models_generated.rst.inc", models_rst(figures))
 
@@ -314,6 +434,8 @@ def _build_finished(app, exception):
 
 def setup(app):
     app.add_config_value("bsdfkit_model_figures", True, "env")
+    # scripts/docs --gallery: execute the notebooks (minutes); otherwise reuse the last executed copies
+    app.add_config_value("bsdfkit_execute_notebooks", False, "env")
     app.connect("autodoc-process-docstring", _process_docstring, priority=900)   # after napoleon
     app.connect("build-finished", _build_finished)
     # config-inited, not builder-inited: by builder-inited Sphinx has already listed the sources,

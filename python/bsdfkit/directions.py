@@ -94,7 +94,28 @@ def hemisphere_grid(n_theta: int, n_phi: int, *, sphere: bool = False) -> np.nda
 def random_directions(n: int, rng: np.random.Generator, *, upper: bool = False) -> np.ndarray:
     """``n`` directions uniform on the unit sphere (or, with ``upper``, the upper hemisphere:
     z folded to z >= 0), float64 (n, 3), drawn from ``rng`` as normalised Gaussian triples.
-    ``n``: an integer in [0, 2**28] (as :func:`hemisphere_grid`'s size limit)."""
+
+    Parameters
+    ----------
+    n : int
+        Number of directions, in [0, 2**28] (as :func:`hemisphere_grid`'s size limit).
+    rng : numpy.random.Generator
+        The generator to draw from.
+    upper : bool, optional
+        Fold z to z >= 0 (the upper hemisphere).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, 3)
+        Unit vectors, float64.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from bsdfkit.directions import random_directions
+    >>> w = random_directions(5, np.random.default_rng(0), upper=True)
+    >>> w.shape, bool(np.allclose((w * w).sum(1), 1) and (w[:, 2] >= 0).all())
+    ((5, 3), True)"""
     n = check_int(n, "n", 0, 2 ** 28)
     if not isinstance(rng, np.random.Generator):
         raise TypeError(f"rng: expected a numpy.random.Generator (np.random.default_rng(seed)), "

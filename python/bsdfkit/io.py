@@ -18,21 +18,77 @@ _LDR = (".png", ".jpg", ".jpeg", ".bmp")
 
 
 def linear_to_srgb(x: np.ndarray) -> np.ndarray:
-    """IEC 61966-2-1 sRGB transfer function (input clipped to [0, 1])."""
+    """IEC 61966-2-1 sRGB transfer function (input clipped to [0, 1]).
+
+    Parameters
+    ----------
+    x : array_like
+        Linear values.
+
+    Returns
+    -------
+    numpy.ndarray
+        sRGB-encoded values in [0, 1], the input's shape.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> bk.io.linear_to_srgb([0.0, 0.5, 2.0]).round(4)
+    array([0.    , 0.7354, 1.    ])
+    """
     x = np.clip(x, 0.0, 1.0)
     return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
 
 
 def srgb_to_linear(x: np.ndarray) -> np.ndarray:
-    """Inverse of :func:`linear_to_srgb`."""
+    """Inverse of :func:`linear_to_srgb`.
+
+    Parameters
+    ----------
+    x : array_like
+        sRGB-encoded values in [0, 1].
+
+    Returns
+    -------
+    numpy.ndarray
+        Linear values, the input's shape.
+    """
     x = np.clip(x, 0.0, 1.0)
     return np.where(x <= 0.04045, x / 12.92, np.power((x + 0.055) / 1.055, 2.4))
 
 
 def read_image(path, *, linear: bool = True) -> np.ndarray:
     """Reads an image as float32 (H, W, C). LDR formats are decoded from sRGB to linear unless
-    ``linear=False``. Raises FileNotFoundError for a missing file, OSError with
-    OpenImageIO's reason for an unreadable one and ImportError if this build has no image I/O."""
+    ``linear=False``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The image file (any format OpenImageIO reads: EXR, HDR, PNG, JPEG, ...).
+    linear : bool, optional
+        Decode LDR formats from sRGB to linear (default True).
+
+    Returns
+    -------
+    numpy.ndarray, shape (H, W, C)
+        float32 pixels.
+
+    Raises
+    ------
+    FileNotFoundError
+        A missing file.
+    OSError
+        An unreadable file, with OpenImageIO's reason.
+    ImportError
+        This build has no image I/O.
+
+    Examples
+    --------
+    >>> import numpy as np, bsdfkit as bk
+    >>> bk.io.write_image("ramp.exr", np.linspace(0, 1, 12, dtype=np.float32).reshape(3, 4))
+    >>> bk.io.read_image("ramp.exr").shape
+    (3, 4, 1)
+    """
     path = os.fspath(path)
     if not os.path.exists(path):
         raise FileNotFoundError(f"path: no such image file: {path}")
@@ -49,7 +105,28 @@ def write_image(path, img, *, exposure: float = 0.0) -> None:
     """Writes a linear float image (H, W) or (H, W, C), C in {1, 3, 4}.
 
     EXR/HDR keep linear float values; PNG/JPEG get 2**exposure scaling, the sRGB transfer
-    curve and 8-bit quantisation (alpha is left linear)."""
+    curve and 8-bit quantisation (alpha is left linear).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output file; its extension chooses the format.
+    img : array_like, shape (H, W) or (H, W, C)
+        Linear values, C in {1, 3, 4}.
+    exposure : float, optional
+        Stops of scaling for LDR formats (default 0).
+
+    Raises
+    ------
+    ValueError
+        An image of another shape, or with NaN or Inf.
+    TypeError
+        A non-numeric image.
+    OSError
+        A file that cannot be written.
+    ImportError
+        This build has no image I/O.
+    """
     path = os.fspath(path)
     exposure = check_real(exposure, "exposure")
     a = np.asarray(img)

@@ -27,8 +27,24 @@ __all__ = ["FitOutcome", "FitManyResult", "fit_many"]
 
 @dataclass(frozen=True, eq=False)
 class FitOutcome:
-    """One target's fit: ``model`` and ``report`` (``bk.fit``'s pair), or ``error`` (the
-    exception as "Type: message") and ``traceback`` (its text from the worker) when it failed."""
+    """One target's fit: ``model`` and ``report`` (``bk.fit``'s pair), or ``error`` and
+    ``traceback`` when it failed (``ok`` is False then).
+
+    Attributes
+    ----------
+    index : int
+        The target's position in ``fit_many``'s targets.
+    label : str
+        The target's name.
+    model : BxDF or None
+        The fitted model.
+    report : FitReport or None
+        Its report.
+    error : str or None
+        The exception as "Type: message".
+    traceback : str or None
+        Its text from the worker.
+    """
 
     index: int
     label: str
@@ -45,7 +61,20 @@ class FitOutcome:
 class FitManyResult:
     """The outcomes of ``fit_many``, in target order: a sequence of :class:`FitOutcome`, with
     ``models`` / ``reports`` (None where a target failed), ``errors`` ({index: message}) and
-    ``failed`` (the failed outcomes). Prints as a table (text, or HTML in Jupyter)."""
+    ``failed`` (the failed outcomes). Prints as a table (text, or HTML in Jupyter). Results are
+    made by :func:`fit_many`, not by hand.
+
+    Parameters
+    ----------
+    outcomes : sequence of FitOutcome
+        One per target, in target order.
+    family : type
+        The fitted model class.
+    wall_time : float
+        Seconds of the whole run.
+    n_workers : int
+        Dask workers used.
+    """
 
     def __init__(self, outcomes, family, wall_time, n_workers):
         self.outcomes = tuple(outcomes)
@@ -184,21 +213,48 @@ def fit_many(targets, family, client=None, *, n_workers=None, progress=None, lab
              **fit_kwargs) -> FitManyResult:
     """Fit ``family`` to every target of ``targets`` (``bk.fit`` each), one Dask task per target.
 
-    targets: a sequence of targets as ``bk.fit`` takes them (bsdfkit models, or raw samples
-    ``(wo, wi, value)``). family: a model class. fit_kwargs: ``bk.fit``'s keywords (params, init,
-    fixed, directions, loss, weights, starts, n, seed, ...), the same for every target.
-    client: a ``dask.distributed.Client``, a scheduler address (``"tcp://host:8786"``, connected
-    and closed here), or None: a ``LocalCluster`` of ``n_workers`` worker processes (default:
-    one per CPU, at most one per target) with one thread each, closed afterwards.
-    progress: None/False (quiet), True (a line on stderr, or an ipywidgets bar in Jupyter) or a
-    callable ``progress(done, total, outcome)``. labels: names of the targets (default: the
-    model's ``describe()``, or ``samples[i]``). kernel_threads: bsdfkit's threads per task
-    (``bk.set_num_threads`` in the worker, default 1: the parallelism is across targets; None
-    leaves the worker's setting); results do not depend on it.
-
     A target whose fit raises is reported (``result.errors``, ``outcome.traceback``), not raised;
-    so is a task lost with its worker. Returns a :class:`FitManyResult` in target order; each
-    outcome's model and report are bit-identical to ``bk.fit`` of that target in-process.
+    so is a task lost with its worker. Each outcome's model and report are bit-identical to
+    ``bk.fit`` of that target in-process. Arguments are checked before any cluster starts.
+
+    Parameters
+    ----------
+    targets : sequence
+        Targets as ``bk.fit`` takes them (bsdfkit models, or raw samples ``(wo, wi, value)``).
+    family : type
+        A model class.
+    client : dask.distributed.Client or str, optional
+        A client, a scheduler address (``"tcp://host:8786"``, connected and closed here), or None:
+        a ``LocalCluster`` of ``n_workers`` worker processes with one thread each, closed
+        afterwards.
+    n_workers : int, optional
+        Workers of that local cluster (default: one per CPU, at most one per target).
+    progress : bool or callable, optional
+        None/False (quiet), True (a line on stderr, or an ipywidgets bar in Jupyter) or a callable
+        ``progress(done, total, outcome)``.
+    labels : sequence of str, optional
+        Names of the targets (default: the model's ``describe()``, or ``samples[i]``).
+    kernel_threads : int or None, optional
+        bsdfkit's threads per task (``bk.set_num_threads`` in the worker, default 1: the
+        parallelism is across targets; None leaves the worker's setting); results do not depend
+        on it.
+    **fit_kwargs
+        ``bk.fit``'s keywords (params, init, fixed, directions, loss, weights, starts, n, seed,
+        ...), the same for every target.
+
+    Returns
+    -------
+    FitManyResult
+        The outcomes, in target order.
+
+    Raises
+    ------
+    TypeError
+        A ``family`` that is not a model class, ``targets`` that is not a sequence, a keyword
+        ``bk.fit`` does not take, a bad ``client``.
+    ValueError
+        Labels of another length, a bad ``kernel_threads`` or ``n_workers`` (or ``n_workers``
+        with a ``client``).
     """
     import time
 

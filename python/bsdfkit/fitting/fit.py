@@ -23,15 +23,38 @@ FLOOR_FRACTION = 1e-3
 class FitReport:
     """What ``bk.fit`` reached.
 
-    model: the fitted model; params: fitted value per gradient column; init: the starting values
-    of the best start; loss: the loss name and cost (half the sum of squared residuals);
-    rel_p50 / rel_p90 / rel_p99 / rel_max: per-channel percentiles (and maximum) of |f - f_target| |cos| /
-    max(f_target |cos|, floor) over the fitted pairs; albedo_error: max over the albedo directions
-    and channels of |albedo - albedo_target| (Monte Carlo, ``None`` for raw-sample targets);
-    nfev / njev: residual and Jacobian evaluations (all starts); time: seconds; starts: number of
-    starting points; success / message: scipy's for the best start -- whether the optimizer
-    converged, not whether the fit is good (a converged fit of the wrong family can have a p99
-    error of 0.8): judge the fit by rel_p99 / rel_max / albedo_error.
+    Attributes
+    ----------
+    model : BxDF
+        The fitted model.
+    params : dict
+        Fitted value per gradient column.
+    init : dict
+        The starting values of the best start.
+    loss : str
+        The loss name.
+    cost : float
+        Half the sum of squared residuals.
+    rel_p50, rel_p90, rel_p99, rel_max : numpy.ndarray, shape (3,)
+        Per-channel percentiles (and maximum) of |f - f_target| |cos| / max(f_target |cos|,
+        floor) over the fitted pairs.
+    albedo_error : float or None
+        Max over the albedo directions and channels of |albedo - albedo_target| (Monte Carlo;
+        ``None`` for raw-sample targets).
+    nfev, njev : int
+        Residual and Jacobian evaluations (all starts).
+    time : float
+        Seconds.
+    starts : int
+        Number of starting points.
+    success, message : bool, str
+        scipy's for the best start -- whether the optimizer converged, not whether the fit is
+        good (a converged fit of the wrong family can have a p99 error of 0.8): judge the fit
+        by rel_p99 / rel_max / albedo_error.
+    n_pairs : int
+        Direction pairs fitted.
+    start_costs : tuple
+        The final cost of every start.
     """
 
     model: object
@@ -229,25 +252,74 @@ def fit(target, family, params=None, init=None, fixed=None, directions=None, los
         starts=1, n=4096, seed=0, max_nfev=200, tol=1e-12, albedo=True):
     """Fit the model class ``family`` to ``target`` by least squares on f |cos theta_i|.
 
-    target: a bsdfkit model (analytic or measured), evaluated on ``directions`` (a pair (wo, wi);
-    default: the trade-off module's direction set of ``n`` pairs, stratified plus samples of the
-    target's lobes, grazing angles included, ``bsdfkit.tuning.errors.direction_set``), or raw
-    samples ``(wo, wi, value)`` with value = f (cosine excluded), (N, 3).
-    family: a model class with a gradient kernel (see ``bsdfkit.fitting.differentiable_params``).
-    params: the parameters to fit (``eval_grad`` names: RGB parameters fit per channel, "eta.g"
-    one channel, "alpha" an isotropic alpha); default: every differentiable parameter not in
-    ``fixed``. init: starting values (dict) or a model of the family; fixed: values (and knobs,
-    e.g. ``{"masking": "separable"}``) held constant; both default to the family's first example.
-    loss: "log" (log(f cos + floor) differences, default: balances peak and tail), "relative"
-    (differences over max(target, floor)) or "l2" (differences over the target's mean).
-    weights: (N,) or (N, 3) residual weights. starts: number of starting points (the given one
-    plus starts - 1 drawn uniformly within the bounds, seeded by ``seed``); the best is kept.
-    Bounds come from the family's validated parameter ranges (``param_ranges``). A parameter whose
-    default is derived from others (FilamentCloth's sheen_color=None: sqrt(base_color)) starts
-    from that value and is then fitted (or held, if not in ``params``) on its own.
+    Uses scipy.optimize.least_squares (trust-region reflective) with the analytic Jacobian
+    (``eval_grad``). Bounds come from the family's validated parameter ranges
+    (``param_ranges``). A parameter whose default is derived from others (FilamentCloth's
+    sheen_color=None: sqrt(base_color)) starts from that value and is then fitted (or held, if
+    not in ``params``) on its own.
 
-    Uses scipy.optimize.least_squares (trust-region reflective) with the analytic Jacobian.
-    Returns ``(model, FitReport)``.
+    Parameters
+    ----------
+    target : BxDF or tuple
+        A bsdfkit model (analytic or measured), evaluated on ``directions``, or raw samples
+        ``(wo, wi, value)`` with value = f (cosine excluded), (N, 3).
+    family : type
+        A model class with a gradient kernel (see ``bsdfkit.fitting.differentiable_params``).
+    params : sequence of str, optional
+        The parameters to fit (``eval_grad`` names: RGB parameters fit per channel, "eta.g" one
+        channel, "alpha" an isotropic alpha); default: every differentiable parameter not in
+        ``fixed``.
+    init : dict or BxDF, optional
+        Starting values, or a model of the family; default: the family's first example.
+    fixed : dict, optional
+        Values (and knobs, e.g. ``{"masking": "separable"}``) held constant; default: the family's
+        first example's.
+    directions : tuple, optional
+        A pair (wo, wi); default: the trade-off module's direction set of ``n`` pairs, stratified
+        plus samples of the target's lobes, grazing angles included
+        (``bsdfkit.tuning.errors.direction_set``). Not used with raw samples.
+    loss : {"log", "relative", "l2"}, optional
+        log(f cos + floor) differences (default: balances peak and tail), differences over
+        max(target, floor), or differences over the target's mean.
+    weights : array_like, shape (N,) or (N, 3), optional
+        Residual weights.
+    starts : int, optional
+        Number of starting points: the given one plus starts - 1 drawn uniformly within the
+        bounds, seeded by ``seed``; the best is kept.
+    n : int, optional
+        Pairs of the default direction set (default 4096).
+    seed : int, optional
+        Seed of the direction set and of the extra starts.
+    max_nfev : int, optional
+        Residual evaluations per start (scipy's ``max_nfev``, default 200).
+    tol : float, optional
+        scipy's ftol / xtol / gtol (default 1e-12).
+    albedo : bool, optional
+        Report the albedo error (``FitReport.albedo_error``; default True).
+
+    Returns
+    -------
+    model : BxDF
+        The fitted model of ``family``.
+    report : FitReport
+        What the fit reached (judge it by its errors, not by ``success``).
+
+    Raises
+    ------
+    TypeError
+        A ``family`` that is not a model class, a target of another kind, a bad ``init``.
+    ValueError
+        Unknown or non-differentiable parameter names, raw samples that do not broadcast or are
+        negative, ``directions`` given with raw samples.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> target = bk.Conductor.from_metal("Cu", alpha=0.25)
+    >>> m, report = bk.fit(target, bk.Conductor, params=["alpha"], init={"alpha": 0.5},
+    ...                    fixed={"eta": target.eta, "k": target.k}, n=512)
+    >>> round(m.alpha_x, 4), bool(report.rel_p99.max() < 1e-6)
+    (0.25, True)
     """
     from scipy.optimize import least_squares
     t0 = time.perf_counter()

@@ -67,7 +67,24 @@ def _supported(model) -> bool:
 
 def differentiable_params(model) -> tuple:
     """Names ``eval_grad`` accepts for ``model`` (RGB parameters as one name; ``"alpha"`` where
-    the model has alpha_x and alpha_y). Empty for a model without a gradient kernel."""
+    the model has alpha_x and alpha_y). Empty for a model without a gradient kernel.
+
+    Parameters
+    ----------
+    model : BxDF
+        Any model.
+
+    Returns
+    -------
+    tuple of str
+        The parameter names, in the model's field order.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> bk.fitting.differentiable_params(bk.Conductor.from_metal("Cu", alpha=0.2))
+    ('eta', 'k', 'alpha', 'alpha_x', 'alpha_y')
+    """
     if not _supported(model):
         return ()
     fields = _core_fields(model._core)
@@ -136,14 +153,74 @@ def _columns(model, params):
 
 def grad_columns(model, params=None) -> tuple:
     """The gradient columns of ``eval_grad(..., params=params)``, e.g. ``("eta.r", "eta.g",
-    "eta.b", "alpha")``."""
+    "eta.b", "alpha")``.
+
+    Parameters
+    ----------
+    model : BxDF
+        A model with a gradient kernel.
+    params : str or sequence of str, optional
+        As ``eval_grad``'s; default: every differentiable field.
+
+    Returns
+    -------
+    tuple of str
+        One name per column of the gradient.
+
+    Raises
+    ------
+    ValueError
+        An unknown or repeated name, or more columns than the kernel supports.
+    TypeError
+        A model without a gradient kernel.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> bk.fitting.grad_columns(bk.Conductor.from_metal("Cu", alpha=0.2), ["eta", "alpha"])
+    ('eta.r', 'eta.g', 'eta.b', 'alpha')
+    """
     return tuple(_columns(model, params)[0])
 
 
 def eval_grad(model, wo, wi, params=None, mode=TransportMode.Radiance):
     """``(f, grad)``: f(wo, wi) (..., 3) and its derivatives (..., 3, P) with respect to the
     columns of ``params`` (see :func:`grad_columns`), in float64 (float32 directions are
-    evaluated in float64 too). Inputs as ``model.eval``."""
+    evaluated in float64 too). Inputs as ``model.eval``; ``model.eval_grad`` calls this.
+
+    Parameters
+    ----------
+    model : BxDF
+        A model with a gradient kernel.
+    wo, wi : array_like, shape (..., 3)
+        Unit directions in the local shading frame.
+    params : str or sequence of str, optional
+        The parameters to differentiate (see :func:`grad_columns`); default: all.
+    mode : TransportMode or str, optional
+        ``Radiance`` (default) or ``Importance``.
+
+    Returns
+    -------
+    f : numpy.ndarray, shape (..., 3)
+        The value, float64.
+    grad : numpy.ndarray, shape (..., 3, P)
+        The derivatives, one column per gradient column.
+
+    Raises
+    ------
+    ValueError
+        A bad parameter name (see :func:`grad_columns`) or direction.
+    TypeError
+        A model without a gradient kernel.
+
+    Examples
+    --------
+    >>> import numpy as np, bsdfkit as bk
+    >>> m = bk.Diffuse([0.5, 0.5, 0.5])
+    >>> f, g = bk.fitting.eval_grad(m, bk.direction(0.3, 0.0), bk.direction(0.5, 1.0), ["reflectance.r"])
+    >>> bool(np.isclose(g[0, 0], 1 / np.pi))   # f = R / pi
+    True
+    """
     from ..models.base import _mode, _raise_bad
     core = model._grad_core(params) if hasattr(model, "_grad_core") else model._core
     names, cols = _columns(model, params)

@@ -42,8 +42,20 @@ class FamilyFit:
 
 @dataclass(frozen=True, eq=False)
 class FamilySimplifyReport:
-    """What every family reached (``fits``, cheapest first) and which one was chosen (None:
-    none within tol)."""
+    """What every family reached (``fits``, cheapest first) and which one was chosen.
+
+    Attributes
+    ----------
+    tol : float
+        The tolerance asked for.
+    metric : str
+        The error metric.
+    fits : tuple of FamilyFit
+        One fit per family, cheapest first: its model, errors (on the target's pairs and on the
+        fit's own), the lobes it dropped, whether it is within tol, its cost.
+    chosen : FamilyFit or None
+        The cheapest fit within tol (None: none is).
+    """
 
     tol: float
     metric: str
@@ -152,16 +164,51 @@ def _lobe_variants(model):
 
 
 def simplify_families(target, tol, families, metric="p99", directions=None, seed=0, costs=None, **fit_kwargs):
-    """Fit every class of ``families`` to ``target`` (``bk.fit``, several starts) and return
-    ``(model, FamilySimplifyReport)``: the cheapest fitted model whose error meets ``tol``
-    (None if none does). metric: ``"p99"`` / ``"max"`` (max over channels of the relative error
-    of f |cos|, the larger of its values on the fitted pairs and on pairs importance-sampled from
-    the fitted model itself, :data:`OWN_PAIRS` of them: a lobe the target does not have is measured
-    where the fit puts it) or ``"albedo"`` (absolute directional-albedo error). An optional lobe of
-    the fit (FilamentStandard's clear coat, sheen) is dropped when the fit without it has no
-    larger error (``FamilyFit.dropped``): the data must support every lobe the answer has. Cost:
-    the shipped cost table's float64 time per eval of the fitted model's configuration (its cost
-    family's reference rate and the configuration's relative cost)."""
+    """Fit every class of ``families`` to ``target`` (``bk.fit``, several starts) and return the
+    cheapest fitted model whose error meets ``tol``.
+
+    An optional lobe of the fit (FilamentStandard's clear coat, sheen) is dropped when the fit
+    without it has no larger error (``FamilyFit.dropped``): the data must support every lobe the
+    answer has. Cost: the shipped cost table's float64 time per eval of the fitted model's
+    configuration (its cost family's reference rate and the configuration's relative cost).
+
+    Parameters
+    ----------
+    target : BxDF
+        The model to replace (typically a measured one).
+    tol : float
+        The tolerance, in the unit of ``metric``.
+    families : sequence of type
+        Model classes with a gradient kernel.
+    metric : {"p99", "max", "albedo"}, optional
+        ``"p99"`` / ``"max"`` (max over channels of the relative error of f |cos|, the larger of
+        its values on the fitted pairs and on pairs importance-sampled from the fitted model
+        itself, :data:`OWN_PAIRS` of them: a lobe the target does not have is measured where the
+        fit puts it) or ``"albedo"`` (absolute directional-albedo error).
+    directions : tuple, optional
+        A pair (wo, wi) to fit and measure on (default: ``bk.fit``'s).
+    seed : int, optional
+        Seed of the directions and starts.
+    costs : dict, optional
+        A cost table to rank by instead of the shipped one.
+    **fit_kwargs
+        Passed to ``bk.fit`` (``n``, ``starts``, ``loss``, ...).
+
+    Returns
+    -------
+    model : BxDF or None
+        The cheapest fit within tol (None if none is).
+    report : FamilySimplifyReport
+        Every family's fit and errors.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> m, report = bk.fitting.simplify_families(bk.Conductor.from_metal("Cu", alpha=0.25), 0.05,
+    ...                                          (bk.Diffuse, bk.Conductor), n=512)
+    >>> type(m).__name__, round(m.alpha_x, 3)
+    ('Conductor', 0.25)
+    """
     if metric not in _METRICS:
         raise ValueError(f"metric: must be one of {_METRICS}, got {metric!r}")
     if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not tol >= 0:

@@ -351,7 +351,7 @@ def from_mitsuba(d) -> BxDF:
 
     Plugins and parameters (Mitsuba 3.9 names and defaults):
 
-    ==================  ======================================================================
+    =================== ======================================================================
     ``diffuse``          ``reflectance`` (0.5) -> ``Diffuse``
     ``conductor``        ``eta``/``k`` or ``material`` (a preset in ``bsdfkit.METALS``: Cu, Au,
                          Ag, Al, Cr; default ``"none"``: eta = 0, k = 1, the perfect mirror,
@@ -381,7 +381,7 @@ def from_mitsuba(d) -> BxDF:
                          ``scale_tilt`` (2 degrees) -> ``Hair(..., h=0)``: Mitsuba has no h, it
                          derives it from the direction (``bsdfkit.testing.hair_ref``); its fibre
                          axis is local y where bsdfkit's (pbrt's) is x
-    ==================  ======================================================================
+    =================== ======================================================================
 
     Colours (reflectance, eta, k) may be a float, 3 numbers (a list, numpy array or
     ``mi.ScalarColor3f``), ``{"type": "rgb", "value": ...}``, ``{"type": "spectrum", "value":
@@ -405,8 +405,27 @@ def from_mitsuba(d) -> BxDF:
     comes back with ``masking="separable"``. Smooth models come back with the default masking
     (a mirror has none). Eta = 1 dielectrics come back as ``Dielectric(1.0)``.
 
-    Raises ``ValueError`` naming the plugin and parameter for anything else: unknown plugins,
-    textures, Beckmann roughness, tints, unknown parameters, presets or IOR names.
+    Parameters
+    ----------
+    d : dict or mitsuba.BSDF
+        A plugin dictionary (as ``mi.load_dict`` takes) or a loaded Mitsuba BSDF.
+
+    Returns
+    -------
+    BxDF
+        The equivalent bsdfkit model.
+
+    Raises
+    ------
+    ValueError
+        Naming the plugin and parameter for anything else: unknown plugins, textures, Beckmann
+        roughness, tints, unknown parameters, presets or IOR names.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> bk.from_mitsuba({"type": "roughconductor", "material": "Au", "distribution": "ggx", "alpha": 0.2})
+    Conductor(eta=[0.143036, 0.375307, 1.442045], k=[3.982997, 2.385556, 1.603359], alpha_x=0.2, alpha_y=0.2, masking='separable', fresnel='exact')
     """
     if not isinstance(d, dict) and type(d).__module__.startswith("mitsuba") and hasattr(d, "class_name"):
         d = _loaded_to_dict(d)

@@ -320,11 +320,35 @@ def parse_pbrt_materials(text: str, *, path=None, skip_missing_includes: bool = 
     material user does not have). A ``ColorSpace`` other than srgb warns once per file
     (:class:`PbrtColorSpaceWarning`): RGB values are read as linear sRGB.
 
-    ``ValueError`` with the line number (and file) for malformed text: unterminated strings or
-    brackets, stray ``]``, non-numbers in lists, malformed parameter declarations, a word that is
-    not a pbrt directive, a bad ``ActiveTransform`` argument, a ``MakeNamedMaterial`` without
-    ``"string type"``, a redefined named material, Include nested too deep. ``OSError`` naming
-    the file for a missing include (unless ``skip_missing_includes``).
+    Parameters
+    ----------
+    text : str
+        pbrt-v4 scene text.
+    path : str or os.PathLike, optional
+        The file the text came from (includes are relative to it).
+    skip_missing_includes : bool, optional
+        Skip missing includes with a warning each (above).
+
+    Returns
+    -------
+    list of PbrtMaterial
+        The material statements, in order.
+
+    Raises
+    ------
+    ValueError
+        With the line number (and file) for malformed text: unterminated strings or brackets,
+        stray ``]``, non-numbers in lists, malformed parameter declarations, a word that is not
+        a pbrt directive, a bad ``ActiveTransform`` argument, a ``MakeNamedMaterial`` without
+        ``"string type"``, a redefined named material, Include nested too deep.
+    OSError
+        Naming the file for a missing include (unless ``skip_missing_includes``).
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> [m.name for m in bk.parse_pbrt_materials('Material "diffuse" Shape "sphere"')]
+    ['material#1 (line 1)']
     """
     if not isinstance(text, str):
         raise TypeError(f"text: expected str (pbrt scene text), got {type(text).__name__}")
@@ -849,13 +873,41 @@ def from_pbrt(source, *, skip_unsupported: bool = False, skip_missing_includes: 
     ``normalmap`` change the geometry, not the BxDF, and are left out
     (``PbrtMaterial.ignored``).
 
-    ``ValueError`` naming the material, its line and the parameter for unsupported types
-    (measured, mix, subsurface, interface, ...),
-    texture-valued or unknown parameters, bad values, and malformed text (with the line).
-    ``skip_unsupported=True`` leaves out materials that cannot be converted (unsupported types,
-    textures, unknown spectra) instead of raising, with one :class:`PbrtSkipWarning` per
-    material naming it, its line and the reason (its ``material``, ``line`` and ``reason``
-    attributes carry them); malformed text still raises.
+    Parameters
+    ----------
+    source : str or os.PathLike
+        Scene text, or the path of a scene file (above).
+    skip_unsupported : bool, optional
+        Leave out materials that cannot be converted (unsupported types, textures, unknown
+        spectra) instead of raising, with one :class:`PbrtSkipWarning` per material naming it,
+        its line and the reason (its ``material``, ``line`` and ``reason`` attributes carry
+        them); malformed text still raises.
+    skip_missing_includes : bool, optional
+        Skip an ``Include`` / ``Import`` of a missing file, with a
+        :class:`PbrtMissingIncludeWarning`.
+    spectral : bool, optional
+        Keep named and file spectra of metal eta / k and dielectric eta as ``bsdfkit.Spectrum``.
+
+    Returns
+    -------
+    dict
+        ``{name: BxDF}`` in file order.
+
+    Raises
+    ------
+    ValueError
+        Naming the material, its line and the parameter for unsupported types (measured, mix,
+        subsurface, interface, ...), texture-valued or unknown parameters, bad values, and
+        malformed text (with the line).
+    OSError
+        A missing scene file or include (unless ``skip_missing_includes``).
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> bk.from_pbrt('''MakeNamedMaterial "gold" "string type" "conductor"
+    ...     "spectrum eta" "metal-Au-eta" "spectrum k" "metal-Au-k" "float roughness" 0.04''')["gold"].alpha_x
+    0.2
     """
     if not isinstance(spectral, (bool, np.bool_)):
         raise TypeError(f"spectral: expected True or False, got {spectral!r}")

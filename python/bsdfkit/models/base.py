@@ -120,8 +120,28 @@ def roughness_to_alpha(roughness):
 
     pbrt-v4 applies it to ``roughness``/``uroughness``/``vroughness`` when ``remaproughness``
     is true (the default). pbrt-v4 issue #479 notes that r**2 would have been the perceptually
-    linear choice; sqrt is kept for compatibility with pbrt scenes. Accepts scalars or arrays;
-    roughness must be finite and >= 0.
+    linear choice; sqrt is kept for compatibility with pbrt scenes.
+
+    Parameters
+    ----------
+    roughness : float or array_like
+        pbrt's roughness, finite and >= 0.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        alpha: a float for a scalar input, else a float64 array of the input's shape.
+
+    Raises
+    ------
+    ValueError
+        A roughness that is negative or not finite.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> bk.roughness_to_alpha(0.09)
+    0.3
     """
     r = np.asarray(roughness, dtype=np.float64)
     if not np.all(np.isfinite(r)) or np.any(r < 0):
@@ -132,18 +152,30 @@ def roughness_to_alpha(roughness):
 
 @dataclass(frozen=True)
 class SampleResult:
-    """Sampled directions and their values; arrays share the batch shape of the inputs.
+    """Sampled directions and their values (``BxDF.sample``); arrays share the batch shape of
+    the inputs.
 
-    wi: (..., 3) sampled directions (outward, local frame); f: (..., 3) BSDF value (cosine
-    excluded); pdf: (...) solid-angle density, or the discrete probability for a specular lobe;
-    flags: (...) uint8 ``BxDFFlags`` of the sampled lobe; eta: (...) relative IOR along wi
-    (1 for reflection); valid: (...) bool, False where no sample exists (then f = pdf = 0,
-    wi = (0, 0, 1), the shading normal, and eta = 1: every wi is a valid ``eval`` / ``pdf`` input);
-    pdf_is_proportional: (...) bool (layered models only).
-    Spectral mode (``sample(..., wavelengths=)``): f is (..., 4), one value per wavelength, and
-    terminated: (...) bool is True where a refraction through a dispersive dielectric kept the
-    first (hero) wavelength only (f of the others is 0; apply pbrt-v4's TerminateSecondary to the
-    wavelength pdfs, ``bsdfkit.spectral.terminate_secondary``); None in RGB mode.
+    Attributes
+    ----------
+    wi : numpy.ndarray, shape (..., 3)
+        Sampled directions (outward, local frame).
+    f : numpy.ndarray, shape (..., 3)
+        BSDF value (cosine excluded); (..., 4), one value per wavelength, in spectral mode.
+    pdf : numpy.ndarray, shape (...)
+        Solid-angle density, or the discrete probability for a specular lobe.
+    flags : numpy.ndarray of uint8, shape (...)
+        ``BxDFFlags`` of the sampled lobe.
+    eta : numpy.ndarray, shape (...)
+        Relative IOR along wi (1 for reflection).
+    valid : numpy.ndarray of bool, shape (...)
+        False where no sample exists (then f = pdf = 0, wi = (0, 0, 1), the shading normal, and
+        eta = 1: every wi is a valid ``eval`` / ``pdf`` input).
+    pdf_is_proportional : numpy.ndarray of bool, shape (...)
+        True where pdf is only proportional to the density (the stochastic layered models).
+    terminated : numpy.ndarray of bool or None
+        Spectral mode: True where a refraction through a dispersive dielectric kept the first
+        (hero) wavelength only (f of the others is 0; apply pbrt-v4's TerminateSecondary to the
+        wavelength pdfs, ``bsdfkit.spectral.terminate_secondary``); None in RGB mode.
     """
 
     wi: np.ndarray
@@ -215,6 +247,22 @@ class BxDF:
     away from the surface, both ``wo`` (towards the viewer) and ``wi``. ``eval`` excludes the
     cosine factor; ``pdf`` is per unit solid angle. Inputs broadcast with numpy rules over
     their leading axes. float32 inputs run float32 kernels, anything else real runs float64.
+
+    Models are immutable values: equal parameters compare and hash equal, ``eval(repr(m)) == m``
+    and they pickle.
+
+    Parameters
+    ----------
+    **params
+        The model's parameters as its subclass constructor checked them (a subclass's own
+        ``__init__`` takes the named parameters; ``BxDF`` itself is not built directly).
+
+    Examples
+    --------
+    >>> import numpy as np, bsdfkit as bk
+    >>> m = bk.Conductor.from_metal("Cu", alpha=0.2)
+    >>> isinstance(m, bk.BxDF), m == bk.Conductor.from_metal("Cu", alpha=0.2)
+    (True, True)
     """
 
     _fields: tuple = ()
@@ -332,9 +380,7 @@ class BxDF:
     # takes the arguments as given, converts and checks what is not a plain array, words every
     # argument error and runs the kernels. Python only dispatches: spectral mode, Dask arrays.
     def eval(self, wo, wi, mode=TransportMode.Radiance, out=None, *, wavelengths=None) -> np.ndarray:
-        """BSDF value f(wo, wi), cosine excluded, per RGB channel: shape (..., 3).
-        ``wavelengths``: (..., 4) nm in [360, 830], broadcast with the directions: spectral mode,
-        f per wavelength, shape (..., 4) (docs/SPECTRAL.md).
+        """BSDF value f(wo, wi), cosine excluded, per RGB channel.
 
         Specular (delta) lobes evaluate to 0 for every given pair, as in pbrt-v4; use
         ``sample`` to reach them. Dask arrays of directions give a lazy Dask array (blockwise,
@@ -347,6 +393,43 @@ class BxDF:
         them (faster; README "Performance"), with bit-identical values. The result is
         Fortran-ordered (its ``.T`` is a (3, N) C-ordered view) when every full-length direction
         argument is, C-ordered otherwise (numpy's ``order='K'``); ``out`` may be either.
+
+        Parameters
+        ----------
+        wo, wi : array_like, shape (..., 3)
+            Unit directions in the local shading frame, both pointing away from the surface;
+            their leading axes broadcast. float32 inputs run float32 kernels, other real
+            inputs float64. Numpy or Dask arrays.
+        mode : TransportMode or str, optional
+            ``Radiance`` (default) or ``Importance`` (adjoint transport: differs for
+            refraction).
+        out : numpy.ndarray, optional
+            Array of the result's shape and dtype to write into; it is returned.
+        wavelengths : array_like, shape (..., 4), optional
+            Wavelengths in nm in [360, 830], broadcast with the directions: spectral mode, one
+            value per wavelength (docs/SPECTRAL.md).
+
+        Returns
+        -------
+        numpy.ndarray, shape (..., 3)
+            f per RGB channel ((..., 4) per wavelength in spectral mode); a lazy Dask array when
+            a direction argument is a Dask array.
+
+        Raises
+        ------
+        ValueError
+            A direction that is not a finite unit vector (``|w|^2`` within 1e-4 of 1), shapes
+            that do not broadcast, a bad ``mode`` or ``out``.
+
+        Examples
+        --------
+        >>> import numpy as np, bsdfkit as bk
+        >>> m = bk.Conductor.from_metal("Cu", alpha=0.2)
+        >>> wo = bk.direction(np.radians(30), 0.0)
+        >>> m.eval(wo, bk.direction(np.radians(30), np.pi))   # the mirror direction
+        array([2.507..., 1.632..., 1.346...])
+        >>> m.eval(wo, bk.hemisphere_grid(9, 18)).shape
+        (162, 3)
         """
         if wavelengths is not None:
             return _spectral.eval(self, wo, wi, wavelengths, mode, out)
@@ -356,10 +439,42 @@ class BxDF:
 
     def pdf(self, wo, wi, mode=TransportMode.Radiance, sample_flags=ReflTrans.All, out=None, *,
             wavelengths=None) -> np.ndarray:
-        """Solid-angle density of ``sample`` producing wi from wo: shape (...). 0 for delta lobes.
-        ``wavelengths`` (..., 4): the density of ``sample`` with those wavelengths (the first one's
-        for a dispersive dielectric). Directions may be (N, 3) Fortran-ordered planes, read
-        without transposition, with bit-identical values (see ``eval``)."""
+        """Solid-angle density of ``sample`` producing wi from wo; 0 for delta lobes.
+
+        Directions may be (N, 3) Fortran-ordered planes, read without transposition, with
+        bit-identical values (see ``eval``).
+
+        Parameters
+        ----------
+        wo, wi : array_like, shape (..., 3)
+            Unit directions in the local shading frame (as in ``eval``).
+        mode : TransportMode or str, optional
+            ``Radiance`` (default) or ``Importance``.
+        sample_flags : ReflTrans, optional
+            The lobes ``sample`` was restricted to (default ``ReflTrans.All``).
+        out : numpy.ndarray, optional
+            Array of the result's shape and dtype to write into; it is returned.
+        wavelengths : array_like, shape (..., 4), optional
+            The density of ``sample`` with those wavelengths (the first one's for a dispersive
+            dielectric).
+
+        Returns
+        -------
+        numpy.ndarray, shape (...)
+            The density per unit solid angle (a lazy Dask array for Dask directions).
+
+        Raises
+        ------
+        ValueError
+            As ``eval``; a ``sample_flags`` that is not a ``ReflTrans``.
+
+        Examples
+        --------
+        >>> import numpy as np, bsdfkit as bk
+        >>> m = bk.Conductor.from_metal("Cu", alpha=0.2)
+        >>> float(m.pdf(bk.direction(np.radians(30), 0.0), bk.direction(np.radians(30), np.pi)))
+        2.289...
+        """
         if wavelengths is not None:
             return _spectral.pdf(self, wo, wi, wavelengths, mode, sample_flags, out)
         if (type(wo) is not np.ndarray or type(wi) is not np.ndarray) and (is_dask_array(wo) or is_dask_array(wi)):
@@ -379,6 +494,49 @@ class BxDF:
         ``out``: a SampleResult of this call's shapes and dtypes (e.g. an earlier result) to
         write into instead of allocating; it is returned.
         ``wavelengths`` (..., 4): spectral mode (f per wavelength, ``terminated``; see SampleResult).
+
+        Parameters
+        ----------
+        wo : array_like, shape (..., 3)
+            Unit outgoing directions in the local shading frame.
+        uc : float or array_like, shape (...), optional
+            Uniform in [0, 1] choosing the lobe; with ``u``, instead of ``n``.
+        u : array_like, shape (..., 2), optional
+            Uniforms in [0, 1] choosing the direction.
+        n : int, optional
+            Number of samples drawn from the counter-based generator (instead of ``uc``/``u``).
+        seed : int, optional
+            Non-negative seed of that generator; None draws one from the system's entropy.
+        mode : TransportMode or str, optional
+            ``Radiance`` (default) or ``Importance``.
+        sample_flags : ReflTrans, optional
+            Restrict sampling to these lobes (default ``ReflTrans.All``).
+        out : SampleResult, optional
+            A result of this call's shapes and dtypes to write into; it is returned.
+        wavelengths : array_like, shape (..., 4), optional
+            Spectral mode.
+
+        Returns
+        -------
+        SampleResult
+            ``wi``, ``f``, ``pdf``, ``flags``, ``eta``, ``valid``, ``pdf_is_proportional`` (and
+            ``terminated`` in spectral mode), with the batch shape.
+
+        Raises
+        ------
+        ValueError
+            A direction that is not a finite unit vector, a uniform outside [0, 1] or NaN, both
+            or neither of ``uc``/``u`` and ``n``, a negative seed.
+        TypeError
+            An ``out`` that is not a SampleResult.
+
+        Examples
+        --------
+        >>> import numpy as np, bsdfkit as bk
+        >>> m = bk.Conductor.from_metal("Cu", alpha=0.2)
+        >>> s = m.sample(bk.direction(np.radians(30), 0.0), n=4, seed=1)
+        >>> s.wi.shape, s.f.shape, s.pdf.shape, bool(s.valid.all())
+        ((4, 3), (4, 3), (4,), True)
         """
         if wavelengths is not None:
             return _spectral.sample(self, wo, uc, u, n, seed, wavelengths, mode, sample_flags, out)
@@ -396,6 +554,31 @@ class BxDF:
         deterministic for a given seed and independent of the thread count. The standard error
         falls as 1/sqrt(n_samples). ``wavelengths`` (..., 4), broadcast with wo: per wavelength,
         shape (..., 4) (a dispersive dielectric: each wavelength sampled as the hero).
+
+        Parameters
+        ----------
+        wo : array_like, shape (..., 3)
+            Unit outgoing directions in the local shading frame.
+        n_samples : int, optional
+            Importance samples per direction (default 65536).
+        seed : int, optional
+            Seed of the counter-based generator (default 0).
+        mode : TransportMode or str, optional
+            ``Radiance`` (default) or ``Importance``.
+        wavelengths : array_like, shape (..., 4), optional
+            Spectral mode: the albedo per wavelength.
+
+        Returns
+        -------
+        numpy.ndarray, shape (..., 3)
+            rho(wo) per RGB channel ((..., 4) per wavelength in spectral mode).
+
+        Examples
+        --------
+        >>> import numpy as np, bsdfkit as bk
+        >>> rho = bk.Diffuse([0.5, 0.5, 0.5]).albedo(bk.direction(np.radians(30), 0.0), n_samples=4096)
+        >>> np.allclose(rho, 0.5, atol=0.02)
+        True
         """
         if wavelengths is not None:
             return _spectral.albedo(self, wo, wavelengths, n_samples, seed, mode)
@@ -412,7 +595,40 @@ class BxDF:
         eta.r, eta.g, eta.b; ``"eta.g"`` one), ``"alpha"`` the isotropic alpha_x = alpha_y
         direction. Columns: ``bsdfkit.fitting.grad_columns``; one-sided and zero derivatives
         (smooth/rough switch, clamps, tables): ``bsdfkit.fitting.grad``. A bad name raises
-        ValueError listing the differentiable parameters."""
+        ValueError listing the differentiable parameters.
+
+        Parameters
+        ----------
+        wo, wi : array_like, shape (..., 3)
+            Unit directions in the local shading frame.
+        params : sequence of str, optional
+            Parameters to differentiate, in column order; default: all differentiable ones
+            (``bsdfkit.fitting.differentiable_params``).
+        mode : TransportMode or str, optional
+            ``Radiance`` (default) or ``Importance``.
+
+        Returns
+        -------
+        f : numpy.ndarray, shape (..., 3)
+            The value, float64.
+        grad : numpy.ndarray, shape (..., 3, P)
+            d f / d theta, one column per entry of ``bsdfkit.fitting.grad_columns``.
+
+        Raises
+        ------
+        ValueError
+            An unknown or repeated parameter name; a direction that is not a finite unit vector.
+        TypeError
+            A model without a gradient kernel (the stochastic coated models, e.g.).
+
+        Examples
+        --------
+        >>> import numpy as np, bsdfkit as bk
+        >>> m = bk.Conductor.from_metal("Cu", alpha=0.2)
+        >>> f, g = m.eval_grad(bk.direction(np.radians(30), 0.0), bk.direction(np.radians(30), np.pi))
+        >>> f.shape, g.shape
+        ((3,), (3, 8))
+        """
         from ..fitting.grad import eval_grad
         return eval_grad(self, wo, wi, params, mode)
 

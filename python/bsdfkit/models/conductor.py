@@ -44,17 +44,13 @@ class Conductor(BxDF):
     """Metal: perfect mirror or anisotropic Trowbridge-Reitz (GGX) microfacet reflection with a
     conductor Fresnel term (pbrt-v4 ``ConductorBxDF``; the complex Fresnel term by default).
 
-    eta, k: real and imaginary IOR per RGB channel (eta > 0, k >= 0), or each a
-    ``bsdfkit.Spectrum`` (e.g. ``Spectrum.named("metal-Au-eta")``; ``from_metal(name, spectral=True)``).
     Spectral mode (``wavelengths=``): RGB eta / k are uplifted as unbounded spectra (pbrt-v4
     ``RGBUnboundedSpectrum``); RGB mode: spectra are projected without an illuminant, as Mitsuba 3
     projects its IOR presets (``METALS`` is that projection of the Mitsuba spectra).
-    alpha: GGX roughness (alpha, not pbrt's remapped "roughness"), isotropic; or alpha_x and
-    alpha_y together, per tangent axis (local x / y) -- one of them alone, or alpha with them, is
-    a ValueError. max(alpha_x, alpha_y) < 1e-3 makes the lobe a delta mirror
-    (pbrt-v4 ``EffectivelySmooth``); otherwise each alpha is floored at 1e-4.
-    masking: "correlated" (height-correlated Smith, pbrt-v4) or "separable" (G1 G1, Mitsuba 3).
-    fresnel: the Fresnel term F(cos), cos = |wo . wm|, from most accurate to cheapest-ish:
+    max(alpha_x, alpha_y) < 1e-3 makes the lobe a delta mirror (pbrt-v4 ``EffectivelySmooth``);
+    otherwise each alpha is floored at 1e-4.
+
+    The Fresnel term F(cos), cos = |wo . wm|, from most accurate to cheapest-ish:
 
     * ``"exact"`` (default): the complex Fresnel reflectance of eta + i k, unpolarised
       (pbrt-v4 ``FrComplex``).
@@ -74,6 +70,35 @@ class Conductor(BxDF):
     cost a polynomial per direction. Sampling (visible normals) and the pdf do not depend on
     the Fresnel term. See ``bsdfkit.conductor_fresnel`` for F(cos) alone.
     Two-sided; symmetric in wo and wi.
+
+    Parameters
+    ----------
+    eta, k : RGB or Spectrum
+        Real and imaginary IOR per RGB channel (eta > 0, k >= 0), or each a ``bsdfkit.Spectrum``
+        (e.g. ``Spectrum.named("metal-Au-eta")``; ``from_metal(name, spectral=True)``).
+    alpha : float, optional
+        GGX roughness (alpha, not pbrt's remapped "roughness"), isotropic; none: a mirror.
+    alpha_x, alpha_y : float, optional
+        Given together instead of ``alpha``: per tangent axis (local x / y). One of them alone,
+        or alpha with them, is a ValueError.
+    masking : {"correlated", "separable"}, optional
+        Height-correlated Smith (pbrt-v4; default) or G1 G1 (Mitsuba 3).
+    fresnel : {"exact", "schlick", "f82"}, optional
+        The Fresnel term (above); default "exact".
+
+    Raises
+    ------
+    ValueError
+        A value out of its range, naming the parameter (TypeError for a wrong type).
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> m = bk.Conductor([0.2, 0.92, 1.1], [3.9, 2.45, 2.14], alpha=0.2)
+    >>> m == bk.Conductor(m.eta, m.k, alpha_x=0.2, alpha_y=0.2)
+    True
+    >>> bk.Conductor.from_metal("Au", roughness=0.04).alpha_x   # alpha = sqrt(roughness)
+    0.2
     """
 
     __slots__ = ()
@@ -262,9 +287,28 @@ def conductor_fresnel(cos_theta, eta, k, fresnel="exact") -> np.ndarray:
     """Conductor Fresnel reflectance F(cos_theta) of eta + i k, as ``Conductor(..., fresnel=)``
     uses it: float64 array of shape ``cos_theta.shape + (3,)``.
 
-    cos_theta: cosine(s) of the angle of incidence, clamped to [0, 1]; eta (> 0), k (>= 0):
-    scalar or RGB; fresnel: "exact", "schlick" or "f82" (see ``Conductor``). Computed by the
-    same C++ code as the models, in double precision.
+    Computed by the same C++ code as the models, in double precision.
+
+    Parameters
+    ----------
+    cos_theta : float or array_like
+        Cosine(s) of the angle of incidence, clamped to [0, 1].
+    eta, k : float or RGB
+        Real (> 0) and imaginary (>= 0) IOR.
+    fresnel : {"exact", "schlick", "f82"}, optional
+        The approximation (see ``Conductor``).
+
+    Returns
+    -------
+    numpy.ndarray, shape cos_theta.shape + (3,)
+        F per RGB channel, float64.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> F = bk.conductor_fresnel([1.0, 0.0], *bk.METALS["Au"])
+    >>> F.shape, bool((F[1] == 1).all())   # F = 1 at grazing incidence
+    ((2, 3), True)
     """
     c = np.asarray(cos_theta)
     if c.dtype.kind not in "fiu":

@@ -20,6 +20,36 @@ finite unit vectors of the batch's shape (a direction it cannot draw is a unit v
 ``pdf`` is 0); and when ``albedo``'s estimate (the mean of f |cos| / pdf) overflows. Two Custom models
 are equal when they wrap the same functions with the same name; ``repr`` shows the functions'
 names (it cannot be evaluated back). Pickling works for module-level functions.
+
+Parameters
+----------
+f : callable
+    ``f(wo, wi) -> (..., 3)`` (or ``(...)``, grey), the BSDF without the cosine.
+pdf : callable, optional
+    ``pdf(wo, wi) -> (...)``, the solid-angle density of ``sample``; given with ``sample``.
+sample : callable, optional
+    ``sample(wo, uc, u) -> wi``; given with ``pdf``. Neither: cosine-weighted sampling.
+name : str, optional
+    A non-empty name (legends, ``repr``); default "custom".
+transmission : bool, optional
+    True: f is defined on both sides of the surface (cosine sampling covers both hemispheres).
+
+Raises
+------
+TypeError
+    A function that is not callable, a name that is not a non-empty str.
+ValueError
+    ``pdf`` without ``sample`` or the reverse; bad values from the functions (above).
+
+Examples
+--------
+>>> import numpy as np, bsdfkit as bk
+>>> def f(wo, wi):   # a Lambertian of albedo 0.5, with its wo's-side test
+...     same = (wo[..., 2] * wi[..., 2] > 0)[..., None]
+...     return np.where(same, 0.5 / np.pi, 0.0) * np.ones(3)
+>>> m = bk.Custom(f, name="half grey")
+>>> np.allclose(m.albedo(bk.direction(0.5, 0.0), n_samples=4096), 0.5)
+True
 """
 from __future__ import annotations
 

@@ -7,5 +7,23 @@ __all__ = ["describe"]
 
 
 def describe(model: BxDF) -> str:
-    """A short human-readable name of a model, e.g. ``"Conductor Au, α=0.2"`` (``model.describe()``)."""
+    """A short human-readable name of a model (``model.describe()``): legend labels and titles.
+
+    Parameters
+    ----------
+    model : BxDF
+        Any model.
+
+    Returns
+    -------
+    str
+        E.g. ``"Conductor Au, α=0.2"``.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> from bsdfkit import plot as bkplot
+    >>> bkplot.describe(bk.Dielectric(1.5, alpha=0.1))
+    'Dielectric η=1.5, α=0.1'
+    """
     return model.describe()

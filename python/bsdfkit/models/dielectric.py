@@ -21,15 +21,35 @@ class Dielectric(BxDF):
     """Glass-like interface: Fresnel-weighted reflection and refraction, smooth (delta) or
     anisotropic Trowbridge-Reitz rough (pbrt-v4 ``DielectricBxDF``).
 
-    eta: relative IOR, inside over outside (> 0; < 1 when the outside is denser; 1 passes light
-    straight through). wo may be on either side. alpha / alpha_x / alpha_y / masking as in
-    ``Conductor``. In Radiance mode transmitted values are divided by eta'^2.
+    wo may be on either side. In Radiance mode transmitted values are divided by eta'^2.
 
     eta may be a ``bsdfkit.Spectrum`` (``Spectrum.named("glass-BK7")``): a non-constant one
     disperses in spectral mode (``wavelengths=``): ``sample`` lets the first (hero) wavelength
     choose lobe and direction; a reflection keeps all 4 wavelengths (f per wavelength), a
     refraction keeps the hero only (``terminated``); ``eval`` of a transmission pair is the hero's
     alone; ``pdf`` is the hero's. In RGB mode such an eta is its value at 550 nm.
+
+    Parameters
+    ----------
+    eta : float or Spectrum, optional
+        Relative IOR, inside over outside (> 0; < 1 when the outside is denser; 1 passes light
+        straight through). Default 1.5.
+    alpha, alpha_x, alpha_y : float, optional
+        GGX alpha, isotropic or per tangent axis, as in ``Conductor``; none: a smooth interface.
+    masking : {"correlated", "separable"}, optional
+        Masking-shadowing, as in ``Conductor``.
+
+    Raises
+    ------
+    ValueError
+        A value out of its range, naming the parameter (TypeError for a wrong type).
+
+    Examples
+    --------
+    >>> import numpy as np, bsdfkit as bk
+    >>> s = bk.Dielectric(1.5).sample(bk.direction(0.0, 0.0), n=1000, seed=0)
+    >>> sorted(set(np.round(s.wi[:, 2], 6).tolist()))   # smooth: mirror or straight through
+    [-1.0, 1.0]
     """
 
     __slots__ = ()
@@ -107,11 +127,27 @@ class ThinDielectric(BxDF):
     """Thin slab of dielectric (a window pane): specular reflection and straight-through
     transmission, with the inter-reflections inside the slab summed (pbrt-v4 ``ThinDielectricBxDF``).
 
-    eta: IOR of the slab (> 0), or a ``bsdfkit.Spectrum`` (its value at 550 nm in RGB mode). In
-    spectral mode a dispersive slab never terminates wavelengths: both lobes keep their direction
+    In spectral mode a dispersive slab never terminates wavelengths: both lobes keep their direction
     (mirror, straight through), the first wavelength chooses the lobe and f is that lobe's value
     per wavelength (pbrt-v4 terminates the secondaries for any non-constant eta).
     Both lobes are deltas; ``eval`` and ``pdf`` are 0.
+
+    Parameters
+    ----------
+    eta : float or Spectrum, optional
+        IOR of the slab (> 0; default 1.5), or a ``bsdfkit.Spectrum`` (its value at 550 nm in
+        RGB mode).
+
+    Raises
+    ------
+    ValueError
+        A value out of its range, naming the parameter (TypeError for a wrong type).
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> bk.ThinDielectric(1.5).albedo(bk.direction(0.0, 0.0), n_samples=1024)   # lossless
+    array([1., 1., 1.])
     """
 
     __slots__ = ()

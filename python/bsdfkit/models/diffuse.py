@@ -12,9 +12,25 @@ __all__ = ["Diffuse", "DiffuseTransmission"]
 class Diffuse(BxDF):
     """Lambertian reflection, f = reflectance / pi on wo's side (pbrt-v4 ``DiffuseBxDF``).
 
-    reflectance: scalar or RGB in [0, 1], or a ``bsdfkit.Spectrum`` with values in [0, 1]. Two-sided.
-    Spectral mode (``wavelengths=``): an RGB reflectance is uplifted (Jakob & Hanika 2019, bounded);
-    RGB mode: a spectrum is projected to linear sRGB under D65.
+    Two-sided. Spectral mode (``wavelengths=``): an RGB reflectance is uplifted (Jakob & Hanika
+    2019, bounded); RGB mode: a spectrum is projected to linear sRGB under D65.
+
+    Parameters
+    ----------
+    reflectance : float or RGB or Spectrum, optional
+        Scalar or RGB in [0, 1], or a ``bsdfkit.Spectrum`` with values in [0, 1] (default 0.5).
+
+    Raises
+    ------
+    ValueError
+        A value out of its range, naming the parameter (TypeError for a wrong type).
+
+    Examples
+    --------
+    >>> import numpy as np, bsdfkit as bk
+    >>> m = bk.Diffuse([0.8, 0.4, 0.2])
+    >>> m.eval(bk.direction(0.3, 0.0), bk.direction(1.0, 2.0)) * np.pi
+    array([0.8, 0.4, 0.2])
     """
 
     __slots__ = ()
@@ -57,6 +73,23 @@ class DiffuseTransmission(BxDF):
     f = reflectance / pi on wo's side, transmittance / pi across the surface. Each RGB in [0, 1]
     or a ``bsdfkit.Spectrum`` in [0, 1]. Lobes are sampled in proportion to their largest channel
     (in spectral mode: their largest value over the 4 wavelengths, as pbrt-v4).
+
+    Parameters
+    ----------
+    reflectance, transmittance : float or RGB or Spectrum, optional
+        Each scalar or RGB in [0, 1], or a ``bsdfkit.Spectrum`` in [0, 1] (default 0.25 each).
+
+    Raises
+    ------
+    ValueError
+        A value out of its range, naming the parameter (TypeError for a wrong type).
+
+    Examples
+    --------
+    >>> import numpy as np, bsdfkit as bk
+    >>> m = bk.DiffuseTransmission(0.3, 0.5)
+    >>> m.eval(bk.direction(0.3, 0.0), -bk.direction(0.5, 1.0)) * np.pi   # across the surface
+    array([0.5, 0.5, 0.5])
     """
 
     __slots__ = ()

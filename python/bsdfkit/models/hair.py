@@ -131,6 +131,34 @@ class Hair(BxDF):
     ``ApPDF``), so the spectral pdf differs from the RGB pdf (averaged over the 3 RGB channels) by
     that average and depends on the wavelengths; ``sample`` and ``pdf`` agree with each other.
     RGB mode projects a sigma_a spectrum to linear sRGB without an illuminant (clamped at 0).
+
+    Parameters
+    ----------
+    sigma_a : float or RGB or Spectrum, optional
+        Absorption coefficient inside the fibre per unit fibre radius, >= 0; None: pbrt-v4's
+        default (eumelanin 1.3).
+    eta : float, optional
+        IOR of the fibre (>= 1; default 1.55).
+    beta_m, beta_n : float, optional
+        Longitudinal and azimuthal roughness in [0.01, 1] (default 0.3 each).
+    alpha : float, optional
+        Cuticle scale tilt in degrees in [-90, 90] (default 2).
+    h : float or None, optional
+        Offset across the fibre in [-1, 1] (default 0), or None: the far-field fibre.
+    nodes : int, optional
+        Gauss-Legendre nodes of the far-field average (at most 64, the default).
+
+    Raises
+    ------
+    ValueError
+        A value out of its range, naming the parameter (TypeError for a wrong type).
+
+    Examples
+    --------
+    >>> import numpy as np, bsdfkit as bk
+    >>> m = bk.Hair.from_concentration(1.3, beta_m=0.3, beta_n=0.3)
+    >>> m.eval(bk.direction(1.2, 0.3), bk.direction(2.0, 2.5)).shape
+    (3,)
     """
 
     __slots__ = ()

@@ -13,7 +13,45 @@ from .registry import KnobDecl
 
 __all__ = ["CoatedDiffuse", "CoatedConductor"]
 
+_LAYER_PARAMS = """
+    thickness : float, optional
+        Slab thickness in mean free paths of the medium (sigma_t = 1), >= 0; pbrt-v4 floors it
+        at FLT_MIN. With albedo 0 it still attenuates: exp(-thickness / |cos|) per pass.
+    albedo : float or RGB or Spectrum, optional
+        Single-scattering albedo of the medium, scalar or RGB in [0, 1] (0: no medium, only
+        absorption by the thickness).
+    g : float, optional
+        Henyey-Greenstein asymmetry in [-1, 1] (clamped to +-0.99 as pbrt-v4's sampler does).
+    max_depth : int, optional
+        Longest random walk (>= 1); deeper paths are truncated (a bias), pbrt default 10.
+    n_samples : int, optional
+        Random walks averaged per evaluation (>= 1): noise falls as 1/sqrt(n_samples), cost
+        grows linearly.
+    seed : int, optional
+        Picks the realization (integer >= 0). ``eval``/``pdf``/``sample`` are deterministic
+        functions of (seed, wo, wi) / (seed, wo, uc, u): bit-identical for any thread count,
+        chunking or array position; average over seeds for the expectation.
+    mis : {"pbrt", "consistent"}, optional
+        "pbrt" (default) is pbrt-v4's f() estimator as the book defines it. Its MIS weight for
+        leaving through a rough coating after a base or medium sample compares the sample's
+        density of the inner direction with top.PDF(-w, wi), a density of wi: the two strategies'
+        weights do not sum to one and f() is biased high with a rough coat (measured +5 to +8 %
+        of the albedo for alpha 0.1-0.3; sample() is not affected). "consistent" uses the
+        density of the same inner direction under the other strategy (top.PDF(wi, -w) in the
+        adjoint mode), so the weights sum to one.
+    method : {"stochastic", "analytic"}, optional
+        "stochastic" (default, the model: pbrt-v4's random walk) or "analytic", a deterministic
+        closed-form approximation of the same layered material (see Notes).
+
+    Raises
+    ------
+    ValueError
+        A value out of its range, naming the parameter (TypeError for a wrong type).
+"""
+
 _LAYER_DOC = """
+    Notes
+    -----
     Energy under a rough coat: the coat is pbrt-v4's rough dielectric interface, whose
     single-scattering microfacet model loses energy, most of it from inside beyond the critical
     angle. A white, lossless CoatedDiffuse (reflectance 1, medium albedo 1, eta 1.5) reflects
@@ -22,29 +60,7 @@ _LAYER_DOC = """
     nothing else; ``tests/models/test_layered_energy.py``). No energy compensation covers the
     dielectric interface yet.
 
-    Layer and estimator parameters (both models):
-
-    thickness: slab thickness in mean free paths of the medium (sigma_t = 1), >= 0; pbrt-v4
-        floors it at FLT_MIN. With albedo 0 it still attenuates: exp(-thickness / |cos|) per pass.
-    albedo: single-scattering albedo of the medium, scalar or RGB in [0, 1] (0: no medium, only
-        absorption by the thickness).
-    g: Henyey-Greenstein asymmetry in [-1, 1] (clamped to +-0.99 as pbrt-v4's sampler does).
-    max_depth: longest random walk (>= 1); deeper paths are truncated (a bias), pbrt default 10.
-    n_samples: random walks averaged per evaluation (>= 1): noise falls as 1/sqrt(n_samples),
-        cost grows linearly.
-    seed: picks the realization (integer >= 0). ``eval``/``pdf``/``sample`` are deterministic
-        functions of (seed, wo, wi) / (seed, wo, uc, u): bit-identical for any thread count,
-        chunking or array position; average over seeds for the expectation.
-    mis: "pbrt" (default) is pbrt-v4's f() estimator as the book defines it. Its MIS weight for
-        leaving through a rough coating after a base or medium sample compares the sample's
-        density of the inner direction with top.PDF(-w, wi), a density of wi: the two strategies'
-        weights do not sum to one and f() is biased high with a rough coat (measured +5 to +8 %
-        of the albedo for alpha 0.1-0.3; sample() is not affected). "consistent" uses the
-        density of the same inner direction under the other strategy (top.PDF(wi, -w) in the
-        adjoint mode), so the weights sum to one.
-
-    method: "stochastic" (default, the model: pbrt-v4's random walk below) or "analytic", a
-        deterministic closed-form approximation of the same layered material (Weidlich & Wilkie
+    ``method="analytic"`` is a deterministic closed-form approximation (Weidlich & Wilkie
         2007: the coating's reflection lobe, the base evaluated at the refracted directions and
         attenuated by (1 - F(wo)) (1 - F(wi)) / eta^2 and by the absorption exp(-thickness
         (1/cos_o' + 1/cos_i')) along the refracted paths, the internal reflections summed as
@@ -207,10 +223,23 @@ class CoatedDiffuse(_AnalyticSpectral, BxDF):
     __doc__ = """Diffuse base under a dielectric coating with an optional scattering medium between them:
     pbrt-v4's ``CoatedDiffuseBxDF`` (``LayeredBxDF<DielectricBxDF, DiffuseBxDF, true>``).
 
-    reflectance: albedo of the Lambertian base, scalar or RGB in [0, 1].
-    eta: relative IOR of the coating (> 0; 1 = index matched, the coating disappears).
-    alpha / alpha_x / alpha_y: GGX alpha of the coating (< 1e-3: smooth), as in ``Dielectric``.
-    masking: "correlated" (pbrt-v4) or "separable", the coating's masking-shadowing.
+    Parameters
+    ----------
+    reflectance : float or RGB or Spectrum, optional
+        Albedo of the Lambertian base, scalar or RGB in [0, 1].
+    eta : float, optional
+        Relative IOR of the coating (> 0; 1 = index matched, the coating disappears).
+    alpha, alpha_x, alpha_y : float, optional
+        GGX alpha of the coating (< 1e-3: smooth), as in ``Dielectric``.
+    masking : {"correlated", "separable"}, optional
+        The coating's masking-shadowing: pbrt-v4's height-correlated Smith (default) or G1 G1.""" \
+        + _LAYER_PARAMS + """
+    Examples
+    --------
+    >>> import numpy as np, bsdfkit as bk
+    >>> m = bk.CoatedDiffuse([0.6, 0.35, 0.15], alpha=0.05, method="analytic")
+    >>> m.eval(bk.direction(0.5, 0.0), bk.direction(0.7, 2.0)).shape
+    (3,)
     """ + _LAYER_DOC
 
     __slots__ = ()
@@ -289,18 +318,31 @@ class CoatedConductor(_AnalyticSpectral, BxDF):
     (car paint, lacquered metal): pbrt-v4's ``CoatedConductorBxDF``
     (``LayeredBxDF<DielectricBxDF, ConductorBxDF, true>``).
 
-    conductor_eta, conductor_k: the metal's complex IOR per RGB channel, relative to vacuum
-        (eta > 0, k >= 0). As in pbrt-v4 (since PR #343, issue #342), the base sees the metal
-        *relative to the coating*: both are divided by ``interface_eta`` before use, so a
-        coated metal is darker and less tinted at normal incidence than the bare metal.
-    conductor_alpha / conductor_alpha_x / conductor_alpha_y: GGX alpha of the metal.
-    interface_eta: relative IOR of the coating (> 0).
-    interface_alpha / interface_alpha_x / interface_alpha_y: GGX alpha of the coating.
-    masking: "correlated" (pbrt-v4) or "separable", for both microfacet interfaces.
-
     ``from_metal(name, ...)`` takes eta, k from ``bsdfkit.METALS``; ``from_reflectance(r, ...)``
     uses pbrt-v4's artist mapping eta = 1, k = 2 sqrt(r) / sqrt(1 - r) (r clamped to 0.9999),
     also divided by ``interface_eta`` (pbrt-v4 does the same).
+
+    Parameters
+    ----------
+    conductor_eta, conductor_k : RGB or Spectrum
+        The metal's complex IOR per RGB channel, relative to vacuum (eta > 0, k >= 0). As in
+        pbrt-v4 (since PR #343, issue #342), the base sees the metal *relative to the coating*:
+        both are divided by ``interface_eta`` before use, so a coated metal is darker and less
+        tinted at normal incidence than the bare metal.
+    conductor_alpha, conductor_alpha_x, conductor_alpha_y : float, optional
+        GGX alpha of the metal (isotropic, or per tangent axis).
+    interface_eta : float, optional
+        Relative IOR of the coating (> 0).
+    interface_alpha, interface_alpha_x, interface_alpha_y : float, optional
+        GGX alpha of the coating.
+    masking : {"correlated", "separable"}, optional
+        Masking-shadowing of both microfacet interfaces.""" + _LAYER_PARAMS + """
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> m = bk.CoatedConductor.from_metal("Cu", conductor_alpha=0.3, interface_alpha=0.02, method="analytic")
+    >>> m.albedo(bk.direction(0.5, 0.0), n_samples=1024).shape
+    (3,)
     """ + _LAYER_DOC
 
     __slots__ = ()

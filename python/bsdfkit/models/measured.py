@@ -213,6 +213,31 @@ class MERL(BxDF):
     RGB model's (wavelength-independent). In RGB mode the bins' RGB values are used as they are.
 
     Pickles by (path, digest): unpickling re-reads the file and refuses a changed one.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.binary`` file.
+    interpolation : {"nearest", "linear"}, optional
+        The lookup (above); default "nearest".
+    digest : str, optional
+        Expected SHA-256 of the file (hex).
+
+    Raises
+    ------
+    ValueError
+        A file that fails :func:`read_merl`'s checks, a digest that does not match, a bad
+        ``interpolation``.
+    OSError
+        A file that cannot be read.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> path = bk.measured.write_merl("grey.binary", bk.Diffuse(0.5))
+    >>> m = bk.MERL(path)
+    >>> m.eval(bk.direction(0.5, 0.0), bk.direction(0.6, 2.0)).round(3)
+    array([0.159, 0.159, 0.159])
     """
 
     # registry declarations (issue 10)
@@ -638,6 +663,30 @@ class Measured(BxDF):
     renderers clamp the interpolation weight). pdf and sampling are the RGB mode's (the luminance
     and VNDF warps do not depend on the wavelength). In RGB mode the spectra are projected once,
     at load (above).
+
+    Parameters
+    ----------
+    path : str or os.PathLike, optional
+        The tensor file; or
+    data : bytes, optional
+        The tensor file's bytes (exactly one of ``path`` and ``data``).
+    digest : str, optional
+        Expected SHA-256 of the file (hex).
+
+    Raises
+    ------
+    ValueError
+        Both or neither of ``path`` and ``data``; a field that fails validation (named); a
+        digest that does not match.
+    TypeError
+        ``data`` that is not bytes.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> m = bk.measured.tabulate(bk.Diffuse(0.5), resolution=8)
+    >>> isinstance(m, bk.Measured), m.eval(bk.direction(0.5, 0.0), bk.direction(0.6, 2.0)).shape
+    (True, (3,))
     """
 
     # registry declarations (issue 10)

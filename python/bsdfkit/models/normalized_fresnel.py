@@ -32,6 +32,23 @@ class NormalizedFresnel(BxDF):
     eta may be a ``bsdfkit.Spectrum`` (e.g. ``Spectrum.named("glass-BK7")``): in spectral mode
     (``wavelengths=``) f uses eta(lambda) per wavelength (c and the eta^2 factor too); RGB mode
     uses its value at 550 nm. The sampling does not depend on eta.
+
+    Parameters
+    ----------
+    eta : float or Spectrum, optional
+        Relative IOR of the boundary (> 0; default 1.33).
+
+    Raises
+    ------
+    ValueError
+        A value out of its range, naming the parameter (TypeError for a wrong type).
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> rho = bk.NormalizedFresnel(1.33).albedo(bk.direction(0.5, 0.0), mode="importance")
+    >>> bool(abs(rho[0] - 1) < 0.01)
+    True
     """
 
     __slots__ = ()

@@ -30,27 +30,39 @@ class Plastic(BxDF):
 
     Parameters
     ----------
-    reflectance: diffuse albedo R of the base, scalar or RGB in [0, 1] (Mitsuba
-        ``diffuse_reflectance``).
-    eta: relative IOR of the coating, inside over outside (Mitsuba ``int_ior / ext_ior``);
+    reflectance : float or RGB or Spectrum, optional
+        Diffuse albedo R of the base, scalar or RGB in [0, 1] (Mitsuba ``diffuse_reflectance``).
+    eta : float, optional
+        Relative IOR of the coating, inside over outside (Mitsuba ``int_ior / ext_ior``);
         > 0 and != 1 (Mitsuba rejects index-matched rough coatings). Default 1.49
         (polypropylene, Mitsuba's default).
-    alpha: isotropic GGX alpha of the coating (not pbrt's remapped roughness); < 1e-3 gives the
+    alpha : float, optional
+        Isotropic GGX alpha of the coating (not pbrt's remapped roughness); < 1e-3 gives the
         smooth coating (a delta reflection lobe), otherwise it is floored at 1e-4.
-    nonlinear: Mitsuba's ``nonlinear`` knob (a modelling choice). False: the internal
+    nonlinear : bool, optional
+        Mitsuba's ``nonlinear`` knob (a modelling choice). False: the internal
         reflections are summed as 1 / (1 - Fdr), which keeps the diffuse colour as given.
         True: R / (1 - R Fdr), the physical sum of the base's inter-reflections (colours
         saturate and darken, as in real wet/varnished materials).
-    masking: the coating's masking-shadowing, "correlated" (height-correlated Smith, pbrt-v4;
+    masking : {"correlated", "separable"}, optional
+        The coating's masking-shadowing, "correlated" (height-correlated Smith, pbrt-v4;
         the default) or "separable" (G1 G1, what Mitsuba uses: pass it to reproduce Mitsuba
         exactly; ``from_mitsuba`` does). The default is not Mitsuba's because every bsdfkit
         microfacet model defaults to pbrt-v4's height-correlated masking (the physically
         consistent one), and a changed default would silently change the material of every
         existing spec string and script that omits it; instead ``to_mitsuba`` refuses a rough
         correlated model (``approximate=True`` exports it with a warning stating the difference).
-    specular_reflectance: multiplier Ks on the coating's reflection, scalar or RGB >= 0
-        (physically 1; Mitsuba ``specular_reflectance``).
+    specular_reflectance : float or RGB or Spectrum, optional
+        Multiplier Ks on the coating's reflection, scalar or RGB >= 0 (physically 1; Mitsuba
+        ``specular_reflectance``).
 
+    Raises
+    ------
+    ValueError
+        A value out of its range, naming the parameter (TypeError for a wrong type).
+
+    Notes
+    -----
     T and Fdr: smooth coating, T = 1 - F (exact dielectric Fresnel) and Fdr = Mitsuba's fitted
     diffuse Fresnel reflectance of 1/eta (Egan & Hilgeman 1973 / d'Eon & Irving 2011). Rough
     coating, T(cos) is Mitsuba's 64-entry table of the GGX interface's directional

@@ -38,14 +38,33 @@ FLAGS = ("energy_conserving", "exact_eval", "reciprocal", "two_sided", "transmis
 class KnobDecl:
     """An accuracy knob declared by a model class.
 
-    name: the knob's name (also the constructor keyword it sets, unless ``param`` says otherwise).
-    settings: values, most accurate first, or ``callable(params) -> tuple`` for instance-dependent
-    settings (a lobe's ``(strength, 0)``, the DFG sizes around the input's own).
-    kind: ``"approximation"`` or ``"modelling"``.
-    note: what it does, one line. moot: ``callable(params) -> str | None``, the reason the knob
-    cannot change this instance (``None``: it can). labels: ``callable(params) -> tuple`` of
-    short strings for the settings (default ``str`` of each). lobe: True for "keep/drop a lobe"
-    knobs (simplify prefers dropping a lobe among equally cheap configurations).
+    Parameters
+    ----------
+    name : str
+        The knob's name (also the constructor keyword it sets, unless ``param`` says otherwise).
+    settings : tuple or callable
+        Values, most accurate first, or ``callable(params) -> tuple`` for instance-dependent
+        settings (a lobe's ``(strength, 0)``, the DFG sizes around the input's own).
+    kind : {"approximation", "modelling"}
+        Whether a setting changes accuracy or which material it is.
+    note : str
+        What it does, one line.
+    moot : callable, optional
+        ``callable(params) -> str | None``, the reason the knob cannot change this instance
+        (``None``: it can).
+    param : str, optional
+        The constructor keyword, when it is not ``name``.
+    labels : callable, optional
+        ``callable(params) -> tuple`` of short strings for the settings (default ``str`` of each).
+    lobe : bool, optional
+        True for "keep/drop a lobe" knobs (simplify prefers dropping a lobe among equally cheap
+        configurations).
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> [k.name for k in bk.Conductor.knobs]
+    ['fresnel', 'masking']
     """
 
     name: str

@@ -13,18 +13,54 @@ __all__ = ["albedo"]
 
 def albedo(model_or_list, n_theta=46, n_samples=8192, ax=None, channel="luminance", label=None, *,
            seed=0, mode=TransportMode.Radiance, title=None, legend=True, colors=None, linestyle="-"):
-    """Directional albedo ρ(θo) = ∫ f |cos θi| dωi against θo (degrees, 0 to 89.5) with a
-    dashed white-furnace line at 1.
+    """Directional albedo ρ(θo) = ∫ f |cos θi| dωi against θo (degrees, 0 to 89.5) with a dashed
+    white-furnace line at 1.
 
-    ``n_theta`` equally spaced θo (the last one clamped to 89.5° to stay off the horizon),
-    Monte Carlo with ``n_samples`` importance samples each (``BxDF.albedo``). channel:
-    "luminance", "r", "g", "b" or "rgb" (three curves per model). Radiance-mode albedo of a
-    dielectric includes the 1/η² radiance scaling of transmission; pass
+    Monte Carlo with ``n_samples`` importance samples each (``BxDF.albedo``). Radiance-mode albedo
+    of a dielectric includes the 1/η² radiance scaling of transmission; pass
     ``mode=bk.TransportMode.Importance`` for the energy balance.
 
-    Returns the Axes; ``ax.bsdfkit_data`` holds per-model lists ``theta_deg``, ``value``
-    ((n_theta,) or (n_theta, 3)), ``rgb`` ((n_theta, 3)), ``label``, ``model``, plus
-    ``channel``, ``mode``; and the scalar ``n_samples`` (of the first call).
+    Parameters
+    ----------
+    model_or_list : BxDF or list of BxDF
+        The model(s); several are overlaid, each in its own colour.
+    n_theta : int, optional
+        Equally spaced θo (the last one clamped to 89.5° to stay off the horizon).
+    n_samples : int, optional
+        Importance samples per θo.
+    ax : matplotlib Axes, optional
+        Axes to draw into (created if None).
+    channel : {"luminance", "r", "g", "b", "rgb"}, optional
+        Luminance, one channel, or three curves per model.
+    label : str or list of str, optional
+        Legend label(s) (default: ``model.describe()``).
+    seed : int, optional
+        Seed of the samples.
+    mode : TransportMode, optional
+        Passed to ``eval`` / ``sample`` (default Radiance).
+    title : str, optional
+        None: an automatic title; "": none.
+    legend : bool, optional
+        Draw the legend.
+    colors : list, optional
+        One colour per model.
+    linestyle : str, optional
+        Line style.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The Axes; ``ax.bsdfkit_data`` holds per-model lists ``theta_deg``, ``value``
+        ((n_theta,) or (n_theta, 3)), ``rgb`` ((n_theta, 3)), ``label``, ``model``, plus
+        ``channel``, ``mode``; and the scalar ``n_samples`` (of the first call).
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> from bsdfkit import plot as bkplot
+    >>> ax = bkplot.albedo(bk.Diffuse(0.5), n_theta=4, n_samples=1024)
+    >>> [round(float(v), 2) for v in ax.bsdfkit_data["value"][0]]
+    [0.5, 0.5, 0.5, 0.5]
     """
     models = _as_models(model_or_list)
     labels = _as_labels(label, len(models))

@@ -26,7 +26,24 @@ _RGB_STYLES = ("-", "--", ":", "-.")
 
 
 def luminance(rgb) -> np.ndarray:
-    """Luminance 0.2126 R + 0.7152 G + 0.0722 B of (..., 3) linear RGB values."""
+    """Luminance 0.2126 R + 0.7152 G + 0.0722 B of (..., 3) linear RGB values.
+
+    Parameters
+    ----------
+    rgb : array_like, shape (..., 3)
+        Linear RGB.
+
+    Returns
+    -------
+    numpy.ndarray, shape (...)
+        The luminance.
+
+    Examples
+    --------
+    >>> from bsdfkit import plot as bkplot
+    >>> float(bkplot.luminance([1.0, 1.0, 1.0]))
+    1.0
+    """
     return np.asarray(rgb, dtype=np.float64) @ LUMINANCE_WEIGHTS
 
 

@@ -13,8 +13,38 @@ _VIEWS = ("polar", "hemisphere", "halfdiff")
 
 def difference_model(a: BxDF, b: BxDF, floor: float = 1e-3) -> Custom:
     """A :class:`bsdfkit.Custom` whose value is the relative difference per channel
-    ``|f_b - f_a| / max(|f_a|, floor * max f_a)`` (``a`` is the reference; the floor is relative
-    to ``a``'s largest value over the pair batch, so that near-zero regions do not explode)."""
+    ``|f_b - f_a| / max(|f_a|, floor * max f_a)``.
+
+    Parameters
+    ----------
+    a : BxDF
+        The reference.
+    b : BxDF
+        The model compared with it.
+    floor : float, optional
+        > 0, relative to ``a``'s largest value over the pair batch, so that near-zero regions do
+        not explode (default 1e-3).
+
+    Returns
+    -------
+    Custom
+        A model whose "f" is the relative difference (any view can draw it).
+
+    Raises
+    ------
+    TypeError
+        ``a`` or ``b`` not a bsdfkit model.
+    ValueError
+        A floor <= 0.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> from bsdfkit import plot as bkplot
+    >>> d = bkplot.difference_model(bk.Diffuse(0.5), bk.Diffuse(0.55))
+    >>> d.eval(bk.direction(0.3, 0.0), bk.direction(0.6, 1.0)).round(6)
+    array([0.1, 0.1, 0.1])
+    """
     if not isinstance(a, BxDF) or not isinstance(b, BxDF):
         raise TypeError("a, b: expected two bsdfkit models")
     if not floor > 0:
@@ -29,13 +59,47 @@ def difference_model(a: BxDF, b: BxDF, floor: float = 1e-3) -> Custom:
 
 
 def difference(a: BxDF, b: BxDF, view="polar", *, floor=1e-3, ax=None, **kwargs):
-    """Plots the relative difference of ``b`` against the reference ``a`` in one view:
-    ``"polar"`` (:func:`polar`), ``"hemisphere"`` (:func:`hemisphere`) or ``"halfdiff"``
-    (:func:`halfdiff`); ``kwargs`` go to that view (theta_o, channel, log, ...). The plotted value
-    is :func:`difference_model`'s ``|f_b - f_a| / max(|f_a|, floor max f_a)`` (1 = 100 %); delta
-    lobes are not compared (eval reports them as 0). The colour bar / radius is labelled as that
-    relative difference (dimensionless), not as f; ``cosine=True`` is refused (a ratio has no
-    cosine factor). Returns the view's Axes."""
+    """Plots the relative difference of ``b`` against the reference ``a`` in one view.
+
+    The plotted value is :func:`difference_model`'s ``|f_b - f_a| / max(|f_a|, floor max f_a)``
+    (1 = 100 %); delta lobes are not compared (eval reports them as 0). The colour bar / radius is
+    labelled as that relative difference (dimensionless), not as f.
+
+    Parameters
+    ----------
+    a : BxDF
+        The reference.
+    b : BxDF
+        The model compared with it.
+    view : {"polar", "hemisphere", "halfdiff"}, optional
+        :func:`polar`, :func:`hemisphere` or :func:`halfdiff`.
+    floor : float, optional
+        As :func:`difference_model`'s.
+    ax : matplotlib Axes, optional
+        Where to draw.
+    **kwargs
+        Passed to the view (theta_o, channel, log, ...); ``cosine=True`` is refused (a ratio has
+        no cosine factor).
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The view's Axes.
+
+    Raises
+    ------
+    ValueError
+        An unknown view, ``cosine=True``, a floor <= 0.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> from bsdfkit import plot as bkplot
+    >>> ax = bkplot.difference(bk.Conductor.from_metal("Cu", alpha=0.3),
+    ...                        bk.Conductor.from_metal("Cu", alpha=0.3, fresnel="schlick"))
+    >>> bool(max(v.max() for v in ax.bsdfkit_data["value"]) < 0.2)
+    True
+    """
     from ._halfdiff import halfdiff
     from ._hemisphere import hemisphere
     from ._polar import polar

@@ -64,11 +64,28 @@ def _auto_control(name, default, choices):
 
 
 class Explorer:
-    """The widget of :func:`explore`: ``.widget`` (an ipywidgets HBox, shown when the Explorer is
-    the last expression of a cell), ``.controls`` (name -> widget), ``.model`` (the current
-    model), ``.figure`` (the last drawn Figure), ``.png`` (its PNG bytes, as shown),
-    ``.update()`` (rebuild the model and the Figure), ``.error`` (the last model construction
-    error, or None)."""
+    """The widget of :func:`explore` (made by it, not by hand).
+
+    Attributes: ``.widget`` (an ipywidgets HBox, shown when the Explorer is the last expression of
+    a cell), ``.controls`` (name -> widget), ``.model`` (the current model), ``.figure`` (the last
+    drawn Figure), ``.png`` (its PNG bytes, as shown), ``.update()`` (rebuild the model and the
+    Figure), ``.error`` (the last model construction error, or None).
+
+    Parameters
+    ----------
+    factory : callable
+        Returns a model from the control values.
+    params : dict
+        The factory's parameters and their defaults.
+    views : sequence of str
+        The :func:`overview` views.
+    theta_o, phi_o : float
+        The starting wo, degrees.
+    choices : dict
+        Slider ranges and dropdown choices (:func:`explore`'s ``params``).
+    overview_kw : dict
+        Keywords of :func:`overview`.
+    """
 
     def __init__(self, factory, params, views, theta_o, phi_o, choices, overview_kw):
         import ipywidgets as W
@@ -174,17 +191,49 @@ def explore(model_factory, theta_o=30.0, phi_o=0.0, views=VIEWS, *, params=None,
     """Interactive views in Jupyter: sliders for θo, φo and the model's parameters, toggles for
     log scale, × cos θi and the channel; every change redraws :func:`overview`.
 
-    model_factory: a callable whose keyword parameters with number/bool defaults become
-    controls (``lambda alpha=0.2, eta=1.5: bk.Dielectric(eta, alpha=alpha)``), a model (its
-    real and boolean parameters become controls, RGB ones when gray) or a model class (its
-    example model, ``bsdfkit._spec.example_model``). params: ``{name: (min, max, step)}`` (a
-    tuple) to set a slider's range (needed for integer parameters), or ``{name: [choices]}``
-    (a list) for a dropdown (needed for string parameters). Other keywords go to :func:`overview`
-    (plus ``figsize`` in inches and ``dpi`` of the shown PNG, default 80). Invalid parameter values show the model's error message instead of the
-    plots.
+    Invalid parameter values show the model's error message instead of the plots.
 
-    Needs ipywidgets (``pip install ipywidgets``); raises ImportError saying so otherwise.
-    Returns an :class:`Explorer` (displayed as the widget).
+    Parameters
+    ----------
+    model_factory : callable, BxDF or type
+        A callable whose keyword parameters with number/bool defaults become controls
+        (``lambda alpha=0.2, eta=1.5: bk.Dielectric(eta, alpha=alpha)``), a model (its real and
+        boolean parameters become controls, RGB ones when gray) or a model class (its example
+        model, ``bsdfkit.models.spec.example_model``).
+    theta_o, phi_o : float, optional
+        The starting wo, degrees.
+    views : sequence of str, optional
+        As :func:`overview`'s.
+    params : dict, optional
+        ``{name: (min, max, step)}`` (a tuple) to set a slider's range (needed for integer
+        parameters), or ``{name: [choices]}`` (a list) for a dropdown (needed for string
+        parameters).
+    **overview_kw
+        Passed to :func:`overview` (plus ``figsize`` in inches and ``dpi`` of the shown PNG,
+        default 80).
+
+    Returns
+    -------
+    Explorer
+        The widget (displayed when it is the last expression of a cell).
+
+    Raises
+    ------
+    ImportError
+        ipywidgets is not installed (``pip install ipywidgets``).
+    ValueError
+        A ``params`` entry naming no parameter of the factory.
+    TypeError
+        A ``model_factory`` of another kind.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> from bsdfkit import plot as bkplot
+    >>> ex = bkplot.explore(lambda alpha=0.2: bk.Conductor.from_metal("Cu", alpha=alpha),
+    ...                     views=("polar",))
+    >>> sorted(ex.controls)[:3], ex.error is None
+    (['alpha', 'channel', 'cosine'], True)
     """
     try:
         import ipywidgets  # noqa: F401

@@ -16,12 +16,36 @@ def gallery(models=None, theta_o=40.0, *, fig=None, res=96, albedo_samples=16384
     """One row per model — in-plane polar slice, hemisphere image, directional albedo (RGB and
     luminance) — at ``theta_o`` (degrees).
 
-    models: a list of models, or None for the first registered example of every class in
-    ``bsdfkit.MODELS`` (``bsdfkit.models.spec.example_model``; the registry refuses a class
-    without examples, so the gallery never silently skips a model).
+    Parameters
+    ----------
+    models : list of BxDF, optional
+        The models; None: the first registered example of every class in ``bsdfkit.MODELS``
+        (``bsdfkit.models.spec.example_model``; the registry refuses a class without examples, so
+        the gallery never silently skips a model).
+    theta_o : float, optional
+        wo's angle from the normal, degrees.
+    fig : matplotlib Figure, optional
+        A Figure to draw into (a new pyplot figure otherwise).
+    res : int, optional
+        Resolution of the hemisphere images.
+    albedo_samples, albedo_theta : int, optional
+        Samples per θo and θo count of the albedo curves.
+    row_height : float, optional
+        Inches per row.
 
-    Returns the Figure (a pyplot figure unless ``fig`` is given); ``fig.bsdfkit_rows`` is a list
-    of ``(model, {"polar": ax, "hemisphere": ax, "albedo": ax})``.
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The Figure; ``fig.bsdfkit_rows`` is a list of ``(model, {"polar": ax, "hemisphere": ax,
+        "albedo": ax})``.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> from bsdfkit import plot as bkplot
+    >>> fig = bkplot.gallery([bk.Diffuse(0.5), bk.Dielectric(1.5)], res=24, albedo_samples=512, albedo_theta=4)
+    >>> len(fig.bsdfkit_rows)
+    2
     """
     if models is None:
         from ..models import MODELS

@@ -38,28 +38,81 @@ def _halfdiff_dirs(theta_h, theta_d, phi_h, phi_d):
 def halfdiff(model_or_list, phi_d=90.0, sqrt_theta_h=True, log=True, cosine=False, channel="luminance", ax=None,
              res=128, label=None, *, phi_h=0.0, title=None, legend=True, colorbar=True, cmap="inferno",
              log_decades=4.0, vmax=None, grazing_deg=85.0, mode=TransportMode.Radiance, quantity=None):
-    """θh × θd image of ``f`` (or ``f |cos θi|``; ``quantity``: its label with the unit, as in
-    :func:`hemisphere`) in Rusinkiewicz half/difference coordinates at
-    a fixed ``phi_d`` (degrees; default 90°, Disney BRDF Explorer's slice) and ``phi_h``
-    (degrees; matters for anisotropic models only).
+    """θh × θd image of ``f`` (or ``f |cos θi|``) in Rusinkiewicz half/difference coordinates at a
+    fixed ``phi_d`` and ``phi_h``.
 
     θh (the half vector's angle from the normal) runs across, θd (the angle between ωi and the
-    half vector) up, both 0..90°. ``sqrt_theta_h=True`` spaces θh as √θh (as in MERL and BRDF
-    Explorer) so that the specular peak near θh = 0 gets room; tick labels stay in degrees.
-    Configurations with ωo or ωi below the horizon (none at φd = 90°; θh + θd > 90° at φd = 0°)
-    are not reflection and are drawn gray (NaN in the data). Transmission is not part of this view.
-    A list of models: the first is the image, every model is drawn as iso-value lines.
-    log (default True) and vmax: f of microfacet models grows without bound towards θd = 90°
-    (ωo and ωi grazing: the 1/(cos θo cos θi) factor), which would leave the rest of the image
-    black. So by default (``vmax=None``) the colour scale tops out at the largest value with both
-    ωo and ωi within ``grazing_deg`` of the normal; larger values are drawn in the top colour
-    (the colorbar's upper arrow) and the true maximum is in the title.
+    half vector) up, both 0..90°. Configurations with ωo or ωi below the horizon (none at
+    φd = 90°; θh + θd > 90° at φd = 0°) are not reflection and are drawn gray (NaN in the data).
+    Transmission is not part of this view. A list of models: the first is the image, every model
+    is drawn as iso-value lines.
 
-    Returns the Axes; ``ax.bsdfkit_data`` has ``value`` (list per model, (res, res) or
-    (res, res, 3), rows θd, columns θh, NaN where invalid), ``theta_h_deg`` (res,),
-    ``theta_d_deg`` (res,), ``wo``/``wi`` ((res, res, 3)), ``valid`` ((res, res) bool),
-    ``phi_d``, ``phi_h``, ``sqrt_theta_h``, ``label``, ``model``, ``vmax``, ``cosine``,
-    ``channel``, ``log``.
+    Parameters
+    ----------
+    model_or_list : BxDF or list of BxDF
+        The model(s); several are overlaid, each in its own colour.
+    phi_d : float, optional
+        Difference azimuth, degrees (default 90°, Disney BRDF Explorer's slice).
+    sqrt_theta_h : bool, optional
+        Space θh as √θh (as in MERL and BRDF Explorer) so that the specular peak near θh = 0 gets
+        room; tick labels stay in degrees.
+    log : bool, optional
+        Logarithmic colour scale over ``log_decades`` decades (default True).
+    cosine : bool, optional
+        Plot ``f |cos θi|`` instead of ``f``.
+    channel : {"luminance", "r", "g", "b", "rgb"}, optional
+        Luminance (0.2126 R + 0.7152 G + 0.0722 B), one channel, or all three.
+    ax : matplotlib Axes, optional
+        A rectilinear Axes to draw into (created if None).
+    res : int, optional
+        Pixels per axis.
+    label : str or list of str, optional
+        Legend label(s) (default: ``model.describe()``).
+    title : str, optional
+        None: a title stating what is plotted; "" : none.
+    legend : bool, optional
+        Draw the legend.
+    phi_h : float, optional
+        Half-vector azimuth, degrees (matters for anisotropic models only).
+    colorbar : bool, optional
+        Draw the colour bar.
+    cmap : str, optional
+        Matplotlib colour map.
+    log_decades : float, optional
+        Decades shown on a log scale.
+    vmax : float, optional
+        Top of the colour scale. f of microfacet models grows without bound towards θd = 90° (ωo
+        and ωi grazing: the 1/(cos θo cos θi) factor), which would leave the rest of the image
+        black. So by default (None) the scale tops out at the largest value with both ωo and ωi
+        within ``grazing_deg`` of the normal; larger values are drawn in the top colour (the
+        colorbar's upper arrow) and the true maximum is in the title.
+    grazing_deg : float, optional
+        See ``vmax``.
+    mode : TransportMode, optional
+        Passed to ``eval`` / ``sample`` (default Radiance).
+    quantity : str, optional
+        The label of the plotted value with its unit, as in :func:`hemisphere`.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The Axes; ``ax.bsdfkit_data`` has ``value`` (list per model, (res, res) or (res, res, 3),
+        rows θd, columns θh, NaN where invalid), ``theta_h_deg`` (res,), ``theta_d_deg`` (res,),
+        ``wo``/``wi`` ((res, res, 3)), ``valid`` ((res, res) bool), ``phi_d``, ``phi_h``,
+        ``sqrt_theta_h``, ``label``, ``model``, ``vmax``, ``cosine``, ``channel``, ``log``.
+
+    Raises
+    ------
+    ValueError
+        An ``ax`` that is not rectilinear.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> from bsdfkit import plot as bkplot
+    >>> ax = bkplot.halfdiff(bk.Conductor.from_metal("Cu", alpha=0.2), res=32)
+    >>> ax.bsdfkit_data["value"][0].shape
+    (32, 32)
     """
     models = _as_models(model_or_list)
     labels = _as_labels(label, len(models))

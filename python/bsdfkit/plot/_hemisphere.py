@@ -21,36 +21,81 @@ def hemisphere(model_or_list, theta_o=30.0, phi_o=0.0, projection="disk", log=Fa
                colorbar=True, cmap="inferno", log_decades=4.0, mode=TransportMode.Radiance, n_delta=4096, seed=0,
                magnify_below=0.04, quantity=None):
     """Image of ``f(wo, wi)`` (or ``f |cos θi|`` with ``cosine=True``) over every direction wi.
-    ``quantity``: the label of the plotted value with its unit (default ``"f [1/sr]"`` or
-    ``"f·|cos θi| [1/sr]"``; :func:`difference` gives its relative difference's).
 
     ``wo = bk.direction(radians(theta_o), radians(phi_o))`` (degrees in, marked "ωo"; its mirror
-    direction, azimuth ``phi_o + 180``, is marked "+").
+    direction, azimuth ``phi_o + 180``, is marked "+"). A list of models: the first is drawn as the
+    image, every model as iso-value lines in its colour (shared levels, in the legend). Delta
+    (specular) lobes, which ``eval`` reports as 0, are marked with a star and their
+    reflectance/transmittance.
 
-    projection:
-      * ``"disk"``: azimuthal equidistant disk seen from above (+z): a direction at angle θ from
+    Parameters
+    ----------
+    model_or_list : BxDF or list of BxDF
+        The model(s); several are overlaid, each in its own colour.
+    theta_o, phi_o : float, optional
+        wo's angle from the normal and azimuth, in degrees.
+    projection : {"disk", "theta_phi"}, optional
+        ``"disk"``: azimuthal equidistant disk seen from above (+z): a direction at angle θ from
         the side's pole (+z for the upper, -z for the lower hemisphere) and azimuth φ is drawn at
         ``(θ cos φ, θ sin φ)`` degrees, so circles are 30°, 60°, 90° from the normal. With
         ``side="both"`` the transmission disk is drawn right of the reflection disk (centre at
-        x = 200°).
-      * ``"theta_phi"``: a latitude-longitude image, φ (0..360°) across and θ from +z (0..90°,
-        or 0..180° with transmission) down.
-    side: ``"auto"`` (``"both"`` when some model transmits, else ``"reflection"``),
-    ``"reflection"`` (wo's hemisphere), ``"transmission"`` or ``"both"``.
-    log: logarithmic colour scale spanning ``log_decades`` decades below the maximum.
-    channel: "luminance", "r", "g", "b" or "rgb" (an RGB image scaled so that the maximum is white).
-    A list of models: the first is drawn as the image, every model as iso-value lines in its colour
-    (shared levels, in the legend). Delta (specular) lobes, which ``eval`` reports as 0, are
-    marked with a star and their reflectance/transmittance.
-    magnify_below: on a linear scale with both sides shown, when the weaker side of the (first)
-    model peaks below this fraction of the stronger one, its colours are scaled by a round
-    factor (said above that disk; the data stay unscaled); 0 or None turns this off.
+        x = 200°). ``"theta_phi"``: a latitude-longitude image, φ (0..360°) across and θ from +z
+        (0..90°, or 0..180° with transmission) down.
+    log : bool, optional
+        Logarithmic colour scale spanning ``log_decades`` decades below the maximum.
+    cosine : bool, optional
+        Plot ``f |cos θi|`` instead of ``f``.
+    channel : {"luminance", "r", "g", "b", "rgb"}, optional
+        Luminance (0.2126 R + 0.7152 G + 0.0722 B), one channel, or all three.
+        "rgb" is an RGB image scaled so that the maximum is white.
+    ax : matplotlib Axes, optional
+        Axes to draw into (created if None).
+    res : int, optional
+        Pixels across.
+    label : str or list of str, optional
+        Legend label(s) (default: ``model.describe()``).
+    title : str, optional
+        None: a title stating what is plotted; "" : none.
+    legend : bool, optional
+        Draw the legend.
+    side : {"auto", "reflection", "transmission", "both"}, optional
+        ``"auto"``: ``"both"`` when some model transmits, else ``"reflection"`` (wo's hemisphere).
+    colorbar : bool, optional
+        Draw the colour bar.
+    cmap : str, optional
+        Matplotlib colour map.
+    log_decades : float, optional
+        Decades shown on a log scale.
+    mode : TransportMode, optional
+        Passed to ``eval`` / ``sample`` (default Radiance).
+    n_delta : int, optional
+        Samples estimating each delta lobe's reflectance / transmittance.
+    seed : int, optional
+        Seed of those samples.
+    magnify_below : float, optional
+        On a linear scale with both sides shown, when the weaker side of the (first) model peaks
+        below this fraction of the stronger one, its colours are scaled by a round factor (said
+        above that disk; the data stay unscaled); 0 or None turns this off.
+    quantity : str, optional
+        The label of the plotted value with its unit (default ``"f [1/sr]"`` or
+        ``"f·|cos θi| [1/sr]"``; :func:`difference` gives its relative difference's).
 
-    Returns the Axes; ``ax.bsdfkit_data`` has ``value`` (list, per model, (H, W) or (H, W, 3),
-    NaN outside the projection), ``wi`` ((H, W, 3), NaN outside), ``wo``, ``x``, ``y`` (pixel
-    centres, degrees), ``extent``, ``projection``, ``sides`` (+1 upper / -1 lower hemisphere),
-    ``label``, ``model``, ``delta`` (per model, as in :func:`polar`), ``vmax``, ``cosine``,
-    ``channel``, ``log``, ``levels`` (contour levels, when overlaid).
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The Axes; ``ax.bsdfkit_data`` has ``value`` (list, per model, (H, W) or (H, W, 3), NaN
+        outside the projection), ``wi`` ((H, W, 3), NaN outside), ``wo``, ``x``, ``y`` (pixel
+        centres, degrees), ``extent``, ``projection``, ``sides`` (+1 upper / -1 lower hemisphere),
+        ``label``, ``model``, ``delta`` (per model, as in :func:`polar`), ``vmax``, ``cosine``,
+        ``channel``, ``log``, ``levels`` (contour levels, when overlaid).
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> from bsdfkit import plot as bkplot
+    >>> ax = bkplot.hemisphere(bk.Dielectric(1.5, alpha=0.3), theta_o=30, res=48)
+    >>> [int(s) for s in ax.bsdfkit_data["sides"]]   # both hemispheres: it transmits
+    [1, -1]
     """
     models = _as_models(model_or_list)
     labels = _as_labels(label, len(models))

@@ -18,19 +18,75 @@ def lobe3d(model_or_list, theta_o=30.0, phi_o=0.0, log=False, cosine=False, chan
            n_theta=46, n_phi=91, label=None, *, sphere=None, title=None, legend=True, colorbar=True,
            cmap="viridis", log_decades=3.0, view=(22.0, -70.0), mode=TransportMode.Radiance, n_delta=4096, seed=0,
            alpha=None):
-    """3D lobe: the surface ``r(ωi) ωi`` with radius ``r = f(wo, wi)`` (or ``f |cos θi|``;
-    on a log scale, decades above ``max · 10^-log_decades``) over the upper hemisphere, or the
-    whole sphere (``sphere=True``; default: when some model transmits).
+    """3D lobe: the surface ``r(ωi) ωi`` with radius ``r = f(wo, wi)`` (or ``f |cos θi|``; on a log
+    scale, decades above ``max · 10^-log_decades``) over the upper hemisphere, or the whole sphere.
 
     ``wo = bk.direction(radians(theta_o), radians(phi_o))`` is drawn as a dashed arrow, the
     surface as a gray circle, the normal as a thin line. One model: coloured by value (colorbar;
     ``channel="rgb"``: radius by luminance, colour = hue of f). Several models: one translucent
     colour each, with a legend. Delta lobes are drawn as arrows of length R (or T).
 
-    Returns the 3D Axes; ``ax.bsdfkit_data`` has ``theta_deg`` (n_theta,), ``phi_deg`` (n_phi,),
-    ``wi`` ((n_theta, n_phi, 3)), ``value`` (list per model, (n_theta, n_phi) or
-    (n_theta, n_phi, 3)), ``radius`` (list per model, (n_theta, n_phi)), ``wo``, ``label``,
-    ``model``, ``delta``, ``sphere``, ``cosine``, ``channel``, ``log``, ``log_floor``.
+    Parameters
+    ----------
+    model_or_list : BxDF or list of BxDF
+        The model(s); several are overlaid, each in its own colour.
+    theta_o, phi_o : float, optional
+        wo's angle from the normal and azimuth, in degrees.
+    log : bool, optional
+        Logarithmic radius over ``log_decades`` decades.
+    cosine : bool, optional
+        Plot ``f |cos θi|`` instead of ``f``.
+    channel : {"luminance", "r", "g", "b", "rgb"}, optional
+        Luminance (0.2126 R + 0.7152 G + 0.0722 B), one channel, or all three.
+    ax : matplotlib Axes, optional
+        A 3D Axes to draw into (created if None).
+    n_theta, n_phi : int, optional
+        Grid of the surface.
+    label : str or list of str, optional
+        Legend label(s) (default: ``model.describe()``).
+    title : str, optional
+        None: a title stating what is plotted; "" : none.
+    legend : bool, optional
+        Draw the legend.
+    sphere : bool, optional
+        Draw the whole sphere (default: when some model transmits).
+    colorbar : bool, optional
+        Draw the colour bar (one model).
+    cmap : str, optional
+        Matplotlib colour map.
+    log_decades : float, optional
+        Decades shown on a log radius.
+    view : tuple of float, optional
+        Camera elevation and azimuth, degrees.
+    mode : TransportMode, optional
+        Passed to ``eval`` / ``sample`` (default Radiance).
+    n_delta : int, optional
+        Samples estimating each delta lobe's reflectance / transmittance.
+    seed : int, optional
+        Seed of those samples.
+    alpha : float, optional
+        Opacity of the surfaces (default: opaque for one model, 0.35 for several).
+
+    Returns
+    -------
+    mpl_toolkits.mplot3d.Axes3D
+        The 3D Axes; ``ax.bsdfkit_data`` has ``theta_deg`` (n_theta,), ``phi_deg`` (n_phi,),
+        ``wi`` ((n_theta, n_phi, 3)), ``value`` (list per model, (n_theta, n_phi) or
+        (n_theta, n_phi, 3)), ``radius`` (list per model, (n_theta, n_phi)), ``wo``, ``label``,
+        ``model``, ``delta``, ``sphere``, ``cosine``, ``channel``, ``log``, ``log_floor``.
+
+    Raises
+    ------
+    ValueError
+        An ``ax`` that is not a 3D Axes.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> from bsdfkit import plot as bkplot
+    >>> ax = bkplot.lobe3d(bk.Conductor.from_metal("Cu", alpha=0.3), n_theta=12, n_phi=24)
+    >>> ax.bsdfkit_data["radius"][0].shape
+    (12, 24)
     """
     models = _as_models(model_or_list)
     labels = _as_labels(label, len(models))

@@ -28,14 +28,58 @@ def overview(model_or_list, theta_o=30.0, phi_o=0.0, views=VIEWS, *, log=False, 
     """Several views of the same model(s) at one ``wo`` in one figure (the CLI ``lobes`` command,
     :func:`explore` and the notebooks use it).
 
-    views: names from :data:`VIEWS`. ``phi_o`` is wo's azimuth (degrees); the polar slice is the
-    plane of wo (its ``phi_plane = phi_o + 180``, so the mirror direction is at +θo). log,
-    cosine and channel apply to every view that has them (``cosine=None``: f |cos| when a model is
-    defined over the whole sphere with f divided by |cos| as Hair is, else f). ``fig``: a Figure
-    to draw into (a new pyplot figure otherwise).
+    The polar slice is the plane of wo (its ``phi_plane = phi_o + 180``, so the mirror direction
+    is at +θo).
 
-    Returns the Figure; ``fig.bsdfkit_axes`` maps each view name to its Axes (each with its
-    ``bsdfkit_data``).
+    Parameters
+    ----------
+    model_or_list : BxDF or list of BxDF
+        The model(s); several are overlaid, each in its own colour.
+    theta_o, phi_o : float, optional
+        wo's angle from the normal and azimuth, in degrees.
+    views : sequence of str, optional
+        Names from :data:`VIEWS` (default: all six).
+    log : bool, optional
+        Log scale in every view that has one.
+    cosine : bool, optional
+        f |cos θi| in every view that has it (None: f |cos| when a model is defined over the whole
+        sphere with f divided by |cos| as Hair is, else f).
+    channel : {"luminance", "r", "g", "b", "rgb"}, optional
+        As in the views.
+    fig : matplotlib Figure, optional
+        A Figure to draw into (a new pyplot figure otherwise).
+    ncols : int, optional
+        Panels per row.
+    n_samples : int, optional
+        Samples of the sampling view.
+    albedo_samples, albedo_theta : int, optional
+        Samples per θo and θo count of the albedo view.
+    res : int, optional
+        Resolution of the image views.
+    seed : int, optional
+        Seed of the sampled views.
+    title : str, optional
+        The figure's title (default: the models' names and wo).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The Figure; ``fig.bsdfkit_axes`` maps each view name to its Axes (each with its
+        ``bsdfkit_data``).
+
+    Raises
+    ------
+    ValueError
+        No view, or an unknown one.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> from bsdfkit import plot as bkplot
+    >>> fig = bkplot.overview(bk.Plastic(0.5, alpha=0.2), views=("polar", "albedo"), albedo_samples=1024,
+    ...                       albedo_theta=5)
+    >>> sorted(fig.bsdfkit_axes)
+    ['albedo', 'polar']
     """
     models = _as_models(model_or_list)
     if cosine is None:

@@ -9,17 +9,51 @@ __all__ = ["pareto"]
 
 
 def pareto(table: Table, ax=None, metric: str = "p99", front_list="auto"):
-    """Throughput against error of every configuration in ``table`` (a :class:`Table`), the
-    Pareto front highlighted and labelled. x: the error ``metric`` (log scale; error-0 rows, the
-    most accurate configuration among them, are drawn at the left edge), y: live speedup over
-    the most accurate configuration (expected speedup when the table was not measured).
-    front_list: where the numbered list of front configurations goes: ``"below"`` the axes (in a
-    panel of its own when this call makes the figure, so the plot keeps the full width),
-    ``"right"`` of the axes, ``"none"`` (only the numbers at the points; the list is
-    ``ax.bsdfkit_data["front_list"]``), or ``"auto"``: below when this call makes the figure,
-    none when drawing into a given ``ax`` (a grid of panels, where a list would squash the plots).
-    Returns the Axes, with the numbers in ``ax.bsdfkit_data`` (error, speedup, front, labels,
-    front_list)."""
+    """Throughput against error of every configuration in ``table``, the Pareto front highlighted
+    and labelled.
+
+    x: the error ``metric`` (log scale; error-0 rows, the most accurate configuration among them,
+    are drawn at the left edge), y: live speedup over the most accurate configuration (expected
+    speedup when the table was not measured).
+
+    Parameters
+    ----------
+    table : Table
+        A :func:`bsdfkit.tradeoff` result.
+    ax : matplotlib Axes, optional
+        Where to draw (a new figure otherwise).
+    metric : str, optional
+        The error column without its ``_err`` suffix (default ``"p99"``).
+    front_list : {"auto", "below", "right", "none"}, optional
+        Where the numbered list of front configurations goes: ``"below"`` the axes (in a panel of
+        its own when this call makes the figure, so the plot keeps the full width), ``"right"`` of
+        the axes, ``"none"`` (only the numbers at the points; the list is
+        ``ax.bsdfkit_data["front_list"]``), or ``"auto"``: below when this call makes the figure,
+        none when drawing into a given ``ax`` (a grid of panels, where a list would squash the
+        plots).
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The Axes, with the numbers in ``ax.bsdfkit_data`` (error, speedup, front, labels,
+        front_list).
+
+    Raises
+    ------
+    TypeError
+        ``table`` not a Table.
+    ValueError
+        A bad ``front_list``.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> from bsdfkit import plot as bkplot
+    >>> t = bk.tradeoff(bk.Conductor.from_metal("Cu", alpha=0.3), n=256, n_albedo=64, measure=False)
+    >>> ax = bkplot.pareto(t)
+    >>> len(ax.bsdfkit_data["error"]) == len(t)
+    True
+    """
     if not isinstance(table, Table):
         raise TypeError(f"table: expected a bsdfkit.tradeoff.Table, got {type(table).__name__}")
     col = _check_metric(metric)

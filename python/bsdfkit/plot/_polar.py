@@ -78,26 +78,79 @@ def polar(model_or_list, theta_o=30.0, phi_plane=0.0, log=False, cosine=False, c
     f |cos θi| / pdf over ``n_delta`` samples restricted to that side) and are marked "delta"
     in the legend (and, with ``annotate_delta``, at the arrow tip).
 
-    channel: "luminance" (0.2126 R + 0.7152 G + 0.0722 B), "r", "g", "b" or "rgb" (three curves).
-    magnify_below: on a linear radius, when the weaker half (reflection or transmission) of a
-    curve peaks below this fraction of the stronger half, it is also drawn magnified by a round
-    factor (dotted, labelled "×factor") so that it does not vanish; 0 or None turns this off.
-    log: radial axis logarithmic, covering ``log_decades`` decades below the largest value
-    (values below are drawn at the centre; an overlaid curve lying entirely below the range of
-    the first call says so in its legend entry). The radial range (linear or log) is set by the
-    values off the horizon: the samples at θi = ±90° exactly (cos θi = 0, where a value may be
-    singular) are drawn but clipped at the rim instead of setting the scale.
-    quantity: the label of the plotted value with its unit (default ``"f [1/sr]"`` or
-    ``"f·|cos θi| [1/sr]"``; :func:`difference` gives its relative difference's).
-    ax: a polar Axes to draw into (created if None); calling again on the same Axes overlays
-    and appends to its data (the radial mapping of the first call is kept).
+    Parameters
+    ----------
+    model_or_list : BxDF or list of BxDF
+        The model(s); several are overlaid, each in its own colour.
+    theta_o : float, optional
+        wo's angle from the normal, degrees.
+    phi_plane : float, optional
+        Azimuth of the plotted plane, degrees.
+    log : bool, optional
+        Radial axis logarithmic, covering ``log_decades`` decades below the largest value (values
+        below are drawn at the centre; an overlaid curve lying entirely below the range of the
+        first call says so in its legend entry). The radial range (linear or log) is set by the
+        values off the horizon: the samples at θi = ±90° exactly (cos θi = 0, where a value may be
+        singular) are drawn but clipped at the rim instead of setting the scale.
+    cosine : bool, optional
+        Plot ``f |cos θi|`` instead of ``f``.
+    channel : {"luminance", "r", "g", "b", "rgb"}, optional
+        Luminance (0.2126 R + 0.7152 G + 0.0722 B), one channel, or all three.
+    ax : matplotlib Axes, optional
+        A polar Axes to draw into (created if None); calling again on the same Axes overlays and
+        appends to its data (the radial mapping of the first call is kept).
+    n : int, optional
+        Points along the circle.
+    label : str or list of str, optional
+        Legend label(s) (default: ``model.describe()``).
+    title : str, optional
+        None: a title stating what is plotted; "" : none.
+    legend : bool, optional
+        Draw the legend.
+    log_decades : float, optional
+        Decades shown on a log radius.
+    mode : TransportMode, optional
+        Passed to ``eval`` / ``sample`` (default Radiance).
+    n_delta : int, optional
+        Samples estimating each delta lobe's reflectance / transmittance.
+    seed : int, optional
+        Seed of those samples.
+    colors : list, optional
+        One matplotlib colour per model (default: the colour cycle).
+    linestyle : str, optional
+        Line style of the curves.
+    annotate_delta : bool, optional
+        Name delta lobes at their arrow tips.
+    magnify_below : float, optional
+        On a linear scale, when the weaker half (reflection or transmission) peaks below this
+        fraction of the stronger half, it is also drawn magnified by a round factor (labelled
+        "×factor") so that it does not vanish; 0 or None turns this off.
+    quantity : str, optional
+        The label of the plotted value with its unit (default ``"f [1/sr]"`` or
+        ``"f·|cos θi| [1/sr]"``; :func:`difference` gives its relative difference's).
 
-    Returns the Axes. ``ax.bsdfkit_data`` is a dict of lists with one entry per model drawn:
-    ``theta_deg`` (n,) signed angles, ``value`` (n,) or (n, 3) plotted values in linear units,
-    ``wi`` (n, 3), ``wo`` (3,), ``theta_o``, ``phi_plane``, ``label``, ``model`` and ``delta``
-    (a list of lobe dicts with ``theta_deg``, ``wi``, ``weight`` (RGB), ``value`` (channel),
-    ``flags``, ``kind``), ``magnified`` (None or (side, factor) of the dotted magnified copy);
-    and scalars ``channel``, ``cosine``, ``log``.
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The Axes. ``ax.bsdfkit_data`` is a dict of lists with one entry per model drawn:
+        ``theta_deg`` (n,) signed angles, ``value`` (n,) or (n, 3) plotted values in linear units,
+        ``wi`` (n, 3), ``wo`` (3,), ``theta_o``, ``phi_plane``, ``label``, ``model`` and ``delta``
+        (a list of lobe dicts with ``theta_deg``, ``wi``, ``weight`` (RGB), ``value`` (channel),
+        ``flags``, ``kind``), ``magnified`` (None or (side, factor) of the dotted magnified copy);
+        and scalars ``channel``, ``cosine``, ``log``.
+
+    Raises
+    ------
+    ValueError
+        A bad channel or angle.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> from bsdfkit import plot as bkplot
+    >>> ax = bkplot.polar([bk.Conductor.from_metal("Au", alpha=a) for a in (0.1, 0.3)], theta_o=45, log=True)
+    >>> len(ax.bsdfkit_data["value"]), ax.bsdfkit_data["value"][0].shape
+    (2, (721,))
     """
     models = _as_models(model_or_list)
     labels = _as_labels(label, len(models))

@@ -71,16 +71,45 @@ def sample_stats(model, theta_o=30.0, phi_o=0.0, n=200_000, seed=0, *, n_theta=9
                  mode=TransportMode.Radiance, min_expected=5.0):
     """Sampled directions of ``model.sample`` against ``model.pdf``, binned over the sphere.
 
-    Bins: ``n_theta`` equal bins of θi over 0..180° times ``n_phi`` bins of φi over 0..360°.
     ``counts`` are the non-delta valid samples per bin; ``expected = n ∫_bin pdf dω`` by a
     ``quad`` × ``quad`` Gauss-Legendre rule per bin. Pearson's χ² pools the bins with fewer than
     ``min_expected`` expected samples into one cell. Delta-lobe samples (flag Specular) have a
     discrete pdf and are only counted (``n_specular``).
 
-    Returns a dict: ``theta_edges``, ``phi_edges`` (degrees), ``counts``, ``expected``
-    ((n_theta, n_phi)), ``solid_angle`` (per bin, sr), ``n``, ``n_valid``, ``n_specular``,
-    ``chi2``, ``dof``, ``p_value`` (None when fewer than 2 cells), ``theta_hist``/``theta_pdf``
-    (densities of θi in 1/°: samples and ∫ pdf dφ), ``wo``.
+    Parameters
+    ----------
+    model : BxDF
+        The model.
+    theta_o, phi_o : float, optional
+        wo's angle from the normal and azimuth, in degrees.
+    n : int, optional
+        Samples drawn.
+    seed : int, optional
+        Their seed.
+    n_theta, n_phi : int, optional
+        ``n_theta`` equal bins of θi over 0..180° times ``n_phi`` bins of φi over 0..360°.
+    quad : int, optional
+        Gauss-Legendre nodes per bin and axis.
+    mode : TransportMode, optional
+        Passed to ``eval`` / ``sample`` (default Radiance).
+    min_expected : float, optional
+        Bins expecting fewer samples are pooled.
+
+    Returns
+    -------
+    dict
+        ``theta_edges``, ``phi_edges`` (degrees), ``counts``, ``expected`` ((n_theta, n_phi)),
+        ``solid_angle`` (per bin, sr), ``n``, ``n_valid``, ``n_specular``, ``chi2``, ``dof``,
+        ``p_value`` (None when fewer than 2 cells), ``theta_hist``/``theta_pdf`` (densities of θi
+        in 1/°: samples and ∫ pdf dφ), ``wo``.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> from bsdfkit import plot as bkplot
+    >>> st = bkplot.sample_stats(bk.Diffuse(0.5), n=20000, n_theta=18, n_phi=12, quad=4)
+    >>> st["counts"].shape, st["n_valid"]
+    ((18, 12), 20000)
     """
     n = _check_int(n, "n", 1)
     wo = _wo_dir(_finite(theta_o, "theta_o"), _finite(phi_o, "phi_o"))
@@ -130,15 +159,58 @@ def samples(model_or_list, theta_o=30.0, phi_o=0.0, n=200_000, seed=0, kind="the
     """Sampling quality: where ``model.sample(wo, n)`` sends directions against what ``model.pdf``
     says (see :func:`sample_stats` for the binning and the χ² test).
 
-    kind="theta" (one Axes; models overlaid): density of θi in 1/° — the samples' histogram
-    (steps) and ∫ pdf dφ per bin (line) — against θi (0..90°, or 0..180° when a model transmits),
-    with the χ² p-value in the legend.
-    kind="image" (first model only; two Axes: ``ax`` may be a pair): sample density and pdf
-    (mean over each bin, 1/sr) in θi × φi images on a shared colour scale.
+    Parameters
+    ----------
+    model_or_list : BxDF or list of BxDF
+        The model(s); several are overlaid, each in its own colour.
+    theta_o, phi_o : float, optional
+        wo's angle from the normal and azimuth, in degrees.
+    n : int, optional
+        Samples drawn.
+    seed : int, optional
+        Their seed.
+    kind : {"theta", "image"}, optional
+        ``"theta"`` (one Axes; models overlaid): density of θi in 1/° — the samples' histogram
+        (steps) and ∫ pdf dφ per bin (line) — against θi (0..90°, or 0..180° when a model
+        transmits), with the χ² p-value in the legend. ``"image"`` (first model only; two Axes):
+        sample density and pdf (mean over each bin, 1/sr) in θi × φi images on a shared colour
+        scale.
+    ax : matplotlib Axes or pair of Axes, optional
+        Where to draw (a pair for kind "image"); created if None.
+    label : str or list of str, optional
+        Legend label(s).
+    n_theta, n_phi, quad : int, optional
+        Binning and quadrature, as :func:`sample_stats`.
+    mode : TransportMode, optional
+        Passed to ``eval`` / ``sample`` (default Radiance).
+    title : str, optional
+        None: an automatic title; "": none.
+    legend : bool, optional
+        Draw the legend.
+    log : bool, optional
+        Logarithmic density axis / colour scale.
+    cmap : str, optional
+        Colour map of kind "image".
 
-    Returns the Axes (kind "theta") or a tuple of the two Axes (kind "image"); their
-    ``bsdfkit_data`` has ``stats`` (list per model of :func:`sample_stats` dicts), ``label``,
-    ``model``, ``theta_o``, ``phi_o``, ``kind``.
+    Returns
+    -------
+    matplotlib.axes.Axes or tuple of Axes
+        The Axes (kind "theta") or the two Axes (kind "image"); their ``bsdfkit_data`` has
+        ``stats`` (list per model of :func:`sample_stats` dicts), ``label``, ``model``,
+        ``theta_o``, ``phi_o``, ``kind``.
+
+    Raises
+    ------
+    ValueError
+        An ``ax`` of the wrong kind.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> from bsdfkit import plot as bkplot
+    >>> ax = bkplot.samples(bk.Conductor.from_metal("Cu", alpha=0.3), n=20000)
+    >>> bool(ax.bsdfkit_data["stats"][0]["p_value"] > 1e-3)   # samples follow the pdf
+    True
     """
     models = _as_models(model_or_list)
     labels = _as_labels(label, len(models))

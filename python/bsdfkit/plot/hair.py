@@ -43,15 +43,47 @@ def hair_lobes(model, theta_o=30.0, *, fig=None, weighted=True, n=721):
     """Three panels for a ``bsdfkit.Hair`` at longitudinal angle ``theta_o`` (degrees from the
     normal plane, wo's azimuth 0 of pbrt's frame):
 
-    1. longitudinal scattering M_p(theta_i) per lobe (the specular cone theta_i = -theta_o is dashed;
-       the cuticle tilt shifts R by -2 alpha, TT by alpha, TRT by 4 alpha);
+    1. longitudinal scattering M_p(theta_i) per lobe (the specular cone theta_i = -theta_o is
+       dashed; the cuticle tilt shifts R by -2 alpha, TT by alpha, TRT by 4 alpha);
     2. azimuthal scattering N_p(phi) per lobe at the model's h, phi = phi_i - phi_o in degrees;
     3. the same azimuthal lobes weighted by the attenuation A_p (luminance) on polar axes, the
        cross-section view of Marschner's and d'Eon's figures (phi = 0: back towards wo... read as
        the direction of exit around the fibre).
 
-    ``weighted``: panel 1 shows A_p M_p instead of M_p. Returns the figure; ``fig.bsdfkit_data``
-    holds ``theta_i_deg``, ``phi_deg``, ``Mp`` (4, n), ``Np`` (4, n), ``Ap`` (4, 3)."""
+    Parameters
+    ----------
+    model : Hair
+        A fibre with an offset ``h`` (not the far-field fibre).
+    theta_o : float, optional
+        wo's longitudinal angle, degrees in [-90, 90].
+    fig : matplotlib Figure, optional
+        A Figure to draw into (a new pyplot figure otherwise).
+    weighted : bool, optional
+        Panel 1 shows A_p M_p instead of M_p.
+    n : int, optional
+        Points per curve.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure; ``fig.bsdfkit_data`` holds ``theta_i_deg``, ``phi_deg``, ``Mp`` (4, n),
+        ``Np`` (4, n), ``Ap`` (4, 3).
+
+    Raises
+    ------
+    TypeError
+        A model that is not a Hair.
+    ValueError
+        The far-field fibre (h=None), or theta_o outside [-90, 90].
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> from bsdfkit import plot as bkplot
+    >>> fig = bkplot.hair_lobes(bk.Hair(h=0.3), n=91)
+    >>> fig.bsdfkit_data["Mp"].shape
+    (4, 91)
+    """
     import matplotlib.pyplot as plt
 
     m = _check_hair(model)
@@ -102,9 +134,35 @@ def hair_lobes(model, theta_o=30.0, *, fig=None, weighted=True, n=721):
 
 def hair_lobe3d(model, theta_o=30.0, phi_o=90.0, *, ax=None, log=False, **kw):
     """3D lobe of ``f |cos wi.z|`` (= sum_p Mp Ap Np, the scattered energy per solid angle) over
-    the whole sphere, with wo at longitudinal angle ``theta_o`` and azimuth ``phi_o`` (degrees) of
-    the hair frame (x = fibre axis; phi from y towards z). Draws with ``bsdfkit.plot.lobe3d``
-    (``sphere=True, cosine=True``); extra keywords go to it. Returns its Axes."""
+    the whole sphere.
+
+    wo is at longitudinal angle ``theta_o`` and azimuth ``phi_o`` (degrees) of the hair frame
+    (x = fibre axis; phi from y towards z). Draws with ``bsdfkit.plot.lobe3d``
+    (``sphere=True, cosine=True``).
+
+    Parameters
+    ----------
+    model : Hair
+        The fibre.
+    theta_o, phi_o : float, optional
+        wo's angles in the hair frame, degrees.
+    ax : Axes3D, optional
+        Where to draw.
+    log : bool, optional
+        Logarithmic radius.
+    **kw
+        Passed to :func:`lobe3d`.
+
+    Returns
+    -------
+    mpl_toolkits.mplot3d.Axes3D
+        The 3D Axes of :func:`lobe3d`.
+
+    Raises
+    ------
+    TypeError
+        A model that is not a Hair.
+    """
     from ._lobe3d import lobe3d
 
     m = _check_hair(model)

@@ -35,8 +35,20 @@ def _soft_disk(cos_angle, radius_deg, edge_deg):
 
 
 def procedural_environment(kind: str, directions) -> np.ndarray:
-    """Radiance of a procedural environment (``"sky"`` or ``"studio"``) toward world
-    ``directions`` (..., 3) (unit, y-up), float64 (..., 3). See :func:`default_environment`."""
+    """Radiance of a procedural environment toward world directions. See :func:`default_environment`.
+
+    Parameters
+    ----------
+    kind : {"sky", "studio"}
+        The environment.
+    directions : array_like, shape (..., 3)
+        Unit directions in world space (y up).
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        float64 radiance.
+    """
     if kind not in ("sky", "studio"):
         raise ValueError(f"kind: must be 'sky' or 'studio', got {kind!r}")
     d = np.asarray(directions, dtype=np.float64)
@@ -71,10 +83,26 @@ DEFAULT_ENV_WIDTH = 256
 def default_environment(kind: str = "sky", width: int = DEFAULT_ENV_WIDTH) -> np.ndarray:
     """Procedural lat-long environment, float32 (width // 2, width, 3) linear radiance.
 
-    ``"sky"``: blue zenith fading to a bright horizon, a dim brownish ground below the horizon
-    and a sun-like hot spot (angular radius 2.5 degrees, radiance ~600, direction
-    :data:`SUN_DIRECTION`) with a soft glow. ``"studio"``: a dark grey room lit by a large key
-    soft box (front left, above), a fill (right) and a rim light (behind).
+    Parameters
+    ----------
+    kind : {"sky", "studio"}, optional
+        ``"sky"``: blue zenith fading to a bright horizon, a dim brownish ground below the
+        horizon and a sun-like hot spot (angular radius 2.5 degrees, radiance ~600, direction
+        :data:`SUN_DIRECTION`) with a soft glow. ``"studio"``: a dark grey room lit by a large key
+        soft box (front left, above), a fill (right) and a rim light (behind).
+    width : int, optional
+        Image width in pixels.
+
+    Returns
+    -------
+    numpy.ndarray, shape (width // 2, width, 3)
+        float32 linear radiance.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> bk.render.default_environment("studio", width=64).shape
+    (32, 64, 3)
     """
     if kind not in ("sky", "studio"):
         raise ValueError(f"kind: must be 'sky' or 'studio', got {kind!r}")
@@ -87,8 +115,18 @@ def default_environment(kind: str = "sky", width: int = DEFAULT_ENV_WIDTH) -> np
 
 def stripes_environment(width: int = 512) -> np.ndarray:
     """A dark lat-long environment with bright white stripes (12 vertical bars around the azimuth
-    and two horizontal bands), float32 (width // 2, width, 3): sharp white edges for a glass to
-    disperse into colour fringes."""
+    and two horizontal bands): sharp white edges for a glass to disperse into colour fringes.
+
+    Parameters
+    ----------
+    width : int, optional
+        Image width in pixels.
+
+    Returns
+    -------
+    numpy.ndarray, shape (width // 2, width, 3)
+        float32 linear radiance.
+    """
     width = int(width)
     if width < 16:
         raise ValueError("width: must be >= 16")

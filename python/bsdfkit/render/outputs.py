@@ -22,8 +22,28 @@ def write_gallery(outdir, configs, *, size=GALLERY_SIZE, spp=GALLERY_SPP, progre
                   labelled=True):
     """Renders one sphere per (name, model) of ``configs`` with :func:`gallery_scene` under the
     default sky and writes ``gallery.exr`` (linear radiance), ``gallery.png`` (sRGB) and, with
-    ``labelled``, ``gallery_labelled.png`` (each sphere numbered, with a key of the names);
-    returns the paths."""
+    ``labelled``, ``gallery_labelled.png`` (each sphere numbered, with a key of the names).
+
+    Parameters
+    ----------
+    outdir : str or os.PathLike
+        The output folder.
+    configs : sequence of (str, BxDF)
+        Names and models.
+    size : tuple of int, optional
+        Image width and height.
+    spp : int, optional
+        Samples per pixel.
+    progress, verbose : bool, optional
+        A progress bar; a line per file written.
+    labelled : bool, optional
+        Also write the numbered image with its key.
+
+    Returns
+    -------
+    list of str
+        The paths written.
+    """
     from ..io import write_image
     names = [n for n, _ in configs]
     sc = gallery_scene([m for _, m in configs], aspect=size[0] / size[1])
@@ -78,9 +98,29 @@ def _labelled_gallery(path, img, sc, names, size):
 
 
 def write_hair(outdir, rows=HAIR_ROW, *, size=HAIR_SIZE, spp=HAIR_SPP, progress=True, exposure=0.0):
-    """Renders :func:`hair_row_scene` of ``rows`` ((label, spec or model) pairs; default
-    :data:`HAIR_ROW`) and writes ``hair.exr`` (linear radiance) and ``hair.png`` (sRGB, each lock
-    labelled with its name and spec); returns the two paths."""
+    """Renders :func:`hair_row_scene` of ``rows`` and writes ``hair.exr`` (linear radiance) and
+    ``hair.png`` (sRGB, each lock labelled with its name and spec).
+
+    Parameters
+    ----------
+    outdir : str or os.PathLike
+        The output folder.
+    rows : sequence of (str, str or Hair), optional
+        (label, spec or model) pairs; default :data:`HAIR_ROW`.
+    size : tuple of int, optional
+        Image width and height.
+    spp : int, optional
+        Samples per pixel.
+    progress : bool, optional
+        A progress bar.
+    exposure : float, optional
+        Stops applied to the PNG.
+
+    Returns
+    -------
+    list of str
+        The two paths.
+    """
     from matplotlib.figure import Figure
 
     from ..io import linear_to_srgb, write_image
@@ -113,10 +153,29 @@ def write_hair(outdir, rows=HAIR_ROW, *, size=HAIR_SIZE, spp=HAIR_SPP, progress=
 
 
 def write_dispersion(outdir, *, glass=DISPERSION_GLASS, size=DISPERSION_SIZE, spp=DISPERSION_SPP, progress=True):
-    """The RGB-versus-spectral comparison of the demo: :func:`dispersion_scene` rendered in RGB
-    (the glass at eta(550 nm): no dispersion) and with ``spectral=True`` (hero wavelengths:
-    colour fringes along every bright edge seen through the glass), side by side with their
-    difference. Writes ``dispersion.png`` and ``dispersion_spectral.exr``; returns the paths."""
+    """The RGB-versus-spectral comparison of the demo: :func:`dispersion_scene` rendered in RGB (the
+    glass at eta(550 nm): no dispersion) and with ``spectral=True`` (hero wavelengths: colour
+    fringes along every bright edge seen through the glass), side by side with their difference.
+    Writes ``dispersion.png`` and ``dispersion_spectral.exr``.
+
+    Parameters
+    ----------
+    outdir : str or os.PathLike
+        The output folder.
+    glass : str, optional
+        A named glass spectrum.
+    size : tuple of int, optional
+        Image width and height.
+    spp : int, optional
+        Samples per pixel.
+    progress : bool, optional
+        A progress bar.
+
+    Returns
+    -------
+    list of str
+        The paths written.
+    """
     from matplotlib.figure import Figure
 
     from ..io import linear_to_srgb, write_image

@@ -27,12 +27,20 @@ CAMERA_MAX_COORD = 1e18
 
 @dataclass
 class Camera:
-    """Pinhole camera: position, look-at point, up hint and full horizontal field of view (degrees).
+    """Pinhole camera: position, look-at point, up hint and full horizontal field of view.
 
-    origin, target, up: 3 finite numbers each, within +-``CAMERA_MAX_COORD`` (1e18: the renderer
-    works in float32); target must differ from origin (in float32) and up must not be (nearly)
-    zero or parallel to the view direction; fov in (0, 180). Checked when the camera is used
-    (``render``, ``project``, ``Scene.look_at``): ValueError naming the field."""
+    Checked when the camera is used (``render``, ``project``, ``Scene.look_at``): ValueError naming
+    the field.
+
+    Parameters
+    ----------
+    origin, target, up : tuple of 3 float, optional
+        3 finite numbers each, within +-``CAMERA_MAX_COORD`` (1e18: the renderer works in
+        float32); target must differ from origin (in float32) and up must not be (nearly) zero or
+        parallel to the view direction.
+    fov : float, optional
+        Full horizontal field of view in degrees, in (0, 180).
+    """
     origin: tuple = (0.0, 1.45, 5.6)
     target: tuple = (0.0, 0.9, 0.0)
     up: tuple = (0.0, 1.0, 0.0)
@@ -90,10 +98,28 @@ def _check_int(v, name, lo):
 
 
 def load_mesh(path):
-    """Triangle mesh from a file (OBJ, PLY, STL, glTF, ... via Assimp): (vertices float32 (N, 3),
-    indices int64 (M, 3)). Every mesh of the file is merged and triangulated. Raises
-    FileNotFoundError for a missing file and ValueError naming the file with Assimp's reason
-    for an unreadable one."""
+    """Triangle mesh from a file (OBJ, PLY, STL, glTF, ... via Assimp). Every mesh of the file is
+    merged and triangulated.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The mesh file.
+
+    Returns
+    -------
+    vertices : numpy.ndarray, shape (N, 3)
+        float32 positions.
+    indices : numpy.ndarray, shape (M, 3)
+        int64 triangle vertex indices.
+
+    Raises
+    ------
+    FileNotFoundError
+        A missing file.
+    ValueError
+        An unreadable file, naming it with Assimp's reason.
+    """
     path = os.fspath(path)
     if not os.path.exists(path):
         raise FileNotFoundError(f"path: no such mesh file: {path}")
@@ -194,11 +220,26 @@ def _radius_list(radius, fibres):
 
 @dataclass
 class Scene:
-    """Objects, materials, lighting and camera of a render. Build with the ``add_*`` methods
-    (each returns the scene, so calls chain) and pass to :func:`render` / :func:`preview`.
+    """Objects, materials, lighting and camera of a render. Build with the ``add_*`` methods (each
+    returns the scene, so calls chain) and pass to :func:`render` / :func:`preview`.
 
-    ``environment``: ``"sky"`` (default), ``"studio"``, ``"white"``, a path to a lat-long
-    EXR/HDR/PNG, an (H, W, 3) radiance array, or a constant radiance (number or RGB).
+    Parameters
+    ----------
+    environment : str, path, array_like or float, optional
+        ``"sky"`` (default), ``"studio"``, ``"white"``, a path to a lat-long EXR/HDR/PNG, an
+        (H, W, 3) radiance array, or a constant radiance (number or RGB).
+    camera : Camera, optional
+        The camera (default: ``Camera()``).
+    objects, lights : list, optional
+        Usually left empty and filled by the ``add_*`` methods.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> scene = bk.render.Scene(environment="white").add_sphere(bk.Diffuse(0.5))
+    >>> img = bk.render.render(scene, width=16, height=16, spp=2, progress=False)
+    >>> img.shape, img.dtype.name
+    ((16, 16, 3), 'float32')
     """
     environment: object = "sky"
     camera: Camera = field(default_factory=Camera)

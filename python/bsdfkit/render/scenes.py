@@ -12,10 +12,24 @@ from .scene import Camera, Scene, _check_int
 
 
 def default_scene(model, *, shape=None, envmap=None) -> Scene:
-    """The preview scene: ``model`` on a unit sphere (or ``shape``: a mesh file path or a
-    ``(vertices, indices)`` pair, fitted to the same place) standing on a grey checkerboard
-    ground, seen from the front, under ``envmap`` (default: the procedural sky).
-    ``shape="hair"``: the fibres of :func:`hair_scene` instead."""
+    """The preview scene: ``model`` on a unit sphere (or ``shape``) standing on a grey checkerboard
+    ground, seen from the front.
+
+    Parameters
+    ----------
+    model : BxDF
+        The material.
+    shape : str or tuple, optional
+        A mesh file path or a ``(vertices, indices)`` pair, fitted to the sphere's place;
+        ``"hair"``: the fibres of :func:`hair_scene` instead.
+    envmap : optional
+        The environment (default: the procedural sky).
+
+    Returns
+    -------
+    Scene
+        The scene.
+    """
     if isinstance(shape, str) and shape == "hair":
         return hair_scene(model, envmap=envmap)
     sc = Scene(environment="sky" if envmap is None else envmap)
@@ -31,10 +45,28 @@ def default_scene(model, *, shape=None, envmap=None) -> Scene:
 
 
 def gallery_scene(models, *, columns=5, envmap=None, spacing=2.5, aspect=2.0) -> Scene:
-    """One unit sphere per model on the checkerboard ground, in rows of ``columns`` from the
-    back row to the front, left to right (rows staggered by half a spacing), seen from above
-    (about 24 degrees down) so that no sphere hides another, framed for an image of width /
-    height = ``aspect`` (camera fov 40 degrees)."""
+    """One unit sphere per model on the checkerboard ground, in rows of ``columns`` from the back
+    row to the front, left to right (rows staggered by half a spacing), seen from above (about
+    24 degrees down) so that no sphere hides another (camera fov 40 degrees).
+
+    Parameters
+    ----------
+    models : sequence of BxDF
+        The materials.
+    columns : int, optional
+        Spheres per row.
+    envmap : optional
+        The environment (default: the procedural sky).
+    spacing : float, optional
+        Distance between sphere centres.
+    aspect : float, optional
+        Width / height of the image the camera is framed for.
+
+    Returns
+    -------
+    Scene
+        The scene.
+    """
     models = list(models)
     if not models:
         raise ValueError("models: need at least one model")
@@ -73,14 +105,47 @@ GALLERY_SPP = 48
 def hair_swatch(n_fibres=1500, length=2.0, radius=0.004, curl=0.3, seed=0, *, width=0.9, thickness=0.18,
                 wave=0.12, points_per_fibre=24, top=2.15):
     """A procedural lock of hair: ``n_fibres`` fibres hanging from a short bar, for
-    :meth:`Scene.add_curves`. Returns ``(points, radius)``: float64 arrays (F, P, 3) and (F, P).
+    :meth:`Scene.add_curves`.
 
     The roots lie on a ``width`` x ``thickness`` rectangle (x, z) at height ``top`` (world y-up);
     each fibre falls about ``length`` toward -y, following the lock's common S-shaped ``wave``
-    (amplitude in world units, in z and a little in x) and its own helical ``curl`` (0: straight
-    fibres, 1: curls of radius ~0.05 length, a few turns per fibre) with a random phase, and the
-    lock narrows toward the tips. ``radius`` is the fibre radius at the root; fibres taper to 40 %
-    of it over the last fifth. ``seed`` makes it reproducible.
+    and its own helical ``curl`` with a random phase, and the lock narrows toward the tips.
+    Fibres taper to 40 % of the root radius over the last fifth.
+
+    Parameters
+    ----------
+    n_fibres : int, optional
+        Number of fibres.
+    length : float, optional
+        Fibre length (world units).
+    radius : float, optional
+        Fibre radius at the root.
+    curl : float, optional
+        0: straight fibres, 1: curls of radius ~0.05 length, a few turns per fibre.
+    seed : int, optional
+        Makes it reproducible.
+    width, thickness : float, optional
+        The root rectangle.
+    wave : float, optional
+        Amplitude of the common S-shape (world units, in z and a little in x).
+    points_per_fibre : int, optional
+        Control points per fibre.
+    top : float, optional
+        Height of the roots.
+
+    Returns
+    -------
+    points : numpy.ndarray, shape (F, P, 3)
+        float64 control points.
+    radius : numpy.ndarray, shape (F, P)
+        float64 radii.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> pts, r = bk.render.hair_swatch(n_fibres=10, points_per_fibre=8)
+    >>> pts.shape, r.shape
+    ((10, 8, 3), (10, 8))
     """
     n = _check_int(n_fibres, "n_fibres", 1)
     p = _check_int(points_per_fibre, "points_per_fibre", 2)
@@ -119,9 +184,29 @@ def hair_swatch(n_fibres=1500, length=2.0, radius=0.004, curl=0.3, seed=0, *, wi
 
 
 def hair_scene(model, *, n_fibres=1500, curl=0.3, seed=0, envmap=None, aspect=1.0) -> Scene:
-    """A lock of hair (:func:`hair_swatch`) of ``model`` against the environment (default: the
-    ``"studio"`` soft boxes, which give hair its highlights), seen from the front at eye level
-    with a 30 degree field of view, framed for width / height = ``aspect``; no ground."""
+    """A lock of hair (:func:`hair_swatch`) of ``model`` against the environment, seen from the front
+    at eye level with a 30 degree field of view; no ground.
+
+    Parameters
+    ----------
+    model : Hair
+        The fibre material.
+    n_fibres : int, optional
+        Fibres in the lock.
+    curl : float, optional
+        As :func:`hair_swatch`'s.
+    seed : int, optional
+        Seed of the lock.
+    envmap : optional
+        The environment (default: the ``"studio"`` soft boxes, which give hair its highlights).
+    aspect : float, optional
+        Width / height of the image the camera is framed for.
+
+    Returns
+    -------
+    Scene
+        The scene.
+    """
     pts, r = hair_swatch(n_fibres=n_fibres, curl=curl, seed=seed)
     sc = Scene(environment="studio" if envmap is None else envmap)
     sc.add_curves(model, pts, r)
@@ -155,8 +240,28 @@ HAIR_SPACING = 1.0
 def hair_row_scene(models, *, n_fibres=2500, spacing=HAIR_SPACING, envmap=None,
                    aspect=HAIR_SIZE[0] / HAIR_SIZE[1], seed=0) -> Scene:
     """One lock of hair (:func:`hair_swatch` with width 0.55, thickness 0.12, wave 0.18, curl 0.12,
-    a different seed each) per model, side by side along x, left to right, under ``envmap``
-    (default: the ``"sky"``, whose sun gives the highlights), framed for width / height = ``aspect``."""
+    a different seed each) per model, side by side along x, left to right.
+
+    Parameters
+    ----------
+    models : sequence of Hair
+        The fibre materials.
+    n_fibres : int, optional
+        Fibres per lock.
+    spacing : float, optional
+        Distance between locks.
+    envmap : optional
+        The environment (default: the ``"sky"``, whose sun gives the highlights).
+    aspect : float, optional
+        Width / height of the image the camera is framed for.
+    seed : int, optional
+        Seed of the first lock.
+
+    Returns
+    -------
+    Scene
+        The scene.
+    """
     models = list(models)
     if not models:
         raise ValueError("models: need at least one model")
@@ -185,7 +290,22 @@ DISPERSION_SPP = 128
 
 def dispersion_scene(glass=DISPERSION_GLASS, *, envmap=None, aspect=4 / 3) -> Scene:
     """A glass sphere with eta = ``bk.Spectrum.named(glass)`` (dispersive) floating in
-    :func:`stripes_environment`, framed close."""
+    :func:`stripes_environment`, framed close.
+
+    Parameters
+    ----------
+    glass : str, optional
+        A named glass spectrum (``bk.Spectrum.names()``).
+    envmap : optional
+        The environment (default: the stripes).
+    aspect : float, optional
+        Width / height of the image the camera is framed for.
+
+    Returns
+    -------
+    Scene
+        The scene.
+    """
     from ..models import Dielectric
     from ..spectral import Spectrum
     sc = Scene(environment=stripes_environment() if envmap is None else envmap)

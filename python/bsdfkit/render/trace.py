@@ -47,9 +47,28 @@ def render(scene: Scene, *, envmap=None, width=256, height=256, spp=64, max_dept
            interrupt="raise", return_stats=False, spectral=False):
     """Renders a :class:`Scene`; see :func:`preview` for the arguments.
 
-    With ``return_stats=True`` returns ``(image, stats)``, stats a dict with ``seconds``
-    (wall time of the path tracing), ``build_seconds`` (scene and BVH), ``rays`` (camera,
-    bounce and shadow rays traced), ``spp`` and ``nonfinite`` (discarded NaN/Inf path samples).
+    Parameters
+    ----------
+    scene : Scene
+        What to render.
+    envmap, width, height, spp, max_depth, seed, progress, interrupt, spectral : optional
+        As :func:`preview`'s.
+    return_stats : bool, optional
+        Also return the statistics.
+
+    Returns
+    -------
+    image : numpy.ndarray, shape (height, width, 3)
+        float32 linear radiance.
+    stats : dict
+        Only with ``return_stats=True``: ``seconds`` (wall time of the path tracing),
+        ``build_seconds`` (scene and BVH), ``rays`` (camera, bounce and shadow rays traced),
+        ``spp`` and ``nonfinite`` (discarded NaN/Inf path samples).
+
+    Raises
+    ------
+    ValueError
+        A bad argument or camera (named).
     """
     if not isinstance(scene, Scene):
         raise TypeError(f"scene: expected a bsdfkit.render.Scene, got {type(scene).__name__}")
@@ -115,20 +134,38 @@ def preview(model_or_scene, envmap=None, width=256, height=256, spp=64, max_dept
             shape=None, interrupt="raise", return_stats=False, spectral=False):
     """Path-traced image of a material, float32 (height, width, 3) linear radiance.
 
-    model_or_scene: a bsdfkit model (shown on a unit sphere, or on ``shape``, standing on a
-        checkerboard ground; see :func:`default_scene`) or a :class:`Scene`.
-    envmap: environment, overriding the scene's: ``"sky"`` (procedural default), ``"studio"``,
+    Write the result with ``bk.io.write_image("x.png", img, exposure=0)`` (sRGB PNG) or ".exr".
+
+    Parameters
+    ----------
+    model_or_scene : BxDF or Scene
+        A bsdfkit model (shown on a unit sphere, or on ``shape``, standing on a checkerboard
+        ground; see :func:`default_scene`) or a :class:`Scene`.
+    envmap : str, path, array_like or float, optional
+        Environment, overriding the scene's: ``"sky"`` (procedural default), ``"studio"``,
         ``"white"`` (uniform radiance 1), a lat-long EXR/HDR/PNG path, an (H, W, 3) array, or a
-        constant radiance. A missing or unreadable file raises FileNotFoundError / OSError naming
-        the file with OpenImageIO's reason.
-    width, height, spp: image size and samples per pixel (>= 1). max_depth: scattering events
-        per path (>= 0; Mitsuba's max_depth is ours + 1). seed: the image is a deterministic
-        function of the seed, independent of the thread count.
-    progress: a text progress bar on stderr for renders longer than about a second.
-    interrupt: on Ctrl-C, ``"raise"`` (default) re-raises KeyboardInterrupt carrying
-        ``.image`` (the completed passes' average, or None) and ``.spp_done``; ``"return"``
-        returns that partial image with a RuntimeWarning.
-    spectral: trace hero-wavelength paths (pbrt-v4's spectral PathIntegrator) instead of RGB:
+        constant radiance.
+    width, height : int, optional
+        Image size (>= 1).
+    spp : int, optional
+        Samples per pixel (>= 1).
+    max_depth : int, optional
+        Scattering events per path (>= 0; Mitsuba's max_depth is ours + 1).
+    seed : int, optional
+        The image is a deterministic function of the seed, independent of the thread count.
+    progress : bool, optional
+        A text progress bar on stderr for renders longer than about a second.
+    shape : str or tuple, optional
+        A mesh file path, a ``(vertices, indices)`` pair, or ``"hair"`` (see
+        :func:`default_scene`).
+    interrupt : {"raise", "return"}, optional
+        On Ctrl-C, ``"raise"`` (default) re-raises KeyboardInterrupt carrying ``.image`` (the
+        completed passes' average, or None) and ``.spp_done``; ``"return"`` returns that partial
+        image with a RuntimeWarning.
+    return_stats : bool, optional
+        Also return the statistics (see :func:`render`).
+    spectral : bool, optional
+        Trace hero-wavelength paths (pbrt-v4's spectral PathIntegrator) instead of RGB:
         4 wavelengths per path from pbrt-v4's visible-wavelength importance sampling
         (``bk.sample_wavelengths``), the materials through their spectral kernels (the same as
         ``model.eval(..., wavelengths=...)``: spectra as parameters, RGB parameters uplifted,
@@ -137,11 +174,31 @@ def preview(model_or_scene, envmap=None, width=256, height=256, spp=64, max_dept
         sigmoid times D65; a lat-long image per texel, bilinear between texel spectra), a
         refraction through a dispersive dielectric terminating the secondary wavelengths
         (pbrt-v4 ``TerminateSecondary``), each path converted to linear sRGB as
-        ``bk.spectrum_to_rgb``. Models without a spectral kernel (see ``SPECTRAL_MODELS``)
-        raise NotImplementedError naming the model: their RGB f is not a spectrum, and
-        uplifting it per evaluation would pass an RGB render off as a spectral one.
+        ``bk.spectrum_to_rgb``.
 
-    Write the result with ``bk.io.write_image("x.png", img, exposure=0)`` (sRGB PNG) or ".exr".
+    Returns
+    -------
+    numpy.ndarray, shape (height, width, 3)
+        float32 linear radiance (with ``return_stats``: ``(image, stats)``).
+
+    Raises
+    ------
+    FileNotFoundError, OSError
+        A missing or unreadable environment file, naming it with OpenImageIO's reason.
+    NotImplementedError
+        ``spectral=True`` with a model that has no spectral kernel (see ``SPECTRAL_MODELS``):
+        its RGB f is not a spectrum, and uplifting it per evaluation would pass an RGB render off
+        as a spectral one.
+    ImportError
+        This build has no renderer (``bsdfkit._render``).
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> img = bk.render.preview(bk.Conductor.from_metal("Au", alpha=0.2), width=24, height=24, spp=2,
+    ...                         progress=False)
+    >>> img.shape
+    (24, 24, 3)
     """
     if isinstance(model_or_scene, Scene):
         if shape is not None:
@@ -157,9 +214,31 @@ def parse_spec(spec):
     """A model from a readable spec: ``"conductor metal=Cu alpha=0.2"``, ``"diffuse 0.8,0.5,0.2"``,
     ``"dielectric eta=1.5 alpha=0.1"``, ``"thin_dielectric"``, ``"difftrans 0.5 0.4"``.
 
-    The same parser as ``python -m bsdfkit lobes`` (``bsdfkit._spec.parse_spec``): a model name
-    (or alias), then positional values and ``key=value`` constructor parameters (RGB as
+    The same parser as ``python -m bsdfkit lobes`` (``bsdfkit.models.spec.parse_spec``): a model
+    name (or alias), then positional values and ``key=value`` constructor parameters (RGB as
     ``r,g,b``); ``metal=`` / ``reflectance=`` select ``Conductor.from_metal`` /
-    ``from_reflectance``. Raises ValueError listing the valid models or parameters."""
+    ``from_reflectance``.
+
+    Parameters
+    ----------
+    spec : str
+        The spec.
+
+    Returns
+    -------
+    BxDF
+        The model.
+
+    Raises
+    ------
+    ValueError
+        Listing the valid models or parameters.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> bk.render.parse_spec("dielectric eta=1.5 alpha=0.1") == bk.Dielectric(1.5, alpha=0.1)
+    True
+    """
     from ..models.spec import parse_spec as shared
     return shared(spec)

@@ -14,7 +14,17 @@ _METHODS = ("visible", "uniform")
 
 def visible_pdf(wavelengths) -> np.ndarray:
     """pbrt-v4 ``VisibleWavelengthsPDF``: 0.0039398042 / cosh^2(0.0072 (lambda - 538)) on
-    [360, 830] nm, 0 outside (Radziszewski et al. 2009's fit to the luminous efficiency)."""
+    [360, 830] nm, 0 outside (Radziszewski et al. 2009's fit to the luminous efficiency).
+
+    Parameters
+    ----------
+    wavelengths : array_like
+        In nm.
+
+    Returns
+    -------
+    numpy.ndarray
+        The density per nm, the input's shape."""
     lam = np.asarray(wavelengths, dtype=np.float64)
     inside = (lam >= colorimetry.LAMBDA_MIN) & (lam <= colorimetry.LAMBDA_MAX)
     return np.where(inside, 0.0039398042 / np.cosh(0.0072 * (lam - 538.0)) ** 2, 0.0)
@@ -39,12 +49,28 @@ def sample_wavelengths(u, method: str = "visible"):
     """Four stratified wavelengths per uniform sample ``u`` (any shape, values in [0, 1]), as
     pbrt-v4's ``SampledWavelengths``: the i-th uses u + i/4 (wrapped into [0, 1)).
 
-    method: ``"visible"`` (``SampleVisible``: importance sampling of the visible range by
-    :func:`visible_pdf`) or ``"uniform"`` (``SampleUniform``: uniform on [360, 830] nm, the others
-    offset by a quarter of the range, wrapped).
+    Parameters
+    ----------
+    u : float or array_like
+        Uniforms in [0, 1], any shape.
+    method : {"visible", "uniform"}, optional
+        ``SampleVisible`` (importance sampling of the visible range by :func:`visible_pdf`) or
+        ``SampleUniform`` (uniform on [360, 830] nm, the others offset by a quarter of the
+        range, wrapped).
 
-    Returns (wavelengths, pdf), float64 (..., 4), wavelengths in nm, pdf per nm (of each
-    wavelength alone; a Monte Carlo estimate averages f / pdf over the four).
+    Returns
+    -------
+    wavelengths : numpy.ndarray, shape (..., 4)
+        In nm, float64.
+    pdf : numpy.ndarray, shape (..., 4)
+        Per nm, of each wavelength alone (a Monte Carlo estimate averages f / pdf over the four).
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> lam, pdf = bk.sample_wavelengths([0.1, 0.6])
+    >>> lam.shape, bool(((lam >= 360) & (lam <= 830)).all())
+    ((2, 4), True)
     """
     if method not in _METHODS:
         raise ValueError(f"method: expected 'visible' or 'uniform', got {method!r}")
@@ -71,14 +97,32 @@ def spectrum_to_rgb(values, wavelengths, pdf, *, space: str = "srgb", illuminant
     values * cmf(lambda) / pdf, divided by the integral of y-bar (pbrt-v4's 1 nm CIE 1931 table
     from colour-science); samples with pdf = 0 contribute 0 (terminated secondary wavelengths).
 
-    values, wavelengths, pdf: broadcast together, last axis = the wavelengths of one estimate
-    (4 from :func:`sample_wavelengths`). space: "srgb" (linear, BT.709 primaries) or "xyz".
-    illuminant (required, keyword): ``"D65"`` when ``values`` are reflectances or BSDF sampling
+    Parameters
+    ----------
+    values, wavelengths, pdf : array_like
+        Broadcast together, last axis = the wavelengths of one estimate (4 from
+        :func:`sample_wavelengths`).
+    space : {"srgb", "xyz"}, optional
+        Linear sRGB (BT.709 primaries; default) or CIE XYZ.
+    illuminant : {"D65", None}
+        Required, keyword: ``"D65"`` when ``values`` are reflectances or BSDF sampling
     weights (``s.weight``: the colour of the material lit by white D65 light of unit luminance),
     ``None`` when they are radiance (a rendered path's spectrum). There is no default: the
     function cannot tell the two apart, and taking a clear glass's weights as radiance turns it
-    red ([0.558, 0.437, 0.416] instead of [0.463, 0.461, 0.458]). Returns float64 (..., 3): one
-    estimate per leading index; average them for the pixel value.
+    red ([0.558, 0.437, 0.416] instead of [0.463, 0.461, 0.458]).
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        float64, one estimate per leading index; average them for the pixel value.
+
+    Examples
+    --------
+    >>> import numpy as np, bsdfkit as bk
+    >>> lam, pdf = bk.sample_wavelengths(np.linspace(0, 1, 4096, endpoint=False))
+    >>> rgb = bk.spectrum_to_rgb(np.ones_like(lam), lam, pdf, illuminant="D65").mean(0)
+    >>> np.allclose(rgb, 1, atol=0.02)   # a white reflectance under D65 is white
+    True
     """
     if illuminant is _REQUIRED:
         raise TypeError("illuminant: required: 'D65' if values are reflectances or BSDF weights (s.weight: the "
@@ -119,7 +163,19 @@ def terminate_secondary(pdf, terminated):
     """pbrt-v4's ``SampledWavelengths::TerminateSecondary`` applied where ``terminated``: the
     wavelength pdfs (..., 4) with lambda1..3 set to 0 and lambda0's divided by 4 (a new array).
     Use it on the wavelength pdf of a path whose sample refracted through a dispersive
-    dielectric (``SampleResult.terminated``) before ``bsdfkit.spectrum_to_rgb``."""
+    dielectric (``SampleResult.terminated``) before ``bsdfkit.spectrum_to_rgb``.
+
+    Parameters
+    ----------
+    pdf : array_like, shape (..., 4)
+        The wavelength pdfs.
+    terminated : array_like of bool, shape (...)
+        Where the secondary wavelengths were terminated.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 4)
+        The new pdfs."""
     p = np.array(pdf, dtype=np.float64, copy=True)
     t = np.asarray(terminated, dtype=bool)
     if p.ndim == 0 or p.shape[-1] != 4:

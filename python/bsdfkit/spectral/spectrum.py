@@ -75,6 +75,27 @@ class Spectrum:
     directly), pickles, and ``eval(repr(s)) == s`` with ``Spectrum`` in scope. ``s(lambda)``
     evaluates at any finite positive wavelengths (float64, same shape); :meth:`to_rgb` projects
     to linear sRGB as Mitsuba 3 does.
+
+    Parameters
+    ----------
+    wavelengths : array_like, 1-D
+        Sample wavelengths in nm, > 0 and strictly increasing.
+    values : array_like, 1-D
+        One value per wavelength.
+
+    Raises
+    ------
+    ValueError
+        Mismatched lengths, a wavelength <= 0, duplicate or decreasing wavelengths (named).
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> s = bk.Spectrum([400, 500, 600], [0.25, 0.5, 1.0])
+    >>> s([450, 700]).tolist()   # linear in between, the end value outside
+    [0.375, 1.0]
+    >>> round(float(bk.Spectrum.named("glass-BK7")(550.0)), 4)
+    1.5185
     """
 
     __slots__ = ("_kind", "_data", "_name")

@@ -17,16 +17,29 @@ _DTYPES = {"float64": np.float64, "float32": np.float32}
 
 @dataclass(frozen=True)
 class Knob:
-    """One accuracy knob of a model instance.
+    """One accuracy knob of a model instance (made by :func:`knobs`).
 
-    name: the knob (a constructor keyword of the model, ``"precision"``, or a lobe name).
-    kind: ``"approximation"`` (a cheaper way to compute the same material: precision, Fresnel
-    approximations, table sizes, dropping a negligible lobe) or ``"modelling"`` (which material it
-    is: masking, Lambert vs Burley, ...), as the model class declares it. settings: values, most
-    accurate first; labels: the same as short strings. value: the model's current setting (``None``
-    for precision, which belongs to the call). reachable: False when the knob cannot change the
-    result of this instance in any configuration (then ``note`` says why). lobe: True for a
-    keep/drop knob of an optional lobe.
+    Attributes
+    ----------
+    name : str
+        The knob (a constructor keyword of the model, ``"precision"``, or a lobe name).
+    kind : {"approximation", "modelling"}
+        A cheaper way to compute the same material (precision, Fresnel approximations, table
+        sizes, dropping a negligible lobe) or which material it is (masking, Lambert vs Burley,
+        ...), as the model class declares it.
+    settings : tuple
+        Values, most accurate first.
+    labels : tuple of str
+        The same as short strings.
+    value : object
+        The model's current setting (``None`` for precision, which belongs to the call).
+    reachable : bool
+        False when the knob cannot change the result of this instance in any configuration (then
+        ``note`` says why).
+    note : str
+        What it does, or why it is moot.
+    lobe : bool
+        True for a keep/drop knob of an optional lobe.
     """
 
     name: str
@@ -151,20 +164,49 @@ def _check_model(model, name="model"):
 
 
 def family(model) -> str:
-    """Cost-table family of a model: the class plus the structural variant that selects a
-    different compiled kernel (``model.cost_family()``: smooth/rough, Filament's coat/sheen lobes)."""
+    """Cost-table family of a model: the class plus the structural variant that selects a different
+    compiled kernel (``model.cost_family()``: smooth/rough, Filament's coat/sheen lobes).
+
+    Parameters
+    ----------
+    model : BxDF
+        The model.
+
+    Returns
+    -------
+    str
+        The family name.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> bk.tuning.family(bk.Conductor.from_metal("Cu")), bk.tuning.family(bk.Conductor.from_metal("Cu", alpha=0.3))
+    ('Conductor/smooth', 'Conductor/rough')
+    """
     _check_model(model)
     return model.cost_family()
 
 
 @dataclass(frozen=True, eq=False)
 class Config:
-    """One reachable knob configuration of a model.
+    """One reachable knob configuration of a model (made by :func:`configurations`).
 
-    labels: ``{knob: label}`` for every registry knob, ``None`` where the knob is moot in this
-    configuration. index: setting index per knob (0 = most accurate; moot knobs 0). model: the
-    configured model (moot knobs keep the user's values). dtype: ``np.float64`` or ``np.float32``.
-    key: the cost-table key (moot knobs at their reference label).
+    Attributes
+    ----------
+    labels : dict
+        ``{knob: label}`` for every registry knob, ``None`` where the knob is moot in this
+        configuration.
+    index : dict
+        Setting index per knob (0 = most accurate; moot knobs 0).
+    model : BxDF
+        The configured model (moot knobs keep the user's values).
+    dtype : type
+        ``np.float64`` or ``np.float32``.
+    key : str
+        The cost-table key (moot knobs at their reference label).
+    cheapness : tuple
+        Per knob: setting index / (settings - 1), 1 where moot (ranks equally costly
+        configurations).
     """
 
     labels: dict
@@ -213,10 +255,30 @@ def _apply(model, specs, combo):
 
 
 def configurations(model, allow="all") -> list:
-    """Every reachable configuration of ``model`` (a list of :class:`Config`), the most accurate
-    first, then in registry order of enumeration (later knobs vary fastest). ``allow``: ``"all"``
-    (default) varies every knob; a tuple of modelling-knob names varies the approximation knobs
-    and only those modelling knobs (the others keep the input's setting), as :func:`simplify`."""
+    """Every reachable configuration of ``model``, the most accurate first, then in registry order
+    of enumeration (later knobs vary fastest).
+
+    Parameters
+    ----------
+    model : BxDF
+        A registered model.
+    allow : "all" or tuple of str, optional
+        ``"all"`` (default) varies every knob; a tuple of modelling-knob names varies the
+        approximation knobs and only those modelling knobs (the others keep the input's setting),
+        as :func:`simplify`.
+
+    Returns
+    -------
+    list of Config
+        The configurations.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> cs = bk.tuning.configurations(bk.Conductor.from_metal("Cu", alpha=0.3))
+    >>> cs[0].labels
+    {'fresnel': 'exact', 'masking': 'correlated', 'precision': 'float64'}
+    """
     _check_model(model)
     specs = _specs(model, allow)
     seen, out = set(), []
@@ -256,7 +318,24 @@ def _reference_config(model, allow="all") -> Config:
 def knobs(model) -> tuple:
     """The accuracy knobs of a model instance (tuple of :class:`Knob`), in the order the class
     declares them, precision last. ``reachable`` is False for knobs that cannot change this
-    instance's result in any configuration."""
+    instance's result in any configuration.
+
+    Parameters
+    ----------
+    model : BxDF
+        A registered model.
+
+    Returns
+    -------
+    tuple of Knob
+        The knobs, precision last.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> [(k.name, k.reachable) for k in bk.knobs(bk.Conductor.from_metal("Cu"))]
+    [('fresnel', True), ('masking', False), ('precision', True)]
+    """
     _check_model(model)
     return _knobs_from(model, configurations(model))
 

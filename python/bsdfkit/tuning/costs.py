@@ -19,9 +19,19 @@ _COSTS_CACHE: dict = {}
 
 
 def knob_costs(path=None) -> dict:
-    """The shipped cost table (``bsdfkit/tuning/_knob_costs.json``, written by ``bench/tradeoff.py``):
-    ``{"families": {family: {"op": ..., "costs": {config key: time / time of the most accurate}}},
-    ...}``; ``{}`` when it is missing. ``path`` reads another file (not cached)."""
+    """The shipped cost table (``bsdfkit/tuning/_knob_costs.json``, written by ``bench/tradeoff.py``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike, optional
+        Read another file (not cached).
+
+    Returns
+    -------
+    dict
+        ``{"families": {family: {"op": ..., "costs": {config key: time / time of the most
+        accurate}}}, ...}``; ``{}`` when it is missing.
+    """
     if path is None:
         path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "_knob_costs.json")
         if path in _COSTS_CACHE:
@@ -151,8 +161,31 @@ def time_repeats(fn, repeats=5, min_time=0.005, warmup=1) -> list:
 
 def best_time(fn, repeats=5, min_time=0.005, warmup=1):
     """Min over ``repeats`` of the mean time of ``inner`` back-to-back calls of ``fn`` after
-    ``warmup`` calls (:func:`time_repeats`).
-    Also the timer of ``tools/perf/throughput.py`` and ``bench/filament.py``."""
+    ``warmup`` calls (:func:`time_repeats`). Also the timer of ``tools/perf/throughput.py`` and
+    ``tools/perf/filament.py``.
+
+    Parameters
+    ----------
+    fn : callable
+        Called without arguments.
+    repeats : int, optional
+        Repeats; the best is kept.
+    min_time : float, optional
+        Seconds one repeat lasts at least (``inner`` is chosen for it).
+    warmup : int, optional
+        Calls before timing.
+
+    Returns
+    -------
+    float
+        Seconds per call.
+
+    Examples
+    --------
+    >>> from bsdfkit.tuning import best_time
+    >>> best_time(lambda: sum(range(100)), repeats=2, min_time=1e-4) > 0
+    True
+    """
     return min(time_repeats(fn, repeats, min_time, warmup))
 
 

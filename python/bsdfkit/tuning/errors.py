@@ -49,13 +49,22 @@ def _all_delta(model) -> bool:
 
 @dataclass(frozen=True, eq=False)
 class DirectionSet:
-    """The directions every configuration is compared on (float64 arrays).
+    """The directions every configuration is compared on (float64 arrays; made by
+    :func:`direction_set`, or by hand to compare on one's own directions).
 
-    wo, wi: (N, 3) pairs evaluated with ``eval`` (stratified pairs and the non-delta samples of
-    the reference). delta_wo, delta_uc, delta_u: inputs of the delta-lobe rows, where each
-    configuration is sampled with the same uniforms. albedo_wo (K, 3), albedo_uc (M,),
-    albedo_u (M, 2): the directional-albedo set (M samples of the reference per wo). seed: the
-    seed it was drawn with (None if given by the user).
+    Parameters
+    ----------
+    wo, wi : numpy.ndarray, shape (N, 3)
+        Pairs evaluated with ``eval`` (stratified pairs and the non-delta samples of the
+        reference).
+    delta_wo, delta_uc, delta_u : numpy.ndarray
+        Inputs of the delta-lobe rows, where each configuration is sampled with the same uniforms.
+    albedo_wo : numpy.ndarray, shape (K, 3)
+        The directions of the directional-albedo set.
+    albedo_uc, albedo_u : numpy.ndarray, shapes (M,) and (M, 2)
+        Its uniforms (M samples of the reference per wo).
+    seed : int or None, optional
+        The seed it was drawn with (None if given by the user).
     """
 
     wo: np.ndarray
@@ -87,7 +96,31 @@ def _albedo_inputs(model, rng, n_albedo):
 def direction_set(model, n: int = 8192, seed: int = 0, *, n_albedo: int = 4096) -> DirectionSet:
     """The default direction set of ``model`` (see the module docstring): ``n`` rows, half
     stratified pairs and half samples of the most accurate configuration (all samples for models
-    made only of delta lobes), plus the albedo set with ``n_albedo`` samples per wo."""
+    made only of delta lobes), plus the albedo set with ``n_albedo`` samples per wo.
+
+    Parameters
+    ----------
+    model : BxDF
+        The model.
+    n : int, optional
+        Rows.
+    seed : int, optional
+        Seed of the draws.
+    n_albedo : int, optional
+        Albedo samples per wo.
+
+    Returns
+    -------
+    DirectionSet
+        The directions.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> ds = bk.tuning.direction_set(bk.Diffuse(0.5), n=64, n_albedo=16)
+    >>> ds.wo.shape, ds.wi.shape
+    ((64, 3), (64, 3))
+    """
     _check_model(model)
     n = _check_int(n, "n", 16)
     seed = _check_int(seed, "seed", 0)
@@ -151,7 +184,28 @@ def _user_directions(model, directions, seed, n_albedo) -> DirectionSet:
 
 
 def relative_error(v_ref, v, floor: float) -> np.ndarray:
-    """``|v - v_ref| / max(|v_ref|, floor)`` elementwise (float64)."""
+    """``|v - v_ref| / max(|v_ref|, floor)`` elementwise (float64).
+
+    Parameters
+    ----------
+    v_ref : array_like
+        The reference values.
+    v : array_like
+        The values compared, broadcast with ``v_ref``.
+    floor : float
+        The smallest denominator.
+
+    Returns
+    -------
+    numpy.ndarray
+        The relative errors.
+
+    Examples
+    --------
+    >>> from bsdfkit.tuning import relative_error
+    >>> relative_error([1.0, 0.0], [1.1, 0.01], floor=0.1).round(6)
+    array([0.1, 0.1])
+    """
     v_ref = np.asarray(v_ref, dtype=np.float64)
     return np.abs(np.asarray(v, dtype=np.float64) - v_ref) / np.maximum(np.abs(v_ref), floor)
 

@@ -80,7 +80,19 @@ class Table:
     ``table["p99_err"]`` a column, ``table.configs[i]`` the :class:`Config` (``.model``,
     ``.dtype``). Attributes: model, reference (the most accurate model, or tradeoff's
     ``reference=``), external_reference (that model, else None), knobs, floor,
-    reference_albedo, directions (the :class:`DirectionSet`), seed, family, measured.
+    reference_albedo, directions (the :class:`DirectionSet`), seed, family, measured. Tables
+    are made by :func:`tradeoff`, not by hand.
+
+    Parameters
+    ----------
+    model : BxDF
+        The model :func:`tradeoff` was given.
+    evaluation : object
+        The errors of every configuration (internal).
+    rates, speedups, expected, spreads : sequence or None
+        Per configuration: measured throughput, live and expected speedup, timing spread.
+    info : dict
+        What the run used (``n_timing``, thread count, ...).
     """
 
     def __init__(self, model, evaluation: _Evaluation, rates, speedups, expected, info, spreads=None):
@@ -240,9 +252,6 @@ def tradeoff(model, directions=None, n: int | None = None, seed: int = 0, *, n_a
              costs: dict | None = None, reference=None, progress=None) -> Table:
     """Throughput and error of every reachable knob configuration of ``model``.
 
-    directions: ``None`` (the default set, :func:`direction_set` with ``n`` rows and ``seed``),
-    a :class:`DirectionSet`, or a pair ``(wo, wi)`` of direction arrays (float64 unit vectors;
-    delta lobes, which ``eval`` cannot reach, are then sampled at those ``wo``).
     Errors: ``max_err`` / ``p99_err`` (relative error of f |cos theta_i|) and ``albedo_err``
     against the most accurate configuration (definitions in the module docstring). float32
     configurations are run on float32 directions.
@@ -254,17 +263,10 @@ def tradeoff(model, directions=None, n: int | None = None, seed: int = 0, *, n_a
     its default (65536 pairs, 4096 for stochastic models) it is reduced, down to 64, so that the
     timing takes about ``TIMING_BUDGET_S`` (15 s) at most, estimated from one call of the most
     accurate configuration, and its repeats then last >= 1 ms instead of 5 ms
-    (``Table.info["n_timing"]`` says what was used); pass ``n_timing=`` for a fixed size. progress: None (a progress line on stderr when it is a terminal, a bar in
-    Jupyter), True, False, or a callable ``progress(done, total, stage)``; Ctrl-C stops between
-    two calls (KeyboardInterrupt). ``expected_speedup`` is what
-    the shipped cost table predicts (the number :func:`simplify` ranks by; see the module
-    docstring for why simplify does not use the live figure). DFG tables are built before timing.
-    costs: a cost table in the :func:`knob_costs` format to use instead of the shipped one.
-    reference: another model to measure the errors against instead of the most accurate
-    configuration (called in float64; e.g. a ``bk.Custom`` wrapping your own formula, or a
-    measured material): every configuration of ``model`` is compared with it on the same
-    directions (drawn from ``model``; the albedo from the reference's own samples). It must have
-    specular (delta) lobes exactly when ``model`` has.
+    (``Table.info["n_timing"]`` says what was used); pass ``n_timing=`` for a fixed size. Ctrl-C
+    stops between two calls (KeyboardInterrupt). ``expected_speedup`` is what the shipped cost
+    table predicts (the number :func:`simplify` ranks by; see the module docstring for why
+    simplify does not use the live figure). DFG tables are built before timing.
 
     Stochastic models (``model.exact_eval`` False: CoatedDiffuse, CoatedConductor): the errors are
     against the *converged* reference (the most accurate configuration with n_samples = 256,
@@ -276,6 +278,57 @@ def tradeoff(model, directions=None, n: int | None = None, seed: int = 0, *, n_a
     front is on rms_err. Defaults there: n = 512 pairs, n_timing = 4096, n_albedo = 4096 (each
     configuration's albedo is the mean of its own sampling weights: the walk's sample pdf is only
     proportional to the density; 64 when only the configurations are stochastic).
+
+    Parameters
+    ----------
+    model : BxDF
+        The model whose configurations are compared.
+    directions : DirectionSet or tuple, optional
+        ``None`` (the default set, :func:`direction_set` with ``n`` rows and ``seed``), a
+        :class:`DirectionSet`, or a pair ``(wo, wi)`` of direction arrays (float64 unit vectors;
+        delta lobes, which ``eval`` cannot reach, are then sampled at those ``wo``).
+    n : int, optional
+        Rows of the default direction set (8192; 512 for stochastic models).
+    seed : int, optional
+        Seed of the default direction set (default 0).
+    n_albedo : int, optional
+        Samples per wo of the albedo error (4096; see above for stochastic models).
+    measure : bool, optional
+        Time every configuration (default True); False: errors only (``speedup`` is None).
+    n_timing : int, optional
+        Direction pairs per timed call (default: chosen as above).
+    repeats, rounds : int, optional
+        Timing repeats (best of, default 5) and rounds (default 1).
+    costs : dict, optional
+        A cost table in the :func:`knob_costs` format to use instead of the shipped one.
+    reference : BxDF, optional
+        Another model to measure the errors against instead of the most accurate configuration
+        (called in float64; e.g. a ``bk.Custom`` wrapping your own formula, or a measured
+        material): every configuration of ``model`` is compared with it on the same directions
+        (drawn from ``model``; the albedo from the reference's own samples). It must have specular
+        (delta) lobes exactly when ``model`` has.
+    progress : bool or callable, optional
+        None (a progress line on stderr when it is a terminal, a bar in Jupyter), True, False, or a
+        callable ``progress(done, total, stage)``.
+
+    Returns
+    -------
+    Table
+        One row per reachable configuration, the most accurate first.
+
+    Raises
+    ------
+    ValueError
+        A bad argument (named); a reference whose delta lobes differ from the model's.
+    TypeError
+        An argument of the wrong type, or a model that is not a bsdfkit model.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> t = bk.tradeoff(bk.Conductor.from_metal("Cu", alpha=0.3), n=256, n_albedo=64, measure=False)
+    >>> t[0]["config"], len(t) > 1
+    ('most accurate', True)
     """
     _check_model(model)
     progress = check_progress(progress)
@@ -323,21 +376,60 @@ def _any_stochastic(model) -> bool:
 
 @dataclass
 class SimplifyReport:
-    """What :func:`simplify` chose and why.
+    """What :func:`simplify` chose and why (``summary()`` says it in words).
 
-    model: the simplified model; dtype: ``np.float32`` or ``np.float64``, the precision to call
-    it with (feed directions of that dtype); config: ``{knob: label}`` of every reachable knob
-    (precision included); changes: ``[(parameter, input value, output value, reason)]`` for every
-    constructor parameter that differs between the input and the output model, and
-    ``("precision", "float64", "float32", ...)`` when float32 was chosen -- an empty list means the
-    input comes back unchanged; error: ``{"max": ..., "p99": ..., "albedo": ...}`` of the chosen
-    configuration against the input model called in float64 (``reference``); expected_speedup:
-    against the most accurate configuration simplify considered, from the cost table (``None``
-    when the configuration is not in it); speedup_vs_input: the same against the input model's
-    own configuration (float64 calls), when both are in the table; ranked_by: ``"cost table"`` or
-    ``"registry order"``; kept: ``[(knob, reason)]`` for approximation knobs left at the input's
-    setting although a cheaper one exists; fixed: ``[(knob, value)]``, the modelling choices kept
-    as given (not named in ``allow``); allow: the modelling knobs simplify was allowed to change.
+    Attributes
+    ----------
+    input_model : BxDF
+        The model given to simplify.
+    model : BxDF
+        The simplified model.
+    dtype : type
+        ``np.float32`` or ``np.float64``, the precision to call it with (feed directions of that
+        dtype).
+    config : dict
+        ``{knob: label}`` of every reachable knob (precision included).
+    changes : list
+        ``[(parameter, input value, output value, reason)]`` for every constructor parameter that
+        differs between the input and the output model, and ``("precision", "float64",
+        "float32", ...)`` when float32 was chosen -- an empty list means the input comes back
+        unchanged.
+    kept : list
+        ``[(knob, reason)]`` for approximation knobs left at the input's setting although a
+        cheaper one exists.
+    error : dict
+        ``{"max": ..., "p99": ..., "albedo": ...}`` of the chosen configuration against the input
+        model called in float64 (``reference``).
+    tol : float
+        The tolerance.
+    metric : str
+        The metric the tolerance applies to.
+    expected_speedup : float or None
+        Against the most accurate configuration simplify considered, from the cost table
+        (``None`` when the configuration is not in it).
+    speedup_vs_input : float or None
+        The same against the input model's own configuration (float64 calls), when both are in
+        the table.
+    ranked_by : str
+        ``"cost table"`` or ``"registry order"``.
+    reference : BxDF
+        What the errors are measured against.
+    description : str
+        The chosen configuration in words.
+    n_configurations, n_within_tol : int
+        Configurations measured, and how many met the tolerance.
+    seed : int
+        Seed of the direction set.
+    floor : float
+        The relative-error floor.
+    notes : list of str
+        Remarks (e.g. the n_samples that would reach a missed tolerance).
+    fixed : list
+        ``[(knob, value)]``, the modelling choices kept as given (not named in ``allow``).
+    allow : tuple
+        The modelling knobs simplify was allowed to change.
+    within_tol : bool
+        False when no configuration met the tolerance.
     """
 
     input_model: BxDF
@@ -445,29 +537,18 @@ def simplify(model, tol, metric: str | None = None, directions=None, seed: int =
              n_albedo: int | None = None, costs: dict | None = None, allow=(), margin: float | None = None,
              families=None, progress=None):
     """The cheapest configuration of ``model`` whose error against ``model`` itself (called in
-    float64) is <= ``tol``: returns ``(simplified_model, SimplifyReport)``.
-
-    margin: a configuration is accepted when its error on the measuring direction set is
-    <= ``margin * tol`` (default 0.5). The p99 (or max) over a few thousand directions is itself
-    an estimate: an error measured at 0.94 tol was seen at 1.55 tol on another direction set
-    (a Filament sheen + coat material with fast visibility), so the factor keeps the error on
-    directions simplify never saw within ``tol``. ``margin=1`` accepts up to tol exactly.
+    float64) is <= ``tol``.
 
     The reference is the user's model as given. Approximation knobs (precision, Schlick/F82
     versus exact Fresnel, Filament's fast visibility, DFG table size, dropping a negligible lobe)
     may move in either direction; modelling knobs (masking, Lambert versus Burley, f90 rule, energy
     compensation, ...: which material it is) keep the input's setting unless named in ``allow``,
     e.g. ``allow=("diffuse",)``. Every parameter that differs between input and output is listed
-    in ``report.changes`` (empty: the model comes back unchanged).
-
-    metric: ``"p99"`` (the default for deterministic models: the 99th percentile of the relative
-    error of f |cos theta_i|), ``"max"`` (its maximum), ``"albedo"`` (absolute directional-albedo
-    error) or ``"rms"`` (the default for stochastic models, below); definitions in the module
-    docstring, one-line descriptions in ``METRIC_DESCRIPTIONS``; ``report.metric`` names the one used. Errors are measured
-    on ``directions`` (default: :func:`direction_set` of ``n`` rows drawn with ``seed``); float32
-    configurations on float32 directions, so ``report.dtype`` is the precision to call the result
-    with. A lobe whose removal stays within ``tol`` is dropped (a FilamentStandard with clear_coat
-    0.001 gets clear_coat 0 and the compiled variant without the coat).
+    in ``report.changes`` (empty: the model comes back unchanged). Errors are measured on
+    ``directions``; float32 configurations on float32 directions, so ``report.dtype`` is the
+    precision to call the result with. A lobe whose removal stays within ``tol`` is dropped (a
+    FilamentStandard with clear_coat 0.001 gets clear_coat 0 and the compiled variant without the
+    coat).
 
     "Cheapest" is ranked by the shipped cost table (bench/tradeoff.py), not by a timing taken
     now, so the result is deterministic for a given seed: among the configurations within tol
@@ -476,17 +557,12 @@ def simplify(model, tol, metric: str | None = None, directions=None, seed: int =
     to itself), then the one closest to the input; configurations missing from the table count as
     costing as much as the most accurate one, and a family without a table is ranked by registry
     order (most knobs at cheaper settings). ``tol = 0`` returns the input unchanged (float64).
-    costs: a cost table in the :func:`knob_costs` format (e.g. ``bench/tradeoff.py`` run on
-    another machine) to rank by instead of the shipped one.
 
     A model with a non-constant ``bsdfkit.Spectrum`` parameter also has the ``color`` knob
     (``"spectral"``, the reference, or ``"rgb"``; a property of the call like precision): its error
     is RGB mode's f |cos| against spectral mode's, both in linear sRGB under a D65 white furnace
     (``bsdfkit.tuning.errors.color_weights``); ``report.config["color"]`` says which mode to call.
 
-    families: model classes (e.g. ``(bk.Diffuse, bk.Conductor, bk.FilamentStandard)``): instead
-    of configurations of ``model``, fit each family to it and return the cheapest fitted model
-    within ``tol`` (``bsdfkit.fitting.simplify_families``: measured -> analytic).
     Stochastic models (``model.exact_eval`` False: CoatedDiffuse, CoatedConductor): the reference
     is the input's converged walk (n_samples = 256, max_depth = 100, another realization), the
     default metric is ``"rms"`` (relative RMS of f |cos theta_i|, noise and bias together; see
@@ -502,7 +578,69 @@ def simplify(model, tol, metric: str | None = None, directions=None, seed: int =
     dominates when the set happens to contain one: for such materials the figure varies by a
     factor of several between direction sets (car paint, alpha 0.02: 0.07 on simplify's 512
     stratified pairs, 0.009 on 400 uniform pairs with one highlight pair, same n_samples = 64).
-    progress: as in :func:`tradeoff` (one step per configuration measured).
+
+    Parameters
+    ----------
+    model : BxDF
+        The model to simplify (the reference).
+    tol : float
+        The tolerance, >= 0 (inf allowed), in the unit of ``metric``.
+    metric : {"p99", "max", "albedo", "rms"}, optional
+        ``"p99"`` (the default for deterministic models: the 99th percentile of the relative
+        error of f |cos theta_i|), ``"max"`` (its maximum), ``"albedo"`` (absolute
+        directional-albedo error) or ``"rms"`` (the default for stochastic models, above);
+        definitions in the module docstring, one-line descriptions in ``METRIC_DESCRIPTIONS``;
+        ``report.metric`` names the one used.
+    directions : DirectionSet or tuple, optional
+        As :func:`tradeoff`'s (default: :func:`direction_set` of ``n`` rows drawn with ``seed``).
+    seed : int, optional
+        Seed of the default direction set.
+    n, n_albedo : int, optional
+        Rows of the default direction set and albedo samples per wo, as :func:`tradeoff`'s.
+    costs : dict, optional
+        A cost table in the :func:`knob_costs` format (e.g. ``bench/tradeoff.py`` run on another
+        machine) to rank by instead of the shipped one.
+    allow : tuple of str, optional
+        Modelling knobs that may change (default none).
+    margin : float, optional
+        A configuration is accepted when its error on the measuring direction set is
+        <= ``margin * tol`` (default 0.5; 0.8 for ``"rms"``), in (0, 1]. The p99 (or max) over a
+        few thousand directions is itself an estimate: an error measured at 0.94 tol was seen at
+        1.55 tol on another direction set (a Filament sheen + coat material with fast visibility),
+        so the factor keeps the error on directions simplify never saw within ``tol``.
+        ``margin=1`` accepts up to tol exactly.
+    families : sequence of type, optional
+        Model classes (e.g. ``(bk.Diffuse, bk.Conductor, bk.FilamentStandard)``): instead of
+        configurations of ``model``, fit each family to it and return the cheapest fitted model
+        within ``tol`` (``bsdfkit.fitting.simplify_families``: measured -> analytic).
+    progress : bool or callable, optional
+        As in :func:`tradeoff` (one step per configuration measured).
+
+    Returns
+    -------
+    model : BxDF
+        The simplified model (call it with ``report.dtype`` directions).
+    report : SimplifyReport
+        What was chosen, its measured error, the changes, and whether ``tol`` was met.
+
+    Raises
+    ------
+    ValueError
+        A bad ``tol``, ``metric`` or ``margin`` (named).
+    TypeError
+        A ``tol`` that is not a real number.
+
+    Warns
+    -----
+    ToleranceNotMetWarning
+        When no configuration meets ``tol``.
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> m, report = bk.simplify(bk.Conductor.from_metal("Cu", alpha=0.3), 0.02, n=512, n_albedo=64)
+    >>> report.within_tol, report.metric, report.dtype.__name__
+    (True, 'p99', 'float32')
     """
     if families is not None:  # measured -> analytic (bsdfkit.fitting; one hook)
         from ..fitting.simplify import simplify_families

@@ -120,37 +120,71 @@ class FilamentStandard(BxDF):
     Fresnel, optional anisotropy, clear coat and sheen, and multiple-scattering energy
     compensation (Filament ``surface_shading_model_standard.fs``; doc "Standard model").
 
-    base_color: RGB in [0, 1] (linear). metallic: [0, 1]. roughness: *perceptual* roughness in
-    [0, 1] (GGX alpha = roughness**2, clamped below by ``min_roughness``). reflectance: [0, 1],
-    dielectric f0 = 0.16 reflectance**2. So f0 = 0.16 reflectance**2 (1 - metallic) + base_color
-    metallic and the diffuse color is base_color (1 - metallic).
-    anisotropy: [-1, 1]; alpha_t = alpha (1 + a) along local x, alpha_b = alpha (1 - a) along y.
-    clear_coat, clear_coat_roughness: [0, 1]; an isotropic IOR 1.5 (f0 = 0.04) GGX coat with
-    Kelemen visibility; it raises the base roughness to mix(r, max(r, r_coat), clear_coat).
-    sheen_color: RGB in [0, 1]; sheen_roughness: [0, 1]. A Charlie sheen lobe; the base below
-    is scaled by 1 - max(sheen_color) DFG.z (KHR_materials_sheen as in Filament), floored at 0
-    (DFG.z, the sheen albedo, exceeds 1 at grazing angles for sheen roughness below ~0.1, where
-    Filament's factor turns negative).
+    f0 = 0.16 reflectance**2 (1 - metallic) + base_color metallic and the diffuse color is
+    base_color (1 - metallic). The keyword-only knobs' defaults reproduce Filament's desktop,
+    FILAMENT_QUALITY_HIGH shading.
 
-    Knobs (keyword-only; defaults reproduce Filament's desktop, FILAMENT_QUALITY_HIGH shading):
+    Parameters
+    ----------
+    base_color : float or RGB or Spectrum, optional
+        RGB in [0, 1] (linear).
+    metallic : float, optional
+        In [0, 1].
+    roughness : float, optional
+        *Perceptual* roughness in [0, 1] (GGX alpha = roughness**2, clamped below by
+        ``min_roughness``).
+    reflectance : float, optional
+        In [0, 1]: dielectric f0 = 0.16 reflectance**2.
+    anisotropy : float, optional
+        In [-1, 1]; alpha_t = alpha (1 + a) along local x, alpha_b = alpha (1 - a) along y.
+    clear_coat, clear_coat_roughness : float, optional
+        In [0, 1]; an isotropic IOR 1.5 (f0 = 0.04) GGX coat with Kelemen visibility; it raises
+        the base roughness to mix(r, max(r, r_coat), clear_coat).
+    sheen_color : float or RGB or Spectrum, optional
+        RGB in [0, 1]: a Charlie sheen lobe; the base below is scaled by 1 - max(sheen_color)
+        DFG.z (KHR_materials_sheen as in Filament), floored at 0 (DFG.z, the sheen albedo,
+        exceeds 1 at grazing angles for sheen roughness below ~0.1, where Filament's factor
+        turns negative).
+    sheen_roughness : float, optional
+        In [0, 1].
+    diffuse : {"lambert", "burley"}, optional
+        ``Fd_Lambert`` (Filament's BRDF_DIFFUSE) or ``Fd_Burley``.
+    visibility : {"correlated", "fast"}, optional
+        ``V_SmithGGXCorrelated`` or ``V_SmithGGXCorrelated_Fast`` (Filament's quality < HIGH).
+        Anisotropic lobes always use ``V_SmithGGXCorrelated_Anisotropic``, as in Filament.
+    f90 : {"filament", "one"}, optional
+        f90 = saturate(16.5 (f0.r + f0.g + f0.b)), the default-quality "specular occlusion", or
+        f90 = 1 (LOW quality).
+    energy_compensation : bool, optional
+        True multiplies the specular lobe by 1 + f0 (1/DFG.y - 1) (Kulla-Conty as simplified by
+        Lagarde; the diffuse lobe is not reduced, as in Filament).
+    min_roughness : {"desktop", "mobile"} or float, optional
+        Perceptual 0.045, 0.089, or a number in [0.0317, 1]: the MIN_PERCEPTUAL_ROUGHNESS clamp
+        applied to every roughness (the anisotropic alphas are floored at its square,
+        MIN_ROUGHNESS).
+    clear_coat_layering : {"code", "doc"}, optional
+        (Fd + Fr) (1 - Fc) + Frc (Filament's shaders) or (Fd + Fr (1 - Fc)) (1 - Fc) + Frc
+        (Filament's document: specular attenuated twice).
+    clear_coat_ior_change : bool, optional
+        True (Filament's default) re-derives the base f0 under an IOR 1.5 coat:
+        f0 <- mix(f0, f0ClearCoatToSurface(f0), clear_coat).
+    dfg_lut_size : int, optional
+        Side of the DFG table (``bsdfkit.filament.dfg_lut``), default 128.
 
-    diffuse: ``"lambert"`` (``Fd_Lambert``, Filament's BRDF_DIFFUSE) or ``"burley"`` (``Fd_Burley``).
-    visibility: ``"correlated"`` (``V_SmithGGXCorrelated``) or ``"fast"``
-        (``V_SmithGGXCorrelated_Fast``, Filament's quality < HIGH). Anisotropic lobes always use
-        ``V_SmithGGXCorrelated_Anisotropic``, as in Filament.
-    f90: ``"filament"`` (f90 = saturate(16.5 (f0.r + f0.g + f0.b)), the default-quality
-        "specular occlusion") or ``"one"`` (f90 = 1, LOW quality).
-    energy_compensation: True multiplies the specular lobe by 1 + f0 (1/DFG.y - 1) (Kulla-Conty
-        as simplified by Lagarde; the diffuse lobe is not reduced, as in Filament).
-    min_roughness: ``"desktop"`` (perceptual 0.045), ``"mobile"`` (0.089) or a number in
-        [0.0317, 1]: the MIN_PERCEPTUAL_ROUGHNESS clamp applied to every roughness (the
-        anisotropic alphas are floored at its square, MIN_ROUGHNESS).
-    clear_coat_layering: ``"code"`` ((Fd + Fr) (1 - Fc) + Frc, Filament's shaders) or ``"doc"``
-        ((Fd + Fr (1 - Fc)) (1 - Fc) + Frc, Filament's document: specular attenuated twice).
-    clear_coat_ior_change: True (Filament's default) re-derives the base f0 under an IOR 1.5
-        coat: f0 <- mix(f0, f0ClearCoatToSurface(f0), clear_coat).
-    dfg_lut_size: side of the DFG table (``bsdfkit.filament.dfg_lut``), default 128.
+    Raises
+    ------
+    ValueError
+        A value out of its range, naming the parameter (TypeError for a wrong type).
 
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> m = bk.FilamentStandard(base_color=[0.8, 0.1, 0.1], roughness=0.4, clear_coat=1.0)
+    >>> m.eval(bk.direction(0.5, 0.0), bk.direction(0.5, 3.14159)).shape
+    (3,)
+
+    Notes
+    -----
     One-sided, as in Filament: f and pdf are 0 unless both wo and wi are above the surface
     (z > 0). eval excludes the cosine (Filament's shading is f <NoL>). NoV is clamped to 1e-4
     where Filament clamps it. Not reciprocal in general (energy compensation and sheen scaling
@@ -307,16 +341,34 @@ class FilamentStandard(BxDF):
 class FilamentCloth(BxDF):
     """Filament's cloth material (``surface_shading_model_cloth.fs``; doc "Cloth model").
 
-    base_color: RGB in [0, 1], the diffuse color. sheen_color: RGB in [0, 1], the specular color
-    of the Charlie sheen lobe D_Charlie V_Neubelt sheen_color (no Fresnel term); None (default)
-    means sqrt(base_color), Filament's default. subsurface_color: RGB in [0, 1] or None (default,
-    no subsurface): when given, the diffuse lobe becomes Filament's wrapped diffuse
-    Fd_Wrap(NoL, 0.5) saturate(subsurface_color + NoL) base_color / pi, which Filament does not
-    multiply by NoL -- here it is divided by NoL (f <NoL> stays bounded, f grows as 1/NoL at
-    the horizon). roughness: perceptual, [0, 1] (alpha = roughness**2).
+    Parameters
+    ----------
+    base_color : float or RGB or Spectrum, optional
+        RGB in [0, 1], the diffuse color.
+    sheen_color : float or RGB or Spectrum, optional
+        RGB in [0, 1], the specular color of the Charlie sheen lobe D_Charlie V_Neubelt
+        sheen_color (no Fresnel term); None (default) means sqrt(base_color), Filament's default.
+    subsurface_color : float or RGB or Spectrum, optional
+        RGB in [0, 1] or None (default, no subsurface): when given, the diffuse lobe becomes
+        Filament's wrapped diffuse Fd_Wrap(NoL, 0.5) saturate(subsurface_color + NoL)
+        base_color / pi, which Filament does not multiply by NoL -- here it is divided by NoL
+        (f <NoL> stays bounded, f grows as 1/NoL at the horizon).
+    roughness : float, optional
+        Perceptual, [0, 1] (alpha = roughness**2).
+    diffuse, min_roughness, dfg_lut_size : optional
+        Keyword-only knobs, as for :class:`FilamentStandard`.
 
-    Knobs (keyword-only): diffuse (``"lambert"`` | ``"burley"``), min_roughness, dfg_lut_size,
-    as for :class:`FilamentStandard`.
+    Raises
+    ------
+    ValueError
+        A value out of its range, naming the parameter (TypeError for a wrong type).
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> m = bk.FilamentCloth(base_color=[0.6, 0.2, 0.2], roughness=0.7)
+    >>> float(m.eval(bk.direction(0.5, 0.0), -bk.direction(0.5, 1.0)).max())   # one-sided
+    0.0
 
     One-sided (f = pdf = 0 unless wo.z > 0 and wi.z > 0); no energy compensation; not energy
     conserving (the diffuse lobe is not reduced by the sheen, as in Filament). Sampling: diffuse

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Error and cost of the far-field fibre's quadrature order (Hair(h=None, nodes=N)).
 
-    python bench/hair_nodes.py            # prints a markdown table (bench/HAIR.md, "Far field")
+    python tools/perf/hair_nodes.py            # prints a markdown table (bench/HAIR.md, "Far field")
 
 Error: bsdfkit.tuning's definition (relative error of f |cos theta_i| per pair and channel with the
 albedo floor; p99 and max over the default direction set, n = 8192, seed 0) against the 64-node
@@ -19,7 +19,7 @@ import time
 import numpy as np
 
 import bsdfkit as bk
-from _host import cpu_model  # same directory
+from _machine import cpu_model  # bench/_host.py's
 from bsdfkit.tuning import direction_set
 
 NODES = (64, 32, 16, 8, 4)

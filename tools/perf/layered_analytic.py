@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The analytic layered method (method="analytic") against the converged random walk, and its cost.
 
-    python bench/layered_analytic.py          # ~2 min on 2 loaded cores
+    python tools/perf/layered_analytic.py          # ~2 min on 2 loaded cores
 
 For every registered CoatedDiffuse / CoatedConductor example (stochastic ones; plus a smooth
 coat over a smooth metal): relative RMS of f |cos wi| of the analytic method against the
@@ -23,12 +23,12 @@ import numpy as np
 os.environ.setdefault("DRJIT_LIBLLVM_PATH", "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1")
 
 import bsdfkit as bk  # noqa: E402
-from _host import cpu_model  # noqa: E402  (same directory)
+from _machine import cpu_model  # noqa: E402  (bench/_host.py's)
 from bsdfkit.models import registry  # noqa: E402
 from bsdfkit.models.spec import parse_spec  # noqa: E402
 from bsdfkit.tuning.costs import best_time  # noqa: E402
 
-HERE = Path(__file__).resolve().parent
+HERE = Path(__file__).resolve().parents[2] / "bench"   # writes a section of bench/LAYERED.md
 N = 1500
 BEGIN, END = "<!-- analytic:begin -->", "<!-- analytic:end -->"
 

@@ -9,7 +9,7 @@ residual at the same point would not (see GRAD.md for the integration's own cost
 the time of eval (float64) on the same N pairs, and that ratio per gradient column. Timings on a
 shared machine: ratios within one run, median of repeats with the spread (max/min).
 
-    python bench/grad.py [--n 65536] [--repeats 5] [--threads 1] [--json bench/grad.json]
+    python tools/perf/grad.py [--n 65536] [--repeats 5] [--threads 1] [--json /tmp/grad.json]
 """
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ import statistics
 import numpy as np
 
 import bsdfkit as bk
-from _host import cpu_model  # same directory
+from _machine import cpu_model  # bench/_host.py's
 from bsdfkit.tuning.costs import time_repeats
 
 CASES = {
