@@ -185,6 +185,9 @@ def _spectral_core(model):
     polishes each colour, ~1-15 ms). Models without a spectral form (``_has_spectral_kernel()``
     false) raise NotImplementedError."""
     if not model._has_spectral_kernel():
+        reason = getattr(model, "_no_spectral_reason", None)
+        if reason is not None:
+            raise NotImplementedError(reason())
         raise NotImplementedError(
             f"wavelengths: spectral mode is not implemented for {type(model).__name__} yet "
             f"(models with wavelengths=: {spectral_model_names()}); call without wavelengths= for RGB")

@@ -799,12 +799,15 @@ class Measured(BxDF):
     def _spectral_inputs(self) -> dict:
         # spectral/measured_spectral.h MeasuredSpectral: the file's spectra per wavelength
         fields, info, _, _ = self._entry()
-        if not info["spectral"]:
-            raise NotImplementedError(
-                "wavelengths: this tensor file holds RGB data (an `rgb` field, e.g. *_rgb.bsdf or "
+        return {"spectra": _measured_spectra(self._params["digest"], fields, info)}
+
+    def _has_spectral_kernel(self) -> bool:
+        return bool(self._entry()[1]["spectral"])  # a file with spectra
+
+    def _no_spectral_reason(self) -> str:
+        return ("wavelengths: this tensor file holds RGB data (an `rgb` field, e.g. *_rgb.bsdf or "
                 "bsdfkit.measured.tabulate); spectral mode needs a spectral file (`spectra` and `wavelengths` "
                 "fields, *_spec.bsdf), as pbrt-v4 and Mitsuba's spectral variants do; call without wavelengths=")
-        return {"spectra": _measured_spectra(self._params["digest"], fields, info)}
 
     @property
     def fields(self) -> dict:
