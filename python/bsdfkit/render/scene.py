@@ -60,6 +60,12 @@ def _model_check(material, name="material"):
     core = getattr(material, "_core", None)
     if core is None:
         raise TypeError(f"{name}: expected a bsdfkit model (e.g. bk.Diffuse(0.8)), got {type(material).__name__}")
+    if not type(core).__module__.startswith("bsdfkit._core"):
+        # a Python-implemented model (bk.Mix, bk.TwoSided, bk.Mask, bk.NormalMap, bk.Custom): the
+        # renderer's per-bounce shading runs compiled model code only
+        raise TypeError(f"{name}: {type(material).__name__} ({material.describe()}) is implemented in Python and the "
+                        "preview renderer takes compiled models only (e.g. bk.Diffuse, bk.Conductor); render one of "
+                        "its children, or evaluate it with eval / sample")
     return material
 
 
