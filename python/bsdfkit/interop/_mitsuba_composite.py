@@ -15,8 +15,9 @@ REFLECTION_ONLY = ("diffuse", "conductor", "roughconductor", "plastic", "roughpl
 
 
 def _nested(d, where, fail, keys=()):
-    """The nested plugin dicts of ``d`` in Mitsuba's order (the alphanumeric order of their
-    names, as blendbsdf documents it), refusing other keys than ``keys``."""
+    """The nested plugin dicts of ``d`` in Mitsuba's order, the dictionary's (measured with Mitsuba
+    3.9.1: blendbsdf's first nested BSDF is the one at weight 0 whatever the names; its docs
+    still say alphanumeric order), refusing other keys than ``keys``."""
     nested, bad = [], []
     for key, v in d.items():
         if key in ("type", "id") or key in keys:
@@ -28,7 +29,7 @@ def _nested(d, where, fail, keys=()):
     if bad:
         fail(where, f"unsupported parameters {bad}; {d['type']} takes " + (", ".join(keys) + " and " if keys else "")
              + "nested BSDF dicts")
-    return sorted(nested, key=lambda kv: kv[0])
+    return nested
 
 
 def _constant(v, where, param, fail, to_float):

@@ -351,8 +351,8 @@ def from_mitsuba(d) -> BxDF:
                          identical ones): unwrapped, bsdfkit's Diffuse, Conductor and Plastic are
                          two-sided; any other reflection-only nested BSDF, or two different ones
                          -> ``TwoSided(front, back)``; a transmitting one is refused (as Mitsuba)
-    ``blendbsdf``        ``weight`` (0.5, a constant), two nested BSDFs in the alphanumeric order
-                         of their names -> ``Mix(a, b, weight)``
+    ``blendbsdf``        ``weight`` (0.5, a constant), two nested BSDFs in the dictionary's order
+                         (Mitsuba 3.9's) -> ``Mix(a, b, weight)``
     ``mask``             ``opacity`` (0.5, a constant), one nested BSDF -> ``Mask(model, opacity)``
     ``normalmap``        ``normalmap`` (a constant ``rgb`` (n + 1) / 2, decoded and normalized),
                          ``flip_invalid_normals`` / ``use_shadowing_function`` (true) -> ``NormalMap``
