@@ -128,8 +128,10 @@ def put_sample(rows: dict, idx, s: SampleResult):
 
 class Door:
     """The ``_core`` interface of a composite model ``m``: ``m._param_arrays()`` (name -> per-element
-    parameter: a float or an array of trailing shape ``m._param_tails[name]``) and the row
-    functions ``m._eval_rows(wo, wi, md, lam, P)``, ``m._pdf_rows(wo, wi, md, sf, lam, P)``,
+    parameter: a float or an array of trailing shape ``m._param_tails[name]``), ``m._check_dirs``
+    (False: the children get wo and wi unchanged and their doors count bad ones) and the row
+    functions ``m._eval_rows(wo, wi, md, lam, P, out)``, ``m._pdf_rows(wo, wi, md, sf, lam, P, out)``
+    (``out``: the (N, channels) / (N,) result rows, which they may fill and return),
     ``m._sample_rows(wo, uc, u, md, sf, lam, P, n)`` (a dict of row arrays, see empty_sample)."""
 
     def __init__(self, m):
@@ -177,8 +179,9 @@ class Door:
         return wo, wi, batch, dtype
 
     def _rows(self, wo, wi, lam, batch, dtype):
-        _raise_bad("wo", _bad_dirs(wo))
-        _raise_bad("wi", _bad_dirs(wi))
+        if self.m._check_dirs:   # else the children's doors count them: they get wo and wi as given
+            _raise_bad("wo", _bad_dirs(wo))
+            _raise_bad("wi", _bad_dirs(wi))
         lr = None
         if lam is not None:
             _raise_lam(lam)
@@ -198,7 +201,10 @@ class Door:
         if out.size:
             wor, wir, lr, P = self._rows(wo, wi, lam, batch, dtype)
             buf = c_buffer(out)
-            buf.reshape(-1, nch)[...] = self.m._eval_rows(wor, wir, md, lr, P)
+            b2 = buf.reshape(-1, nch)
+            res = self.m._eval_rows(wor, wir, md, lr, P, b2)
+            if res is not b2:
+                b2[...] = res
             if buf is not out:
                 np.copyto(out, buf)
         return out
@@ -210,7 +216,10 @@ class Door:
         out = check_out(out, batch, dtype)
         if out.size:
             wor, wir, lr, P = self._rows(wo, wi, lam, batch, dtype)
-            out.reshape(-1)[...] = self.m._pdf_rows(wor, wir, md, sf, lr, P)
+            o1 = out.reshape(-1)
+            res = self.m._pdf_rows(wor, wir, md, sf, lr, P, o1)
+            if res is not o1:
+                o1[...] = res
         return out
 
     # ---- sample

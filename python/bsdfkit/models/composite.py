@@ -63,6 +63,7 @@ class _Composite(BxDF, register=False):
 
     __slots__ = ()
     _param_tails: dict = {}
+    _check_dirs = True
     knobs = ()
 
     def _make_core(self):
@@ -112,6 +113,21 @@ class _Composite(BxDF, register=False):
     def _export_child(self, m, approximate):
         d = m.to_mitsuba(approximate=approximate)
         return d
+
+
+def _scale(x, w):
+    """x (a child's fresh (N, channels) or (N,) result) times the per-row weight w ((1,) or (N,)
+    rows), in place where the shapes allow: by a scalar, or channel by channel (numpy's
+    broadcast of an (N, 1) operand over 3 channels is several times slower)."""
+    if len(w) == 1:
+        return np.multiply(x, w[0], out=x)
+    if len(x) != len(w):
+        return x * (w[:, None] if x.ndim == 2 else w)
+    if x.ndim == 1:
+        return np.multiply(x, w, out=x)
+    for c in range(x.shape[1]):
+        np.multiply(x[:, c], w, out=x[:, c])
+    return x
 
 
 def _all(attr):
@@ -227,22 +243,35 @@ class Mix(_Composite):
         return (w >= 1) | ((w > 0) & (u <= w))
 
     # ---- rows
-    def _eval_rows(self, wo, wi, md, lam, P):
+    _check_dirs = False   # a and b get wo and wi as given: their doors count bad directions
+
+    @staticmethod
+    def _blend(xa, xb, w, out):
+        """(1 - w) xa + w xb (xa, xb are the children's fresh results, scaled in place): Mitsuba's order."""
+        xa, xb = _scale(xa, 1 - w), _scale(xb, w)
+        if out is not None and out.shape == np.broadcast_shapes(xa.shape, xb.shape):
+            return np.add(xa, xb, out=out)
+        return xa + xb
+
+    def _eval_rows(self, wo, wi, md, lam, P, out=None):
         a, b = self._params["a"], self._params["b"]
-        fa, fb = child_eval(a, wo, wi, md, lam), child_eval(b, wo, wi, md, lam)
         w = P["weight"]
+        if out is not None and lam is None and self._params["method"] == "linear" and \
+                out.shape[0] == max(len(wo), len(wi)):   # a writes straight into the result rows
+            fa = a.eval(wo, wi, md, out=out)
+            return self._blend(fa, child_eval(b, wo, wi, md, lam), w, out)
+        fa, fb = child_eval(a, wo, wi, md, lam), child_eval(b, wo, wi, md, lam)
         if self._params["method"] == "stochastic":
             return np.where(self._pick_b(wo, w, P)[:, None], fb, fa)
-        w = w[:, None]
-        return fa * (1 - w) + fb * w
+        return self._blend(fa, fb, w, out)
 
-    def _pdf_rows(self, wo, wi, md, sf, lam, P):
+    def _pdf_rows(self, wo, wi, md, sf, lam, P, out=None):
         a, b = self._params["a"], self._params["b"]
         pa, pb = child_pdf(a, wo, wi, md, sf, lam), child_pdf(b, wo, wi, md, sf, lam)
         w = P["weight"]
         if self._params["method"] == "stochastic":
             return np.where(self._pick_b(wo, w, P), pb, pa)
-        return pa * (1 - w) + pb * w
+        return self._blend(pa, pb, w, out)
 
     def _sample_rows(self, wo, uc, u, md, sf, lam, P, n):
         a, b = self._params["a"], self._params["b"]
@@ -368,12 +397,12 @@ class TwoSided(_Composite):
                 out[rows] = fn(model, rows, sign)
         return out
 
-    def _eval_rows(self, wo, wi, md, lam, P):
+    def _eval_rows(self, wo, wi, md, lam, P, out=None):
         def fn(m, r, sign):
             return child_eval(m, _flip(take(wo, r), sign), _flip(take(wi, r), sign), md, take(lam, r))
         return self._split(wo, wi, P, fn, (3 if lam is None else 4,))
 
-    def _pdf_rows(self, wo, wi, md, sf, lam, P):
+    def _pdf_rows(self, wo, wi, md, sf, lam, P, out=None):
         def fn(m, r, sign):
             return child_pdf(m, _flip(take(wo, r), sign), _flip(take(wi, r), sign), md, sf & _REFL, take(lam, r))
         return self._split(wo, wi, P, fn, ())
@@ -455,12 +484,14 @@ class Mask(_Composite):
         return f"Mask {type(self.model).__name__}, opacity {o:.3g}" if isinstance(o, float) else \
             f"Mask {type(self.model).__name__}, opacity map"
 
-    def _eval_rows(self, wo, wi, md, lam, P):
-        return child_eval(self.model, wo, wi, md, lam) * P["opacity"][:, None]
+    _check_dirs = False   # the model gets wo and wi as given: its door counts bad directions
 
-    def _pdf_rows(self, wo, wi, md, sf, lam, P):
+    def _eval_rows(self, wo, wi, md, lam, P, out=None):
+        return _scale(child_eval(self.model, wo, wi, md, lam), P["opacity"])
+
+    def _pdf_rows(self, wo, wi, md, sf, lam, P, out=None):
         p = child_pdf(self.model, wo, wi, md, sf, lam)
-        return p * P["opacity"] if sf & _TRANS else p
+        return _scale(p, P["opacity"]) if sf & _TRANS else p
 
     def _sample_rows(self, wo, uc, u, md, sf, lam, P, n):
         dtype = uc.dtype

@@ -185,10 +185,10 @@ class NormalMap(_Composite):
             out = f * r[:, None]
         return np.where(np.isfinite(out) & (out <= np.finfo(dt).max), out, 0).astype(dt)
 
-    def _eval_rows(self, wo, wi, md, lam, P):
+    def _eval_rows(self, wo, wi, md, lam, P, out=None):
         return self._eval_pdf(wo, wi, md, lam, P)
 
-    def _pdf_rows(self, wo, wi, md, sf, lam, P):
+    def _pdf_rows(self, wo, wi, md, sf, lam, P, out=None):
         return self._eval_pdf(wo, wi, md, lam, P, sf)
 
     def _sample_rows(self, wo, uc, u, md, sf, lam, P, n):
