@@ -453,7 +453,7 @@ def test_pbrt_ignored_params():
     assert rec.to_bxdf() == bk.Diffuse(0.5)
 
 
-@pytest.mark.parametrize("mtype", ["measured", "mix", "interface", "subsurface", "plastic"])
+@pytest.mark.parametrize("mtype", ["measured", "interface", "subsurface", "plastic"])
 def test_pbrt_unsupported_types(mtype):
     text = f'WorldBegin\n\nMakeNamedMaterial "thing" "string type" "{mtype}" "float roughness" 0.1'
     with pytest.raises(ValueError) as e:

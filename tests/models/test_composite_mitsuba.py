@@ -182,3 +182,33 @@ def test_to_mitsuba_refusals():
     with pytest.warns(bk.interop.MitsubaApproximationWarning, match="differs"):
         d = bk.Mix(RED, GOLD, 0.5, method="stochastic").to_mitsuba(approximate=True)
     assert bk.from_mitsuba(d) == bk.Mix(RED, GOLD, 0.5)
+
+
+def test_from_pbrt_mix():
+    """pbrt-v4 mix: "string materials" (two named materials, defined before or after, mixes too)
+    and "float amount" -> Mix(..., method="stochastic") (MixMaterial: the second with probability
+    amount)."""
+    text = '''
+    MakeNamedMaterial "both" "string type" "mix" "string materials" ["red" "metal"] "float amount" 0.25
+    MakeNamedMaterial "red" "string type" "diffuse" "rgb reflectance" [0.8 0.1 0.1]
+    MakeNamedMaterial "metal" "string type" "conductor" "float roughness" 0.09
+    MakeNamedMaterial "outer" "string type" "mix" "string materials" ["both" "red"]
+    '''
+    out = bk.from_pbrt(text)
+    assert list(out) == ["both", "red", "metal", "outer"]
+    metal = out["metal"]
+    assert out["both"] == bk.Mix(RED, metal, 0.25, method="stochastic")
+    assert out["outer"] == bk.Mix(out["both"], RED, 0.5, method="stochastic")
+    for bad, words in [('MakeNamedMaterial "m" "string type" "mix" "string materials" ["red" "nope"]\n'
+                        'MakeNamedMaterial "red" "string type" "diffuse"', ["'m'", "'nope'", "not defined"]),
+                       ('MakeNamedMaterial "m" "string type" "mix" "string materials" ["m" "m"]', ["cycle"]),
+                       ('MakeNamedMaterial "m" "string type" "mix" "float amount" 0.3', ["string materials"]),
+                       ('MakeNamedMaterial "m" "string type" "mix" "string materials" ["a" "b"] '
+                        '"texture amount" "t"', ["'amount'", "texture"])]:
+        with pytest.raises(ValueError) as e:
+            bk.from_pbrt(bad)
+        for w in words:
+            assert w in str(e.value), (w, str(e.value))
+    with pytest.warns(bk.interop.PbrtSkipWarning, match="nope"):
+        assert list(bk.from_pbrt('MakeNamedMaterial "m" "string type" "mix" "string materials" ["x" "nope"]\n'
+                                 'MakeNamedMaterial "x" "string type" "diffuse"', skip_unsupported=True)) == ["x"]
