@@ -110,9 +110,14 @@ class _Composite(BxDF, register=False):
             f |= int(c.flags)
         return f
 
-    def _export_child(self, m, approximate):
-        d = m.to_mitsuba(approximate=approximate)
-        return d
+    eval.__doc__, pdf.__doc__, sample.__doc__, albedo.__doc__ = (BxDF.eval.__doc__, BxDF.pdf.__doc__,
+                                                                  BxDF.sample.__doc__, BxDF.albedo.__doc__)
+
+    def eval_grad(self, wo, wi, params=None, mode=0):
+        """Not available: parameter gradients are compiled per model (``bsdfkit.fitting``); a
+        composite raises NotImplementedError naming itself (differentiate its children instead)."""
+        raise NotImplementedError(f"{type(self).__name__}.eval_grad: parameter gradients are not implemented for the "
+                                  "composite models (Mix, TwoSided, Mask, NormalMap); take them of the children")
 
 
 def _scale(x, w):
