@@ -6,7 +6,9 @@
 written in brackets: ``mix [diffuse 0.8] [conductor metal=Au alpha=0.3] 0.3``), the contract suite,
 plots, ``to_mitsuba`` and ``from_mitsuba``. Per-element parameters (``weight``, ``opacity``,
 ``normals``) are numpy arrays broadcasting against the call's batch shape (the directions' shape
-without the last axis); results then equal a loop of scalar models element by element.
+without the last axis); results then equal a loop of scalar models element by element. ``==`` and
+``hash`` compare such arrays by a content digest, and ``repr`` shows an array of more than 12
+values by its shape and digest (that repr cannot be evaluated back; smaller ones print in full).
 
 Capability flags (``energy_conserving``, ``reciprocal``, ...) are answered per instance from the
 children; the class attribute is the value of the registered examples. The preview renderer takes
