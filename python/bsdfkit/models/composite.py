@@ -115,12 +115,6 @@ class _Composite(BxDF, register=False):
     eval.__doc__, pdf.__doc__, sample.__doc__, albedo.__doc__ = (BxDF.eval.__doc__, BxDF.pdf.__doc__,
                                                                   BxDF.sample.__doc__, BxDF.albedo.__doc__)
 
-    def eval_grad(self, wo, wi, params=None, mode=0):
-        """Not available: parameter gradients are compiled per model (``bsdfkit.fitting``); a
-        composite raises NotImplementedError naming itself (differentiate its children instead)."""
-        raise NotImplementedError(f"{type(self).__name__}.eval_grad: parameter gradients are not implemented for the "
-                                  "composite models (Mix, TwoSided, Mask, NormalMap); take them of the children")
-
 
 def _scale(x, w):
     """x (a child's fresh (N, channels) or (N,) result) times the per-row weight w ((1,) or (N,)
