@@ -195,7 +195,8 @@ def run_demo(outdir="bsdfkit-demo", *, verbose=True):
     _albedo_table(configs, paths[2])
     _views_figure(configs, paths[3])
     from .render import write_gallery  # gallery.exr / gallery.png: one path-traced sphere per configuration
-    paths += write_gallery(outdir, configs, verbose=verbose, progress=verbose)
+    from .render.scene import is_compiled  # the renderer shades compiled models (not the Python composites)
+    paths += write_gallery(outdir, [c for c in configs if is_compiled(c[1])], verbose=verbose, progress=verbose)
     from .render import write_hair  # hair.exr / hair.png: locks of Hair on fibres, labelled
     paths += write_hair(outdir, progress=verbose)
     from .render import write_dispersion  # dispersion.png: a flint-glass sphere, RGB vs spectral render

@@ -31,7 +31,8 @@ MIRROR_ETA = 1e-6
 
 
 _MI_SUPPORTED = ("diffuse", "conductor", "roughconductor", "dielectric", "roughdielectric",
-                 "thindielectric", "measured", "plastic", "roughplastic", "twosided", "null", "hair")
+                 "thindielectric", "measured", "plastic", "roughplastic", "twosided", "null", "hair",
+                 "blendbsdf", "mask", "normalmap")
 
 
 _MI_CONSTANT_TEXTURES = ("rgb", "spectrum", "uniform", "srgb")
@@ -222,26 +223,6 @@ def _mi_eta(d, where):
     return eta_int / eta_ext
 
 
-def _mi_nested(d, where):
-    """The BSDF dictionaries nested in a twosided plugin."""
-    nested, bad = [], []
-    for key, v in d.items():
-        if key in ("type", "id"):
-            continue
-        if isinstance(v, dict) and "type" in v:
-            nested.append((key, v))
-        else:
-            bad.append(key)
-    if bad:
-        _mi_fail(where, f"unsupported parameters {bad}; twosided takes one nested BSDF dict "
-                 "(or two identical ones)")
-    if not nested:
-        _mi_fail(where, "no nested BSDF dict found")
-    if len(nested) > 2:
-        _mi_fail(where, f"at most two nested BSDFs, got {len(nested)}")
-    return nested
-
-
 def _mi_bsdf(d, where):
     if not isinstance(d, dict):
         raise TypeError(f"from_mitsuba: {where or 'd'}: expected a Mitsuba plugin dict, got {type(d).__name__}")
@@ -251,19 +232,15 @@ def _mi_bsdf(d, where):
     label = f"{where} ({kind!r})" if where else f"plugin {kind!r}"
     if kind not in _MI_SUPPORTED:
         _mi_fail(label, "unsupported plugin; supported: " + ", ".join(_MI_SUPPORTED))
-    if kind == "twosided":
-        models = []
-        for key, sub in _mi_nested(d, label):
-            subkind = sub.get("type")
-            if not isinstance(subkind, str) or subkind not in ("diffuse", "conductor", "roughconductor", "plastic",
-                                                              "roughplastic"):
-                _mi_fail(label, f"nested plugin {subkind!r} is not supported inside twosided (only the "
-                         "reflection-only diffuse, conductor, roughconductor, plastic and roughplastic are)")
-            models.append(_mi_bsdf(sub, f"{label}.{key}"))
-        if len(models) == 2 and models[0] != models[1]:
-            _mi_fail(label, "different front and back BSDFs are not supported (bsdfkit models are "
-                     f"two-sided): {models[0]!r} vs {models[1]!r}")
-        return models[0]
+    if kind in ("twosided", "blendbsdf", "mask", "normalmap"):   # composites: interop/_mitsuba_composite.py
+        from . import _mitsuba_composite as mc
+        if kind == "twosided":
+            return mc.mi_twosided(d, label, _mi_bsdf, _mi_fail)
+        if kind == "blendbsdf":
+            return _mi_build(label, lambda: mc.mi_blend(d, label, _mi_bsdf, _mi_fail, _mi_float))
+        if kind == "mask":
+            return _mi_build(label, lambda: mc.mi_mask(d, label, _mi_bsdf, _mi_fail, _mi_float))
+        return _mi_build(label, lambda: mc.mi_normalmap(d, label, _mi_bsdf, _mi_fail, _mi_color))
     unknown = [k for k in d if k not in ("type", "id") + _MI_PARAMS[kind]]
     if unknown:
         _mi_fail(label, f"unsupported parameters {unknown}; {kind} takes: "
@@ -370,8 +347,15 @@ def from_mitsuba(d) -> BxDF:
                          ("air") -> ``Plastic(..., masking="separable")``
     ``roughplastic``     as plastic, plus ``distribution`` ("ggx" only), ``alpha`` (0.1)
                          -> ``Plastic(..., alpha=alpha, masking="separable")``
-    ``twosided``         one nested diffuse/conductor/roughconductor (or two identical ones):
-                         unwrapped, bsdfkit's Diffuse and Conductor are two-sided
+    ``twosided``         one nested diffuse/conductor/roughconductor/(rough)plastic (or two
+                         identical ones): unwrapped, bsdfkit's Diffuse, Conductor and Plastic are
+                         two-sided; any other reflection-only nested BSDF, or two different ones
+                         -> ``TwoSided(front, back)``; a transmitting one is refused (as Mitsuba)
+    ``blendbsdf``        ``weight`` (0.5, a constant), two nested BSDFs in the dictionary's order
+                         (Mitsuba 3.9's) -> ``Mix(a, b, weight)``
+    ``mask``             ``opacity`` (0.5, a constant), one nested BSDF -> ``Mask(model, opacity)``
+    ``normalmap``        ``normalmap`` (a constant ``rgb`` (n + 1) / 2, decoded and normalized),
+                         ``flip_invalid_normals`` / ``use_shadowing_function`` (true) -> ``NormalMap``
     ``measured``         ``filename`` (an RGL tensor file) -> ``Measured(filename)``
     ``null``             -> ``Dielectric(1.0)`` (pbrt's straight pass-through; ``to_mitsuba``
                          writes eta = 1 dielectrics and thin dielectrics as ``null``)

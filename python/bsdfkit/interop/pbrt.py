@@ -849,6 +849,9 @@ def from_pbrt(source, *, skip_unsupported: bool = False, skip_missing_includes: 
       eumelanin / pheomelanin [1.3 / 0] (``Hair.from_concentration``); eta [1.55], beta_m, beta_n
       [0.3] (clamped to [0.01, 1]), alpha [2 degrees] -> ``Hair(..., h=0)`` (pbrt-v4 takes h from
       the curve's v coordinate per hit).
+    * ``mix``: materials [two names of materials of the scene, in any order, mixes too], amount
+      [0.5] (a constant) -> ``Mix(first, second, amount, method="stochastic")`` (pbrt-v4
+      MixMaterial: the second material with probability amount, per shading point).
 
     pbrt-v4's microfacet models use height-correlated Smith masking: ``masking="correlated"``.
     Roughness: with remaproughness true, alpha = sqrt(roughness) (``bk.roughness_to_alpha``),
@@ -913,17 +916,24 @@ def from_pbrt(source, *, skip_unsupported: bool = False, skip_missing_includes: 
         raise TypeError(f"spectral: expected True or False, got {spectral!r}")
     text, path = _scene_source(source)
     base = None if path is None else os.path.dirname(os.path.abspath(path))
-    out = {}
-    for rec in parse_pbrt_materials(text, path=path, skip_missing_includes=skip_missing_includes):
+    out, records = {}, parse_pbrt_materials(text, path=path, skip_missing_includes=skip_missing_includes)
+
+    def skip(rec, e):
+        if not skip_unsupported:
+            raise e
+        w = PbrtSkipWarning(f"from_pbrt: skipped {e}" + (f" [in {rec.file}]" if rec.file else ""))
+        w.material, w.line, w.file, w.reason = rec.name, rec.line, rec.file, str(e)
+        warnings.warn(w, stacklevel=3)
+    for rec in records:
+        if rec.type == "mix":   # needs the others: resolved below (interop/_pbrt_mix.py)
+            continue
         try:
             out[rec.name] = rec.to_bxdf(spectral=spectral, base_dir=base)
         except _PbrtError as e:
-            if not skip_unsupported:
-                raise
-            w = PbrtSkipWarning(f"from_pbrt: skipped {e}" + (f" [in {rec.file}]" if rec.file else ""))
-            w.material, w.line, w.file, w.reason = rec.name, rec.line, rec.file, str(e)
-            warnings.warn(w, stacklevel=2)
-    return out
+            skip(rec, e)
+    from ._pbrt_mix import resolve_mixes
+    resolve_mixes([r for r in records if r.type == "mix"], out, _pfail, _pfail_param, _float_param, skip)
+    return {rec.name: out[rec.name] for rec in records if rec.name in out}   # file order
 
 
 class PbrtSkipWarning(UserWarning):

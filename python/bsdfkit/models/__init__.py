@@ -1,11 +1,12 @@
 """The models: the base class (``base``), the registry (``registry``), then one module per family.
 
 ``diffuse`` (Diffuse, DiffuseTransmission), ``eon`` (EON: energy-preserving Oren-Nayar), ``conductor``
-(Conductor, METALS, conductor_fresnel), ``dielectric`` (Dielectric, ThinDielectric), ``filament``
-(FilamentStandard, FilamentCloth, the DFG table), ``measured`` (MERL, Measured: measured tables and
-tensor files), ``plastic`` (Plastic), ``layered`` (CoatedDiffuse, CoatedConductor),
-``normalized_fresnel`` (NormalizedFresnel, fresnel_moment1), ``hair`` (Hair and its sigma_a helpers).
-A new family is a new module here whose classes subclass :class:`BxDF`.
+(Conductor, METALS, conductor_fresnel),
+``dielectric`` (Dielectric, ThinDielectric), ``filament`` (FilamentStandard, FilamentCloth, the
+DFG table), ``measured`` (MERL, Measured: measured tables and tensor files), ``plastic`` (Plastic),
+``layered`` (CoatedDiffuse, CoatedConductor), ``normalized_fresnel`` (NormalizedFresnel, fresnel_moment1),
+``hair`` (Hair and its sigma_a helpers), ``composite`` (Mix, TwoSided, Mask) and ``normal_map``
+(NormalMap): models built from other models, in Python. A new family is a new module here whose classes subclass :class:`BxDF`.
 """
 from . import registry
 from .base import BxDF, SampleResult, roughness_to_alpha
@@ -20,8 +21,10 @@ from .plastic import Plastic
 from .layered import CoatedConductor, CoatedDiffuse
 from .normalized_fresnel import NormalizedFresnel
 from .hair import Hair
+from .composite import Mask, Mix, TwoSided
+from .normal_map import NormalMap
 from .registry import MODELS, KnobDecl
 
 __all__ = ["BxDF", "SampleResult", "roughness_to_alpha", "METALS", "Conductor", "conductor_fresnel", "Dielectric",
-           "ThinDielectric", "Diffuse", "DiffuseTransmission", "EON", "FilamentStandard", "FilamentCloth", "MERL",
-           "Measured", "Plastic", "CoatedDiffuse", "CoatedConductor", "NormalizedFresnel", "Hair", "MODELS", "KnobDecl"]
+           "ThinDielectric", "Diffuse", "DiffuseTransmission", "EON", "FilamentStandard", "FilamentCloth", "MERL", "Measured",
+           "Plastic", "CoatedDiffuse", "CoatedConductor", "NormalizedFresnel", "Hair", "Mix", "TwoSided", "Mask", "NormalMap", "MODELS", "KnobDecl"]

@@ -14,7 +14,9 @@ The model name is a class of ``bsdfkit.MODELS`` (case-insensitive, as ``Filament
 those of the class's constructor, positional or ``key=value``; a key ``X`` naming an alternative
 constructor ``from_X`` (``metal=`` for ``Conductor.from_metal``, ``reflectance=`` for
 ``Conductor.from_reflectance``) switches to it. Values: numbers, ``r,g,b`` triples,
-``true``/``false``, ``none``, anything else is a string (``masking=separable``).
+``true``/``false``, ``none``, a model in brackets (the children of the composite models:
+``mix [diffuse 0.8] [conductor metal=Au alpha=0.3] 0.3``), anything else is a string
+(``masking=separable``).
 
 Everything is derived from the model registry (``bsdfkit.models.registry``: class names,
 ``aliases``, ``examples``) and the constructors' signatures, so a new model class is accepted (and
@@ -111,7 +113,34 @@ def usage(cls=None) -> str:
     return text
 
 
+def _words(spec) -> list:
+    """The words of a spec (a string or a list of words): split at spaces, except inside brackets
+    (a nested model spec is one word, ``[diffuse 0.8]``)."""
+    text = spec if isinstance(spec, str) else " ".join(map(str, spec))
+    words, cur, depth = [], "", 0
+    for ch in text:
+        if ch == "[":
+            depth += 1
+        elif ch == "]":
+            depth -= 1
+            if depth < 0:
+                raise SpecError(f"unbalanced ']' in {text!r}")
+        if ch.isspace() and depth == 0:
+            if cur:
+                words.append(cur)
+            cur = ""
+        else:
+            cur += ch
+    if depth:
+        raise SpecError(f"unbalanced '[' in {text!r}")
+    if cur:
+        words.append(cur)
+    return words
+
+
 def _value(text: str):
+    if text.startswith("[") and text.endswith("]"):
+        return parse_spec(text[1:-1])
     low = text.lower()
     if low in ("true", "false"):
         return low == "true"
@@ -134,7 +163,7 @@ def parse_spec(spec):
     or the model's parameters; a ValueError/TypeError of the constructor (an out-of-range value)
     is re-raised as SpecError with the spec in front.
     """
-    words = (spec if isinstance(spec, str) else " ".join(map(str, spec))).split()
+    words = _words(spec)
     text = " ".join(words)
     if not words:
         raise SpecError("empty model spec\n" + usage())
@@ -143,7 +172,7 @@ def parse_spec(spec):
         raise SpecError(f"unknown model {words[0]!r}\n" + usage())
     args, kwargs = [], {}
     for w in words[1:]:
-        if "=" in w:
+        if "=" in w and not w.startswith("["):
             k, v = w.split("=", 1)
             if not k.isidentifier():
                 raise SpecError(f"bad parameter {w!r} in {text!r}; expected key=value\n" + usage(cls))
@@ -182,7 +211,7 @@ def parse_spec(spec):
 
 def parse_specs(words) -> list:
     """Several specs separated by a ``+`` word (``conductor metal=Cu + diffuse 0.5``): a list of models."""
-    words = (words if isinstance(words, str) else " ".join(map(str, words))).split()
+    words = _words(words)
     groups, cur = [], []
     for w in words:
         if w == "+":
@@ -225,6 +254,9 @@ def _same(a, b) -> bool:
 def _txt(v) -> str:
     import numpy as np
 
+    from .base import BxDF
+    if isinstance(v, BxDF):
+        return "[" + to_spec(v) + "]"
     if isinstance(v, (np.ndarray, list, tuple)) and not isinstance(v, str):
         a = np.asarray(v, dtype=float).ravel()
         return f"{a[0]:.4g}" if np.all(a == a[0]) else ",".join(f"{x:.4g}" for x in a)

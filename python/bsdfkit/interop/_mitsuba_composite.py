@@ -1,0 +1,101 @@
+"""Mitsuba 3 composite plugins -> bsdfkit composite models (``from_mitsuba``'s ``twosided``,
+``blendbsdf``, ``mask`` and ``normalmap``); ``bsdfkit.interop.mitsuba`` dispatches here."""
+from __future__ import annotations
+
+import numpy as np
+
+from .._enums import BxDFFlags
+from ..models import Mask, Mix, NormalMap, TwoSided
+
+__all__ = ["mi_twosided", "mi_blend", "mi_mask", "mi_normalmap", "REFLECTION_ONLY"]
+
+#: One-sided Mitsuba plugins whose bsdfkit model is two-sided already: ``twosided{x}`` of one of
+#: them (or of two identical ones) is that model.
+REFLECTION_ONLY = ("diffuse", "conductor", "roughconductor", "plastic", "roughplastic")
+
+
+def _nested(d, where, fail, keys=()):
+    """The nested plugin dicts of ``d`` in Mitsuba's order, the dictionary's (measured with Mitsuba
+    3.9.1: blendbsdf's first nested BSDF is the one at weight 0 whatever the names; its docs
+    still say alphanumeric order), refusing other keys than ``keys``."""
+    nested, bad = [], []
+    for key, v in d.items():
+        if key in ("type", "id") or key in keys:
+            continue
+        if isinstance(v, dict) and "type" in v:
+            nested.append((key, v))
+        else:
+            bad.append(key)
+    if bad:
+        fail(where, f"unsupported parameters {bad}; {d['type']} takes " + (", ".join(keys) + " and " if keys else "")
+             + "nested BSDF dicts")
+    return nested
+
+
+def _constant(v, where, param, fail, to_float):
+    if isinstance(v, dict) and v.get("type") not in ("rgb", "spectrum", "uniform", "srgb"):
+        fail(where, f"parameter {param!r} is a texture ({v.get('type')!r}); only a constant is supported (a "
+             "per-element array is a bsdfkit parameter: build the model directly)")
+    return to_float(v, where, param)
+
+
+def mi_twosided(d, where, build, fail):
+    nested = _nested(d, where, fail)
+    if not nested:
+        fail(where, "no nested BSDF dict found")
+    if len(nested) > 2:
+        fail(where, f"at most two nested BSDFs, got {len(nested)}")
+    kinds = [sub.get("type") for _, sub in nested]
+    models = [build(sub, f"{where}.{key}") for key, sub in nested]
+    for (key, sub), m in zip(nested, models):
+        if m.flags & BxDFFlags.Transmission:
+            fail(where, f"nested plugin {sub.get('type')!r} ({key}) transmits: Mitsuba's twosided refuses "
+                 "transmitting BSDFs (only reflection-only ones, e.g. diffuse, roughconductor, roughplastic, "
+                 "blendbsdf of them)")
+    if all(k in REFLECTION_ONLY for k in kinds) and (len(models) == 1 or models[0] == models[1]):
+        return models[0]   # bsdfkit's Diffuse, Conductor and Plastic are two-sided already
+    if len(models) == 1 or models[0] == models[1]:
+        return TwoSided(models[0])
+    return TwoSided(models[0], models[1])
+
+
+def mi_blend(d, where, build, fail, to_float):
+    nested = _nested(d, where, fail, keys=("weight",))
+    if len(nested) != 2:
+        fail(where, f"blendbsdf takes two nested BSDFs, got {len(nested)}")
+    w = _constant(d.get("weight", 0.5), where, "weight", fail, to_float)
+    a, b = (build(sub, f"{where}.{key}") for key, sub in nested)
+    return Mix(a, b, float(np.clip(w, 0.0, 1.0)))   # Mitsuba clips the weight to [0, 1]
+
+
+def mi_mask(d, where, build, fail, to_float):
+    nested = _nested(d, where, fail, keys=("opacity",))
+    if len(nested) != 1:
+        fail(where, f"mask takes one nested BSDF, got {len(nested)}")
+    o = _constant(d.get("opacity", 0.5), where, "opacity", fail, to_float)
+    key, sub = nested[0]
+    return Mask(build(sub, f"{where}.{key}"), float(np.clip(o, 0.0, 1.0)))
+
+
+def mi_normalmap(d, where, build, fail, to_color):
+    nested = _nested(d, where, fail, keys=("normalmap", "flip_invalid_normals", "use_shadowing_function"))
+    if len(nested) != 1:
+        fail(where, f"normalmap takes one nested BSDF, got {len(nested)}")
+    if "normalmap" not in d:
+        fail(where, "no 'normalmap' texture given")
+    v = d["normalmap"]
+    if isinstance(v, dict) and v.get("type") not in ("rgb", "srgb", "uniform"):
+        fail(where, f"parameter 'normalmap' is a texture ({v.get('type')!r}); only a constant rgb normal is supported "
+             "(per-element normals: bk.NormalMap(model, normals=array))")
+    n = 2 * to_color(v, where, "normalmap", bounded=False) - 1   # Mitsuba's decoding
+    norm = np.linalg.norm(n)
+    if not norm > 0:
+        fail(where, f"parameter 'normalmap': the decoded normal {n.tolist()} is zero")
+    flags = {}
+    for name, kw in (("flip_invalid_normals", "flip_invalid_normals"), ("use_shadowing_function", "shadowing")):
+        val = d.get(name, True)
+        if not isinstance(val, (bool, np.bool_)):
+            fail(where, f"parameter {name!r}: expected True or False, got {val!r}")
+        flags[kw] = bool(val)
+    key, sub = nested[0]
+    return NormalMap(build(sub, f"{where}.{key}"), n / norm, **flags)
