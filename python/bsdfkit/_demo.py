@@ -52,13 +52,22 @@ def _refracts(model) -> bool:
 def _lobes_figure(configs, path):
     from matplotlib.figure import Figure
 
-    nrow, ncol = len(configs), len(THETAS)
+    # more than 10 models: two groups side by side (the figure stays under ~6000 px tall), each
+    # model one row of len(THETAS) panels, a spacer column for the second group's labels
+    nt = len(THETAS)
+    groups = 2 if len(configs) > 10 else 1
+    nrow = -(-len(configs) // groups)
     # fixed margins: constrained layout would more than double the (polar-heavy) drawing time
-    w, h = 3.3 * ncol + 1.5, 3.45 * nrow + 1.7
+    w, h = (3.3 * nt + 1.5) * groups, 3.45 * nrow + 1.7
     fig = Figure(figsize=(w, h))
-    fig.subplots_adjust(left=1.2 / w, right=1 - 0.35 / w, top=1 - 1.45 / h, bottom=0.3 / h,
-                        wspace=0.32, hspace=0.42)
-    axes = fig.subplots(nrow, ncol, subplot_kw=dict(projection="polar"), squeeze=False)
+    ratios = ([1.0] * nt + [0.42]) * (groups - 1) + [1.0] * nt
+    gs = fig.add_gridspec(nrow, len(ratios), width_ratios=ratios, left=1.2 / w, right=1 - 0.35 / w,
+                          top=1 - 1.45 / h, bottom=0.3 / h, wspace=0.32, hspace=0.42)
+    axes = np.empty((len(configs), nt), dtype=object)
+    for i in range(len(configs)):
+        g, r = divmod(i, nrow)
+        for j in range(nt):
+            axes[i, j] = fig.add_subplot(gs[r, g * (nt + 1) + j], projection="polar")
     for i, (name, m) in enumerate(configs):
         for j, th in enumerate(THETAS):
             ax = axes[i, j]

@@ -180,6 +180,18 @@ class Mix(_Composite):
     refuses, ``approximate=True`` exports the linear blend (the choice's expectation).
 
     Capability flags are the children's (energy conserving if both are, ...); ``delta_only`` if both.
+
+    Parameters
+    ----------
+    a, b : BxDF or str
+        The two models (or their specs); ``weight`` 0 is ``a``, 1 is ``b``.
+    weight : float or numpy.ndarray, default 0.5
+        In [0, 1]; an array broadcasts against the call's batch shape (per element).
+    method : {"linear", "stochastic"}, default "linear"
+        Mitsuba's ``blendbsdf`` (linear in the weight) or pbrt-v4's ``MixMaterial`` (one
+        component per shading point).
+    key : numpy.ndarray of int, optional
+        Per-element integers hashed with wo by ``method="stochastic"`` (pbrt hashes the position).
     """
 
     __slots__ = ()
@@ -353,6 +365,13 @@ class TwoSided(_Composite):
     sampled alone (``sample_flags=Reflection``), so ``TwoSided(bk.Dielectric(1.5, alpha=0.3))`` is
     that dielectric's reflection. bsdfkit's own models are already two-sided (mirrored below);
     TwoSided gives a surface a different back, and makes any model reflection-only.
+
+    Parameters
+    ----------
+    front : BxDF or str
+        The model seen from above the surface.
+    back : BxDF or str, optional
+        The model seen from below (each as from above); default: ``front``.
     """
 
     __slots__ = ()
@@ -456,6 +475,13 @@ class Mask(_Composite):
     probability 1 - opacity (``uc >= opacity``) a delta transmission wi = -wo of throughput weight 1
     (f = (1 - opacity) / |cos|, pdf = 1 - opacity, flags SpecularTransmission, eta 1), else the
     model with ``uc / opacity``. opacity: in [0, 1], a float or a per-element numpy array.
+
+    Parameters
+    ----------
+    model : BxDF or str
+        The masked model.
+    opacity : float or numpy.ndarray, default 0.5
+        In [0, 1]; the rest passes straight through. An array is per element.
     """
 
     __slots__ = ()

@@ -114,6 +114,19 @@ class NormalMap(_Composite):
     and G < 1); in Importance mode the ratio |wo . n_s| / |wo . n_g| exceeds 1 at grazing wo, so
     the albedo can exceed 1 there (the known cost of shading normals): the class does not declare
     ``energy_conserving``, and it is not ``reciprocal`` (the flip and G are one-sided).
+
+    Parameters
+    ----------
+    model : BxDF or str
+        The model evaluated in the shading frame.
+    normals : array_like, default (0, 0, 1)
+        Unit tangent-space normals with z > 0, (3,) or (..., 3) per element.
+    convention : {"opengl", "directx"}, default "opengl"
+        "directx" negates the normals' y.
+    flip_invalid_normals : bool, default True
+        Mitsuba's rule: the shading normal is flipped where wo sees it from the other side.
+    shadowing : bool, default True
+        Estevez et al. 2019's shadow terminator term.
     """
 
     __slots__ = ()
