@@ -410,10 +410,12 @@ def test_preview_on_a_mesh_shape(tmp_path):
 
 def test_bad_render_arguments_raise_value_error():
     m = bk.Diffuse(0.5)
-    for kw in (dict(width=0), dict(height=-1), dict(spp=0), dict(spp=-3), dict(max_depth=-1), dict(width=2.5),
-               dict(seed=-1)):
+    for kw in (dict(width=0), dict(height=-1), dict(spp=0), dict(spp=-3), dict(max_depth=-1), dict(seed=-1)):
         with pytest.raises(ValueError):
             R.preview(m, progress=False, **kw)
+    # a count of the wrong type: TypeError naming it (bsdfkit._validate.check_int, as everywhere)
+    with pytest.raises(TypeError, match="width: expected an integer, got float"):
+        R.preview(m, progress=False, width=2.5)
     with pytest.raises(TypeError):
         R.preview("not a model", progress=False)
     with pytest.raises(ValueError):

@@ -6,6 +6,8 @@ import numbers
 
 import numpy as np
 
+from ._validate import check_int  # noqa: F401  (re-exported: the door's callers import it from here)
+
 __all__ = ["as_dirs", "kernel_dtype", "flatten_to", "check_out", "as_uniform"]
 
 
@@ -114,16 +116,6 @@ def check_real(x, name: str) -> float:
     if not math.isfinite(v):
         raise ValueError(f"{name}: must be finite, got {v}")
     return v
-
-
-def check_int(x, name: str, lo: int, hi: int | None = None) -> int:
-    if isinstance(x, bool) or not isinstance(x, numbers.Integral):
-        raise TypeError(f"{name}: expected an integer, got {type(x).__name__}")
-    if x < lo:
-        raise ValueError(f"{name}: must be >= {lo}, got {x}")
-    if hi is not None and x > hi:
-        raise ValueError(f"{name}: must be <= {hi}, got {x}")
-    return int(x)
 
 
 # albedo's n_samples: 2**40 samples per direction run for hours already; beyond 2**63 the C++

@@ -99,7 +99,7 @@ def dask_eval(model, op, wo, wi, mode, sample_flags=None, out=None):
     import dask.array as da
     if out is not None:
         raise TypeError("out: not supported with Dask arrays (the result is a lazy Dask array)")
-    from .models.base import _mode, _sflags
+    from ._validate import check_mode as _mode, check_sample_flags as _sflags
     md = _mode(mode)
     sf = None if sample_flags is None else _sflags(sample_flags)
     wo, wi = _as_dask_dirs(wo, "wo"), _as_dask_dirs(wi, "wi")

@@ -221,7 +221,7 @@ def eval_grad(model, wo, wi, params=None, mode=TransportMode.Radiance):
     >>> bool(np.isclose(g[0, 0], 1 / np.pi))   # f = R / pi
     True
     """
-    from ..models.base import _mode, _raise_bad
+    from .._validate import check_mode as _mode, raise_bad as _raise_bad
     core = model._grad_core(params) if hasattr(model, "_grad_core") else model._core
     names, cols = _columns(model, params)
     wo, wi = as_dirs(wo, "wo"), as_dirs(wi, "wi")

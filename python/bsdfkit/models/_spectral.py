@@ -77,7 +77,7 @@ def spectrum_or_rgb(x, name: str, *, lo=None, hi=None, lo_open=False):
     """A validated Spectrum (bounds checked over [360, 830] nm) or RGB value (base._rgb)."""
     if isinstance(x, Spectrum):
         return _check_spectrum(x, name, lo, hi, lo_open)
-    from .base import _rgb
+    from .._validate import check_rgb as _rgb
     return _rgb(x, name, lo=lo, hi=hi, lo_open=lo_open)
 
 
@@ -85,7 +85,7 @@ def spectrum_or_scalar(x, name: str, *, lo=None, hi=None, lo_open=False):
     """A validated Spectrum or real number (base._scalar)."""
     if isinstance(x, Spectrum):
         return _check_spectrum(x, name, lo, hi, lo_open)
-    from .base import _scalar
+    from .._validate import check_real as _scalar
     return _scalar(x, name, lo=lo, hi=hi, lo_open=lo_open)
 
 
@@ -227,12 +227,12 @@ def _raise_counts(counts, names):
             continue
         if name == "wavelengths":
             raise ValueError(f"wavelengths: {c} row(s) of 4 hold values that are not finite or outside [360, 830] nm")
-        from .base import _raise_bad
+        from .._validate import raise_bad as _raise_bad
         _raise_bad(name, c)
 
 
 def _mode_sf(mode, sample_flags=None):
-    from .base import _mode, _sflags
+    from .._validate import check_mode as _mode, check_sample_flags as _sflags
     return _mode(mode), (None if sample_flags is None else _sflags(sample_flags))
 
 

@@ -1,8 +1,6 @@
 """The model base class (array API, value semantics) and the parameter validation shared by every model."""
 from __future__ import annotations
 
-import math
-import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -10,6 +8,12 @@ import numpy as np
 from .. import _core
 from .._dask import dask_eval, is_dask_array
 from .._enums import BxDFFlags, ReflTrans, TransportMode
+from .._validate import bad_message as _bad_message  # noqa: F401  (re-exported for the models)
+from .._validate import check_mode as _mode  # noqa: F401
+from .._validate import check_real as _scalar  # noqa: F401
+from .._validate import check_rgb as _rgb  # noqa: F401
+from .._validate import check_sample_flags as _sflags  # noqa: F401
+from .._validate import raise_bad as _raise_bad  # noqa: F401
 from . import _spectral
 from . import registry as _registry
 
@@ -17,38 +21,6 @@ __all__ = ["roughness_to_alpha", "SampleResult", "BxDF"]
 
 
 _MASKING = {"correlated": 0, "separable": 1}
-
-
-def _scalar(x, name: str, *, lo=None, hi=None, lo_open=False) -> float:
-    if isinstance(x, bool) or not isinstance(x, (numbers.Real, np.floating, np.integer)):
-        raise TypeError(f"{name}: expected a real number, got {type(x).__name__}")
-    v = float(x)
-    if not math.isfinite(v):
-        raise ValueError(f"{name}: must be finite, got {v}")
-    if lo is not None and (v <= lo if lo_open else v < lo):
-        raise ValueError(f"{name}: must be {'>' if lo_open else '>='} {lo}, got {v}")
-    if hi is not None and v > hi:
-        raise ValueError(f"{name}: must be <= {hi}, got {v}")
-    return v
-
-
-def _rgb(x, name: str, *, lo=None, hi=None, lo_open=False) -> np.ndarray:
-    a = np.asarray(x)
-    if a.dtype.kind not in "fiu":
-        raise TypeError(f"{name}: expected a number or 3 numbers (RGB), got dtype {a.dtype}")
-    if a.ndim == 0:
-        a = np.repeat(a, 3)
-    if a.shape != (3,):
-        raise ValueError(f"{name}: expected a number or 3 numbers (RGB), got shape {a.shape}")
-    a = a.astype(np.float64)
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name}: must be finite, got {a.tolist()}")
-    if lo is not None and np.any(a <= lo if lo_open else a < lo):
-        raise ValueError(f"{name}: every channel must be {'>' if lo_open else '>='} {lo}, got {a.tolist()}")
-    if hi is not None and np.any(a > hi):
-        raise ValueError(f"{name}: every channel must be <= {hi}, got {a.tolist()}")
-    a.setflags(write=False)
-    return a
 
 
 def _alphas(alpha, alpha_x, alpha_y):
@@ -206,38 +178,6 @@ def _sample_result(arrays) -> SampleResult:
     r = object.__new__(SampleResult)
     r.__dict__.update(zip(_SAMPLE_FIELDS, arrays))
     return r
-
-
-def _mode(mode) -> int:
-    if isinstance(mode, str) and mode.capitalize() in TransportMode.__members__:
-        return int(TransportMode[mode.capitalize()])
-    try:
-        return int(TransportMode(mode))
-    except (ValueError, TypeError):
-        raise ValueError(f"mode: must be a TransportMode, got {mode!r}") from None
-
-
-def _sflags(sf) -> int:
-    try:
-        v = int(ReflTrans(sf))
-    except (ValueError, TypeError):
-        raise ValueError(f"sample_flags: must be a ReflTrans, got {sf!r}") from None
-    if not 0 <= int(sf) <= int(ReflTrans.All):  # IntFlag takes -1 as ~0, i.e. All
-        raise ValueError(f"sample_flags: must be a ReflTrans (0..{int(ReflTrans.All)}), got {sf!r}")
-    return v
-
-
-def _bad_message(name: str, count: int) -> str:
-    """The words of cpp/bindings/bind_model.h bad_message (the compiled fast path raises those)."""
-    if name in ("uc", "u"):
-        return f"{name}: {count} sample value(s) are outside [0, 1] or NaN (uniforms must lie in [0, 1])"
-    return (f"{name}: {count} direction(s) are not finite unit vectors "
-            "(|w|^2 must equal 1 within 1e-4; normalize them first)")
-
-
-def _raise_bad(name: str, count: int) -> None:
-    if count:
-        raise ValueError(_bad_message(name, count))
 
 
 class BxDF:

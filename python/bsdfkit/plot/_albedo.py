@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..models.base import _mode
+from .._validate import check_mode as _mode
 from .._enums import TransportMode
 from ._common import _RGB_COLORS, _RGB_STYLES, _as_labels, _as_models, _check_channel, _new_axes, _select
 from ..models.describe import describe

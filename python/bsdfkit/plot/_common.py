@@ -8,6 +8,7 @@ import numpy as np
 from .._enums import BxDFFlags
 from ..models.describe import _fmt
 from ..models import BxDF
+from .._validate import check_int as _check_int  # noqa: F401  (the plot modules)
 
 __all__ = ["LUMINANCE_WEIGHTS", "luminance"]
 
@@ -133,12 +134,6 @@ def _positive_max(values) -> float:
         if v.size and np.any(np.isfinite(v)):
             vmax = max(vmax, float(np.nanmax(v)))
     return vmax if vmax > 0 and math.isfinite(vmax) else 0.0
-
-
-def _check_int(v, name, lo):
-    if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
-        raise ValueError(f"{name}: expected an integer >= {lo}, got {v!r}")
-    return int(v)
 
 
 def _check_choice(v, name, allowed):

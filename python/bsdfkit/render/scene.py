@@ -14,6 +14,7 @@ from .. import _render_ext
 from .._arrays import _as_real_array, check_real
 from ..models import _spectral as _spectral_forms
 from .environment import _environment
+from .._validate import check_int as _check_int  # noqa: F401  (scenes.py, trace.py)
 
 
 #: Largest |coordinate| of the camera's origin, target and up, and of the scene's geometry
@@ -99,14 +100,6 @@ def _vec3(x, name):
     if a.shape != (3,) or not np.all(np.isfinite(a)):
         raise ValueError(f"{name}: expected 3 finite numbers")
     return a
-
-
-def _check_int(v, name, lo):
-    if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)):
-        raise ValueError(f"{name}: expected an integer, got {v!r}")
-    if v < lo:
-        raise ValueError(f"{name}: must be >= {lo}, got {v}")
-    return int(v)
 
 
 def load_mesh(path):

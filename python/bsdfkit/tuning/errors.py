@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import math
-import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -10,6 +9,7 @@ import numpy as np
 from .._enums import BxDFFlags
 from ..models import BxDF
 from .configs import Config, _check_model, _reference_config, configurations
+from .._validate import check_int as _check_int
 
 __all__ = ["FLOOR_FRACTION", "ALBEDO_COS_THETA", "MIN_COS", "DirectionSet", "direction_set", "relative_error",
            "CONVERGED", "is_stochastic", "relative_rms", "color_weights", "COLOR_STEP_NM"]
@@ -497,11 +497,3 @@ def _check_comparable(model, reference) -> None:
         raise ValueError(f"reference: {type(has).__name__} has specular (delta) lobes and {type(lacks).__name__} "
                          "has none; their values cannot be compared pair by pair (give a reference with the "
                          "same kind of lobes, e.g. a rough model against a rough or user-defined one)")
-
-
-def _check_int(x, name, lo):
-    if isinstance(x, bool) or not isinstance(x, numbers.Integral):
-        raise TypeError(f"{name}: expected an integer, got {type(x).__name__}")
-    if int(x) < lo:
-        raise ValueError(f"{name}: must be >= {lo}, got {x}")
-    return int(x)
