@@ -110,6 +110,7 @@ def models_rst(figures: dict | None = None) -> str:
                                                                           "float64 reference)")
         for f in ("energy_conserving", "exact_eval", "reciprocal", "two_sided", "transmission", "delta_only"):
             row(f"``{f}``", "yes" if getattr(cls, f) else "no")
+        row("spectral mode (``wavelengths=``)", _spectral_text(cls))
         out.append("")
         if cls.knobs:
             out += ["Knobs (most accurate setting first):", "", ".. list-table::", "   :header-rows: 1",
@@ -430,6 +431,19 @@ def _build_finished(app, exception):
     if exception is None and app.outdir:
         report = Path(app.outdir).parent / "preformatted_docstrings.txt"
         report.write_text("".join(n + "\n" for n in sorted(_PREFORMATTED)))
+
+
+def _spectral_text(cls) -> str:
+    """Whether a class takes ``wavelengths=``: read from ``_core`` (its compiled spectral form), or
+    its children's for the Python composites."""
+    from bsdfkit.models import _spectral
+    if cls in _spectral.spectral_classes():
+        if "_no_spectral_reason" in vars(cls):   # e.g. Measured: only a tensor file with spectra
+            return "yes, for data with spectra (see the class); a compiled form, ``_core.<Name>Spectral``"
+        return "yes (a compiled spectral form per variant, ``_core.<Name>Spectral``)"
+    if cls.__module__.rsplit(".", 1)[-1] in ("composite", "normal_map"):
+        return "when its children have it (passed through)"
+    return "no"
 
 
 def setup(app):
