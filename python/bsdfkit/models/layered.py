@@ -199,17 +199,15 @@ def _method_text(p) -> str:
 
 
 class _AnalyticSpectral:
-    """Spectral kernels exist for both methods (the analytic closed form: batch_spectral.h; the
-    random walk with 4 channels: spectral/layered_spectral.h). The ``color`` knob of the trade-off
+    """Spectral forms exist for both methods (the analytic closed form: batch_spectral.h; the
+    random walk with 4 channels: spectral/layered_spectral.h; BxDF._has_spectral_kernel reads them
+    from _core). The ``color`` knob of the trade-off
     registry (tuning/configs.py reads ``_spectral_ok``) applies to the analytic method only: the
     walk's RGB-versus-spectral error would be measured through its own noise."""
 
     @staticmethod
     def _spectral_ok(p) -> bool:
         return p["method"] == "analytic"
-
-    def _has_spectral_kernel(self) -> bool:
-        return True
 
     def _has_medium(self) -> bool:
         """The walk samples the medium: the albedo is not 0 (over [360, 830] nm for a spectrum)."""
