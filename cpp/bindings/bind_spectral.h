@@ -223,7 +223,7 @@ template <template <typename> class Model> inline void bind_spectral_form(py::mo
              o.m32 = P::S32::make(p, a);
              o.m64 = P::S64::make(p, a);
              a.check_all_used();
-             o.keep = py::make_tuple(spectral, kw);
+             o.keep = py::make_tuple(py::dict(spectral), kw);  // a copy: the caller may change its dict
              return o;
          }),
          py::arg("spectral"),

@@ -111,6 +111,7 @@ struct ColourSpectral : PerElementModel<ColourSpectral<M, F>, F> {
     static constexpr bool kPackets = true;
     using Params = typename M<double, 3, double>::Params;
     static constexpr int kMaxColours = 8;
+    static constexpr int kMaxFields = 64;  // params4's pointer table
     Params p;                            // the RGB Params: every field but the colours
     SpectralParam colour[kMaxColours];   // the colour fields, in field order
     int n_colours = 0;
@@ -130,6 +131,9 @@ struct ColourSpectral : PerElementModel<ColourSpectral<M, F>, F> {
         ColourSpectral s;
         s.p = p;
         Params q = p;
+        int n_fields = 0;
+        q.fields([&](const char *, auto &) { ++n_fields; });
+        if (n_fields > kMaxFields) throw std::invalid_argument("ColourSpectral: too many Params fields");
         q.fields([&](const char *name, auto &f) {
             if constexpr (is_colour<std::decay_t<decltype(f)>>) {
                 if (s.n_colours == kMaxColours) throw std::invalid_argument("ColourSpectral: too many colour fields");
@@ -142,7 +146,7 @@ struct ColourSpectral : PerElementModel<ColourSpectral<M, F>, F> {
     // The Params at 4 channels of type Col: colour i from value(colour[i]), the rest copied.
     template <typename Col, typename Value> typename Params::template WithColours<4, Col> params4(const Value &value) const {
         typename Params::template WithColours<4, Col> q;
-        const void *src[64];
+        const void *src[kMaxFields];  // make() checked the count
         int n = 0, c = 0, i = 0;
         const_cast<Params &>(p).fields([&](const char *, auto &f) { src[n++] = &f; });
         q.fields([&](const char *, auto &f) {
