@@ -28,16 +28,34 @@ template <template <typename> class Model> void bind_one(py::module_ &m) {
     std::vector<std::string> names = field_names<Params>();
     auto cls = bind_model<Model>(m, name);
     cls.def(py::init([name](const py::args &args, const py::kwargs &kw) {
-           Params p = params_from_kwargs<Params>(name, args, kw);
-           return PyModel<Model>{Model<float>::make(p), Model<double>::make(p), p};
+           std::vector<VaryingField> varying;
+           Params p = params_from_kwargs<Params>(name, args, kw, &varying);
+           return PyModel<Model>{Model<float>::make(p), Model<double>::make(p), p, std::move(varying)};
        }))
         .def_property_readonly("params",
                                [](const PyModel<Model> &self) {
                                    py::dict d;
                                    Params p = self.params;
-                                   p.fields([&](const char *n, const auto &field) { d[n] = to_py(field); });
+                                   int k = 0;
+                                   size_t j = 0;
+                                   p.fields([&](const char *n, const auto &field) {
+                                       if (j < self.varying.size() && self.varying[j].field == k) d[n] = self.varying[j++].values;
+                                       else d[n] = to_py(field);
+                                       ++k;
+                                   });
                                    return d;
-                               });
+                               })
+        .def_property_readonly("varying", [](const PyModel<Model> &self) {
+            py::list l;
+            Params p = self.params;
+            int k = 0;
+            size_t j = 0;
+            p.fields([&](const char *n, const auto &) {
+                if (j < self.varying.size() && self.varying[j].field == k) l.append(py::str(n)), ++j;
+                ++k;
+            });
+            return py::tuple(l);
+        });
     py::tuple fields(names.size());
     for (size_t i = 0; i < names.size(); ++i) fields[i] = py::str(names[i]);
     cls.attr("fields") = fields;

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "bind_varying.h"
 #include "block_cache.h"
 #include "door.h"
 #include "bsdfkit/batch.h"
@@ -307,6 +308,29 @@ template <template <typename> class Model> struct PyModel {
     Model<float> m32;
     Model<double> m64;
     typename Model<double>::Params params;
+    // Per-element parameters (bind_varying.h), in field order; empty for a uniform model, whose
+    // calls take the paths below unchanged.
+    std::vector<VaryingField> varying;
+    mutable int flags_union = -1;  // varying: the union of the elements' flags, computed on first use
+
+    // The lobes: the model's, or with per-element parameters the union over the elements'.
+    uint8_t flags() const {
+        if (varying.empty()) return m64.flags();
+        if (flags_union < 0) {
+            // over the planes' own broadcast (every joint element: smoothness may depend on two)
+            std::vector<py::array> keep;
+            const door::Shape shape = broadcast_with({}, {}, varying);
+            std::vector<ParamPlane> pl = planes_for(varying, shape, keep);
+            VaryingParams<typename Model<double>::Params> vp{params, pl.data(), int(pl.size())};
+            const int64_t n = door::prod(shape);
+            int u = 0;
+            py::gil_scoped_release release;
+            for (int64_t i = 0; i < n; ++i)
+                if (i == 0 || !vp.same(i - 1, i)) u |= Model<double>::make(vp.at(i)).flags();
+            flags_union = u;
+        }
+        return uint8_t(flags_union);
+    }
 
     // albedo's n_samples: 2**40 samples per direction run for hours already (Python's twin:
     // _arrays.MAX_ALBEDO_SAMPLES).
@@ -478,12 +502,160 @@ template <template <typename> class Model> struct PyModel {
         return std::move(res);
     }
 
+    // ---- per-element parameters (bind_varying.h, batch_varying.h): the door of a model with
+    // varying fields. Every argument and plane is broadcast to the call's batch (numpy rules over
+    // the directions', uniforms' and parameters' shapes) as full C-order rows, then the varying
+    // kernels run. out= is written by copy.
+    using VParams = VaryingParams<typename Model<double>::Params>;
+
+    static py::array full_rows(const py::array &a, const door::Shape &batch, size_t tail, int type) {
+        return door::rows(a, batch, tail, type, true);
+    }
+
+    static void copy_into(py::handle target, py::handle src) {
+        if (py::detail::npy_api::get().PyArray_CopyInto_(target.ptr(), src.ptr()) != 0) throw py::error_already_set();
+    }
+
+    py::object varying_pair(bool eval, py::handle wo, py::handle wi, py::handle mode, py::handle sflags,
+                            py::handle out) const {
+        using door::Shape;
+        const int md = door::mode_arg(mode), sf = eval ? 0 : door::sflags_arg(sflags);
+        py::array a = door::dirs(wo, "wo"), b = door::dirs(wi, "wi");
+        const int type = door::is_f32(a) && door::is_f32(b) ? py::detail::npy_api::NPY_FLOAT_
+                                                            : py::detail::npy_api::NPY_DOUBLE_;
+        const Shape batch = broadcast_with({"wo", "wi"}, {door::lead(door::shape_of(a), 1),
+                                                          door::lead(door::shape_of(b), 1)}, varying);
+        const Shape shape = eval ? door::cat(batch, {3}) : batch;
+        if (!out.is_none()) door::check_out(out, shape, type, false);
+        a = full_rows(a, batch, 1, type);
+        b = full_rows(b, batch, 1, type);
+        std::vector<py::array> keep;
+        std::vector<ParamPlane> pl = planes_for(varying, batch, keep);
+        const VParams vp{params, pl.data(), int(pl.size())};
+        const int64_t n = door::prod(batch);
+        py::array res = type == py::detail::npy_api::NPY_FLOAT_ ? py::array(py::array_t<float>(shape))
+                                                                : py::array(py::array_t<double>(shape));
+        BadCounts bad;
+        if (n > 0) {
+            py::gil_scoped_release release;
+            auto run = [&](auto tag) {
+                using F = decltype(tag);
+                const F *po = static_cast<const F *>(a.data()), *pi = static_cast<const F *>(b.data());
+                F *po_ = static_cast<F *>(res.mutable_data());
+                if (eval) varying_pair_batch<true, Model<F>>(vp, po, pi, n, TransportMode(md), 0, po_, num_threads(), bad);
+                else varying_pair_batch<false, Model<F>>(vp, po, pi, n, TransportMode(md), uint8_t(sf), po_, num_threads(), bad);
+            };
+            if (type == py::detail::npy_api::NPY_FLOAT_) run(float{});
+            else run(double{});
+        }
+        raise_if_interrupted();
+        raise_bad(bad, true, false);
+        if (out.is_none()) return std::move(res);
+        copy_into(out, res);
+        return py::reinterpret_borrow<py::object>(out);
+    }
+
+    py::object varying_sample(py::handle wo, py::handle uc, py::handle u, py::handle mode, py::handle sflags,
+                              py::handle out, py::handle n_arg, py::handle seed) const {
+        using door::Shape;
+        const int md = door::mode_arg(mode), sf = door::sflags_arg(sflags);
+        py::array a = door::dirs(wo, "wo"), c, w;
+        Shape batch;
+        int type;
+        if (!n_arg.is_none()) {
+            if (!uc.is_none() || !u.is_none()) door::value_error("n: give either n (and seed) or the uniforms uc and u, not both");
+            const long long nn = door::int_arg(n_arg, "n", 0);
+            batch = broadcast_with({"wo", "n"}, {door::lead(door::shape_of(a), 1), Shape{py::ssize_t(nn)}}, varying);
+            type = door::is_f32(a) ? py::detail::npy_api::NPY_FLOAT_ : py::detail::npy_api::NPY_DOUBLE_;
+            const uint64_t sd = door::seed_arg(seed);
+            c = py::array(py::dtype(type), batch);
+            w = py::array(py::dtype(type), door::cat(batch, {2}));
+            {
+                py::gil_scoped_release release;
+                if (type == py::detail::npy_api::NPY_FLOAT_)
+                    fill_uniforms<float>(sd, static_cast<float *>(c.mutable_data()), static_cast<float *>(w.mutable_data()), c.size());
+                else
+                    fill_uniforms<double>(sd, static_cast<double *>(c.mutable_data()), static_cast<double *>(w.mutable_data()), c.size());
+            }
+            raise_if_interrupted();
+        } else {
+            if (uc.is_none() || u.is_none()) door::value_error("uc, u: pass both uniforms, or n= and seed=");
+            c = door::uniforms(uc, "uc", false);
+            w = door::uniforms(u, "u", true);
+            const bool uc_weak = PyFloat_CheckExact(uc.ptr()) || (PyLong_CheckExact(uc.ptr()));
+            type = door::is_f32(a) && (uc_weak || door::is_f32(c)) && door::is_f32(w) ? py::detail::npy_api::NPY_FLOAT_
+                                                                                     : py::detail::npy_api::NPY_DOUBLE_;
+            batch = broadcast_with({"wo", "uc", "u"}, {door::lead(door::shape_of(a), 1), door::shape_of(c),
+                                                       door::lead(door::shape_of(w), 1)}, varying);
+            c = full_rows(c, batch, 0, type);
+            w = full_rows(w, batch, 1, type);
+        }
+        if (!out.is_none()) check_sample_out(out, batch, type);
+        a = full_rows(a, batch, 1, type);
+        std::vector<py::array> keep;
+        std::vector<ParamPlane> pl = planes_for(varying, batch, keep);
+        const VParams vp{params, pl.data(), int(pl.size())};
+        const int64_t n = door::prod(batch);
+        py::object ret;
+        BadCounts bad;
+        auto run = [&](auto tag) {
+            using F = decltype(tag);
+            SampleBlock<F> blk(batch, n);
+            ret = blk.arrays;
+            if (n == 0) return;
+            py::gil_scoped_release release;
+            varying_sample_batch<Model<F>>(vp, static_cast<const F *>(a.data()), static_cast<const F *>(c.data()),
+                                           static_cast<const F *>(w.data()), n, TransportMode(md), uint8_t(sf), blk.out,
+                                           num_threads(), bad);
+        };
+        if (type == py::detail::npy_api::NPY_FLOAT_) run(float{});
+        else run(double{});
+        raise_if_interrupted();
+        raise_bad(bad, false, true);
+        if (out.is_none()) return ret;
+        py::tuple t = ret;
+        for (int k = 0; k < 7; ++k) copy_into(sample_out_field(out, k), t[k]);
+        return py::reinterpret_borrow<py::object>(out);
+    }
+
+    py::object varying_albedo(py::handle wo, py::handle n_samples, py::handle seed, py::handle mode) const {
+        const int md = door::mode_arg(mode);
+        py::array a = door::dirs(wo, "wo");
+        const long long ns = door::int_arg(n_samples, "n_samples", 1, kMaxAlbedoSamples);
+        if (seed.is_none()) door::type_error("seed: expected an integer, got NoneType");
+        const uint64_t sd = door::seed_arg(seed);
+        const int type = door::is_f32(a) ? py::detail::npy_api::NPY_FLOAT_ : py::detail::npy_api::NPY_DOUBLE_;
+        const door::Shape batch = broadcast_with({"wo"}, {door::lead(door::shape_of(a), 1)}, varying);
+        a = full_rows(a, batch, 1, type);
+        std::vector<py::array> keep;
+        std::vector<ParamPlane> pl = planes_for(varying, batch, keep);
+        const VParams vp{params, pl.data(), int(pl.size())};
+        const int64_t n = door::prod(batch);
+        py::array res = type == py::detail::npy_api::NPY_FLOAT_ ? py::array(py::array_t<float>(door::cat(batch, {3})))
+                                                                : py::array(py::array_t<double>(door::cat(batch, {3})));
+        BadCounts bad;
+        if (n > 0) {
+            py::gil_scoped_release release;
+            auto run = [&](auto tag) {
+                using F = decltype(tag);
+                varying_albedo_batch<Model<F>>(vp, static_cast<const F *>(a.data()), n, ns, sd, TransportMode(md),
+                                               static_cast<F *>(res.mutable_data()), num_threads(), bad);
+            };
+            if (type == py::detail::npy_api::NPY_FLOAT_) run(float{});
+            else run(double{});
+        }
+        raise_if_interrupted();
+        raise_bad(bad, false, false);
+        return std::move(res);
+    }
+
     // ---- the door: one entry per operation (see the top of this file) ----
     // The plain arguments take the fast path above; anything else is converted and checked here
     // (door.h), in the same call, and then runs the same kernels.
 
     template <bool Eval>
     py::object pair_door(py::handle wo, py::handle wi, py::handle mode, py::handle sflags, py::handle out) const {
+        if (!varying.empty()) return varying_pair(Eval, wo, wi, mode, sflags, out);
         {
             Plain o, i;
             const Plain *big;
@@ -592,6 +764,7 @@ template <template <typename> class Model> struct PyModel {
     // given out (a SampleResult of this call's shapes and dtypes), out after writing into it.
     py::object sample(py::handle wo, py::handle uc, py::handle u, py::handle mode, py::handle sflags, py::handle out,
                       py::handle n, py::handle seed) const {
+        if (!varying.empty()) return varying_sample(wo, uc, u, mode, sflags, out, n, seed);
         if (n.is_none()) {
             Plain o, c, w;
             const Plain *big;
@@ -652,6 +825,7 @@ template <template <typename> class Model> struct PyModel {
     }
 
     py::object albedo(py::handle wo, py::handle n_samples, py::handle seed, py::handle mode) const {
+        if (!varying.empty()) return varying_albedo(wo, n_samples, seed, mode);
         {
             Plain o;
             int md = small_int(mode, 0, 1);
@@ -689,7 +863,7 @@ py::class_<PyModel<Model>> bind_model(py::module_ &m, const char *name) {
              py::arg("mode") = 0, py::arg("sflags") = 3, py::arg("out") = py::none(), py::arg("n") = py::none(),
              py::arg("seed") = py::none())
         .def("albedo", &P::albedo, py::arg("wo"), py::arg("n_samples") = 65536, py::arg("seed") = 0, py::arg("mode") = 0)
-        .def_property_readonly("flags", [](const P &self) { return int(self.m64.flags()); });
+        .def_property_readonly("flags", [](const P &self) { return int(self.flags()); });
     return c;
 }
 

@@ -116,20 +116,47 @@ inline std::string join(const std::vector<std::string> &v) {
     return s;
 }
 
-// Params from keyword arguments (see the top of this file).
-template <typename Params> Params params_from_kwargs(const char *model, const py::args &args, const py::kwargs &kw) {
+// Params from keyword arguments (see the top of this file). varying: where a real or RGB field
+// may take a numpy array (per-element parameters, bind_varying.h), its plane is appended and the
+// field takes the array's first element; nullptr refuses arrays (the spectral forms, for now).
+template <typename Params>
+Params params_from_kwargs(const char *model, const py::args &args, const py::kwargs &kw,
+                          std::vector<VaryingField> *varying = nullptr) {
     const std::string m(model);
     if (args.size() != 0)
         type_error(m + ": takes keyword arguments only (" + join(field_names<Params>()) + ")");
     Params p;
     size_t used = 0;
+    int index = 0;
     p.fields([&](const char *name, auto &field) {
+        using T = std::decay_t<decltype(field)>;
+        const std::string what = m + "." + name;
         if (kw.contains(name)) {
-            from_py(kw[name], field, m + "." + name);
+            py::object v = kw[name];
+            constexpr int comps = std::is_same_v<T, double> ? 1 : std::is_same_v<T, std::array<double, 3>> ? 3 : 0;
+            if constexpr (comps > 0) {
+                if (is_plane_value(v, comps)) {
+                    if (!varying) type_error(what + ": per-element parameters (arrays) are not supported here");
+                    double first[3] = {0, 0, 0};
+                    if constexpr (comps == 1) first[0] = field;
+                    else first[0] = field[0], first[1] = field[1], first[2] = field[2];
+                    varying->push_back(make_plane(v, index, comps, what, first));
+                    if constexpr (comps == 1) field = first[0];
+                    else field = {first[0], first[1], first[2]};
+                } else {
+                    from_py(v, field, what);
+                }
+            } else {
+                if (door::is_ndarray(v) && py::reinterpret_borrow<py::array>(v).ndim() >= 1)
+                    type_error(what + ": takes one value for the whole material (a knob, a count or a table), "
+                                      "not a per-element array");
+                from_py(v, field, what);
+            }
             ++used;
-        } else if constexpr (is_shared_table<std::decay_t<decltype(field)>>::value) {
+        } else if constexpr (is_shared_table<T>::value) {
             type_error(m + ": missing required keyword argument '" + name + "'");
         }
+        ++index;
     });
     if (used != kw.size()) {
         std::vector<std::string> known = field_names<Params>();

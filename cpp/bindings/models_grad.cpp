@@ -131,6 +131,9 @@ template <template <typename> class Model, int MaxK> void add_eval_grad(py::modu
     py::object cls = py::type::of<P>();
     auto fn = [](const P &self, py::array wo, py::array wi, int mode, std::vector<Column> cols, py::array out_f,
                  py::array out_g) {
+        if (!self.varying.empty())
+            value_error(std::string(Model<double>::Name) + ".eval_grad: per-element parameters are not supported yet "
+                        "(build one model per parameter value)");
         int64_t no, ni, nf, ng;
         const double *po = checked<double>(wo, "wo", {3}, &no), *pi = checked<double>(wi, "wi", {3}, &ni);
         int64_t n = broadcast_rows(no, ni, "wo", "wi");

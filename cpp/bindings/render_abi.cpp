@@ -23,6 +23,8 @@ bool to_material_impl(const py::handle &h, render::Material *out, ModelList<Ms..
     auto one = [&](auto tag) {
         using P = typename decltype(tag)::type;
         if (!py::isinstance<P>(h)) return false;
+        // per-element parameters have no one material (the Python side says so first)
+        if (!h.cast<const P &>().varying.empty()) return false;
         *out = h.cast<const P &>().template get<render::Float>();
         return true;
     };

@@ -111,6 +111,7 @@ def models_rst(figures: dict | None = None) -> str:
         for f in ("energy_conserving", "exact_eval", "reciprocal", "two_sided", "transmission", "delta_only"):
             row(f"``{f}``", "yes" if getattr(cls, f) else "no")
         row("spectral mode (``wavelengths=``)", _spectral_text(cls))
+        row("per-element parameters (arrays)", _varying_text(cls))
         out.append("")
         if cls.knobs:
             out += ["Knobs (most accurate setting first):", "", ".. list-table::", "   :header-rows: 1",
@@ -431,6 +432,16 @@ def _build_finished(app, exception):
     if exception is None and app.outdir:
         report = Path(app.outdir).parent / "preformatted_docstrings.txt"
         report.write_text("".join(n + "\n" for n in sorted(_PREFORMATTED)))
+
+
+def _varying_text(cls) -> str:
+    """The parameters a class takes as per-element arrays (its ``varying_params`` declaration)."""
+    vp = getattr(cls, "varying_params", {})
+    if not vp:
+        if cls.__module__.rsplit(".", 1)[-1] in ("composite", "normal_map"):
+            return "its own array parameters (see the class); children per their classes"
+        return "none (uniform: the model holds a table)"
+    return ", ".join(f"``{k}``" + (" (..., 3)" if c == 3 else "") for k, c in vp.items())
 
 
 def _spectral_text(cls) -> str:

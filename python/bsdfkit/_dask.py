@@ -95,6 +95,8 @@ def _as_dask_dirs(x, name):
 def dask_eval(model, op, wo, wi, mode, sample_flags=None, out=None):
     """``model.eval`` (op "eval") or ``model.pdf`` (op "pdf") on Dask arrays: a Dask array of shape
     batch + (3,) or batch, dtype float32 when every input is float32, else float64."""
+    if getattr(model, "varying", ()):
+        model._refuse_varying("Dask arrays of directions")
     import dask
     import dask.array as da
     if out is not None:

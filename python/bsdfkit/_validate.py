@@ -11,7 +11,8 @@ import numpy as np
 
 from ._enums import ReflTrans, TransportMode
 
-__all__ = ["check_int", "check_real", "check_rgb", "check_mode", "check_sample_flags", "bad_message", "raise_bad"]
+__all__ = ["check_int", "check_real", "check_rgb", "check_array", "check_mode", "check_sample_flags", "bad_message",
+           "raise_bad"]
 
 
 def check_int(x, name: str, lo: int, hi: int | None = None) -> int:
@@ -26,8 +27,56 @@ def check_int(x, name: str, lo: int, hi: int | None = None) -> int:
     return int(x)
 
 
-def check_real(x, name: str, *, lo=None, hi=None, lo_open=False) -> float:
-    """A finite real number within the bounds (``lo_open``: strictly above lo)."""
+def check_array(x, name: str, tail: tuple = (), *, lo=None, hi=None, lo_open=False):
+    """A per-element parameter: a read-only float64 array of trailing shape ``tail`` whose entries
+    are finite and within the bounds, or, when it has no element axis (shape ``tail``), a float
+    (``tail == ()``) or that float64 array. Wrong types raise TypeError, bad entries ValueError
+    naming ``name`` and the first bad index."""
+    try:
+        a = np.asarray(x)
+    except Exception as e:
+        raise TypeError(f"{name}: cannot be converted to a numeric array ({e})") from None
+    if a.dtype.kind not in "fiu" or a.dtype == np.bool_:
+        raise TypeError(f"{name}: expected real numbers, got {type(x).__name__} of dtype {a.dtype}")
+    if a.ndim < len(tail) or a.shape[a.ndim - len(tail):] != tail:
+        raise ValueError(f"{name}: expected trailing shape {tail}, got {a.shape}")
+    a = a.astype(np.float64)
+    items = a.reshape((-1,) + tail)
+    flat = items.reshape(len(items), -1)
+    bad = ~np.isfinite(flat).all(1)
+    what = "not finite"
+    if not bad.any() and lo is not None:
+        bad = ~(flat > lo if lo_open else flat >= lo).all(1)
+        what = f"{'<=' if lo_open else '<'} {lo}"
+    if not bad.any() and hi is not None:
+        bad = ~(flat <= hi).all(1)
+        what = f"> {hi}"
+    if bad.any():
+        i = int(np.argmax(bad))
+        idx = np.unravel_index(i, a.shape[:a.ndim - len(tail)]) if a.ndim > len(tail) else ()
+        rng = "" if lo is None and hi is None else (
+            f" and {'>' if lo_open else '>='} {lo}" if hi is None else
+            f" and in {'(' if lo_open else '['}{lo if lo is not None else '-inf'}, {hi}]")
+        raise ValueError(f"{name}: entries must be finite{rng}; the first bad one, at index "
+                         f"{tuple(int(j) for j in idx)}, is {what}: {items[i].tolist()}")
+    if a.ndim == len(tail) and not tail:
+        return float(a)
+    a.setflags(write=False)
+    return a
+
+
+def _is_elements(x, ndim: int) -> bool:
+    """Whether x is array-like with more than ``ndim`` axes (an element axis), not a scalar / RGB."""
+    if isinstance(x, (np.ndarray, list, tuple)):
+        return np.ndim(x) > ndim
+    return False
+
+
+def check_real(x, name: str, *, lo=None, hi=None, lo_open=False, varying=False):
+    """A finite real number within the bounds (``lo_open``: strictly above lo). ``varying``: an
+    array of them is accepted too (a per-element parameter, ``check_array``)."""
+    if varying and _is_elements(x, 0):
+        return check_array(x, name, lo=lo, hi=hi, lo_open=lo_open)
     if isinstance(x, bool) or not isinstance(x, (numbers.Real, np.floating, np.integer)):
         raise TypeError(f"{name}: expected a real number, got {type(x).__name__}")
     v = float(x)
@@ -40,9 +89,12 @@ def check_real(x, name: str, *, lo=None, hi=None, lo_open=False) -> float:
     return v
 
 
-def check_rgb(x, name: str, *, lo=None, hi=None, lo_open=False) -> np.ndarray:
+def check_rgb(x, name: str, *, lo=None, hi=None, lo_open=False, varying=False) -> np.ndarray:
     """A number (grey) or 3 numbers (RGB), finite and within the bounds per channel: a read-only
-    float64 (3,) array."""
+    float64 (3,) array. ``varying``: an array of shape (..., 3) is accepted too (an RGB value per
+    element, ``check_array``)."""
+    if varying and _is_elements(x, 1):
+        return check_array(x, name, (3,), lo=lo, hi=hi, lo_open=lo_open)
     a = np.asarray(x)
     if a.dtype.kind not in "fiu":
         raise TypeError(f"{name}: expected a number or 3 numbers (RGB), got dtype {a.dtype}")

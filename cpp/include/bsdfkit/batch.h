@@ -1208,14 +1208,18 @@ void sample_batch(const Model &m, const F *wo, const F *uc, const F *u, int64_t 
 // Directional albedo rho(wo) = E[f |cos wi| / pdf] (pbrt-v4 BxDF::rho), skipping pdf = 0
 // samples (pbrt-v4 #313). Uniforms come from a counter hash of (seed, wo index, sample index),
 // summed in fixed blocks and then in block order: deterministic for any thread count.
-template <typename Model, typename F>
-void albedo_batch(const Model &m, const F *wo, int64_t n_wo, int64_t n_samples, uint64_t seed, TransportMode mode,
-                  F *out, int nthreads, BadCounts &bad) {
+// model_of(j): the model of direction j (the uniform call's one model, or per-element parameters'
+// model, batch_varying.h).
+template <typename ModelOf, typename F>
+void albedo_batch_of(const ModelOf &model_of, const F *wo, int64_t n_wo, int64_t n_samples, uint64_t seed,
+                     TransportMode mode, F *out, int nthreads, BadCounts &bad) {
+    using Model = std::decay_t<decltype(model_of(int64_t(0)))>;
     const int64_t block = 4096;
     int64_t nblocks = (n_samples + block - 1) / block;
     std::vector<double> partial(size_t(n_wo * nblocks * 3), 0.0);
     parallel_chunks(n_wo * nblocks, nthreads, 1, [&](int64_t item, int64_t) {
         int64_t j = item / nblocks, blk = item % nblocks;
+        const Model &m = model_of(j);  // built outside the model's FTZ scope, as the uniform model is
         const DenormalsFlushedFor<Model> ftz;
         Vec3<F> o = load3<F, 3>(wo, j);
         int64_t bad_o = check_dir(&o);
@@ -1238,6 +1242,12 @@ void albedo_batch(const Model &m, const F *wo, int64_t n_wo, int64_t n_samples, 
             for (int64_t blk = 0; blk < nblocks; ++blk) sum += partial[size_t((j * nblocks + blk) * 3 + c)];
             out[3 * j + c] = n_samples > 0 ? F(sum / double(n_samples)) : F(0);
         }
+}
+
+template <typename Model, typename F>
+void albedo_batch(const Model &m, const F *wo, int64_t n_wo, int64_t n_samples, uint64_t seed, TransportMode mode,
+                  F *out, int nthreads, BadCounts &bad) {
+    albedo_batch_of([&m](int64_t) -> const Model & { return m; }, wo, n_wo, n_samples, seed, mode, out, nthreads, bad);
 }
 
 } // namespace bsdfkit

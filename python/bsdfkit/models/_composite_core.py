@@ -11,14 +11,15 @@ arithmetic. Children are called through their public methods (their own door).
 """
 from __future__ import annotations
 
-import hashlib
 import math
 
 import numpy as np
 
+from .._validate import check_array
+
 from .._arrays import (MAX_ALBEDO_SAMPLES, as_dirs, broadcast_batch, c_buffer, check_int, check_out, flatten_to,
                        kernel_dtype, planes_order, sample_uniforms)
-from .base import SampleResult, _mode, _raise_bad, _sflags
+from .base import SampleResult, _mode, _raise_bad, _sflags, digest  # noqa: F401  (digest re-exported)
 from ._spectral import check_wavelengths
 
 __all__ = ["Door", "take", "child_eval", "child_pdf", "child_sample", "array_param", "digest"]
@@ -42,48 +43,11 @@ def _raise_lam(lam):
         raise ValueError(f"wavelengths: {c} row(s) of 4 hold values that are not finite or outside [360, 830] nm")
 
 
-def digest(a: np.ndarray) -> str:
-    """Content digest of an array parameter (hash, ==, repr without printing the values)."""
-    h = hashlib.blake2b(digest_size=10)
-    h.update(str((a.shape, a.dtype.str)).encode())
-    h.update(np.ascontiguousarray(a).tobytes())
-    return h.hexdigest()
-
-
 def array_param(x, name: str, tail: tuple = (), lo=None, hi=None):
     """A per-element parameter: a Python float (a scalar) or a read-only float64 array of trailing
     shape ``tail``. Non-finite or out-of-range entries raise ValueError naming the parameter and the
-    first bad index."""
-    try:
-        a = np.asarray(x)
-    except Exception as e:
-        raise TypeError(f"{name}: cannot be converted to a numeric array ({e})") from None
-    if a.dtype.kind not in "fiu" or a.dtype == np.bool_:
-        raise TypeError(f"{name}: expected real numbers, got {type(x).__name__} of dtype {a.dtype}")
-    if a.ndim < len(tail) or a.shape[a.ndim - len(tail):] != tail:
-        raise ValueError(f"{name}: expected trailing shape {tail}, got {a.shape}")
-    a = a.astype(np.float64)
-    items = a.reshape((-1,) + tail)
-    bad = ~np.isfinite(items).reshape(len(items), -1).all(1)
-    what = "not finite"
-    if lo is not None or hi is not None:
-        rng = np.ones(len(items), bool)
-        if lo is not None:
-            rng &= (items >= lo).reshape(len(items), -1).all(1)
-        if hi is not None:
-            rng &= (items <= hi).reshape(len(items), -1).all(1)
-        if not bad.any() and not rng.all():
-            bad, what = ~rng, f"outside [{lo}, {hi}]"
-    if bad.any():
-        i = int(np.argmax(bad))
-        idx = np.unravel_index(i, a.shape[:a.ndim - len(tail)]) if a.ndim > len(tail) else ()
-        val = items[i].tolist()
-        raise ValueError(f"{name}: entries must be finite{'' if lo is None else f' and in [{lo}, {hi}]'}; "
-                         f"the first bad one, at index {tuple(int(j) for j in idx)}, is {what}: {val}")
-    if a.ndim == len(tail) and not tail:
-        return float(a)
-    a.setflags(write=False)
-    return a
+    first bad index (``bsdfkit._validate.check_array``)."""
+    return check_array(x, name, tail, lo=lo, hi=hi)
 
 
 def take(a, idx):

@@ -73,20 +73,21 @@ def _check_spectrum(s: Spectrum, name: str, lo, hi, lo_open):
     return s
 
 
-def spectrum_or_rgb(x, name: str, *, lo=None, hi=None, lo_open=False):
-    """A validated Spectrum (bounds checked over [360, 830] nm) or RGB value (base._rgb)."""
+def spectrum_or_rgb(x, name: str, *, lo=None, hi=None, lo_open=False, varying=False):
+    """A validated Spectrum (bounds checked over [360, 830] nm) or RGB value (base._rgb; with
+    ``varying``, also an RGB value per element)."""
     if isinstance(x, Spectrum):
         return _check_spectrum(x, name, lo, hi, lo_open)
     from .._validate import check_rgb as _rgb
-    return _rgb(x, name, lo=lo, hi=hi, lo_open=lo_open)
+    return _rgb(x, name, lo=lo, hi=hi, lo_open=lo_open, varying=varying)
 
 
-def spectrum_or_scalar(x, name: str, *, lo=None, hi=None, lo_open=False):
-    """A validated Spectrum or real number (base._scalar)."""
+def spectrum_or_scalar(x, name: str, *, lo=None, hi=None, lo_open=False, varying=False):
+    """A validated Spectrum or real number (base._scalar; with ``varying``, also one per element)."""
     if isinstance(x, Spectrum):
         return _check_spectrum(x, name, lo, hi, lo_open)
     from .._validate import check_real as _scalar
-    return _scalar(x, name, lo=lo, hi=hi, lo_open=lo_open)
+    return _scalar(x, name, lo=lo, hi=hi, lo_open=lo_open, varying=varying)
 
 
 def rgb_of(v, kind: str) -> np.ndarray:
@@ -108,7 +109,7 @@ def scalar_of(v) -> float:
     550 nm (pbrt-v4 RGB renders have no dispersion; ``interop.PBRT_GLASS_ETA`` is the same rule)."""
     if isinstance(v, Spectrum):
         return float(v(np.float64(RGB_ETA_WAVELENGTH)))
-    return float(v)
+    return v if isinstance(v, np.ndarray) else float(v)   # an array: per-element values
 
 
 def is_dispersive(v) -> bool:

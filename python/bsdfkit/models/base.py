@@ -1,6 +1,7 @@
 """The model base class (array API, value semantics) and the parameter validation shared by every model."""
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,10 +24,11 @@ __all__ = ["roughness_to_alpha", "SampleResult", "BxDF"]
 _MASKING = {"correlated": 0, "separable": 1}
 
 
-def _alphas(alpha, alpha_x, alpha_y):
+def _alphas(alpha, alpha_x, alpha_y, varying=False):
     """(alpha_x, alpha_y) from either ``alpha`` (isotropic; None = 0, smooth) or both of
     ``alpha_x`` and ``alpha_y``: one of the pair alone would silently leave the other at 0, and
-    ``alpha`` with the pair would silently ignore one of them."""
+    ``alpha`` with the pair would silently ignore one of them. ``varying``: arrays (per element)
+    are accepted."""
     if (alpha_x is None) != (alpha_y is None):
         given, missing = ("alpha_x", "alpha_y") if alpha_y is None else ("alpha_y", "alpha_x")
         raise ValueError(f"{missing}: give alpha_x and alpha_y together (only {given} was given), "
@@ -34,8 +36,9 @@ def _alphas(alpha, alpha_x, alpha_y):
     if alpha_x is not None:
         if alpha is not None:
             raise ValueError("alpha: give either alpha (isotropic) or alpha_x and alpha_y (anisotropic), not both")
-        return _scalar(alpha_x, "alpha_x", lo=0.0), _scalar(alpha_y, "alpha_y", lo=0.0)
-    a = 0.0 if alpha is None else _scalar(alpha, "alpha", lo=0.0)
+        return (_scalar(alpha_x, "alpha_x", lo=0.0, varying=varying),
+                _scalar(alpha_y, "alpha_y", lo=0.0, varying=varying))
+    a = 0.0 if alpha is None else _scalar(alpha, "alpha", lo=0.0, varying=varying)
     return a, a
 
 
@@ -53,8 +56,9 @@ def _masking(m) -> str:
 
 
 def is_smooth(p) -> bool:
-    """pbrt-v4's ``EffectivelySmooth`` on a parameter dict with alpha_x / alpha_y."""
-    return max(p["alpha_x"], p["alpha_y"]) < 1e-3
+    """pbrt-v4's ``EffectivelySmooth`` on a parameter dict with alpha_x / alpha_y (per-element
+    alphas: whether every element is smooth)."""
+    return bool(np.max(np.maximum(p["alpha_x"], p["alpha_y"]), initial=0.0) < 1e-3)
 
 
 def fmt_value(v) -> str:
@@ -62,6 +66,8 @@ def fmt_value(v) -> str:
     v = np.asarray(v, dtype=np.float64)
     if v.ndim and np.allclose(v, v.flat[0]):
         v = v.flat[0]
+    elif v.ndim > 1 or (v.ndim == 1 and v.size != 3):
+        return "per element"
     if v.ndim == 0:
         return f"{float(v):.3g}"
     return "(" + ", ".join(f"{x:.2g}" for x in v) + ")"
@@ -70,6 +76,8 @@ def fmt_value(v) -> str:
 def alpha_text(p) -> str:
     """``", smooth"``, ``", α=0.2"`` or ``", αx=.., αy=.."`` for a parameter dict with alphas."""
     ax, ay = p["alpha_x"], p["alpha_y"]
+    if np.ndim(ax) or np.ndim(ay):
+        return ", α per element"
     if max(ax, ay) < 1e-3:
         return ", smooth"
     if ax == ay:
@@ -81,6 +89,34 @@ def rgb_dict(v) -> dict:
     """A Mitsuba ``rgb`` texture of a scalar or RGB value."""
     a = np.broadcast_to(np.asarray(v, dtype=np.float64), (3,))
     return {"type": "rgb", "value": [float(x) for x in a]}
+
+
+def digest(a: np.ndarray) -> str:
+    """Content digest of an array parameter (hash, ==, repr without printing the values)."""
+    h = hashlib.blake2b(digest_size=10)
+    h.update(str((a.shape, a.dtype.str)).encode())
+    h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()
+
+
+def key_value(v):
+    """A parameter value as a hashable key: a small 1-D array (an RGB value) by its values, a
+    larger array (per-element parameters) by its shape and content digest."""
+    if isinstance(v, np.ndarray):
+        return tuple(v.tolist()) if v.ndim == 1 and v.size <= 12 else ("array", v.shape, digest(v))
+    return v
+
+
+def fmt_param(v) -> str:
+    """A parameter value in ``repr``: Python's shortest round-trip floats; an array of more than
+    12 values as its shape and digest (that repr cannot be evaluated back)."""
+    if isinstance(v, np.ndarray):
+        if v.size > 12:
+            return f"<array {v.shape} digest {digest(v)}>"
+        if v.ndim == 1:
+            return "[" + ", ".join(repr(float(x)) for x in v) + "]"
+        return repr(v.tolist())
+    return repr(v)
 
 
 #: pbrt-v4 / Mitsuba 3 alpha floor of the rough microfacet lobes.
@@ -219,6 +255,12 @@ class BxDF:
     #: Hair): plots draw the whole sphere, and contracts that assume a hemispherical surface
     #: model (albedo over wo's hemisphere, cosine-weighted sampling) are gated on it.
     full_sphere: bool = False
+    #: The parameters that take one value per element (issue 47): {name: 1 (a real) or 3 (RGB)},
+    #: by the names the model stores (``params``). Such a parameter may be a numpy array of shape
+    #: (...) or (..., 3) that broadcasts against the call's batch shape (the directions' shape
+    #: without the last axis); the model's kernels then build each element's model from its
+    #: values. Integer, table and knob parameters stay uniform.
+    varying_params: dict = {}
 
     def __init_subclass__(cls, register: bool = True, **kwargs):
         super().__init_subclass__(**kwargs)
@@ -232,6 +274,8 @@ class BxDF:
 
     def describe(self) -> str:
         """A short human-readable name, e.g. ``"Conductor Au, α=0.2"`` (legends and titles)."""
+        if self.varying:
+            return f"{type(self).__name__} ({', '.join(self.varying)} per element)"
         from .spec import to_spec
         rest = to_spec(self).split()[1:]
         return type(self).__name__ + (" " + ", ".join(rest) if rest else "")
@@ -249,6 +293,21 @@ class BxDF:
 
     def _make_core(self):
         raise NotImplementedError
+
+    @property
+    def varying(self) -> tuple:
+        """The parameters given per element (numpy arrays) in this model, in ``params`` order;
+        ``()`` for a uniform model."""
+        vp = type(self).varying_params
+        return tuple(k for k, v in self._params.items()
+                     if k in vp and isinstance(v, np.ndarray) and v.ndim >= (1 if vp[k] == 1 else 2))
+
+    def _refuse_varying(self, what: str) -> None:
+        """NotImplementedError for an operation that needs one uniform material."""
+        if self.varying:
+            raise NotImplementedError(
+                f"{type(self).__name__}: {what} is not supported with per-element parameters yet "
+                f"({', '.join(self.varying)}); build one model per parameter value")
 
     # ---- spectral form (core/bxdf.h `Spectral`): one generic construction for every model
     def _has_spectral_kernel(self) -> bool:
@@ -271,6 +330,7 @@ class BxDF:
         """``_core.<Name>Spectral`` of this model: each of its ``spectral_fields`` (declared by
         the C++ form) as a ``_core.SpectralParam`` of the field's value, uplifted by the field's
         kind, plus ``_spectral_inputs()``."""
+        self._refuse_varying("spectral mode (wavelengths=)")
         cls = getattr(_core, type(self._core).__name__ + "Spectral")
         extra = dict(self._spectral_inputs())
         spectral = {name: _spectral.spectral_param(extra.pop(name) if name in extra else self._params[name], kind)
@@ -289,7 +349,7 @@ class BxDF:
         raise AttributeError(f"{type(self).__name__!s} has no attribute {k!r}")
 
     def _key(self):
-        return tuple((k, tuple(v.tolist()) if isinstance(v, np.ndarray) else v) for k, v in self._params.items())
+        return tuple((k, key_value(v)) for k, v in self._params.items())
 
     def __eq__(self, other):
         return type(self) is type(other) and self._key() == other._key()
@@ -298,14 +358,9 @@ class BxDF:
         return hash((type(self).__name__, self._key()))
 
     def __repr__(self):
-        # Python's shortest round-trip float repr, not a rounded one: eval(repr(m)) == m.
-        def fmt(v):
-            if isinstance(v, np.ndarray):
-                return "[" + ", ".join(repr(float(x)) for x in v) + "]"
-            if isinstance(v, float):
-                return repr(v)
-            return repr(v)
-        args = ", ".join(f"{k}={fmt(v)}" for k, v in self._params.items())
+        # Python's shortest round-trip float repr, not a rounded one: eval(repr(m)) == m (but for
+        # arrays of more than 12 values, shown by shape and digest)
+        args = ", ".join(f"{k}={fmt_param(v)}" for k, v in self._params.items())
         return f"{type(self).__name__}({args})"
 
     def __reduce__(self):
@@ -569,6 +624,7 @@ class BxDF:
         >>> f.shape, g.shape
         ((3,), (3, 8))
         """
+        self._refuse_varying("eval_grad")
         from ..fitting.grad import eval_grad
         return eval_grad(self, wo, wi, params, mode)
 
@@ -577,9 +633,17 @@ def _rebuild(cls, params):
     return cls._from_params(params)
 
 
-def _pick_alpha(roughness, alpha) -> float:
+def _pick_alpha(roughness, alpha):
     if roughness is not None and alpha is not None:
         raise ValueError("roughness, alpha: give one of them, not both")
     if roughness is not None:
-        return roughness_to_alpha(_scalar(roughness, "roughness", lo=0.0))
+        return roughness_to_alpha(_scalar(roughness, "roughness", lo=0.0, varying=True))
     return alpha
+
+
+def core_value(v):
+    """A parameter value as the compiled model's keyword takes it: a 1-D (RGB) array as a list, a
+    per-element array as is (bind_varying.h), anything else unchanged."""
+    if isinstance(v, np.ndarray) and v.ndim == 1 and v.size == 3:
+        return v.tolist()
+    return v

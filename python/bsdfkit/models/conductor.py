@@ -5,8 +5,8 @@ import numpy as np
 
 from .. import _core
 from . import _spectral as _sp
-from .base import (MIN_ALPHA, BxDF, _MASKING, _alphas, _masking, _pick_alpha, _rgb, alpha_text, fmt_value,
-                   is_smooth, masking_knob, rgb_dict)
+from .base import (MIN_ALPHA, BxDF, _MASKING, _alphas, _masking, _pick_alpha, _rgb, alpha_text, core_value,
+                   fmt_value, is_smooth, masking_knob, rgb_dict)
 from . import _mitsuba_export as _me
 from .registry import KnobDecl
 
@@ -121,6 +121,7 @@ class Conductor(BxDF):
     mitsuba = "roughconductor"
     # fitting bounds (bk.fit): the validated ranges, alphas kept in the rough regime (>= 1e-3)
     param_ranges = {"eta": (1e-3, 10.0), "k": (0.0, 20.0), "alpha_x": (1e-3, 2.0), "alpha_y": (1e-3, 2.0)}
+    varying_params = {"eta": 3, "k": 3, "alpha_x": 1, "alpha_y": 1}
     knobs = (
         KnobDecl("fresnel", ("exact", "f82", "schlick"), "approximation",
                  "conductor Fresnel: complex (exact), F82-tint, Schlick"),
@@ -130,9 +131,9 @@ class Conductor(BxDF):
     def __init__(self, eta, k, alpha=None, alpha_x=None, alpha_y=None, masking="correlated", fresnel="exact"):
         """A Conductor: the parameters are described in the class docstring (``help(bsdfkit.Conductor)``);
         a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
-        ax, ay = _alphas(alpha, alpha_x, alpha_y)
-        super().__init__(eta=_sp.spectrum_or_rgb(eta, "eta", lo=0.0, lo_open=True),
-                         k=_sp.spectrum_or_rgb(k, "k", lo=0.0),
+        ax, ay = _alphas(alpha, alpha_x, alpha_y, varying=True)
+        super().__init__(eta=_sp.spectrum_or_rgb(eta, "eta", lo=0.0, lo_open=True, varying=True),
+                         k=_sp.spectrum_or_rgb(k, "k", lo=0.0, varying=True),
                          alpha_x=ax, alpha_y=ay, masking=_masking(masking), fresnel=_fresnel(fresnel))
 
     @classmethod
@@ -199,7 +200,7 @@ class Conductor(BxDF):
     def _make_core(self):
         p = self._params
         core_cls = getattr(_core, _FRESNEL[p["fresnel"]][0])
-        return core_cls(eta=_sp.rgb_of(p["eta"], "unbounded").tolist(), k=_sp.rgb_of(p["k"], "unbounded").tolist(),
+        return core_cls(eta=core_value(_sp.rgb_of(p["eta"], "unbounded")), k=core_value(_sp.rgb_of(p["k"], "unbounded")),
                         alpha_x=p["alpha_x"], alpha_y=p["alpha_y"], masking=_MASKING[p["masking"]])
 
     def cost_family(self) -> str:
@@ -234,6 +235,7 @@ class Conductor(BxDF):
         correlated: f up to ~70 % apart at grazing angles). A mirror has no masking: smooth models
         export exactly with either masking.
         """
+        self._refuse_varying("to_mitsuba")
         approximate = _me.check_approximate(approximate)
         p = self._params
         eta, k = _sp.rgb_of(self.eta, "unbounded"), _sp.rgb_of(self.k, "unbounded")

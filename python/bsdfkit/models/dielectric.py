@@ -1,6 +1,8 @@
 """Dielectric interfaces: pbrt-v4's DielectricBxDF (smooth or rough) and ThinDielectricBxDF."""
 from __future__ import annotations
 
+import numpy as np
+
 from .. import _core
 from . import _mitsuba_export as _me
 from . import _spectral as _sp
@@ -66,13 +68,15 @@ class Dielectric(BxDF):
     mitsuba = "roughdielectric"
     # fitting bounds (bk.fit): alphas kept in the rough regime (>= 1e-3)
     param_ranges = {"eta": (1.001, 4.0), "alpha_x": (1e-3, 2.0), "alpha_y": (1e-3, 2.0)}
+    varying_params = {"eta": 1, "alpha_x": 1, "alpha_y": 1}
     knobs = (masking_knob(_dielectric_masking_moot),)
 
     def __init__(self, eta=1.5, alpha=None, alpha_x=None, alpha_y=None, masking="correlated"):
         """A Dielectric: the parameters are described in the class docstring (``help(bsdfkit.Dielectric)``);
         a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
-        ax, ay = _alphas(alpha, alpha_x, alpha_y)
-        super().__init__(eta=_sp.spectrum_or_scalar(eta, "eta", lo=0.0, lo_open=True), alpha_x=ax, alpha_y=ay,
+        ax, ay = _alphas(alpha, alpha_x, alpha_y, varying=True)
+        super().__init__(eta=_sp.spectrum_or_scalar(eta, "eta", lo=0.0, lo_open=True, varying=True),
+                         alpha_x=ax, alpha_y=ay,
                          masking=_masking(masking))
 
     @classmethod
@@ -89,7 +93,7 @@ class Dielectric(BxDF):
 
     def cost_family(self) -> str:
         p = self._params
-        return "Dielectric" + ("/smooth" if is_smooth(p) or p["eta"] == 1.0 else "/rough")
+        return "Dielectric" + ("/smooth" if is_smooth(p) or bool(np.all(p["eta"] == 1.0)) else "/rough")
 
     def describe(self) -> str:
         return f"Dielectric η={_sp.fmt_param(self._params['eta'])}{alpha_text(self._params)}"
@@ -106,6 +110,7 @@ class Dielectric(BxDF):
         ``approximate=True`` exports the separable version and warns with
         ``MitsubaApproximationWarning`` stating it. Smooth and eta = 1 models export exactly.
         """
+        self._refuse_varying("to_mitsuba")
         approximate = _me.check_approximate(approximate)
         eta, p = _sp.scalar_of(self.eta), self._params
         if eta == 1.0:
@@ -159,11 +164,12 @@ class ThinDielectric(BxDF):
     energy_conserving, exact_eval, two_sided, transmission, delta_only = True, True, True, True, True
     reciprocal = True
     mitsuba = "thindielectric"
+    varying_params = {"eta": 1}
 
     def __init__(self, eta=1.5):
         """A ThinDielectric: the parameters are described in the class docstring (``help(bsdfkit.ThinDielectric)``);
         a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
-        super().__init__(eta=_sp.spectrum_or_scalar(eta, "eta", lo=0.0, lo_open=True))
+        super().__init__(eta=_sp.spectrum_or_scalar(eta, "eta", lo=0.0, lo_open=True, varying=True))
 
     @classmethod
     def _from_params(cls, p):
@@ -182,6 +188,7 @@ class ThinDielectric(BxDF):
         """``thindielectric`` with int_ior = eta (its value at 550 nm if a spectrum), ext_ior = 1;
         eta == 1 -> ``null``. Always exact (delta lobes only); ``approximate`` is accepted for
         uniformity with the other models."""
+        self._refuse_varying("to_mitsuba")
         _me.check_approximate(approximate)
         eta = _sp.scalar_of(self.eta)
         return {"type": "null"} if eta == 1.0 else {"type": "thindielectric", "int_ior": eta, "ext_ior": 1.0}

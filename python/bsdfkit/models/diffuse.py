@@ -4,7 +4,7 @@ from __future__ import annotations
 from .. import _core
 from . import _spectral as _sp
 from ._mitsuba_export import check_approximate as _check_approximate
-from .base import BxDF, rgb_dict
+from .base import BxDF, core_value, rgb_dict
 
 __all__ = ["Diffuse", "DiffuseTransmission"]
 
@@ -42,18 +42,19 @@ class Diffuse(BxDF):
     reciprocal = True
     mitsuba = "diffuse"
     param_ranges = {"reflectance": (0.0, 1.0)}  # fitting bounds (bk.fit)
+    varying_params = {"reflectance": 3}
 
     def __init__(self, reflectance=0.5):
         """A Diffuse: the parameters are described in the class docstring (``help(bsdfkit.Diffuse)``);
         a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
-        super().__init__(reflectance=_sp.spectrum_or_rgb(reflectance, "reflectance", lo=0.0, hi=1.0))
+        super().__init__(reflectance=_sp.spectrum_or_rgb(reflectance, "reflectance", lo=0.0, hi=1.0, varying=True))
 
     @classmethod
     def _from_params(cls, p):
         return cls(p["reflectance"])
 
     def _make_core(self):
-        return _core.Diffuse(reflectance=_sp.rgb_of(self._params["reflectance"], "reflectance").tolist())
+        return _core.Diffuse(reflectance=core_value(_sp.rgb_of(self._params["reflectance"], "reflectance")))
 
     def describe(self) -> str:
         return f"Diffuse R={_sp.fmt_param(self._params['reflectance'])}"
@@ -61,6 +62,7 @@ class Diffuse(BxDF):
     def to_mitsuba(self, approximate: bool = False) -> dict:
         """``twosided{diffuse}`` with the RGB reflectance (a spectrum's RGB value, as RGB mode
         uses). Always exact; ``approximate`` is accepted for uniformity."""
+        self._refuse_varying("to_mitsuba")
         _check_approximate(approximate)
         r = _sp.rgb_of(self.reflectance, "reflectance")
         return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": rgb_dict(r)}}
@@ -102,12 +104,14 @@ class DiffuseTransmission(BxDF):
     reciprocal = True
     mitsuba = None
     param_ranges = {"reflectance": (0.0, 1.0), "transmittance": (0.0, 1.0)}  # fitting bounds (bk.fit)
+    varying_params = {"reflectance": 3, "transmittance": 3}
 
     def __init__(self, reflectance=0.25, transmittance=0.25):
         """A DiffuseTransmission: the parameters are described in the class docstring (``help(bsdfkit.DiffuseTransmission)``);
         a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
-        super().__init__(reflectance=_sp.spectrum_or_rgb(reflectance, "reflectance", lo=0.0, hi=1.0),
-                         transmittance=_sp.spectrum_or_rgb(transmittance, "transmittance", lo=0.0, hi=1.0))
+        super().__init__(reflectance=_sp.spectrum_or_rgb(reflectance, "reflectance", lo=0.0, hi=1.0, varying=True),
+                         transmittance=_sp.spectrum_or_rgb(transmittance, "transmittance", lo=0.0, hi=1.0,
+                                                           varying=True))
 
     @classmethod
     def _from_params(cls, p):
@@ -115,8 +119,8 @@ class DiffuseTransmission(BxDF):
 
     def _make_core(self):
         p = self._params
-        return _core.DiffuseTransmission(reflectance=_sp.rgb_of(p["reflectance"], "reflectance").tolist(),
-                                         transmittance=_sp.rgb_of(p["transmittance"], "reflectance").tolist())
+        return _core.DiffuseTransmission(reflectance=core_value(_sp.rgb_of(p["reflectance"], "reflectance")),
+                                         transmittance=core_value(_sp.rgb_of(p["transmittance"], "reflectance")))
 
     def describe(self) -> str:
         p = self._params

@@ -4,7 +4,7 @@ from __future__ import annotations
 from .. import _core
 from . import _spectral as _sp
 from ._mitsuba_export import check_approximate as _check_approximate
-from .base import BxDF, _scalar
+from .base import BxDF, _scalar, core_value
 
 __all__ = ["EON"]
 
@@ -73,24 +73,25 @@ class EON(BxDF):
     reciprocal = True
     mitsuba = None
     param_ranges = {"reflectance": (0.0, 1.0), "roughness": (0.0, 1.0)}  # fitting bounds (bk.fit)
+    varying_params = {"reflectance": 3, "roughness": 1}
 
     def __init__(self, reflectance=0.5, roughness=0.0):
         """An EON: the parameters are described in the class docstring (``help(bsdfkit.EON)``);
         a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
-        super().__init__(reflectance=_sp.spectrum_or_rgb(reflectance, "reflectance", lo=0.0, hi=1.0),
-                         roughness=_scalar(roughness, "roughness", lo=0.0, hi=1.0))
+        super().__init__(reflectance=_sp.spectrum_or_rgb(reflectance, "reflectance", lo=0.0, hi=1.0, varying=True),
+                         roughness=_scalar(roughness, "roughness", lo=0.0, hi=1.0, varying=True))
 
     @classmethod
     def _from_params(cls, p):
         return cls(p["reflectance"], p["roughness"])
 
     def _make_core(self):
-        return _core.EON(reflectance=_sp.rgb_of(self._params["reflectance"], "reflectance").tolist(),
+        return _core.EON(reflectance=core_value(_sp.rgb_of(self._params["reflectance"], "reflectance")),
                          roughness=self._params["roughness"])
 
     def describe(self) -> str:
         p = self._params
-        return f"EON R={_sp.fmt_param(p['reflectance'])}, r={p['roughness']:g}"
+        return f"EON R={_sp.fmt_param(p['reflectance'])}, r={_sp.fmt_param(p['roughness'])}"
 
     def to_mitsuba(self, approximate: bool = False) -> dict:
         """Raises NotImplementedError: Mitsuba 3 has no Oren-Nayar-type plugin."""

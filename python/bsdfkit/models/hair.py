@@ -7,7 +7,7 @@ import numpy as np
 
 from .. import _core
 from . import _spectral as _sp
-from .base import BxDF, _rgb, _scalar
+from .base import BxDF, _rgb, _scalar, core_value
 from .registry import KnobDecl
 from ..spectral.spectrum import Spectrum
 
@@ -79,7 +79,7 @@ def _sigma_a_rgb(v) -> np.ndarray:
 def _h(h):
     if h is None:
         return None
-    return _scalar(h, "h", lo=-1.0, hi=1.0)
+    return _scalar(h, "h", lo=-1.0, hi=1.0, varying=True)
 
 
 def _nodes(n):
@@ -178,6 +178,7 @@ class Hair(BxDF):
     transmission = False
     delta_only = False
     mitsuba = "hair"
+    varying_params = {"sigma_a": 3, "eta": 1, "beta_m": 1, "beta_n": 1, "alpha": 1, "h": 1}
     # pbrt-v4's HairBxDF has no accuracy setting (p_max = 3 is fixed); the far-field fibre's
     # quadrature order is one (bench/HAIR.md: its error against 64 nodes)
     knobs = (KnobDecl("nodes", (64, 32, 16, 8, 4), "approximation",
@@ -192,6 +193,7 @@ class Hair(BxDF):
         wo (``bsdfkit.testing.hair_ref.wo_for_h``), and its fibre axis is local y where bsdfkit's
         (pbrt-v4's) is x (``hair_ref.to_mitsuba_frame``); so only h = 0 converts, other h and the
         far-field fibre (h=None) raise ValueError, also with ``approximate=True``."""
+        self._refuse_varying("to_mitsuba")
         from ._mitsuba_export import check_approximate
         check_approximate(approximate)
         if self._params["h"] != 0.0:
@@ -205,11 +207,11 @@ class Hair(BxDF):
         a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
         if sigma_a is None:  # pbrt-v4's default: eumelanin 1.3
             sigma_a = sigma_a_from_concentration(1.3, 0.0)
-        super().__init__(sigma_a=_sp.spectrum_or_rgb(sigma_a, "sigma_a", lo=0.0),
-                         eta=_scalar(eta, "eta", lo=1.0),
-                         beta_m=_scalar(beta_m, "beta_m", lo=0.01, hi=1.0),
-                         beta_n=_scalar(beta_n, "beta_n", lo=0.01, hi=1.0),
-                         alpha=_scalar(alpha, "alpha", lo=-90.0, hi=90.0),
+        super().__init__(sigma_a=_sp.spectrum_or_rgb(sigma_a, "sigma_a", lo=0.0, varying=True),
+                         eta=_scalar(eta, "eta", lo=1.0, varying=True),
+                         beta_m=_scalar(beta_m, "beta_m", lo=0.01, hi=1.0, varying=True),
+                         beta_n=_scalar(beta_n, "beta_n", lo=0.01, hi=1.0, varying=True),
+                         alpha=_scalar(alpha, "alpha", lo=-90.0, hi=90.0, varying=True),
                          h=_h(h), nodes=_nodes(nodes))
 
     @classmethod
@@ -236,6 +238,8 @@ class Hair(BxDF):
         return cls(**p)
 
     def __repr__(self):
+        if self.varying:
+            return BxDF.__repr__(self)
         p = self._params
         nodes = "" if p["nodes"] == 64 else f", nodes={p['nodes']!r}"
         sa = p["sigma_a"]
@@ -245,14 +249,14 @@ class Hair(BxDF):
 
     def describe(self) -> str:
         p = self._params
-        if not isinstance(p["sigma_a"], Spectrum):
+        if self.varying or not isinstance(p["sigma_a"], Spectrum):
             return super().describe()
         q = dict(p, sigma_a=_sigma_a_rgb(p["sigma_a"]))   # the spec text of the RGB projection
         return type(self)._from_params(q).describe() + " (sigma_a spectral)"
 
     def _core_kwargs(self) -> dict:
         p = self._params
-        kw = dict(sigma_a=_sigma_a_rgb(p["sigma_a"]).tolist(), eta=p["eta"], beta_m=p["beta_m"], beta_n=p["beta_n"],
+        kw = dict(sigma_a=core_value(_sigma_a_rgb(p["sigma_a"])), eta=p["eta"], beta_m=p["beta_m"], beta_n=p["beta_n"],
                   alpha=p["alpha"])
         if p["h"] is None:
             kw["nodes"] = p["nodes"]

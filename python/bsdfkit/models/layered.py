@@ -7,7 +7,8 @@ from .. import _core
 from .._arrays import check_int
 from ..spectral.spectrum import Spectrum
 from . import _spectral as _sp
-from .base import _MASKING, BxDF, _alphas, _masking, _pick_alpha, _rgb, _scalar, fmt_value, masking_knob
+from .base import (_MASKING, BxDF, _alphas, _masking, _pick_alpha, _rgb, _scalar, core_value, fmt_value,
+                   masking_knob)
 from .conductor import METALS
 from .registry import KnobDecl
 
@@ -104,9 +105,9 @@ _METHODS = ("stochastic", "analytic")
 
 
 def _layer(thickness, albedo, g, max_depth, n_samples, seed, mis, method="stochastic"):
-    t = _scalar(thickness, "thickness", lo=0.0)
-    a = _sp.spectrum_or_rgb(albedo, "albedo", lo=0.0, hi=1.0)
-    gg = _scalar(g, "g", lo=-1.0, hi=1.0)
+    t = _scalar(thickness, "thickness", lo=0.0, varying=True)
+    a = _sp.spectrum_or_rgb(albedo, "albedo", lo=0.0, hi=1.0, varying=True)
+    gg = _scalar(g, "g", lo=-1.0, hi=1.0, varying=True)
     md = check_int(max_depth, "max_depth", 1)
     ns = check_int(n_samples, "n_samples", 1)
     sd = check_int(seed, "seed", 0)
@@ -127,7 +128,8 @@ def _layer(thickness, albedo, g, max_depth, n_samples, seed, mis, method="stocha
 
 
 def _layer_kw(p):
-    return dict(thickness=p["thickness"], albedo=_sp.rgb_of(p["albedo"], "reflectance").tolist(), g=p["g"], max_depth=p["max_depth"],
+    return dict(thickness=p["thickness"], albedo=core_value(_sp.rgb_of(p["albedo"], "reflectance")), g=p["g"],
+                max_depth=p["max_depth"],
                 n_samples=p["n_samples"], seed=p["seed"], consistent_mis=p["mis"] == "consistent")
 
 
@@ -252,6 +254,7 @@ class CoatedDiffuse(_AnalyticSpectral, BxDF):
     # bk.fit bounds (gradients: method="analytic" only)
     param_ranges = {"reflectance": (0.0, 1.0), "eta": (1.001, 4.0), "alpha_x": (1e-3, 2.0), "alpha_y": (1e-3, 2.0),
                     "thickness": (0.0, 10.0), "albedo": (0.0, 1.0), "g": (-0.99, 0.99)}
+    varying_params = {"reflectance": 3, "eta": 1, "alpha_x": 1, "alpha_y": 1, "thickness": 1, "albedo": 3, "g": 1}
     # reciprocal = False: each eval is one random-walk realization seeded by (wo, wi), so
     # f(wo, wi) != f(wi, wo) call by call (and pbrt's MIS rule is not reciprocal in expectation)
     energy_conserving, two_sided, transmission, delta_only = True, True, False, False
@@ -271,9 +274,9 @@ class CoatedDiffuse(_AnalyticSpectral, BxDF):
                  method="stochastic"):
         """A CoatedDiffuse: the parameters are described in the class docstring (``help(bsdfkit.CoatedDiffuse)``);
         a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
-        ax, ay = _alphas(alpha, alpha_x, alpha_y)
-        super().__init__(reflectance=_sp.spectrum_or_rgb(reflectance, "reflectance", lo=0.0, hi=1.0),
-                         eta=_scalar(eta, "eta", lo=0.0, lo_open=True), alpha_x=ax, alpha_y=ay,
+        ax, ay = _alphas(alpha, alpha_x, alpha_y, varying=True)
+        super().__init__(reflectance=_sp.spectrum_or_rgb(reflectance, "reflectance", lo=0.0, hi=1.0, varying=True),
+                         eta=_scalar(eta, "eta", lo=0.0, lo_open=True, varying=True), alpha_x=ax, alpha_y=ay,
                          **_layer(thickness, albedo, g, max_depth, n_samples, seed, mis, method),
                          masking=_masking(masking))
 
@@ -288,7 +291,7 @@ class CoatedDiffuse(_AnalyticSpectral, BxDF):
 
     def _core_kwargs(self) -> dict:
         p = self._params
-        return dict(reflectance=_sp.rgb_of(p["reflectance"], "reflectance").tolist(), eta=p["eta"],
+        return dict(reflectance=core_value(_sp.rgb_of(p["reflectance"], "reflectance")), eta=p["eta"],
                     alpha_x=p["alpha_x"], alpha_y=p["alpha_y"], masking=_MASKING[p["masking"]], **_layer_kw(p))
 
     def _spectral_inputs(self) -> dict:
@@ -356,6 +359,9 @@ class CoatedConductor(_AnalyticSpectral, BxDF):
     param_ranges = {"conductor_eta": (1e-3, 10.0), "conductor_k": (0.0, 20.0), "conductor_alpha_x": (1e-3, 2.0),
                     "conductor_alpha_y": (1e-3, 2.0), "interface_eta": (1.001, 4.0), "interface_alpha_x": (1e-3, 2.0),
                     "interface_alpha_y": (1e-3, 2.0), "thickness": (0.0, 10.0), "albedo": (0.0, 1.0), "g": (-0.99, 0.99)}
+    varying_params = {"conductor_eta": 3, "conductor_k": 3, "conductor_alpha_x": 1, "conductor_alpha_y": 1,
+                      "interface_eta": 1, "interface_alpha_x": 1, "interface_alpha_y": 1, "thickness": 1, "albedo": 3,
+                      "g": 1}
     energy_conserving, two_sided, transmission, delta_only = True, True, False, False
     exact_eval, reciprocal = _ByMethod(False, True), _ByMethod(False, True)   # per instance: see _ByMethod
     mitsuba = None
@@ -376,10 +382,11 @@ class CoatedConductor(_AnalyticSpectral, BxDF):
         a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
         cax, cay = _named_alphas(conductor_alpha, conductor_alpha_x, conductor_alpha_y, "conductor_alpha")
         iax, iay = _named_alphas(interface_alpha, interface_alpha_x, interface_alpha_y, "interface_alpha")
-        super().__init__(conductor_eta=_sp.spectrum_or_rgb(conductor_eta, "conductor_eta", lo=0.0, lo_open=True),
-                         conductor_k=_sp.spectrum_or_rgb(conductor_k, "conductor_k", lo=0.0),
+        super().__init__(conductor_eta=_sp.spectrum_or_rgb(conductor_eta, "conductor_eta", lo=0.0, lo_open=True,
+                                                           varying=True),
+                         conductor_k=_sp.spectrum_or_rgb(conductor_k, "conductor_k", lo=0.0, varying=True),
                          conductor_alpha_x=cax, conductor_alpha_y=cay,
-                         interface_eta=_scalar(interface_eta, "interface_eta", lo=0.0, lo_open=True),
+                         interface_eta=_scalar(interface_eta, "interface_eta", lo=0.0, lo_open=True, varying=True),
                          interface_alpha_x=iax, interface_alpha_y=iay,
                          **_layer(thickness, albedo, g, max_depth, n_samples, seed, mis, method),
                          masking=_masking(masking))
@@ -413,8 +420,8 @@ class CoatedConductor(_AnalyticSpectral, BxDF):
 
     def _core_kwargs(self) -> dict:
         p = self._params
-        return dict(conductor_eta=_sp.rgb_of(p["conductor_eta"], "unbounded").tolist(),
-                    conductor_k=_sp.rgb_of(p["conductor_k"], "unbounded").tolist(),
+        return dict(conductor_eta=core_value(_sp.rgb_of(p["conductor_eta"], "unbounded")),
+                    conductor_k=core_value(_sp.rgb_of(p["conductor_k"], "unbounded")),
                     conductor_alpha_x=p["conductor_alpha_x"], conductor_alpha_y=p["conductor_alpha_y"],
                     interface_eta=p["interface_eta"], interface_alpha_x=p["interface_alpha_x"],
                     interface_alpha_y=p["interface_alpha_y"], masking=_MASKING[p["masking"]], **_layer_kw(p))
@@ -431,6 +438,8 @@ class CoatedConductor(_AnalyticSpectral, BxDF):
         return "CoatedConductor" + (_medium(self._params) + _method_text(self._params)).replace(", ", "/")
 
     def describe(self) -> str:
+        if self.varying:
+            return BxDF.describe(self)
         p = self._params
         spectral = isinstance(p["conductor_eta"], Spectrum) or isinstance(p["conductor_k"], Spectrum)
         name = None if spectral else next((n for n, (eta, k) in METALS.items()
@@ -442,7 +451,7 @@ class CoatedConductor(_AnalyticSpectral, BxDF):
 
 
 def _named_alphas(alpha, ax, ay, name):
-    a = _scalar(alpha, name, lo=0.0)
-    x = a if ax is None else _scalar(ax, name + "_x", lo=0.0)
-    y = a if ay is None else _scalar(ay, name + "_y", lo=0.0)
+    a = _scalar(alpha, name, lo=0.0, varying=True)
+    x = a if ax is None else _scalar(ax, name + "_x", lo=0.0, varying=True)
+    y = a if ay is None else _scalar(ay, name + "_y", lo=0.0, varying=True)
     return x, y

@@ -63,6 +63,7 @@ class NormalizedFresnel(BxDF):
     delta_only = False
     mitsuba = None
     knobs = ()                 # no accuracy setting (FresnelMoment1 is pbrt-v4's fixed polynomial)
+    varying_params = {"eta": 1}
 
     def to_mitsuba(self, approximate: bool = False) -> dict:
         """Raises NotImplementedError: Mitsuba 3 has no normalized-Fresnel plugin."""
@@ -74,14 +75,15 @@ class NormalizedFresnel(BxDF):
     def __init__(self, eta=1.33):
         """A NormalizedFresnel: the parameters are described in the class docstring (``help(bsdfkit.NormalizedFresnel)``);
         a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
-        super().__init__(eta=_sp.spectrum_or_scalar(eta, "eta", lo=0.0, lo_open=True))
+        super().__init__(eta=_sp.spectrum_or_scalar(eta, "eta", lo=0.0, lo_open=True, varying=True))
 
     @classmethod
     def _from_params(cls, p):
         return cls(**p)
 
     def __repr__(self):
-        return f"NormalizedFresnel(eta={self._params['eta']!r})"
+        from .base import fmt_param
+        return f"NormalizedFresnel(eta={fmt_param(self._params['eta'])})"
 
     def _make_core(self):
         return _core.NormalizedFresnel(eta=_sp.scalar_of(self._params["eta"]))

@@ -6,7 +6,8 @@ import numpy as np
 from .. import _core
 from . import _mitsuba_export as _me
 from . import _spectral as _sp
-from .base import _MASKING, MIN_ALPHA, BxDF, _masking, _rgb, _scalar, fmt_value, masking_knob, rgb_dict
+from .base import (_MASKING, MIN_ALPHA, BxDF, _masking, _rgb, _scalar, core_value, fmt_value, masking_knob,
+                   rgb_dict)
 from .registry import KnobDecl
 
 #: below this alpha the coating is smooth (Mitsuba's plastic instead of roughplastic)
@@ -111,6 +112,7 @@ class Plastic(BxDF):
     # bk.fit bounds (eval_grad: every parameter; alpha from the rough coat's 1e-3 up, eta > 1)
     param_ranges = {"reflectance": (0.0, 1.0), "eta": (1.001, 4.0), "alpha": (1e-3, 2.0),
                     "specular_reflectance": (0.0, 1.0)}
+    varying_params = {"reflectance": 3, "eta": 1, "alpha": 1, "specular_reflectance": 3}
     knobs = (masking_knob(lambda q: "smooth coating (alpha < 1e-3): a mirror has no masking"
                           if q["alpha"] < SMOOTH_ALPHA else None),
              KnobDecl("nonlinear", (False, True), "modelling",
@@ -120,15 +122,16 @@ class Plastic(BxDF):
                  specular_reflectance=1.0):
         """A Plastic: the parameters are described in the class docstring (``help(bsdfkit.Plastic)``);
         a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
-        eta = _scalar(eta, "eta", lo=0.0, lo_open=True)
-        if eta == 1.0:
-            raise ValueError("eta: must differ from 1 (an index-matched coating is not a plastic; "
+        eta = _scalar(eta, "eta", lo=0.0, lo_open=True, varying=True)
+        if np.any(np.asarray(eta) == 1.0):
+            at = "" if np.ndim(eta) == 0 else f" (at index {tuple(int(i) for i in np.argwhere(eta == 1.0)[0])})"
+            raise ValueError(f"eta: must differ from 1{at} (an index-matched coating is not a plastic; "
                              "use Diffuse)")
-        super().__init__(reflectance=_sp.spectrum_or_rgb(reflectance, "reflectance", lo=0.0, hi=1.0), eta=eta,
-                         alpha=_scalar(alpha, "alpha", lo=0.0), nonlinear=_bool(nonlinear, "nonlinear"),
-                         masking=_masking(masking),
+        super().__init__(reflectance=_sp.spectrum_or_rgb(reflectance, "reflectance", lo=0.0, hi=1.0, varying=True),
+                         eta=eta, alpha=_scalar(alpha, "alpha", lo=0.0, varying=True),
+                         nonlinear=_bool(nonlinear, "nonlinear"), masking=_masking(masking),
                          specular_reflectance=_sp.spectrum_or_rgb(specular_reflectance, "specular_reflectance",
-                                                                  lo=0.0))
+                                                                  lo=0.0, varying=True))
 
     @classmethod
     def _from_params(cls, p):
@@ -136,9 +139,9 @@ class Plastic(BxDF):
 
     def _make_core(self):
         p = self._params
-        return _core.Plastic(reflectance=_sp.rgb_of(p["reflectance"], "reflectance").tolist(), eta=p["eta"],
+        return _core.Plastic(reflectance=core_value(_sp.rgb_of(p["reflectance"], "reflectance")), eta=p["eta"],
                              alpha=p["alpha"], nonlinear=p["nonlinear"], masking=_MASKING[p["masking"]],
-                             specular_reflectance=_sp.rgb_of(p["specular_reflectance"], "reflectance").tolist())
+                             specular_reflectance=core_value(_sp.rgb_of(p["specular_reflectance"], "reflectance")))
 
     def _spectral_inputs(self) -> dict:
         # batch_spectral.h PlasticSpectral: R and Ks per wavelength; the lobe weight from their
@@ -156,10 +159,12 @@ class Plastic(BxDF):
         return kw
 
     def cost_family(self) -> str:
-        return "Plastic" + ("/smooth" if self._params["alpha"] < SMOOTH_ALPHA else "/rough")
+        return "Plastic" + ("/smooth" if np.all(self._params["alpha"] < SMOOTH_ALPHA) else "/rough")
 
     def describe(self) -> str:
         a = self._params["alpha"]
+        if np.ndim(a):
+            return f"Plastic R={_sp.fmt_param(self._params['reflectance'])}, α per element"
         return f"Plastic R={_sp.fmt_param(self._params['reflectance'])}, " + (f"α={a:.2g}" if a >= SMOOTH_ALPHA else "smooth")
 
     def to_mitsuba(self, approximate: bool = False) -> dict:
@@ -173,6 +178,7 @@ class Plastic(BxDF):
         ``approximate=True`` exports the separable version and warns with
         ``MitsubaApproximationWarning`` stating it. A smooth coating has no masking and exports
         exactly with either setting."""
+        self._refuse_varying("to_mitsuba")
         approximate = _me.check_approximate(approximate)
         p = self._params
         inner = {"diffuse_reflectance": rgb_dict(_sp.rgb_of(p["reflectance"], "reflectance")),

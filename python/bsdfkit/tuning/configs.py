@@ -160,6 +160,7 @@ def _check_model(model, name="model"):
     if not isinstance(model, BxDF):
         raise TypeError(f"{name}: expected a bsdfkit model (a bsdfkit.BxDF such as bsdfkit.Conductor), "
                         f"got {type(model).__name__}")
+    model._refuse_varying("tradeoff / simplify (measure one uniform material)")
     return model
 
 

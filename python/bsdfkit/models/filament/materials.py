@@ -8,7 +8,7 @@ import numpy as np
 from ... import _core
 from . import dfg as _fil
 from .. import _spectral as _sp
-from ..base import BxDF, _scalar
+from ..base import BxDF, _scalar, core_value
 from ..registry import KnobDecl
 
 __all__ = ["FilamentStandard", "FilamentCloth", "examples"]
@@ -230,6 +230,8 @@ class FilamentStandard(BxDF):
     energy_conserving, exact_eval, two_sided, transmission, delta_only = False, True, False, False, False
     reciprocal = False  # energy compensation and sheen scaling depend on wo only
     mitsuba = None
+    varying_params = {"base_color": 3, "metallic": 1, "roughness": 1, "reflectance": 1, "anisotropy": 1,
+                      "clear_coat": 1, "clear_coat_roughness": 1, "sheen_color": 3, "sheen_roughness": 1}
     param_ranges = {"base_color": (0.0, 1.0), "metallic": (0.0, 1.0), "roughness": (0.0, 1.0),  # bk.fit bounds
                     "reflectance": (0.0, 1.0), "anisotropy": (-1.0, 1.0), "clear_coat": (0.0, 1.0),
                     "clear_coat_roughness": (0.0, 1.0), "sheen_color": (0.0, 1.0), "sheen_roughness": (0.0, 1.0)}
@@ -258,15 +260,15 @@ class FilamentStandard(BxDF):
                  min_roughness="desktop", clear_coat_layering="code", clear_coat_ior_change=True,
                  dfg_lut_size=128):
         super().__init__(
-            base_color=_sp.spectrum_or_rgb(base_color, "base_color", lo=0.0, hi=1.0),
-            metallic=_scalar(metallic, "metallic", lo=0.0, hi=1.0),
-            roughness=_scalar(roughness, "roughness", lo=0.0, hi=1.0),
-            reflectance=_scalar(reflectance, "reflectance", lo=0.0, hi=1.0),
-            anisotropy=_scalar(anisotropy, "anisotropy", lo=-1.0, hi=1.0),
-            clear_coat=_scalar(clear_coat, "clear_coat", lo=0.0, hi=1.0),
-            clear_coat_roughness=_scalar(clear_coat_roughness, "clear_coat_roughness", lo=0.0, hi=1.0),
-            sheen_color=_sp.spectrum_or_rgb(sheen_color, "sheen_color", lo=0.0, hi=1.0),
-            sheen_roughness=_scalar(sheen_roughness, "sheen_roughness", lo=0.0, hi=1.0),
+            base_color=_sp.spectrum_or_rgb(base_color, "base_color", lo=0.0, hi=1.0, varying=True),
+            metallic=_scalar(metallic, "metallic", lo=0.0, hi=1.0, varying=True),
+            roughness=_scalar(roughness, "roughness", lo=0.0, hi=1.0, varying=True),
+            reflectance=_scalar(reflectance, "reflectance", lo=0.0, hi=1.0, varying=True),
+            anisotropy=_scalar(anisotropy, "anisotropy", lo=-1.0, hi=1.0, varying=True),
+            clear_coat=_scalar(clear_coat, "clear_coat", lo=0.0, hi=1.0, varying=True),
+            clear_coat_roughness=_scalar(clear_coat_roughness, "clear_coat_roughness", lo=0.0, hi=1.0, varying=True),
+            sheen_color=_sp.spectrum_or_rgb(sheen_color, "sheen_color", lo=0.0, hi=1.0, varying=True),
+            sheen_roughness=_scalar(sheen_roughness, "sheen_roughness", lo=0.0, hi=1.0, varying=True),
             diffuse=_choice(diffuse, "diffuse", _DIFFUSE),
             visibility=_choice(visibility, "visibility", _VISIBILITY),
             f90=_choice(f90, "f90", _F90),
@@ -290,7 +292,7 @@ class FilamentStandard(BxDF):
 
     def cost_family(self) -> str:
         p = self._params
-        lobes = [x for x, on in (("coat", p["clear_coat"] > 0), ("sheen", _strength(p["sheen_color"]) > 0)) if on]
+        lobes = [x for x, on in (("coat", np.any(p["clear_coat"] > 0)), ("sheen", _strength(p["sheen_color"]) > 0)) if on]
         return "FilamentStandard" + ("/" + "+".join(lobes) if lobes else "")
 
     @property
@@ -303,7 +305,8 @@ class FilamentStandard(BxDF):
         # cost nothing; the sheen lobe's pow() keeps a kernel scalar); each equals the general
         # model with the missing lobe's strength 0.
         p = self._params
-        return self._core_variant(p["clear_coat"] > 0, _strength(p["sheen_color"]) > 0)
+        # (per-element parameters: the variant with every lobe any element has)
+        return self._core_variant(bool(np.any(p["clear_coat"] > 0)), _strength(p["sheen_color"]) > 0)
 
     def _grad_core(self, params):
         """``eval_grad``'s kernel: the model's own variant, or the one with the clear-coat / sheen
@@ -312,13 +315,13 @@ class FilamentStandard(BxDF):
         p = self._params
         names = ("clear_coat", "sheen_color") if params is None else (params,) if isinstance(params, str) else params
         names = [str(n).partition(".")[0] for n in names]
-        coat = p["clear_coat"] > 0 or any(n.startswith("clear_coat") for n in names)
+        coat = bool(np.any(p["clear_coat"] > 0)) or any(n.startswith("clear_coat") for n in names)
         sheen = _strength(p["sheen_color"]) > 0 or any(n.startswith("sheen") for n in names)
         return self._core if (coat, sheen) == self._core_variant_key() else self._core_variant(coat, sheen)
 
     def _core_variant_key(self):
         p = self._params
-        return p["clear_coat"] > 0, _strength(p["sheen_color"]) > 0
+        return bool(np.any(p["clear_coat"] > 0)), _strength(p["sheen_color"]) > 0
 
     def _core_variant(self, coat, sheen):
         p = self._params
@@ -328,9 +331,9 @@ class FilamentStandard(BxDF):
 
     def _core_kwargs(self) -> dict:
         p = self._params
-        return dict(base_color=_proj(p["base_color"]).tolist(), metallic=p["metallic"], roughness=p["roughness"],
+        return dict(base_color=core_value(_proj(p["base_color"])), metallic=p["metallic"], roughness=p["roughness"],
                    reflectance=p["reflectance"], anisotropy=p["anisotropy"], clear_coat=p["clear_coat"],
-                   clear_coat_roughness=p["clear_coat_roughness"], sheen_color=_proj(p["sheen_color"]).tolist(),
+                   clear_coat_roughness=p["clear_coat_roughness"], sheen_color=core_value(_proj(p["sheen_color"])),
                    sheen_roughness=p["sheen_roughness"], diffuse=_DIFFUSE[p["diffuse"]],
                    visibility=_VISIBILITY[p["visibility"]], f90_filament=_F90[p["f90"]],
                    energy_compensation=p["energy_compensation"], min_perceptual_roughness=_min_pr(p["min_roughness"]),
@@ -397,6 +400,7 @@ class FilamentCloth(BxDF):
     mitsuba = None
     param_ranges = {"base_color": (0.0, 1.0), "sheen_color": (0.0, 1.0), "subsurface_color": (0.0, 1.0),  # bk.fit
                     "roughness": (0.0, 1.0)}
+    varying_params = {"base_color": 3, "sheen_color": 3, "subsurface_color": 3, "roughness": 1}
     knobs = (
         KnobDecl("diffuse", ("burley", "lambert"), "modelling", "diffuse term: Fd_Burley or Fd_Lambert",
                  moot=lambda q: "black base colour" if _strength(q["base_color"]) == 0 else None),
@@ -408,11 +412,12 @@ class FilamentCloth(BxDF):
     def __init__(self, base_color=0.5, sheen_color=None, subsurface_color=None, roughness=0.5, *,
                  diffuse="lambert", min_roughness="desktop", dfg_lut_size=128):
         super().__init__(
-            base_color=_sp.spectrum_or_rgb(base_color, "base_color", lo=0.0, hi=1.0),
-            sheen_color=None if sheen_color is None else _sp.spectrum_or_rgb(sheen_color, "sheen_color", lo=0.0, hi=1.0),
+            base_color=_sp.spectrum_or_rgb(base_color, "base_color", lo=0.0, hi=1.0, varying=True),
+            sheen_color=None if sheen_color is None else _sp.spectrum_or_rgb(sheen_color, "sheen_color", lo=0.0, hi=1.0,
+                                                                              varying=True),
             subsurface_color=(None if subsurface_color is None
-                              else _sp.spectrum_or_rgb(subsurface_color, "subsurface_color", lo=0.0, hi=1.0)),
-            roughness=_scalar(roughness, "roughness", lo=0.0, hi=1.0),
+                              else _sp.spectrum_or_rgb(subsurface_color, "subsurface_color", lo=0.0, hi=1.0, varying=True)),
+            roughness=_scalar(roughness, "roughness", lo=0.0, hi=1.0, varying=True),
             diffuse=_choice(diffuse, "diffuse", _DIFFUSE),
             min_roughness=_min_roughness(min_roughness),
             dfg_lut_size=_lut_size(dfg_lut_size))
@@ -443,8 +448,8 @@ class FilamentCloth(BxDF):
     def _core_kwargs(self) -> dict:
         p = self._params
         ss = p["subsurface_color"]
-        return dict(base_color=_proj(p["base_color"]).tolist(), sheen_color=self.effective_sheen_color.tolist(),
-                    subsurface_color=[0.0, 0.0, 0.0] if ss is None else _proj(ss).tolist(),
+        return dict(base_color=core_value(_proj(p["base_color"])), sheen_color=core_value(self.effective_sheen_color),
+                    subsurface_color=[0.0, 0.0, 0.0] if ss is None else core_value(_proj(ss)),
                     has_subsurface=ss is not None, roughness=p["roughness"], diffuse=_DIFFUSE[p["diffuse"]],
                     min_perceptual_roughness=_min_pr(p["min_roughness"]), dfg=_fil._table(p["dfg_lut_size"]))
 
