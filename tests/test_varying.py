@@ -168,6 +168,29 @@ def test_any_thread_count_and_array_position(case):
         bk.set_num_threads(before)
 
 
+GRAD_CASES = [c for c in CASES if c[0] in ("conductor-exact", "conductor-f82", "dielectric", "diffuse", "eon",
+                                             "plastic", "filament-standard")]
+
+
+@pytest.mark.parametrize("case", GRAD_CASES, ids=[c[0] for c in GRAD_CASES])
+def test_eval_grad_equals_a_loop_of_uniform_models(case):
+    make, arrays, wo, wi, _ = _setup(case, n=60, seed=7)
+    m = make(**arrays)
+    f, g = m.eval_grad(wo, wi)
+    assert f.shape == (60, 3) and g.shape[:2] == (60, 3)
+    for i in range(60):
+        fi, gi = _one(make, arrays, i).eval_grad(wo[i], wi[i])
+        _eq(f[i], fi, f"eval_grad f, element {i}")
+        _eq(g[i], gi, f"eval_grad grad, element {i}")
+    # a parameter map under one direction pair: the map's batch shape
+    alpha = np.random.default_rng(8).uniform(0.05, 0.5, (3, 4))
+    f, g = bk.Conductor.from_metal("Au", alpha=alpha).eval_grad(bk.direction(0.3, 0.0), bk.direction(0.4, 2.0),
+                                                               ["alpha"])
+    assert f.shape == (3, 4, 3) and g.shape == (3, 4, 3, 1)
+    _eq(g[2, 1], bk.Conductor.from_metal("Au", alpha=alpha[2, 1]).eval_grad(
+        bk.direction(0.3, 0.0), bk.direction(0.4, 2.0), ["alpha"])[1], "map element (2, 1)")
+
+
 def test_parameter_maps_broadcast_with_the_directions():
     rng = np.random.default_rng(3)
     alpha = rng.uniform(0, 0.6, (5, 7))
@@ -271,15 +294,13 @@ def test_operations_that_need_one_material_refuse_clearly():
     wo = bk.direction(0.3, 0.0)
     with pytest.raises(NotImplementedError, match="spectral mode.*alpha_x"):
         m.eval(wo, wo, wavelengths=[500.0, 550.0, 600.0, 650.0])
-    with pytest.raises(NotImplementedError, match="eval_grad"):
-        m.eval_grad(wo, wo)
     with pytest.raises(NotImplementedError, match="to_mitsuba"):
         m.to_mitsuba()
     with pytest.raises(NotImplementedError, match="tradeoff"):
         bk.tradeoff(m)
-    with pytest.raises(ValueError, match="eval_grad: per-element"):
-        m._core.eval_grad(np.zeros((1, 3)) + [0, 0, 1], np.zeros((1, 3)) + [0, 0, 1], 0, [[("alpha_x", 0)]],
-                          np.zeros((1, 3)), np.zeros((1, 3, 1)))
+    with pytest.raises(ValueError, match="eval_grad: a model with per-element parameters needs the batch shape"):
+        m._core.eval_grad(np.zeros((2, 3)) + [0, 0, 1], np.zeros((2, 3)) + [0, 0, 1], 0, [[("alpha_x", -1)]],
+                          np.zeros((2, 3)), np.zeros((2, 3, 1)))
     assert "per element" in m.describe()
 
 

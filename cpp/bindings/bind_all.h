@@ -45,6 +45,13 @@ template <template <typename> class Model> void bind_one(py::module_ &m) {
                                    });
                                    return d;
                                })
+        .def_property_readonly("varying_shapes", [](const PyModel<Model> &self) {
+            // ((field, its batch shape), ...): the shapes a call broadcasts with the directions'
+            py::list l;
+            for (const VaryingField &f : self.varying) l.append(py::make_tuple(f.name.substr(f.name.find('.') + 1),
+                                                                                door::to_tuple(f.shape)));
+            return py::tuple(l);
+        })
         .def_property_readonly("varying", [](const PyModel<Model> &self) {
             py::list l;
             Params p = self.params;

@@ -146,11 +146,13 @@ Params params_from_kwargs(const char *model, const py::args &args, const py::kwa
                 } else {
                     from_py(v, field, what);
                 }
-            } else {
+            } else if constexpr (!is_shared_table<T>::value) {
                 if (door::is_ndarray(v) && py::reinterpret_borrow<py::array>(v).ndim() >= 1)
-                    type_error(what + ": takes one value for the whole material (a knob, a count or a table), "
+                    type_error(what + ": takes one value for the whole material (a knob or a count), "
                                       "not a per-element array");
                 from_py(v, field, what);
+            } else {
+                from_py(v, field, what);  // a table: its own type error
             }
             ++used;
         } else if constexpr (is_shared_table<T>::value) {

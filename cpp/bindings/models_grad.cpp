@@ -2,8 +2,10 @@
 // from the same per-element model code instantiated with F = Dual<double, K> (core/dual.h).
 //
 // For each model of bxdfs/all.h with `GradColumns` (core/bxdf.h), the bound class (bind_model.h's PyModel) gains
-//   eval_grad(wo, wi, mode, columns, out_f, out_grad) -> (bad wo count, bad wi count)
+//   eval_grad(wo, wi, mode, columns, out_f, out_grad, batch=None) -> (bad wo count, bad wi count)
 //     wo, wi       float64 (N or 1, 3) rows, validated and broadcast by Python
+//     batch        with per-element parameters (bind_varying.h): the call's batch shape, of which
+//                  wo and wi are the N full rows (the planes broadcast to it)
 //     columns      list of P gradient columns; a column is a list of (field, channel) pairs whose
 //                  partial is seeded with 1 (channel -1: a scalar field; 0..2: one channel of an
 //                  RGB field), so a column can tie fields together (Python's "alpha" seeds
@@ -113,6 +115,41 @@ void run_grad(const typename Model<double>::Params &params, const std::vector<Co
     else grad_batch<0, 0, K>(m, po, pi, n, md, P, pf, pg, nt, bad);
 }
 
+// Per-element parameters (bind_varying.h): f and its partials with element i's model built from
+// element i's Params (Dual-valued, seeded as dual_params seeds them), one model per run of equal
+// values; every array full length (n rows).
+template <template <typename> class Model, int K>
+void run_grad_varying(const VaryingParams<typename Model<double>::Params> &vp, const std::vector<Column> &cols,
+                      const double *po, const double *pi, int64_t n, TransportMode md, double *pf, double *pg,
+                      BadCounts &bad) {
+    using D = DualK<K>;
+    using M = Model<D>;
+    const int P = int(cols.size());
+    dual_params<Model, K>(vp.base, cols);  // checks the column names once (ValueError), with the GIL
+    py::gil_scoped_release release;
+    parallel_chunks(n, num_threads(), kChunk / 4, [&](int64_t b, int64_t e) {
+        int64_t bo = 0, bi = 0;
+        for (int64_t i = b; i < e;) {
+            int64_t j = i + 1;
+            while (j < e && vp.same(i, j)) ++j;
+            const M m = M::make(dual_params<Model, K>(vp.at(i), cols));
+            for (int64_t r = i; r < j; ++r) {
+                Vec3<double> o = load3<double, 3>(po, r), w = load3<double, 3>(pi, r);
+                bo += check_dir(&o);
+                bi += check_dir(&w);
+                Spectrum<D> v = bsdf_f(m, Vec3<D>(o.x, o.y, o.z), Vec3<D>(w.x, w.y, w.z), md);
+                for (int c = 0; c < 3; ++c) {
+                    pf[3 * r + c] = v[c].v;
+                    for (int q = 0; q < P; ++q) pg[(3 * r + c) * P + q] = v[c].d[q];
+                }
+            }
+            i = j;
+        }
+        bad.wo += bo;
+        bad.wi += bi;
+    });
+}
+
 // The differentiable fields of a model: ((name, 1 or 3), ...).
 template <template <typename> class Model> py::tuple grad_fields() {
     using D = DualK<1>;
@@ -130,10 +167,7 @@ template <template <typename> class Model, int MaxK> void add_eval_grad(py::modu
     using P = PyModel<Model>;
     py::object cls = py::type::of<P>();
     auto fn = [](const P &self, py::array wo, py::array wi, int mode, std::vector<Column> cols, py::array out_f,
-                 py::array out_g) {
-        if (!self.varying.empty())
-            value_error(std::string(Model<double>::Name) + ".eval_grad: per-element parameters are not supported yet "
-                        "(build one model per parameter value)");
+                 py::array out_g, py::object batch) {
         int64_t no, ni, nf, ng;
         const double *po = checked<double>(wo, "wo", {3}, &no), *pi = checked<double>(wi, "wi", {3}, &ni);
         int64_t n = broadcast_rows(no, ni, "wo", "wi");
@@ -146,7 +180,22 @@ template <template <typename> class Model, int MaxK> void add_eval_grad(py::modu
         if (nf != n || ng != n) value_error("out: wrong shape");
         TransportMode md = to_mode(mode);
         BadCounts bad;
-        if (Pn <= 4) run_grad<Model, 4>(self.params, cols, po, no, pi, ni, n, md, pf, pg, bad);
+        if (!self.varying.empty()) {
+            // per-element parameters: `batch` is the call's batch shape (the planes broadcast to it),
+            // wo and wi its n full rows
+            if (batch.is_none()) value_error("eval_grad: a model with per-element parameters needs the batch shape");
+            door::Shape shape;
+            for (auto d : py::reinterpret_borrow<py::tuple>(batch)) shape.push_back(py::cast<py::ssize_t>(d));
+            if (door::prod(shape) != n || no != n || ni != n) value_error("eval_grad: wo, wi must be the batch's rows");
+            std::vector<py::array> keep;
+            std::vector<ParamPlane> pl = planes_for(self.varying, shape, keep);
+            const VaryingParams<typename Model<double>::Params> vp{self.params, pl.data(), int(pl.size())};
+            if (Pn <= 4) run_grad_varying<Model, 4>(vp, cols, po, pi, n, md, pf, pg, bad);
+            else if constexpr (MaxK > 4) {
+                if (Pn <= 8) run_grad_varying<Model, 8>(vp, cols, po, pi, n, md, pf, pg, bad);
+                else if constexpr (MaxK > 8) run_grad_varying<Model, 16>(vp, cols, po, pi, n, md, pf, pg, bad);
+            }
+        } else if (Pn <= 4) run_grad<Model, 4>(self.params, cols, po, no, pi, ni, n, md, pf, pg, bad);
         else if constexpr (MaxK > 4) {
             if (Pn <= 8) run_grad<Model, 8>(self.params, cols, po, no, pi, ni, n, md, pf, pg, bad);
             else if constexpr (MaxK > 8) run_grad<Model, 16>(self.params, cols, po, no, pi, ni, n, md, pf, pg, bad);
@@ -156,7 +205,7 @@ template <template <typename> class Model, int MaxK> void add_eval_grad(py::modu
     };
     cls.attr("eval_grad") = py::cpp_function(fn, py::name("eval_grad"), py::is_method(cls),
                                              py::arg("wo"), py::arg("wi"), py::arg("mode"), py::arg("columns"),
-                                             py::arg("out_f"), py::arg("out_grad"));
+                                             py::arg("out_f"), py::arg("out_grad"), py::arg("batch") = py::none());
     cls.attr("grad_fields") = grad_fields<Model>();
     cls.attr("grad_max_columns") = MaxK;
 }

@@ -7,11 +7,14 @@
 //
 // Runs: consecutive elements whose plane values are equal bit for bit share one model, built once,
 // and run through the uniform kernels' own per-element code over the run: the packet code on
-// lanes [i, j) (batch.h's padded tail for a run shorter than a packet), or the scalar code. Each
-// element's result is therefore bit-identical to a call of the uniform model built from its
-// parameters on the same inputs (a "loop of scalar models"), for any thread count, chunking and
-// array position (tests/test_varying.py). A piecewise-constant map runs at the uniform rate; a map
-// whose every element differs builds one model per element and runs one padded packet per element.
+// lanes [i, j) (batch.h's padded tail for a run shorter than a packet), or the scalar code. A model
+// with make_lanes (below; ConductorBxDF) instead takes a run shorter than a packet as a packet of
+// per-lane parameters: one model whose lanes are the elements' own. Each element's result is
+// therefore bit-identical to a call of the uniform model built from its parameters on the same
+// inputs (a "loop of scalar models"), for any thread count, chunking and array position
+// (tests/test_varying.py). A piecewise-constant map runs at the uniform rate; a map whose every
+// element differs runs at the lane models' rate (make_lanes), or builds one model per element and
+// runs one padded packet per element (the others).
 #pragma once
 #include <array>
 #include <cstdint>
@@ -62,17 +65,42 @@ template <typename Params> struct VaryingParams {
     }
 };
 
-// fn(model, i, j) for each run [i, j) of equal parameters, over chunks of [0, n) on the pool.
-// The model is built in Model's precision from element i's Params.
-template <typename Model, typename Params, typename Fn>
-inline bool varying_runs(const VaryingParams<Params> &vp, int64_t n, int nthreads, const Fn &fn) {
+// Whether a model builds a model of per-lane parameters (core/bxdf.h, optional):
+//   static Lanes make_lanes(const Params *p)   lane l from p[l] (kPacketWidth of them), the same
+//                                              operations per lane as make(p[l]), so each lane's
+//                                              values are those of the uniform model's packet code.
+template <typename M, typename = void> struct has_make_lanes : std::false_type {};
+template <typename M>
+struct has_make_lanes<M, std::void_t<decltype(M::make_lanes(std::declval<const typename M::Params *>()))>>
+    : std::bool_constant<is_vectorized<M>::value> {};
+
+// Over chunks of [0, n) on the pool: run(model, i, j) for each run [i, j) of equal parameters (the
+// model built from element i's Params), or, for a model with make_lanes, lanes(lane model, i, cnt)
+// for a packet of cnt elements starting a run shorter than a packet (each lane its own
+// parameters; lanes past cnt repeat lane 0's). Either way each element gets its own model's values.
+template <typename Model, typename Params, typename F, typename Run, typename Lanes>
+inline bool varying_chunks(const VaryingParams<Params> &vp, int64_t n, int nthreads, const Run &run,
+                           const Lanes &lanes) {
     return parallel_chunks(n, nthreads, kChunk, [&](int64_t b, int64_t e) {
         for (int64_t i = b; i < e;) {
             int64_t j = i + 1;
+            while (j < e && j - i < kW<F> && vp.same(i, j)) ++j;
+            if constexpr (has_make_lanes<Model>::value) {
+                if (j - i < kW<F>) {
+                    const int64_t cnt = std::min(kW<F>, e - i);
+                    Params ps[kPacketWidth];
+                    for (int64_t l = 0; l < int64_t(kPacketWidth); ++l) ps[l] = vp.at(l < cnt ? i + l : i);
+                    const auto lm = Model::make_lanes(ps);
+                    const DenormalsFlushedFor<Model> ftz;
+                    lanes(lm, i, cnt);
+                    i += cnt;
+                    continue;
+                }
+            }
             while (j < e && vp.same(i, j)) ++j;
             const Model m = Model::make(vp.at(i));  // outside the FTZ scope, as the uniform model
             const DenormalsFlushedFor<Model> ftz;
-            fn(m, i, j);
+            run(m, i, j);
             i = j;
         }
     });
@@ -82,18 +110,25 @@ inline bool varying_runs(const VaryingParams<Params> &vp, int64_t n, int nthread
 template <bool Eval, typename Model, typename Params, typename F>
 void varying_pair_batch(const VaryingParams<Params> &vp, const F *wo, const F *wi, int64_t n, TransportMode mode,
                         uint8_t sf, F *out, int nthreads, BadCounts &bad) {
-    varying_runs<Model>(vp, n, nthreads, [&](const Model &m, int64_t b, int64_t e) {
-        LocalModel<Model> mloc = m;
+    // the packets of [b, e) through model mm (a run's model, or a lane model over one packet)
+    auto packets = [&](const auto &mm, int64_t b, int64_t e) {
         int64_t bo = 0, bi = 0;
+        for (int64_t i = b; i < e; i += kW<F>) {
+            const int64_t cnt = std::min(kW<F>, e - i);
+            Vec3<Packet<F>> o = load3_lanes<3>(wo, i, cnt), w = load3_lanes<3>(wi, i, cnt);
+            count_not_unit_pair(o, w, &bo, &bi);
+            if constexpr (Eval) store3_lanes(out, i, cnt, bsdf_f(mm, o, w, mode));
+            else store1_lanes(out, i, cnt, bsdf_pdf(mm, o, w, mode, sf));
+        }
+        bad.wo += bo;
+        bad.wi += bi;
+    };
+    auto run = [&](const Model &m, int64_t b, int64_t e) {
+        LocalModel<Model> mloc = m;
         if constexpr (is_vectorized<Model>::value) {
-            for (int64_t i = b; i < e; i += kW<F>) {
-                const int64_t cnt = std::min(kW<F>, e - i);
-                Vec3<Packet<F>> o = load3_lanes<3>(wo, i, cnt), w = load3_lanes<3>(wi, i, cnt);
-                count_not_unit_pair(o, w, &bo, &bi);
-                if constexpr (Eval) store3_lanes(out, i, cnt, bsdf_f(mloc, o, w, mode));
-                else store1_lanes(out, i, cnt, bsdf_pdf(mloc, o, w, mode, sf));
-            }
+            packets(mloc, b, e);
         } else {
+            int64_t bo = 0, bi = 0;
             for (int64_t i = b; i < e; ++i) {
                 Vec3<F> o = load3<F, 3>(wo, i), w = load3<F, 3>(wi, i);
                 bo += check_dir(&o);
@@ -105,28 +140,34 @@ void varying_pair_batch(const VaryingParams<Params> &vp, const F *wo, const F *w
                     out[i] = bsdf_pdf(mloc, o, w, mode, sf);
                 }
             }
+            bad.wo += bo;
+            bad.wi += bi;
         }
-        bad.wo += bo;
-        bad.wi += bi;
-    });
+    };
+    auto lanes = [&](const auto &lm, int64_t i, int64_t cnt) { packets(lm, i, i + cnt); };
+    varying_chunks<Model, Params, F>(vp, n, nthreads, run, lanes);
 }
 
 // sample of n elements (wo, uc, u full length), as sample_batch per run: the model's smooth or
-// rough loop (has_split_sample), its lobe test (model_ok) per run.
+// rough loop (has_split_sample), its lobe test (model_ok) per run; a lane model's sample_f and
+// its lanes' lobes (make_lanes: the same lobes in every lane's sample flags test).
 template <typename Model, typename Params, typename F>
 void varying_sample_batch(const VaryingParams<Params> &vp, const F *wo, const F *uc, const F *u, int64_t n,
                           TransportMode mode, uint8_t sf, const SampleOut<F> &out, int nthreads, BadCounts &bad) {
-    varying_runs<Model>(vp, n, nthreads, [&](const Model &m, int64_t b, int64_t e) {
+    auto chunk_packets = [&](const auto &mm, const auto &sampler, bool model_ok, int64_t b, int64_t e) {
+        int64_t c[3] = {0, 0, 0};
+        sample_chunk_packet<3, false>(mm, sampler, model_ok, b, e, wo, uc, u, out.wi, out.f, out.pdf, out.eta,
+                                      out.flags, out.valid, out.proportional, false, c);
+        bad.wo += c[0];
+        bad.uc += c[1];
+        bad.u += c[2];
+    };
+    auto run = [&](const Model &m, int64_t b, int64_t e) {
         LocalModel<Model> mloc = m;
         const bool model_ok = (m.flags() & sf) != 0;
-        auto run = [&](const auto &sampler) {
+        auto go = [&](const auto &sampler) {
             if constexpr (is_vectorized<Model>::value) {
-                int64_t c[3] = {0, 0, 0};
-                sample_chunk_packet<3, false>(mloc, sampler, model_ok, b, e, wo, uc, u, out.wi, out.f, out.pdf,
-                                              out.eta, out.flags, out.valid, out.proportional, false, c);
-                bad.wo += c[0];
-                bad.uc += c[1];
-                bad.u += c[2];
+                chunk_packets(mloc, sampler, model_ok, b, e);
             } else {
                 std::vector<F> stage(size_t(e - b));
                 int64_t bo = 0;
@@ -139,15 +180,20 @@ void varying_sample_batch(const VaryingParams<Params> &vp, const F *wo, const F 
         };
         if constexpr (has_split_sample<Model>::value) {
             if (m.is_smooth())
-                run([mode, sf](const auto &mm, const auto &o, auto c, auto) { return mm.sample_smooth(o, c, mode, sf); });
+                go([mode, sf](const auto &mm, const auto &o, auto c, auto) { return mm.sample_smooth(o, c, mode, sf); });
             else
-                run([mode, sf](const auto &mm, const auto &o, auto c, auto p) {
+                go([mode, sf](const auto &mm, const auto &o, auto c, auto p) {
                     return mm.sample_rough(o, c, p, mode, sf);
                 });
         } else {
-            run([mode, sf](const auto &mm, const auto &o, auto c, auto p) { return mm.sample_f(o, c, p, mode, sf); });
+            go([mode, sf](const auto &mm, const auto &o, auto c, auto p) { return mm.sample_f(o, c, p, mode, sf); });
         }
-    });
+    };
+    auto lanes = [&](const auto &lm, int64_t i, int64_t cnt) {
+        chunk_packets(lm, [mode, sf](const auto &mm, const auto &o, auto c, auto p) { return mm.sample_f(o, c, p, mode, sf); },
+                      (lm.flags() & sf) != 0, i, i + cnt);
+    };
+    varying_chunks<Model, Params, F>(vp, n, nthreads, run, lanes);
 }
 
 // albedo of n_wo directions, element j's model from its parameters: albedo_batch's estimator

@@ -225,13 +225,18 @@ def eval_grad(model, wo, wi, params=None, mode=TransportMode.Radiance):
     core = model._grad_core(params) if hasattr(model, "_grad_core") else model._core
     names, cols = _columns(model, params)
     wo, wi = as_dirs(wo, "wo"), as_dirs(wi, "wi")
-    batch = broadcast_batch(("wo", "wi"), wo.shape[:-1], wi.shape[:-1])
+    # per-element parameters broadcast with the directions (their shapes from the compiled model)
+    vs = tuple(getattr(core, "varying_shapes", ()))
+    batch = broadcast_batch(("wo", "wi") + tuple(n for n, _ in vs), wo.shape[:-1], wi.shape[:-1],
+                            *(tuple(s) for _, s in vs))
     P = len(cols)
     f = np.empty(batch + (3,))
     g = np.empty(batch + (3, P))
     if f.size:
+        if vs:   # full rows of the batch, which the compiled call takes with the batch shape
+            wo, wi = np.broadcast_to(wo, batch + (3,)), np.broadcast_to(wi, batch + (3,))
         bo, bi = core.eval_grad(flatten_to(wo, batch, (3,), np.float64), flatten_to(wi, batch, (3,), np.float64),
-                                _mode(mode), cols, f.reshape(-1, 3), g.reshape(-1, 3, P))
+                                _mode(mode), cols, f.reshape(-1, 3), g.reshape(-1, 3, P), *((batch,) if vs else ()))
         _raise_bad("wo", bo)
         _raise_bad("wi", bi)
     return f, g

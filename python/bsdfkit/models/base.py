@@ -624,7 +624,6 @@ class BxDF:
         >>> f.shape, g.shape
         ((3,), (3, 8))
         """
-        self._refuse_varying("eval_grad")
         from ..fitting.grad import eval_grad
         return eval_grad(self, wo, wi, params, mode)
 

@@ -82,7 +82,7 @@ def _model_check(material, name="material"):
         raise TypeError(f"{name}: {type(material).__name__} ({material.describe()}) is implemented in Python and the "
                         "preview renderer takes compiled models only (e.g. bk.Diffuse, bk.Conductor); render one of "
                         "its children, or evaluate it with eval / sample")
-    if material.varying:
+    if getattr(material, "varying", ()):
         # per-element parameters follow the call's elements, which a surface has no order of
         raise NotImplementedError(f"{name}: {type(material).__name__} with per-element parameters "
                                   f"({', '.join(material.varying)}) has no one material to render yet (textures "

@@ -40,14 +40,17 @@ using ConductorParams = ConductorParamsT<>;
 // NC: channels (3 RGB; 4 in spectral mode: eta and k at the element's wavelengths, core/spectral.h).
 // C: the channel values' type, F; or Packet<F> for a spectral packet (eta, k, f0, f82_a per lane,
 // set field by field by batch_spectral.h; the constructor serves C = F).
-template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3, typename C = F> struct ConductorBxDF {
+// A: the alphas' type, F; or Packet<F> for per-lane parameters (make_lanes, per-element
+// parameters: batch_varying.h), whose lanes may differ in smoothness (a lane mask, below).
+template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3, typename C = F, typename A = F>
+struct ConductorBxDF {
     using Params = ConductorParamsT<param_t<F>>;
     static constexpr const char *Name = FR == ConductorFresnel::Schlick ? "ConductorSchlick"
                                         : FR == ConductorFresnel::F82   ? "ConductorF82"
                                                                         : "Conductor";
     using Spectral = ConductorSpectralT<F, FR>;  // its spectral form (core/bxdf.h)
     static constexpr int GradColumns = 8;  // eval_grad columns at most
-    TrowbridgeReitz<F> mfd;
+    TrowbridgeReitz<A> mfd;
     Spectrum<C, NC> eta, k;
     // Per-channel Schlick F0 and F82-tint a, computed in double at construction (unused by Exact);
     // for a Dual model in the Dual (param_t), so their derivatives reach eta and k.
@@ -70,7 +73,45 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3,
                              to_spectrum<F>(p.k));
     }
 
-    uint8_t flags() const { return mfd.effectively_smooth() ? SpecularReflection : GlossyReflection; }
+    // per-lane alphas: the union of the lanes' lobes
+    uint8_t flags() const {
+        const auto smooth = mfd.effectively_smooth();
+        if constexpr (is_packet_v<A>)
+            return uint8_t((any(smooth) ? SpecularReflection : 0) | (all(smooth) ? 0 : GlossyReflection));
+        else return smooth ? SpecularReflection : GlossyReflection;
+    }
+
+    // The model of kPacketWidth elements, lane l built from p[l] as make(p[l]) builds it (the same
+    // operations per lane: bit-identical values). The knob (masking) is lane 0's: every lane's is
+    // the same (per-element parameters vary only real and RGB fields).
+    using Lanes = ConductorBxDF<F, FR, 3, Packet<F>, Packet<F>>;
+    static Lanes make_lanes(const Params *p) {
+        using P = Packet<F>;
+        constexpr int W = int(kPacketWidth);
+        alignas(64) F ax[W], ay[W], e[3][W], kk[3][W], f0[3][W], fa[3][W];
+        for (int l = 0; l < W; ++l) {
+            ax[l] = F(p[l].alpha_x);
+            ay[l] = F(p[l].alpha_y);
+            for (int c = 0; c < 3; ++c) {
+                e[c][l] = F(p[l].eta[size_t(c)]);
+                kk[c][l] = F(p[l].k[size_t(c)]);
+                f0[c][l] = fa[c][l] = F(0);
+                if constexpr (FR != ConductorFresnel::Exact) {  // as the constructor, from the F values
+                    f0[c][l] = F(ConductorF0(param_t<F>(e[c][l]), param_t<F>(kk[c][l])));
+                    fa[c][l] = F(ConductorF82A(param_t<F>(e[c][l]), param_t<F>(kk[c][l])));
+                }
+            }
+        }
+        Lanes m;
+        m.mfd = TrowbridgeReitz<P>(drjit::load_aligned<P>(ax), drjit::load_aligned<P>(ay), p[0].masking);
+        for (int c = 0; c < 3; ++c) {
+            m.eta[c] = drjit::load_aligned<P>(e[c]);
+            m.k[c] = drjit::load_aligned<P>(kk[c]);
+            m.f0[c] = drjit::load_aligned<P>(f0[c]);
+            m.f82_a[c] = drjit::load_aligned<P>(fa[c]);
+        }
+        return m;
+    }
 
     // The model runs on packets in the batch kernels (batch.h): every method is written once on
     // the evaluation type V (F, or a packet of F; core/simd.h).
@@ -116,8 +157,9 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3,
     // fresnel_over_scaled), so h is never normalized: Exact 3 divisions and 8 square roots per
     // element (3 + 0 and 2 + 6), Schlick / F82 2 and 3.
     template <typename V> Spectrum<V, NC> f(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode) const {
-        // a delta lobe evaluates to 0: a per-model (uniform) branch, not a lane mask
-        if (mfd.effectively_smooth()) return Spectrum<V, NC>(V(0));
+        // a delta lobe evaluates to 0: a per-model (uniform) branch; per-lane alphas: also per lane
+        const auto smooth = mfd.effectively_smooth();
+        if (all(smooth)) return Spectrum<V, NC>(V(0));
         V cos_o = AbsCosTheta(wo), cos_i = AbsCosTheta(wi);
         Mask<V> active = SameHemisphere(wo, wi);
         V len2;
@@ -125,6 +167,7 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3,
         V denom = mfd.D_denom(h, active, len2) *
                   mfd.G_denom(cos_o, cos_i, mfd.smith_root(wo), mfd.smith_root(wi));
         Spectrum<V, NC> fr = fresnel_over_scaled(abs(dot(wo, h)), len2, denom);
+        if constexpr (is_packet_v<A>) active &= !smooth;
         for (int c = 0; c < NC; ++c) fr[c] = zero_unless(active, fr[c]);
         return fr;
     }
@@ -133,7 +176,15 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3,
 
     template <typename V>
     BSDFSample<V, NC> sample_f(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode mode, uint8_t sample_flags) const {
-        return is_smooth() ? sample_smooth(wo, uc, mode, sample_flags) : sample_rough(wo, uc, u, mode, sample_flags);
+        if constexpr (is_packet_v<A>) {  // per-lane alphas: each lane's own case
+            const Mask<V> smooth = mfd.effectively_smooth();
+            if (all(smooth)) return sample_smooth(wo, uc, mode, sample_flags);
+            if (none(smooth)) return sample_rough(wo, uc, u, mode, sample_flags);
+            return select_sample(smooth, sample_smooth(wo, uc, mode, sample_flags),
+                                 sample_rough(wo, uc, u, mode, sample_flags));
+        } else {
+            return is_smooth() ? sample_smooth(wo, uc, mode, sample_flags) : sample_rough(wo, uc, u, mode, sample_flags);
+        }
     }
 
     // Delta mirror: f = Fr / |cos_i|, discrete probability 1.
@@ -179,9 +230,11 @@ template <typename F, ConductorFresnel FR = ConductorFresnel::Exact, int NC = 3,
     // + R_o)) with h = wo + wi never normalized (D_denom with len2). 1 division, 1 square root.
     template <typename V>
     V pdf(const Vec3<V> &wo, const Vec3<V> &wi, TransportMode, uint8_t sample_flags) const {
-        if (mfd.effectively_smooth()) return V(0); // a delta lobe (as f)
+        const auto smooth = mfd.effectively_smooth();
+        if (all(smooth)) return V(0); // a delta lobe (as f)
         Mask<V> active = SameHemisphere(wo, wi) &
                          Mask<V>((sample_flags & RT_Reflection) != 0);
+        if constexpr (is_packet_v<A>) active &= !smooth;
         V len2;
         Vec3<V> h = reflection_half_vector_h(wo, wi, active, &len2);
         V dd = mfd.D_denom(h, active, len2);

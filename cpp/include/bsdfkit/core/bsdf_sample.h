@@ -30,6 +30,21 @@ template <typename F> inline BSDFSample<F> invalid_sample() { return BSDFSample<
 static_assert(DiffuseTransmission == DiffuseReflection + 1 && GlossyTransmission == GlossyReflection + 1 &&
               SpecularTransmission == SpecularReflection + 1);
 inline uint8_t lobe_flag(BxDFFlags reflection, bool transmit) { return uint8_t(reflection + int(transmit)); }
+// Per lane: a where m is set, else b (two samples of a per-lane model, e.g. a conductor whose
+// lanes differ in smoothness; batch_varying.h).
+template <typename V, int N>
+inline BSDFSample<V, N> select_sample(const Mask<V> &m, const BSDFSample<V, N> &a, const BSDFSample<V, N> &b) {
+    BSDFSample<V, N> r;
+    r.f = select(m, a.f, b.f);
+    r.wi = select(m, a.wi, b.wi);
+    r.pdf = select(m, a.pdf, b.pdf);
+    r.flags = select(m, a.flags, b.flags);
+    r.eta = select(m, a.eta, b.eta);
+    r.pdf_is_proportional = (m & a.pdf_is_proportional) | (!m & b.pdf_is_proportional);
+    r.valid = (m & a.valid) | (!m & b.valid);
+    return r;
+}
+
 // The same per lane, for an evaluation type V (lobe_flag<V>(GlossyReflection, !reflect)).
 template <typename V> inline typename BSDFSample<V>::Flags lobe_flag(BxDFFlags reflection, const Mask<V> &transmit) {
     if constexpr (is_packet_v<V>) return V(scalar_t<V>(reflection)) + mask_to_float<V>(transmit);

@@ -39,6 +39,9 @@
 //                                             the renderer's SpectralMaterial is the variant over them.
 //   static constexpr int GradColumns = K;     eval_grad with up to K gradient columns (its
 //                                             Params templated on param_t<F>; cpp/bindings/models_grad.cpp).
+//   static Lanes make_lanes(const Params *p)  optional, a vectorized model's per-lane form for
+//                                             per-element parameters (batch_varying.h): lane l
+//                                             built from p[l] with make(p[l])'s operations.
 //
 // check_bxdf<Model>() states each rule as a static_assert with a readable message; bxdfs/all.h
 // applies it to every model of the list.

@@ -19,19 +19,26 @@ inline constexpr double kSmoothAlpha = 1e-3;
 // Floor for each alpha of a rough lobe: one zero axis would divide by zero in D (pbrt-v4 #283).
 inline constexpr double kMinAlpha = 1e-4;
 
+// F: the alphas' type, a scalar; or a packet for per-lane alphas (per-element parameters,
+// batch_varying.h), where effectively_smooth() is a lane mask and the floor applies per lane.
 template <typename F> struct TrowbridgeReitz {
     F alpha_x = 0, alpha_y = 0;
     Masking masking = Masking::Correlated;
 
     TrowbridgeReitz() = default;
     TrowbridgeReitz(F ax, F ay, Masking m) : alpha_x(ax), alpha_y(ay), masking(m) {
-        if (!effectively_smooth()) {
+        if constexpr (is_packet_v<F>) {
+            const Mask<F> rough = !effectively_smooth();
+            alpha_x = select(rough, max_(alpha_x, F(kMinAlpha)), alpha_x);
+            alpha_y = select(rough, max_(alpha_y, F(kMinAlpha)), alpha_y);
+        } else if (!effectively_smooth()) {
             alpha_x = max_(alpha_x, F(kMinAlpha));
             alpha_y = max_(alpha_y, F(kMinAlpha));
         }
     }
 
-    bool effectively_smooth() const { return max_(alpha_x, alpha_y) < F(kSmoothAlpha); }
+    // bool; a lane mask for per-lane alphas
+    auto effectively_smooth() const { return max_(alpha_x, alpha_y) < F(kSmoothAlpha); }
 
     // Normal distribution D(wm) (Trowbridge & Reitz 1975; anisotropic form, Heitz 2014 eq. 85).
     template <typename V> V D(const Vec3<V> &wm) const {
