@@ -36,6 +36,17 @@ __all__ = ["frame", "to_local", "to_world", "eval", "pdf", "sample", "albedo", "
 _TOL = 1e-4   # |w|^2 - 1 of every unit input (the kernels' direction tolerance) and |tangent . normal|
 
 
+def _dot(a, b):
+    """Row dot products in a fixed order (einsum's summation order depends on the memory layout,
+    and a Dask block must give the bits of the eager call)."""
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
+
+
+def _cross(a, b):
+    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1], a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], -1)
+
+
 def _index(i: int, shape: tuple, offset=None) -> tuple:
     idx = np.unravel_index(i, shape) if shape else ()
     if offset is not None:
@@ -47,7 +58,7 @@ def _check_unit(a: np.ndarray, name: str, offset=None) -> np.ndarray:
     """``a`` (..., 3) as float64 after checking every vector is finite and unit within _TOL."""
     a64 = np.asarray(a, dtype=np.float64)
     with np.errstate(invalid="ignore", over="ignore"):
-        bad = ~(np.abs(np.einsum("...i,...i->...", a64, a64) - 1) <= _TOL)
+        bad = ~(np.abs(_dot(a64, a64) - 1) <= _TOL)
     if bad.any():
         i = int(np.argmax(bad.reshape(-1)))
         v = a64.reshape(-1, 3)[i]
@@ -58,7 +69,7 @@ def _check_unit(a: np.ndarray, name: str, offset=None) -> np.ndarray:
 
 
 def _normalized(a: np.ndarray) -> np.ndarray:
-    return a / np.sqrt(np.einsum("...i,...i->...", a, a))[..., None]
+    return a / np.sqrt(_dot(a, a))[..., None]
 
 
 def _duff(n: np.ndarray):
@@ -83,7 +94,7 @@ def frame(normal, tangent=None, offset=None):
     t_in = _normalized(_check_unit(as_dirs(tangent, "tangent"), "tangent", offset))
     shape = broadcast_batch(("normal", "tangent"), n.shape[:-1], t_in.shape[:-1])
     n, t_in = np.broadcast_to(n, shape + (3,)), np.broadcast_to(t_in, shape + (3,))
-    d = np.einsum("...i,...i->...", n, t_in)
+    d = _dot(n, t_in)
     bad = ~(np.abs(d) <= _TOL)
     if bad.any():
         i = int(np.argmax(bad.reshape(-1)))
@@ -91,7 +102,7 @@ def frame(normal, tangent=None, offset=None):
                          f"parallel to the normal spans no frame); the first bad one, at index "
                          f"{_index(i, shape, offset)}, has tangent . normal = {float(d.reshape(-1)[i]):.6g}")
     s = _normalized(t_in - n * d[..., None])
-    return s, np.cross(n, s), n
+    return s, _cross(n, s), n
 
 
 def _dtype(w: np.ndarray):
@@ -112,7 +123,7 @@ def to_local(w, fr, name="w", check=True):
     if check:   # the compiled door would count them too, but per element of the broadcast batch
         w64 = np.asarray(w, dtype=np.float64)
         with np.errstate(invalid="ignore", over="ignore"):
-            raise_bad(name, int(np.count_nonzero(~(np.abs(np.einsum("...i,...i->...", w64, w64) - 1) <= _TOL))))
+            raise_bad(name, int(np.count_nonzero(~(np.abs(_dot(w64, w64) - 1) <= _TOL))))
     s, t, n = fr
     shape = np.broadcast_shapes(w.shape, s.shape)
     out = _alloc(shape, _dtype(w), w)
