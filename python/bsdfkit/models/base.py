@@ -386,6 +386,9 @@ class BxDF:
         array([2.507..., 1.632..., 1.346...])
         >>> m.eval(wo, bk.hemisphere_grid(9, 18)).shape
         (162, 3)
+        >>> n = np.array([0.0, 0.6, 0.8])   # world space: a tilted normal, wo = wi = n is normal incidence
+        >>> bool(np.allclose(m.eval(n, n, normal=n), m.eval([0, 0, 1.0], [0, 0, 1.0])))
+        True
         """
         if normal is not None or tangent is not None:   # world space: rotate, then the local call
             from . import _frames
