@@ -105,7 +105,7 @@ def test_default_frame_is_mitsubas(rng):
     from bsdfkit.models._frames import frame
     n32 = _normals(rng, 20000)
     fr = _mi_frame(n32)
-    s, t, n = frame(n32.astype(np.float64))
+    s, t, n = (x.T for x in frame(n32.astype(np.float64)))   # frame() gives component planes (3, N)
     err = max(np.abs(s - _np3(fr.s)).max(), np.abs(t - _np3(fr.t)).max())
     print(f"default frame vs mi.Frame3f(n): max |diff| {err:.3g} (Mitsuba float32)")
     assert err < 1e-6
@@ -161,7 +161,8 @@ def test_world_eval_pdf_against_mitsuba(model, with_tangent, rng):
     # the same BSDF comparison without frames: ours at Mitsuba's (float32) local directions
     el = _p999(model.eval(wo_l, wi_l), f_mi)
     print(f"{model!r} {'tangent' if with_tangent else 'default frame'}: p99.9 rel err f {ef:.3g} (after the "
-          f"float32 conditioning {ef_c:.3g}), pdf {ep:.3g} ({ep_c:.3g}); local f at Mitsuba's local directions {el:.3g}")
+          f"float32 conditioning {ef_c:.3g}), pdf {ep:.3g} ({ep_c:.3g}); local f at Mitsuba's local directions "
+          f"{el:.3g}")
     assert ef_c <= 1e-5 and ep_c <= 1e-5
     assert ef <= 4e-5 and ep <= 4e-5   # raw, float32 rounding of a narrow (alpha 0.05) lobe included
     assert (f_mi > 0).mean() > 0.3
@@ -331,8 +332,8 @@ def test_spectral_and_dask(rng):
     np.testing.assert_allclose(sw.wi[ok], _world(sl.wi, s, t, n)[ok], atol=1e-12)
     assert sw.terminated is not None
     mix = bk.Mix(bk.Diffuse(0.8), m, 0.4)
-    np.testing.assert_allclose(mix.eval(wo, wi, wavelengths=lam, normal=n, tangent=s), mix.eval(lo, li, wavelengths=lam),
-                               rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(mix.eval(wo, wi, wavelengths=lam, normal=n, tangent=s),
+                               mix.eval(lo, li, wavelengths=lam), rtol=1e-9, atol=1e-12)
     # Dask: lazy, blockwise, the same values as numpy
     dwo, dn = da.from_array(wo, chunks=(150, 3)), da.from_array(n, chunks=(100, 3))
     f = m.eval(dwo, wi, normal=dn, tangent=s)
@@ -399,3 +400,26 @@ def test_bad_normal_in_a_dask_block_names_its_global_index(rng):
     f = m.eval(da.from_array(wo, chunks=(100, 3)), wi, normal=da.from_array(n, chunks=(100, 3)))
     with pytest.raises(ValueError, match=r"normal: .*index \(217,\)"):
         f.compute(scheduler="synchronous")
+
+
+def test_chunking_changes_no_bits(rng, monkeypatch):
+    """The rotations run in chunks of elements: a tiny chunk (many boundaries, a ragged last one)
+    gives the bits of one chunk, and a bad normal in a later chunk is still found at its index."""
+    from bsdfkit.models import _frames
+    m = bk.Conductor.from_metal("Cu", alpha_x=0.3, alpha_y=0.1)
+    wo = random_dirs(rng, 6 * 7).reshape(6, 7, 3)
+    wi = random_dirs(rng, 7)                      # broadcast over the first axis
+    s, t, n = (x.reshape(6, 7, 3) for x in _rot_frames(rng, 42))
+    calls = [lambda: m.eval(wo, wi, normal=n), lambda: m.eval(wo, wi, normal=n, tangent=s),
+             lambda: m.pdf(wo, wi, normal=n[0, 0]), lambda: m.sample(wo, n=None, uc=0.4, u=[0.2, 0.7], normal=n).wi,
+             lambda: m.albedo(wo, 32, normal=n, tangent=s)]
+    whole = [c() for c in calls]
+    monkeypatch.setattr(_frames, "_CHUNK", 5)
+    for c, w in zip(calls, whole):
+        assert np.array_equal(c(), w)
+    bad = n.copy()
+    bad[4, 6] *= 1.1
+    _raises(r"normal: .*index \(4, 6\)", m.eval, wo, wi, normal=bad)
+    par = s.copy()
+    par[5, 2] = n[5, 2]
+    _raises(r"tangent: .*perpendicular.*index \(5, 2\)", m.eval, wo, wi, normal=n, tangent=par)

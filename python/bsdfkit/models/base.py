@@ -491,10 +491,10 @@ class BxDF:
         wavelengths : array_like, shape (..., 4), optional
             Spectral mode.
         normal : array_like, shape (..., 3), optional
-            World-space shading normals, per element (broadcast with the directions): ``wo`` is then
-            world-space and is rotated into each element's frame before the
-            model runs; the sampled ``wi`` is returned in world space (``bsdfkit.models._frames``; computed in float64, rounded to the
-            direction's dtype). Unit within 1e-4 in ``|n|^2``.
+            World-space shading normals, per element (broadcast with ``wo``): ``wo`` is then
+            world-space, rotated into each element's frame before the model runs, and the
+            sampled ``wi`` is returned in world space (``bsdfkit.models._frames``; float64
+            arithmetic, rounded to wo's dtype). Unit within 1e-4 in ``|n|^2``.
         tangent : array_like, shape (..., 3), optional
             With ``normal``: the frame's x axis (anisotropic models), unit and perpendicular to
             the normal within 1e-4. Default: Duff et al. 2017's frame of the normal, Mitsuba 3's
@@ -557,10 +557,10 @@ class BxDF:
         wavelengths : array_like, shape (..., 4), optional
             Spectral mode: the albedo per wavelength.
         normal : array_like, shape (..., 3), optional
-            World-space shading normals, per element (broadcast with the directions): ``wo`` is then
-            world-space and is rotated into each element's frame before the
-            model runs (``bsdfkit.models._frames``; computed in float64, rounded to the
-            direction's dtype). Unit within 1e-4 in ``|n|^2``.
+            World-space shading normals, per element (broadcast with ``wo``): ``wo`` is then
+            world-space, rotated into each element's frame before the model runs
+            (``bsdfkit.models._frames``; float64 arithmetic, rounded to wo's dtype). Unit within
+            1e-4 in ``|n|^2``.
         tangent : array_like, shape (..., 3), optional
             With ``normal``: the frame's x axis (anisotropic models), unit and perpendicular to
             the normal within 1e-4. Default: Duff et al. 2017's frame of the normal, Mitsuba 3's
