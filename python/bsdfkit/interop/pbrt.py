@@ -1,10 +1,12 @@
 """pbrt-v4 scene text -> bsdfkit models: the ``Material`` / ``MakeNamedMaterial`` statements."""
 from __future__ import annotations
 
+import gzip
 import math
 import os
 import re
 import warnings
+import zlib
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -277,6 +279,9 @@ _PBRT_DIRECTIVES = frozenset("""
 
 #: Nesting limit of Include/Import (a cycle would otherwise recurse forever).
 PBRT_MAX_INCLUDE_DEPTH = 32
+#: Limit on the Include/Import statements followed in one scene: files that include the next one
+#: twice, 30 deep, are 2^30 includes (a hang without it).
+PBRT_MAX_INCLUDES = 10_000
 
 #: ``ActiveTransform``'s argument: a bare word (pbrt-v4 src/pbrt/parser.cpp).
 _ACTIVE_TRANSFORM = ("All", "StartTime", "EndTime")
@@ -417,6 +422,11 @@ def _parse_statements(st, text, path, depth, where):
             if depth + 1 > PBRT_MAX_INCLUDE_DEPTH:
                 raise _PbrtError(f"line {line}: {kw} {fname!r}: nested deeper than {PBRT_MAX_INCLUDE_DEPTH} "
                                  "files (an Include cycle?)")
+            st["n_includes"] = st.get("n_includes", 0) + 1
+            if st["n_includes"] > PBRT_MAX_INCLUDES:
+                raise _PbrtError(f"line {line}: {kw} {fname!r}: more than {PBRT_MAX_INCLUDES} Include / Import "
+                                 "statements followed in one scene (files that include each other repeatedly?; "
+                                 "bsdfkit.interop.pbrt.PBRT_MAX_INCLUDES)")
             if st["skip_missing"] and not os.path.exists(full):
                 w = PbrtMissingIncludeWarning(f"from_pbrt: {path or '<text>'}: line {line}: skipped {kw} "
                                               f"{fname!r}: no file {full!r}")
@@ -467,17 +477,26 @@ def _parse_statements(st, text, path, depth, where):
 
 
 def _read_scene_file(path) -> str:
-    """A pbrt scene file's text (``.gz`` files decompressed, as pbrt-v4 reads them)."""
+    """A pbrt scene file's text (``.gz`` files decompressed, as pbrt-v4 reads them). Only regular
+    files are opened: a device or FIFO (``Include "/dev/zero"``) raises OSError naming it instead of
+    being read until memory runs out or blocking forever."""
+    from ..models.measured import _NotRegularFile, _regular_file_opener
     p = os.fspath(path)
     try:
+        if "\x00" in p:
+            raise FileNotFoundError(f"{p!r}: a file name cannot contain a NUL character")
         if p.endswith(".gz"):
-            import gzip
-            with gzip.open(p, "rt", encoding="utf-8") as fh:
+            with open(p, "rb", opener=_regular_file_opener) as raw, \
+                    gzip.open(raw, "rt", encoding="utf-8") as fh:
                 return fh.read()
-        with open(p, encoding="utf-8") as fh:
+        with open(p, encoding="utf-8", opener=_regular_file_opener) as fh:
             return fh.read()
     except UnicodeDecodeError as e:  # a binary file (e.g. a .pbrt.gz without the suffix, a PLY)
         raise ValueError(f"{p}: not a pbrt-v4 scene file (not UTF-8 text at byte {e.start})") from None
+    except _NotRegularFile as e:
+        raise OSError(f"{p}: {e}, not a pbrt scene file") from None
+    except (EOFError, zlib.error, gzip.BadGzipFile) as e:   # a truncated or corrupt .gz
+        raise ValueError(f"{p}: not a readable gzip file ({e})") from None
 
 
 def _pfail(rec, msg):
