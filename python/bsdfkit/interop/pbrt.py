@@ -435,6 +435,8 @@ def _parse_statements(st, text, path, depth, where):
                 continue
             try:
                 sub = _read_scene_file(full)
+            except ValueError as e:   # not text, a corrupt .gz
+                raise _PbrtError(f"line {line}: {kw} {fname!r}: {e}") from None
             except OSError as e:
                 hint = ("; from_pbrt(..., skip_missing_includes=True) skips it with a warning"
                         if not os.path.exists(full) else "")
