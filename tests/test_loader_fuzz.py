@@ -434,6 +434,7 @@ MI_XML = [
     '<bsdf version="3.0.0" type="diffuse"><spectrum name="reflectance" value="0.4"/></bsdf>',
     '<bsdf version="3.0.0" type="roughplastic"><string name="distribution" value="ggx"/>'
     '<float name="alpha" value="0.2"/></bsdf>',
+    '<bsdf version="3.0.0" type="hair"><float name="eumelanin" value="0.5"/></bsdf>',
 ]
 # Plugins swapped in. Not blendbsdf / mask without nested BSDFs nor a bitmap texture without a
 # filename: Mitsuba 3.9.1's loader itself crashes on those (SIGSEGV in mi.load_string).
@@ -689,6 +690,13 @@ def test_corrupt_caches_are_ignored(tmp_path):
 
 # ======================================================================= images and meshes
 
+@pytest.fixture
+def render_ext():
+    from bsdfkit import _render_ext
+    if not _render_ext.available():
+        pytest.skip("this build has no bsdfkit._render (image and mesh files)")
+
+
 _CHILD = r'''
 import os, random, sys, time
 import numpy as np
@@ -727,7 +735,7 @@ print("done", flush=True)
 '''
 
 
-def test_images_and_meshes_mutated(tmp_path):
+def test_images_and_meshes_mutated(tmp_path, render_ext):
     """read_image (OpenImageIO: PNG, EXR, HDR, JPEG) and load_mesh (Assimp: OBJ) on mutated
     files, in a child process so that a crash in the C++ libraries fails this test naming the
     case instead of killing the test run. PLY is left out: see the two xfail cases below."""
@@ -769,7 +777,7 @@ def _load_mesh_child(path):
 
 @pytest.mark.xfail(strict=True, reason="C++ (Assimp's PLY reader, in bsdfkit._render.load_mesh): a PLY file whose "
                    "header has no end_header line never returns (CPU-bound, seen for > 300 s)")
-def test_ply_without_end_header(tmp_path):
+def test_ply_without_end_header(tmp_path, render_ext):
     p = tmp_path / "h.ply"
     p.write_bytes(_PLY_HEAD[:-len(b"element face 1\nproperty list uchar int vertex_indices\n")])
     status, out = _load_mesh_child(p)
@@ -779,7 +787,7 @@ def test_ply_without_end_header(tmp_path):
 @pytest.mark.xfail(strict=True, reason="C++ (Assimp, in bsdfkit._render.load_mesh): a PLY file cut after its "
                    "vertices aborts the process (ai_assert 'numOut != pMesh->mNumFaces' in "
                    "TriangulateProcess.cpp(238), SIGABRT)")
-def test_ply_cut_after_vertices(tmp_path):
+def test_ply_cut_after_vertices(tmp_path, render_ext):
     p = tmp_path / "a.ply"
     p.write_bytes(_PLY_HEAD + b"end_header\n0 0 0\n1 0 0\n0 1 0\n")
     status, out = _load_mesh_child(p)
