@@ -444,7 +444,9 @@ def from_mitsuba(d) -> BxDF:
     ------
     ValueError
         Naming the plugin and parameter for anything else: unknown plugins, textures, Beckmann
-        roughness, tints, unknown parameters, presets or IOR names.
+        roughness, tints, unknown parameters, presets or IOR names; plugin dicts nested deeper
+        than ``MI_MAX_DEPTH``, containing themselves, or expanding to more than
+        ``MI_MAX_PLUGINS`` plugins counted once per path.
 
     Examples
     --------

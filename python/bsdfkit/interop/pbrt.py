@@ -345,9 +345,11 @@ def parse_pbrt_materials(text: str, *, path=None, skip_missing_includes: bool = 
         With the line number (and file) for malformed text: unterminated strings or brackets,
         stray ``]``, non-numbers in lists, malformed parameter declarations, a word that is not
         a pbrt directive, a bad ``ActiveTransform`` argument, a ``MakeNamedMaterial`` without
-        ``"string type"``, a redefined named material, Include nested too deep.
+        ``"string type"``, a redefined named material, Include nested too deep or followed more
+        than ``PBRT_MAX_INCLUDES`` times, an include that is not text (or a corrupt ``.gz``).
     OSError
-        Naming the file for a missing include (unless ``skip_missing_includes``).
+        Naming the file for a missing include (unless ``skip_missing_includes``), or one that is
+        not a regular file (a device such as ``/dev/zero``, a FIFO, a directory).
 
     Examples
     --------
@@ -872,7 +874,9 @@ def from_pbrt(source, *, skip_unsupported: bool = False, skip_missing_includes: 
       the curve's v coordinate per hit).
     * ``mix``: materials [two names of materials of the scene, in any order, mixes too], amount
       [0.5] (a constant) -> ``Mix(first, second, amount, method="stochastic")`` (pbrt-v4
-      MixMaterial: the second material with probability amount, per shading point).
+      MixMaterial: the second material with probability amount, per shading point). Mixes of
+      mixes are refused past 64 levels or 1,024 materials counted once per path
+      (``bk.Mix`` evaluates every path; pbrt-v4 picks one).
 
     pbrt-v4's microfacet models use height-correlated Smith masking: ``masking="correlated"``.
     Roughness: with remaproughness true, alpha = sqrt(roughness) (``bk.roughness_to_alpha``),
