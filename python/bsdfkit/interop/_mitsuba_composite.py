@@ -33,6 +33,8 @@ def _nested(d, where, fail, keys=()):
 
 
 def _constant(v, where, param, fail, to_float):
+    if isinstance(v, dict) and not isinstance(v.get("type"), str):
+        fail(where, f"parameter {param!r}: the value dict's 'type' must be a string, got {type(v.get('type')).__name__}")
     if isinstance(v, dict) and v.get("type") not in ("rgb", "spectrum", "uniform", "srgb"):
         fail(where, f"parameter {param!r} is a texture ({v.get('type')!r}); only a constant is supported (a "
              "per-element array is a bsdfkit parameter: build the model directly)")
@@ -84,11 +86,18 @@ def mi_normalmap(d, where, build, fail, to_color):
     if "normalmap" not in d:
         fail(where, "no 'normalmap' texture given")
     v = d["normalmap"]
+    if isinstance(v, dict) and not isinstance(v.get("type"), str):
+        fail(where, f"parameter 'normalmap': the value dict's 'type' must be a string, got "
+             f"{type(v.get('type')).__name__}")
     if isinstance(v, dict) and v.get("type") not in ("rgb", "srgb", "uniform"):
         fail(where, f"parameter 'normalmap' is a texture ({v.get('type')!r}); only a constant rgb normal is supported "
              "(per-element normals: bk.NormalMap(model, normals=array))")
-    n = 2 * to_color(v, where, "normalmap", bounded=False) - 1   # Mitsuba's decoding
-    norm = np.linalg.norm(n)
+    rgb = to_color(v, where, "normalmap", bounded=False)
+    with np.errstate(over="ignore", invalid="ignore"):
+        n = 2 * rgb - 1   # Mitsuba's decoding
+        norm = np.linalg.norm(n)
+    if not np.isfinite(norm):   # inf / nan components, or ones whose square overflows
+        fail(where, f"parameter 'normalmap': expected a finite rgb-encoded normal ((n + 1) / 2), got {rgb.tolist()}")
     if not norm > 0:
         fail(where, f"parameter 'normalmap': the decoded normal {n.tolist()} is zero")
     flags = {}

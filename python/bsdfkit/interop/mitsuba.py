@@ -9,7 +9,7 @@ import numpy as np
 from ..models import BxDF, Conductor, Dielectric, Diffuse, METALS, Plastic, ThinDielectric
 from .spectra import spectrum_to_rgb
 
-__all__ = ["MITSUBA_IOR", "MIRROR_ETA", "from_mitsuba"]
+__all__ = ["MITSUBA_IOR", "MIRROR_ETA", "MI_MAX_DEPTH", "MI_MAX_PLUGINS", "from_mitsuba"]
 
 
 #: Mitsuba 3's named indices of refraction (``include/mitsuba/render/ior.h``; values from Hecht,
@@ -74,7 +74,7 @@ def _mi_color(v, where, param, *, bounded):
     if _is_real(v):
         return np.full(3, float(v))
     if isinstance(v, dict):
-        kind = v.get("type")
+        kind = _value_type(v, where, param)
         if kind not in _MI_CONSTANT_TEXTURES:
             _mi_fail(where, f"parameter {param!r} is a texture ({kind!r}); only constant values "
                      "are supported (a float, {'type': 'rgb', ...}, {'type': 'spectrum', ...} or 3 numbers)")
@@ -118,10 +118,20 @@ def _mi_color(v, where, param, *, bounded):
     return a
 
 
+def _value_type(v, where, param):
+    """The ``type`` of a value dict ({'type': 'rgb', ...}): a string, else a named error (an
+    array there made ``in`` raise numpy's ambiguous-truth ValueError)."""
+    kind = v.get("type")
+    if not isinstance(kind, str):
+        _mi_fail(where, f"parameter {param!r}: the value dict's 'type' must be a string such as 'rgb' or "
+                 f"'spectrum', got {type(kind).__name__} {kind!r}"[:300])
+    return kind
+
+
 def _mi_float(v, where, param):
     if _is_real(v):
         return float(v)
-    if isinstance(v, dict) and v.get("type") not in _MI_CONSTANT_TEXTURES:
+    if isinstance(v, dict) and _value_type(v, where, param) not in _MI_CONSTANT_TEXTURES:
         _mi_fail(where, f"parameter {param!r} is a texture ({v.get('type')!r}); only a constant float is supported")
     if isinstance(v, dict):
         rgb = _mi_color(v, where, param, bounded=False)
@@ -223,24 +233,55 @@ def _mi_eta(d, where):
     return eta_int / eta_ext
 
 
-def _mi_bsdf(d, where):
+#: Deepest nesting of plugin dicts (twosided / blendbsdf / mask / normalmap) accepted: deeper
+#: dicts ran out of Python's recursion limit, here or on the model's first eval.
+MI_MAX_DEPTH = 64
+#: Most nested plugin dicts converted for one call, each counted once per path to it (blendbsdfs
+#: that hold the same dict twice, 30 deep, are 2^30 conversions: a hang without it).
+MI_MAX_PLUGINS = 1024
+
+
+def _mi_bsdf(d, where, ctx=None):
+    if ctx is None:
+        ctx = {"n": 0, "path": []}
     if not isinstance(d, dict):
         raise TypeError(f"from_mitsuba: {where or 'd'}: expected a Mitsuba plugin dict, got {type(d).__name__}")
+    if any(d is p for p in ctx["path"]):
+        raise _MiError(f"from_mitsuba: {where}: the plugin dict contains itself (a cycle)")
+    if len(ctx["path"]) >= MI_MAX_DEPTH:
+        raise _MiError(f"from_mitsuba: {where[:200]}...: plugin dicts nested deeper than {MI_MAX_DEPTH} "
+                       "(bsdfkit.interop.mitsuba.MI_MAX_DEPTH)")
+    ctx["n"] += 1
+    if ctx["n"] > MI_MAX_PLUGINS:
+        raise _MiError(f"from_mitsuba: {where[:200]}: more than {MI_MAX_PLUGINS} nested plugin dicts, each counted "
+                       "once per path to it (the same dict nested through several paths?; "
+                       "bsdfkit.interop.mitsuba.MI_MAX_PLUGINS)")
+    ctx["path"].append(d)
+    try:
+        return _mi_plugin(d, where, ctx)
+    finally:
+        ctx["path"].pop()
+
+
+def _mi_plugin(d, where, ctx):
     kind = d.get("type")
     if not isinstance(kind, str):
-        raise _MiError(f"from_mitsuba: {where or 'd'}: 'type': expected a plugin name (str), got {kind!r}")
+        raise _MiError(f"from_mitsuba: {where or 'd'}: 'type': expected a plugin name (str), got {kind!r}"[:400])
     label = f"{where} ({kind!r})" if where else f"plugin {kind!r}"
     if kind not in _MI_SUPPORTED:
         _mi_fail(label, "unsupported plugin; supported: " + ", ".join(_MI_SUPPORTED))
     if kind in ("twosided", "blendbsdf", "mask", "normalmap"):   # composites: interop/_mitsuba_composite.py
         from . import _mitsuba_composite as mc
+
+        def build(sub, w):
+            return _mi_bsdf(sub, w, ctx)
         if kind == "twosided":
-            return mc.mi_twosided(d, label, _mi_bsdf, _mi_fail)
+            return mc.mi_twosided(d, label, build, _mi_fail)
         if kind == "blendbsdf":
-            return _mi_build(label, lambda: mc.mi_blend(d, label, _mi_bsdf, _mi_fail, _mi_float))
+            return _mi_build(label, lambda: mc.mi_blend(d, label, build, _mi_fail, _mi_float))
         if kind == "mask":
-            return _mi_build(label, lambda: mc.mi_mask(d, label, _mi_bsdf, _mi_fail, _mi_float))
-        return _mi_build(label, lambda: mc.mi_normalmap(d, label, _mi_bsdf, _mi_fail, _mi_color))
+            return _mi_build(label, lambda: mc.mi_mask(d, label, build, _mi_fail, _mi_float))
+        return _mi_build(label, lambda: mc.mi_normalmap(d, label, build, _mi_fail, _mi_color))
     unknown = [k for k in d if k not in ("type", "id") + _MI_PARAMS[kind]]
     if unknown:
         _mi_fail(label, f"unsupported parameters {unknown}; {kind} takes: "
@@ -403,7 +444,9 @@ def from_mitsuba(d) -> BxDF:
     ------
     ValueError
         Naming the plugin and parameter for anything else: unknown plugins, textures, Beckmann
-        roughness, tints, unknown parameters, presets or IOR names.
+        roughness, tints, unknown parameters, presets or IOR names; plugin dicts nested deeper
+        than ``MI_MAX_DEPTH``, containing themselves, or expanding to more than
+        ``MI_MAX_PLUGINS`` plugins counted once per path.
 
     Examples
     --------
@@ -422,15 +465,26 @@ _MI_CLASSES = {"SmoothDiffuse": "diffuse", "SmoothConductor": "conductor", "Roug
                "ThinDielectric": "thindielectric", "Null": "null"}
 
 
+def _unsupported_loaded(cls):
+    raise ValueError(f"from_mitsuba: unsupported loaded Mitsuba BSDF {cls!r}; supported: "
+                     f"{', '.join(sorted(_MI_CLASSES))} (and TwoSided around one of them)")
+
+
 def _loaded_to_dict(bsdf) -> dict:
     """A loaded ``mi.BSDF`` as a plugin dictionary (class name + ``mi.traverse`` parameters)."""
     import re
     import mitsuba as mi
 
-    params = mi.traverse(bsdf)
-    vals = {k: params[k] for k in params.keys()}
-    text = str(bsdf)
     name = bsdf.class_name()
+    if not name.startswith("TwoSided") and name not in _MI_CLASSES:
+        _unsupported_loaded(name)   # before mi.traverse, which raises a bare TypeError for some (Hair)
+    try:
+        params = mi.traverse(bsdf)
+        vals = {k: params[k] for k in params.keys()}
+    except (TypeError, RuntimeError) as e:
+        raise ValueError(f"from_mitsuba: cannot read the parameters of the loaded Mitsuba BSDF {name!r} "
+                         f"(mi.traverse: {e})") from None
+    text = str(bsdf)
     if name.startswith("TwoSided"):
         kids = re.findall(r"brdf\[(\d)\] = (\w+)\[", text)
         cls = dict(kids).get("0")
@@ -445,8 +499,7 @@ def _loaded_params_to_dict(cls: str, vals: dict, text: str) -> dict:
     import re
 
     if cls not in _MI_CLASSES:
-        raise ValueError(f"from_mitsuba: unsupported loaded Mitsuba BSDF {cls!r}; supported: "
-                         f"{', '.join(sorted(_MI_CLASSES))} (and TwoSided around one of them)")
+        _unsupported_loaded(cls)
     plugin = _MI_CLASSES[cls]
     d = {"type": plugin}
 

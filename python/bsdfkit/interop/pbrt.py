@@ -1,10 +1,12 @@
 """pbrt-v4 scene text -> bsdfkit models: the ``Material`` / ``MakeNamedMaterial`` statements."""
 from __future__ import annotations
 
+import gzip
 import math
 import os
 import re
 import warnings
+import zlib
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -277,6 +279,9 @@ _PBRT_DIRECTIVES = frozenset("""
 
 #: Nesting limit of Include/Import (a cycle would otherwise recurse forever).
 PBRT_MAX_INCLUDE_DEPTH = 32
+#: Limit on the Include/Import statements followed in one scene: files that include the next one
+#: twice, 30 deep, are 2^30 includes (a hang without it).
+PBRT_MAX_INCLUDES = 10_000
 
 #: ``ActiveTransform``'s argument: a bare word (pbrt-v4 src/pbrt/parser.cpp).
 _ACTIVE_TRANSFORM = ("All", "StartTime", "EndTime")
@@ -340,9 +345,11 @@ def parse_pbrt_materials(text: str, *, path=None, skip_missing_includes: bool = 
         With the line number (and file) for malformed text: unterminated strings or brackets,
         stray ``]``, non-numbers in lists, malformed parameter declarations, a word that is not
         a pbrt directive, a bad ``ActiveTransform`` argument, a ``MakeNamedMaterial`` without
-        ``"string type"``, a redefined named material, Include nested too deep.
+        ``"string type"``, a redefined named material, Include nested too deep or followed more
+        than ``PBRT_MAX_INCLUDES`` times, an include that is not text (or a corrupt ``.gz``).
     OSError
-        Naming the file for a missing include (unless ``skip_missing_includes``).
+        Naming the file for a missing include (unless ``skip_missing_includes``), or one that is
+        not a regular file (a device such as ``/dev/zero``, a FIFO, a directory).
 
     Examples
     --------
@@ -417,6 +424,11 @@ def _parse_statements(st, text, path, depth, where):
             if depth + 1 > PBRT_MAX_INCLUDE_DEPTH:
                 raise _PbrtError(f"line {line}: {kw} {fname!r}: nested deeper than {PBRT_MAX_INCLUDE_DEPTH} "
                                  "files (an Include cycle?)")
+            st["n_includes"] = st.get("n_includes", 0) + 1
+            if st["n_includes"] > PBRT_MAX_INCLUDES:
+                raise _PbrtError(f"line {line}: {kw} {fname!r}: more than {PBRT_MAX_INCLUDES} Include / Import "
+                                 "statements followed in one scene (files that include each other repeatedly?; "
+                                 "bsdfkit.interop.pbrt.PBRT_MAX_INCLUDES)")
             if st["skip_missing"] and not os.path.exists(full):
                 w = PbrtMissingIncludeWarning(f"from_pbrt: {path or '<text>'}: line {line}: skipped {kw} "
                                               f"{fname!r}: no file {full!r}")
@@ -425,6 +437,8 @@ def _parse_statements(st, text, path, depth, where):
                 continue
             try:
                 sub = _read_scene_file(full)
+            except ValueError as e:   # not text, a corrupt .gz
+                raise _PbrtError(f"line {line}: {kw} {fname!r}: {e}") from None
             except OSError as e:
                 hint = ("; from_pbrt(..., skip_missing_includes=True) skips it with a warning"
                         if not os.path.exists(full) else "")
@@ -467,17 +481,26 @@ def _parse_statements(st, text, path, depth, where):
 
 
 def _read_scene_file(path) -> str:
-    """A pbrt scene file's text (``.gz`` files decompressed, as pbrt-v4 reads them)."""
+    """A pbrt scene file's text (``.gz`` files decompressed, as pbrt-v4 reads them). Only regular
+    files are opened: a device or FIFO (``Include "/dev/zero"``) raises OSError naming it instead of
+    being read until memory runs out or blocking forever."""
+    from ..models.measured import _NotRegularFile, _regular_file_opener
     p = os.fspath(path)
     try:
+        if "\x00" in p:
+            raise FileNotFoundError(f"{p!r}: a file name cannot contain a NUL character")
         if p.endswith(".gz"):
-            import gzip
-            with gzip.open(p, "rt", encoding="utf-8") as fh:
+            with open(p, "rb", opener=_regular_file_opener) as raw, \
+                    gzip.open(raw, "rt", encoding="utf-8") as fh:
                 return fh.read()
-        with open(p, encoding="utf-8") as fh:
+        with open(p, encoding="utf-8", opener=_regular_file_opener) as fh:
             return fh.read()
     except UnicodeDecodeError as e:  # a binary file (e.g. a .pbrt.gz without the suffix, a PLY)
         raise ValueError(f"{p}: not a pbrt-v4 scene file (not UTF-8 text at byte {e.start})") from None
+    except _NotRegularFile as e:
+        raise OSError(f"{p}: {e}, not a pbrt scene file") from None
+    except (EOFError, zlib.error, gzip.BadGzipFile) as e:   # a truncated or corrupt .gz
+        raise ValueError(f"{p}: not a readable gzip file ({e})") from None
 
 
 def _pfail(rec, msg):
@@ -851,7 +874,9 @@ def from_pbrt(source, *, skip_unsupported: bool = False, skip_missing_includes: 
       the curve's v coordinate per hit).
     * ``mix``: materials [two names of materials of the scene, in any order, mixes too], amount
       [0.5] (a constant) -> ``Mix(first, second, amount, method="stochastic")`` (pbrt-v4
-      MixMaterial: the second material with probability amount, per shading point).
+      MixMaterial: the second material with probability amount, per shading point). Mixes of
+      mixes are refused past 64 levels or 1,024 materials counted once per path
+      (``bk.Mix`` evaluates every path; pbrt-v4 picks one).
 
     pbrt-v4's microfacet models use height-correlated Smith masking: ``masking="correlated"``.
     Roughness: with remaproughness true, alpha = sqrt(roughness) (``bk.roughness_to_alpha``),

@@ -166,7 +166,8 @@ class SampleResult:
     Attributes
     ----------
     wi : numpy.ndarray, shape (..., 3)
-        Sampled directions (outward, local frame).
+        Sampled directions (outward, local frame; world space when ``sample`` was given
+        ``normal=``).
     f : numpy.ndarray, shape (..., 3)
         BSDF value (cosine excluded); (..., 4), one value per wavelength, in spectral mode.
     pdf : numpy.ndarray, shape (...)
@@ -197,9 +198,11 @@ class SampleResult:
 
     @property
     def weight(self) -> np.ndarray:
-        """f |cos wi| / pdf, 0 where invalid (the Monte Carlo throughput weight)."""
+        """f |cos wi| / pdf, 0 where invalid (the Monte Carlo throughput weight); cos wi is to the
+        shading normal (wi.z, or wi . normal of a world-space ``sample``)."""
+        cos = self.__dict__.get("_cos_wi")
         with np.errstate(divide="ignore", invalid="ignore"):
-            w = self.f * (np.abs(self.wi[..., 2]) / self.pdf)[..., None]
+            w = self.f * ((np.abs(self.wi[..., 2]) if cos is None else cos) / self.pdf)[..., None]
         return np.where(self.valid[..., None], w, 0.0).astype(self.f.dtype)
 
 
@@ -220,7 +223,8 @@ class BxDF:
     """Common array API of every model (pbrt-v4 conventions).
 
     Directions live in the local shading frame (z is the normal), are unit vectors and point
-    away from the surface, both ``wo`` (towards the viewer) and ``wi``. ``eval`` excludes the
+    away from the surface, both ``wo`` (towards the viewer) and ``wi``; with ``normal=`` (and
+    ``tangent=``) per element they are world-space instead. ``eval`` excludes the
     cosine factor; ``pdf`` is per unit solid angle. Inputs broadcast with numpy rules over
     their leading axes. float32 inputs run float32 kernels, anything else real runs float64.
 
@@ -374,7 +378,8 @@ class BxDF:
     # array API. Each op is one call of the compiled core's door (cpp/bindings/bind_model.h): it
     # takes the arguments as given, converts and checks what is not a plain array, words every
     # argument error and runs the kernels. Python only dispatches: spectral mode, Dask arrays.
-    def eval(self, wo, wi, mode=TransportMode.Radiance, out=None, *, wavelengths=None) -> np.ndarray:
+    def eval(self, wo, wi, mode=TransportMode.Radiance, out=None, *, wavelengths=None, normal=None,
+             tangent=None) -> np.ndarray:
         """BSDF value f(wo, wi), cosine excluded, per RGB channel.
 
         Specular (delta) lobes evaluate to 0 for every given pair, as in pbrt-v4; use
@@ -403,6 +408,15 @@ class BxDF:
         wavelengths : array_like, shape (..., 4), optional
             Wavelengths in nm in [360, 830], broadcast with the directions: spectral mode, one
             value per wavelength (docs/SPECTRAL.md).
+        normal : array_like, shape (..., 3), optional
+            World-space shading normals, per element (broadcast with the directions): ``wo`` and
+            ``wi`` are then world-space and are rotated into each element's frame before the
+            model runs (``bsdfkit.models._frames``; computed in float64, rounded to the
+            directions' dtype). Unit within 1e-4 in ``|n|^2``.
+        tangent : array_like, shape (..., 3), optional
+            With ``normal``: the frame's x axis (anisotropic models), unit and perpendicular to
+            the normal within 1e-4. Default: Duff et al. 2017's frame of the normal, Mitsuba 3's
+            ``Frame3f(n)`` (the identity for n = (0, 0, 1)).
 
         Returns
         -------
@@ -414,7 +428,9 @@ class BxDF:
         ------
         ValueError
             A direction that is not a finite unit vector (``|w|^2`` within 1e-4 of 1), shapes
-            that do not broadcast, a bad ``mode`` or ``out``.
+            that do not broadcast, a bad ``mode`` or ``out``; a bad ``normal`` or ``tangent``
+            (not a finite unit vector, a tangent not perpendicular to the normal, a tangent
+            without a normal), naming it and its first bad index.
 
         Examples
         --------
@@ -425,7 +441,13 @@ class BxDF:
         array([2.507..., 1.632..., 1.346...])
         >>> m.eval(wo, bk.hemisphere_grid(9, 18)).shape
         (162, 3)
+        >>> n = np.array([0.0, 0.6, 0.8])   # world space: a tilted normal, wo = wi = n is normal incidence
+        >>> bool(np.allclose(m.eval(n, n, normal=n), m.eval([0, 0, 1.0], [0, 0, 1.0])))
+        True
         """
+        if normal is not None or tangent is not None:   # world space: rotate, then the local call
+            from . import _frames
+            return _frames.eval(self, wo, wi, mode, out, wavelengths, normal, tangent)
         if wavelengths is not None:
             return _spectral.eval(self, wo, wi, wavelengths, mode, out)
         if (type(wo) is not np.ndarray or type(wi) is not np.ndarray) and (is_dask_array(wo) or is_dask_array(wi)):
@@ -433,7 +455,7 @@ class BxDF:
         return self._core.eval(wo, wi, mode, out)
 
     def pdf(self, wo, wi, mode=TransportMode.Radiance, sample_flags=ReflTrans.All, out=None, *,
-            wavelengths=None) -> np.ndarray:
+            wavelengths=None, normal=None, tangent=None) -> np.ndarray:
         """Solid-angle density of ``sample`` producing wi from wo; 0 for delta lobes.
 
         Directions may be (N, 3) Fortran-ordered planes, read without transposition, with
@@ -452,6 +474,15 @@ class BxDF:
         wavelengths : array_like, shape (..., 4), optional
             The density of ``sample`` with those wavelengths (the first one's for a dispersive
             dielectric).
+        normal : array_like, shape (..., 3), optional
+            World-space shading normals, per element (broadcast with the directions): ``wo`` and
+            ``wi`` are then world-space and are rotated into each element's frame before the
+            model runs (``bsdfkit.models._frames``; computed in float64, rounded to the
+            directions' dtype). Unit within 1e-4 in ``|n|^2``.
+        tangent : array_like, shape (..., 3), optional
+            With ``normal``: the frame's x axis (anisotropic models), unit and perpendicular to
+            the normal within 1e-4. Default: Duff et al. 2017's frame of the normal, Mitsuba 3's
+            ``Frame3f(n)`` (the identity for n = (0, 0, 1)).
 
         Returns
         -------
@@ -461,7 +492,8 @@ class BxDF:
         Raises
         ------
         ValueError
-            As ``eval``; a ``sample_flags`` that is not a ``ReflTrans``.
+            As ``eval`` (including ``normal`` / ``tangent``); a ``sample_flags`` that is not a
+            ``ReflTrans``.
 
         Examples
         --------
@@ -470,6 +502,9 @@ class BxDF:
         >>> float(m.pdf(bk.direction(np.radians(30), 0.0), bk.direction(np.radians(30), np.pi)))
         2.289...
         """
+        if normal is not None or tangent is not None:
+            from . import _frames
+            return _frames.pdf(self, wo, wi, mode, sample_flags, out, wavelengths, normal, tangent)
         if wavelengths is not None:
             return _spectral.pdf(self, wo, wi, wavelengths, mode, sample_flags, out)
         if (type(wo) is not np.ndarray or type(wi) is not np.ndarray) and (is_dask_array(wo) or is_dask_array(wi)):
@@ -477,7 +512,7 @@ class BxDF:
         return self._core.pdf(wo, wi, mode, sample_flags, out)
 
     def sample(self, wo, uc=None, u=None, *, n=None, seed=None, mode=TransportMode.Radiance,
-               sample_flags=ReflTrans.All, out=None, wavelengths=None) -> SampleResult:
+               sample_flags=ReflTrans.All, out=None, wavelengths=None, normal=None, tangent=None) -> SampleResult:
         """Importance-sample wi given wo.
 
         Either pass the uniforms ``uc`` (...) (lobe choice) and ``u`` (..., 2) (direction), in
@@ -510,6 +545,15 @@ class BxDF:
             A result of this call's shapes and dtypes to write into; it is returned.
         wavelengths : array_like, shape (..., 4), optional
             Spectral mode.
+        normal : array_like, shape (..., 3), optional
+            World-space shading normals, per element (broadcast with ``wo``): ``wo`` is then
+            world-space, rotated into each element's frame before the model runs, and the
+            sampled ``wi`` is returned in world space (``bsdfkit.models._frames``; float64
+            arithmetic, rounded to wo's dtype). Unit within 1e-4 in ``|n|^2``.
+        tangent : array_like, shape (..., 3), optional
+            With ``normal``: the frame's x axis (anisotropic models), unit and perpendicular to
+            the normal within 1e-4. Default: Duff et al. 2017's frame of the normal, Mitsuba 3's
+            ``Frame3f(n)`` (the identity for n = (0, 0, 1)).
 
         Returns
         -------
@@ -521,7 +565,8 @@ class BxDF:
         ------
         ValueError
             A direction that is not a finite unit vector, a uniform outside [0, 1] or NaN, both
-            or neither of ``uc``/``u`` and ``n``, a negative seed.
+            or neither of ``uc``/``u`` and ``n``, a negative seed; a bad ``normal`` or
+            ``tangent`` (as ``eval``).
         TypeError
             An ``out`` that is not a SampleResult.
 
@@ -533,16 +578,20 @@ class BxDF:
         >>> s.wi.shape, s.f.shape, s.pdf.shape, bool(s.valid.all())
         ((4, 3), (4, 3), (4,), True)
         """
+        if normal is not None or tangent is not None:   # world space: wi rotated back
+            from . import _frames
+            return _frames.sample(self, wo, uc, u, n, seed, mode, sample_flags, out, wavelengths, normal, tangent)
         if wavelengths is not None:
             return _spectral.sample(self, wo, uc, u, n, seed, wavelengths, mode, sample_flags, out)
         if out is not None:
             if type(out) is not SampleResult:
                 raise TypeError(f"out: expected a SampleResult (e.g. an earlier result of sample), got {type(out).__name__}")
+            out.__dict__.pop("_cos_wi", None)   # a world-space call's cosines (SampleResult.weight)
             return self._core.sample(wo, uc, u, mode, sample_flags, out, n, seed)
         return _sample_result(self._core.sample(wo, uc, u, mode, sample_flags, None, n, seed))
 
     def albedo(self, wo, n_samples: int = 65536, seed: int = 0, mode=TransportMode.Radiance, *,
-               wavelengths=None) -> np.ndarray:
+               wavelengths=None, normal=None, tangent=None) -> np.ndarray:
         """Directional albedo rho(wo) = integral of f |cos wi| dwi, per channel: shape (..., 3).
 
         Monte Carlo with ``n_samples`` importance samples per direction (pbrt-v4 ``rho``);
@@ -562,6 +611,15 @@ class BxDF:
             ``Radiance`` (default) or ``Importance``.
         wavelengths : array_like, shape (..., 4), optional
             Spectral mode: the albedo per wavelength.
+        normal : array_like, shape (..., 3), optional
+            World-space shading normals, per element (broadcast with ``wo``): ``wo`` is then
+            world-space, rotated into each element's frame before the model runs
+            (``bsdfkit.models._frames``; float64 arithmetic, rounded to wo's dtype). Unit within
+            1e-4 in ``|n|^2``.
+        tangent : array_like, shape (..., 3), optional
+            With ``normal``: the frame's x axis (anisotropic models), unit and perpendicular to
+            the normal within 1e-4. Default: Duff et al. 2017's frame of the normal, Mitsuba 3's
+            ``Frame3f(n)`` (the identity for n = (0, 0, 1)).
 
         Returns
         -------
@@ -575,6 +633,9 @@ class BxDF:
         >>> np.allclose(rho, 0.5, atol=0.02)
         True
         """
+        if normal is not None or tangent is not None:
+            from . import _frames
+            return _frames.albedo(self, wo, n_samples, seed, mode, wavelengths, normal, tangent)
         if wavelengths is not None:
             return _spectral.albedo(self, wo, wavelengths, n_samples, seed, mode)
         return self._core.albedo(wo, n_samples, seed, mode)

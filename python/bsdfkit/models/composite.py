@@ -21,6 +21,7 @@ import numpy as np
 
 from .._arrays import _mix64
 from .._enums import BxDFFlags, ReflTrans
+from . import _frames
 from . import _mitsuba_export as _me
 from ._composite_core import (Door, array_param, child_eval, child_pdf, child_sample, digest, empty_sample,
                               put_sample, take)
@@ -88,22 +89,35 @@ class _Composite(BxDF, register=False):
     def __repr__(self):
         return f"{type(self).__name__}(" + ", ".join(f"{k}={_fmt(v)}" for k, v in self._params.items()) + ")"
 
-    # the array API: the base's, with wavelengths= passed to this door (the children run spectral)
-    def eval(self, wo, wi, mode=0, out=None, *, wavelengths=None):
+    # the array API: the base's, with wavelengths= passed to this door (the children run spectral);
+    # normal= / tangent= (world space) rotate the directions once here, the children run local
+    def eval(self, wo, wi, mode=0, out=None, *, wavelengths=None, normal=None, tangent=None):
+        if normal is not None or tangent is not None:
+            return _frames.eval(self, wo, wi, mode, out, wavelengths, normal, tangent)
         if wavelengths is None:
             return super().eval(wo, wi, mode, out)
         return self._core.eval(wo, wi, mode, out, wavelengths)
 
-    def pdf(self, wo, wi, mode=0, sample_flags=ReflTrans.All, out=None, *, wavelengths=None):
+    def pdf(self, wo, wi, mode=0, sample_flags=ReflTrans.All, out=None, *, wavelengths=None, normal=None,
+            tangent=None):
+        if normal is not None or tangent is not None:
+            return _frames.pdf(self, wo, wi, mode, sample_flags, out, wavelengths, normal, tangent)
         if wavelengths is None:
             return super().pdf(wo, wi, mode, sample_flags, out)
         return self._core.pdf(wo, wi, mode, sample_flags, out, wavelengths)
 
     def sample(self, wo, uc=None, u=None, *, n=None, seed=None, mode=0, sample_flags=ReflTrans.All, out=None,
-               wavelengths=None):
+               wavelengths=None, normal=None, tangent=None):
+        if normal is not None or tangent is not None:
+            return _frames.sample(self, wo, uc, u, n, seed, mode, sample_flags, out, wavelengths, normal, tangent)
+        if out is not None:
+            _frames.forget_frame(out)
         return self._core.sample(wo, uc, u, mode, sample_flags, out, n, seed, wavelengths)
 
-    def albedo(self, wo, n_samples: int = 65536, seed: int = 0, mode=0, *, wavelengths=None):
+    def albedo(self, wo, n_samples: int = 65536, seed: int = 0, mode=0, *, wavelengths=None, normal=None,
+               tangent=None):
+        if normal is not None or tangent is not None:
+            return _frames.albedo(self, wo, n_samples, seed, mode, wavelengths, normal, tangent)
         return self._core.albedo(wo, n_samples, seed, mode, wavelengths)
 
     def _flags(self) -> int:

@@ -70,25 +70,56 @@ def _example_file(stem: str, ext: str, write) -> str:
     return path
 
 
-def _read_bytes(path, what: str) -> tuple[str, bytes]:
-    """(absolute path, content) of a file, with OSErrors that name it."""
+def _read_bytes(path, what: str, limit: int | None = None) -> tuple[str, bytes, int]:
+    """(absolute path, content, size in bytes) of a regular file, with OSErrors that name it.
+    A device, FIFO or socket is refused before it is opened (``/dev/zero`` was read until memory
+    ran out, a FIFO without a writer blocked forever). ``limit``: read at most that many bytes
+    (the size returned is the file's)."""
     try:
         p = os.fspath(path)
     except TypeError:
         raise TypeError(f"path: expected a str or os.PathLike, got {type(path).__name__}") from None
     if not isinstance(p, str):
         p = os.fsdecode(p)
+    if "\x00" in p:
+        raise ValueError(f"path: contains a NUL character: {p!r}")
     ap = os.path.abspath(p)
     if os.path.isdir(ap):
         raise IsADirectoryError(f"{ap}: is a directory, not a {what} file")
     try:
-        with open(ap, "rb") as fh:
-            data = fh.read()
+        with open(ap, "rb", opener=_regular_file_opener) as fh:
+            size = os.fstat(fh.fileno()).st_size
+            data = fh.read() if limit is None else fh.read(limit)
     except FileNotFoundError:
         raise FileNotFoundError(f"{ap}: no such {what} file") from None
+    except _NotRegularFile as e:
+        raise OSError(f"{ap}: {e}, not a {what} file") from None
     except OSError as e:
         raise OSError(f"{ap}: cannot read the {what} file ({e.strerror or e})") from None
-    return ap, data
+    return ap, data, size
+
+
+class _NotRegularFile(OSError):
+    pass
+
+
+def _regular_file_opener(path, flags):
+    """``open``'s opener: opens without blocking (a FIFO would wait for a writer) and refuses
+    anything but a regular file (a device such as /dev/zero never ends)."""
+    import stat
+    fd = os.open(path, flags | getattr(os, "O_NONBLOCK", 0))
+    try:
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):
+            kind = ("a directory" if stat.S_ISDIR(mode) else "a FIFO" if stat.S_ISFIFO(mode) else "a character device" if stat.S_ISCHR(mode)
+                    else "a block device" if stat.S_ISBLK(mode) else "a socket" if stat.S_ISSOCK(mode) else "special")
+            raise _NotRegularFile(f"not a regular file but {kind}")
+        if hasattr(os, "O_NONBLOCK"):
+            os.set_blocking(fd, True)
+    except BaseException:
+        os.close(fd)
+        raise
+    return fd
 
 
 def read_merl(path) -> tuple[np.ndarray, np.ndarray, str, str]:
@@ -105,17 +136,23 @@ def read_merl(path) -> tuple[np.ndarray, np.ndarray, str, str]:
     max 3.4e38 (the table is evaluated in float32 too). Negative values ("not measured") of any
     size are accepted.
     """
-    ap, data = _read_bytes(path, "MERL")
+    n = 12 + 24 * int(np.prod(MERL_DIMS))
+    ap, data, size = _read_bytes(path, "MERL", limit=n + 1)   # a longer file is not read whole
+    if size != len(data):
+        parse_merl(data[:12], ap, check_size=False)            # the header's error first, if any
+        raise ValueError(f"{ap}: values: expected {n - 12} bytes of float64 after the header, got {size - 12}")
     return parse_merl(data, ap)
 
 
-def parse_merl(data: bytes, ap: str = "<bytes>") -> tuple[np.ndarray, np.ndarray, str, str]:
+def parse_merl(data: bytes, ap: str = "<bytes>", *, check_size: bool = True) -> tuple[np.ndarray, np.ndarray, str, str]:
     """:func:`read_merl` on the bytes of a file (``ap`` names it in the messages)."""
     if len(data) < 12:
         raise ValueError(f"{ap}: dims: truncated header ({len(data)} bytes; a MERL file starts with 3 int32)")
     dims = tuple(int(d) for d in np.frombuffer(data, "<i4", 3))
     if dims != MERL_DIMS:
         raise ValueError(f"{ap}: dims: expected {MERL_DIMS} (theta_h, theta_d, phi_d), got {dims}")
+    if not check_size:
+        return None
     n = 3 * int(np.prod(MERL_DIMS))
     if len(data) != 12 + 8 * n:
         raise ValueError(f"{ap}: values: expected {8 * n} bytes of float64 after the header, got {len(data) - 12}")
@@ -405,7 +442,7 @@ def parse_tensor(data: bytes, name: str = "<bytes>") -> dict:
 
 def read_tensor(path) -> dict:
     """Read a tensor file: ``{field name: read-only numpy array}`` (see :func:`parse_tensor`)."""
-    ap, data = _read_bytes(path, "tensor")
+    ap, data, _ = _read_bytes(path, "tensor")
     return parse_tensor(data, ap)
 
 
@@ -544,9 +581,10 @@ def validate_measured(fields: dict, name: str) -> dict:
     isotropic = nphi <= 2
     reduction = 1
     if not isotropic:
-        reduction = int(np.rint(2 * np.pi / (float(phi[-1]) - float(phi[0]))))
+        span = float(phi[-1]) - float(phi[0])    # in float64: float32's difference can overflow
+        reduction = int(np.rint(2 * np.pi / span))
         if reduction not in (1, 2, 4):
-            raise ValueError(f"{name}: field 'phi_i': spans {float(phi[-1] - phi[0]):.4g} rad: reduction "
+            raise ValueError(f"{name}: field 'phi_i': spans {span:.4g} rad: reduction "
                              f"{reduction} (2 pi / span) must be 1, 2 or 4")
     if spectral:
         _finite(wl, "wavelengths", name)
@@ -732,7 +770,7 @@ class Measured(BxDF):
                 raise TypeError(f"data: expected bytes, got {type(data).__name__}")
             data, ap, name = bytes(data), None, "<tensor data>"
         else:
-            ap, data = _read_bytes(path, "tensor")
+            ap, data, _ = _read_bytes(path, "tensor")
             name = ap
         dig = hashlib.sha256(data).hexdigest()
         if digest is not None and digest != dig:

@@ -180,7 +180,11 @@ def project(wavelengths, values, *, d65: bool = True, bounded: bool = False,
         v = np.full(int(keep.sum()), val[0])
     else:
         v = np.interp(w[keep], lam, val)
-    rgb = xyz_to_srgb(v @ W[keep])
+    with np.errstate(over="ignore", invalid="ignore"):
+        rgb = xyz_to_srgb(v @ W[keep])
+    if not np.all(np.isfinite(rgb)):   # finite values near float64's max overflow in the sums
+        raise ValueError(f"values: the spectrum's projection to RGB overflows (values up to "
+                         f"{float(np.max(np.abs(val))):.3g})")
     return np.clip(rgb, 0.0, 1.0) if bounded else np.maximum(rgb, 0.0)
 
 

@@ -231,11 +231,12 @@ def _stderr_progress():
 
 def _load(path, res):
     try:
-        with np.load(path) as f:
+        with np.load(path, allow_pickle=False) as f:
             t = f["coeffs"]
-    except (OSError, KeyError, ValueError):
-        return None
-    if t.shape != (3, res, res, res, 3) or not np.all(np.isfinite(t)):
+    except Exception:   # any damage (zipfile.BadZipFile, a bad CRC, tokenize.TokenError from a mangled
+        return None     # .npy header, ...) makes the cache invalid: fitted again, never an error
+    if not isinstance(t, np.ndarray) or t.shape != (3, res, res, res, 3) or t.dtype.kind != "f" \
+            or not np.all(np.isfinite(t)):
         return None
     return t
 

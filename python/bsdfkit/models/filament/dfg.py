@@ -148,9 +148,9 @@ def _load_cached(size, samples):
     """The table from the disk cache, or None (missing, unreadable or not a valid table)."""
     try:
         a = np.load(_cache_path(size, samples), allow_pickle=False)
-    except (OSError, ValueError, EOFError):
-        return None
-    if a.shape != (size, size, 3) or a.dtype != np.float64 or not np.all(np.isfinite(a)):
+    except Exception:   # any damage (tokenize.TokenError from a mangled header, a zip, ...) makes the
+        return None     # cache invalid: computed again, never an error
+    if not isinstance(a, np.ndarray) or a.shape != (size, size, 3) or a.dtype != np.float64 or not np.all(np.isfinite(a)):
         return None
     return a
 
