@@ -93,7 +93,7 @@ def test_run_demo_returns_paths(demo_run):
     # run_demo's return value, from the CLI's run (demo_run)
     out, paths = demo_run
     assert all(os.path.dirname(p) == str(out) for p in paths)
-    assert [os.path.basename(p) for p in paths] == ["lobes.png", "albedo.png", "albedo.md", "views.png",
+    assert [os.path.basename(p) for p in paths] == ["lobes.png", "albedo.png", "albedo.md", "views.png", "svbrdf.png",
                                                     "gallery.exr", "gallery.png", "gallery_labelled.png", "hair.exr", "hair.png",
                                                     "dispersion.png", "dispersion_spectral.exr"]
     assert all(os.path.getsize(p) > 0 for p in paths)

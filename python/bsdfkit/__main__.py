@@ -19,7 +19,8 @@ def _parser() -> argparse.ArgumentParser:
                        description="Write lobes.png (polar lobe slices of every model at θo = 0, 30, 60, "
                                    "80°), albedo.png (directional albedo vs θo), albedo.md (albedo table), "
                                    "views.png (3D lobe, image over directions, θh × θd slice and sampling "
-                                   "check of every model) and the rendered gallery.")
+                                   "check of every model), svbrdf.png (per-pixel maps and a normal map on a sphere) "
+                                   "and the rendered gallery.")
     d.add_argument("-o", "--outdir", default="bsdfkit-demo", metavar="DIR",
                    help="output directory, created if missing (default: ./bsdfkit-demo)")
     _add_lobes_command(sub)
