@@ -432,3 +432,16 @@ def test_to_and_from_mitsuba():
     for m in (bk.BumpMap(GOLD, 0.5, 0.0), bk.BumpMap(GOLD, np.zeros(3)), bk.BumpMap(GOLD, dp_du=(1.0, 0.0, 0.0))):
         with pytest.raises(ValueError, match="Mitsuba"):
             m.to_mitsuba()
+
+
+def test_spectral_mode_passes_through(rng):
+    """wavelengths= reaches the child in the bumped frame: the same as NormalMap of the closed-form
+    normal, spectral."""
+    m = bk.Conductor.from_metal("Cu", alpha=0.25)
+    lam = np.array([420.0, 510.0, 600.0, 700.0])
+    wo, wi = random_dirs(rng, 500, 1), random_dirs(rng, 500)
+    bm, nm = bk.BumpMap(m, 0.4, -0.9), bk.NormalMap(m, _unit([-0.4, 0.9, 1.0]))
+    np.testing.assert_allclose(bm.eval(wo, wi, wavelengths=lam), nm.eval(wo, wi, wavelengths=lam), rtol=1e-12,
+                               atol=1e-300)
+    s = bm.sample(wo, n=500, seed=1, wavelengths=lam)
+    assert s.f.shape == (500, 4) and s.valid.mean() > 0.5
