@@ -1,13 +1,13 @@
 """Mitsuba 3 composite plugins -> bsdfkit composite models (``from_mitsuba``'s ``twosided``,
-``blendbsdf``, ``mask`` and ``normalmap``); ``bsdfkit.interop.mitsuba`` dispatches here."""
+``blendbsdf``, ``mask``, ``normalmap`` and ``bumpmap``); ``bsdfkit.interop.mitsuba`` dispatches here."""
 from __future__ import annotations
 
 import numpy as np
 
 from .._enums import BxDFFlags
-from ..models import Mask, Mix, NormalMap, TwoSided
+from ..models import BumpMap, Mask, Mix, NormalMap, TwoSided
 
-__all__ = ["mi_twosided", "mi_blend", "mi_mask", "mi_normalmap", "REFLECTION_ONLY"]
+__all__ = ["mi_twosided", "mi_blend", "mi_mask", "mi_normalmap", "mi_bumpmap", "REFLECTION_ONLY"]
 
 #: One-sided Mitsuba plugins whose bsdfkit model is two-sided already: ``twosided{x}`` of one of
 #: them (or of two identical ones) is that model.
@@ -100,11 +100,58 @@ def mi_normalmap(d, where, build, fail, to_color):
         fail(where, f"parameter 'normalmap': expected a finite rgb-encoded normal ((n + 1) / 2), got {rgb.tolist()}")
     if not norm > 0:
         fail(where, f"parameter 'normalmap': the decoded normal {n.tolist()} is zero")
+    key, sub = nested[0]
+    return NormalMap(build(sub, f"{where}.{key}"), n / norm, **_flags(d, where, fail))
+
+
+#: Mitsuba 3 texture plugins (a bumpmap's nested objects are one texture and one BSDF).
+_TEXTURES = ("bitmap", "checkerboard", "mesh_attribute", "volume", "uniform", "rgb", "srgb", "spectrum", "d65",
+             "blackbody", "regular", "irregular")
+
+
+def _flags(d, where, fail):
     flags = {}
     for name, kw in (("flip_invalid_normals", "flip_invalid_normals"), ("use_shadowing_function", "shadowing")):
         val = d.get(name, True)
         if not isinstance(val, (bool, np.bool_)):
             fail(where, f"parameter {name!r}: expected True or False, got {val!r}")
         flags[kw] = bool(val)
-    key, sub = nested[0]
-    return NormalMap(build(sub, f"{where}.{key}"), n / norm, **flags)
+    return flags
+
+
+def mi_bumpmap(d, where, build, fail, to_float):
+    """``bumpmap`` of a height texture whose uv gradient is zero everywhere -> ``BumpMap(model, 0, 0,
+    scale)``: an in-memory ``bitmap`` (``bitmap=mi.Bitmap`` or ``data=`` tensor) of constant
+    texels or with ``filter_type="nearest"`` (Mitsuba's gradient is 0 then). Other heights are
+    refused: a bitmap file (bsdfkit reads no images), a varying bitmap (its gradient depends on
+    each point's uv, which a BSDF has not), other textures (Mitsuba has no gradient of them)."""
+    nested = _nested(d, where, fail, keys=("scale", "flip_invalid_normals", "use_shadowing_function"))
+    tex = [(k, v) for k, v in nested if v.get("type") in _TEXTURES]
+    bsdfs = [(k, v) for k, v in nested if v.get("type") not in _TEXTURES]
+    if len(bsdfs) != 1:
+        fail(where, f"bumpmap takes one nested BSDF, got {len(bsdfs)}")
+    if len(tex) != 1:
+        fail(where, f"bumpmap takes one nested height texture, got {len(tex)}")
+    name, t = tex[0]
+    kind = t.get("type")
+    per_element = ("build bk.BumpMap(model, dh_du, dh_dv) with the gradient at each element's uv "
+                   "(bk.models.bump_map.height_gradient(height, uv) computes Mitsuba's)")
+    if kind != "bitmap":
+        fail(where, f"height texture {name!r} is a {kind!r} texture: Mitsuba's bumpmap differentiates bitmap textures "
+             f"only (eval_1_grad); {per_element}")
+    if "filename" in t:
+        fail(where, f"height texture {name!r} is a bitmap file ({t['filename']!r}): reading image files is not "
+             f"supported here; {per_element}")
+    data = t.get("bitmap", t.get("data"))
+    if data is None:
+        fail(where, f"height texture {name!r}: a bitmap with neither 'filename', 'bitmap' nor 'data'")
+    try:
+        h = np.asarray(data, dtype=np.float64)
+    except Exception as e:
+        fail(where, f"height texture {name!r}: cannot read its texels ({e})")
+    if t.get("filter_type", "bilinear") != "nearest" and not (h.size and np.all(h == h.reshape(-1)[0])):
+        fail(where, f"height texture {name!r}: a varying bitmap's gradient depends on each point's uv (a BSDF has no "
+             f"uv); {per_element}")
+    scale = to_float(d.get("scale", 1.0), where, "scale")
+    key, sub = bsdfs[0]
+    return BumpMap(build(sub, f"{where}.{key}"), 0.0, 0.0, scale=scale, **_flags(d, where, fail))

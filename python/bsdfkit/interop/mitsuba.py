@@ -32,7 +32,7 @@ MIRROR_ETA = 1e-6
 
 _MI_SUPPORTED = ("diffuse", "conductor", "roughconductor", "dielectric", "roughdielectric",
                  "thindielectric", "measured", "plastic", "roughplastic", "twosided", "null", "hair",
-                 "blendbsdf", "mask", "normalmap")
+                 "blendbsdf", "mask", "normalmap", "bumpmap")
 
 
 _MI_CONSTANT_TEXTURES = ("rgb", "spectrum", "uniform", "srgb")
@@ -270,7 +270,7 @@ def _mi_plugin(d, where, ctx):
     label = f"{where} ({kind!r})" if where else f"plugin {kind!r}"
     if kind not in _MI_SUPPORTED:
         _mi_fail(label, "unsupported plugin; supported: " + ", ".join(_MI_SUPPORTED))
-    if kind in ("twosided", "blendbsdf", "mask", "normalmap"):   # composites: interop/_mitsuba_composite.py
+    if kind in ("twosided", "blendbsdf", "mask", "normalmap", "bumpmap"):   # composites: interop/_mitsuba_composite.py
         from . import _mitsuba_composite as mc
 
         def build(sub, w):
@@ -281,6 +281,8 @@ def _mi_plugin(d, where, ctx):
             return _mi_build(label, lambda: mc.mi_blend(d, label, build, _mi_fail, _mi_float))
         if kind == "mask":
             return _mi_build(label, lambda: mc.mi_mask(d, label, build, _mi_fail, _mi_float))
+        if kind == "bumpmap":
+            return _mi_build(label, lambda: mc.mi_bumpmap(d, label, build, _mi_fail, _mi_float))
         return _mi_build(label, lambda: mc.mi_normalmap(d, label, build, _mi_fail, _mi_color))
     unknown = [k for k in d if k not in ("type", "id") + _MI_PARAMS[kind]]
     if unknown:
@@ -397,6 +399,11 @@ def from_mitsuba(d) -> BxDF:
     ``mask``             ``opacity`` (0.5, a constant), one nested BSDF -> ``Mask(model, opacity)``
     ``normalmap``        ``normalmap`` (a constant ``rgb`` (n + 1) / 2, decoded and normalized),
                          ``flip_invalid_normals`` / ``use_shadowing_function`` (true) -> ``NormalMap``
+    ``bumpmap``          a height ``bitmap`` of zero gradient (in memory: constant texels, or
+                         ``filter_type="nearest"``), ``scale`` (1), the two flags (true)
+                         -> ``BumpMap(model, 0, 0, scale)``; a bitmap file or a varying bitmap is
+                         refused (no image reading; the gradient depends on uv: build
+                         ``BumpMap`` from ``height_gradient`` per element)
     ``measured``         ``filename`` (an RGL tensor file) -> ``Measured(filename)``
     ``null``             -> ``Dielectric(1.0)`` (pbrt's straight pass-through; ``to_mitsuba``
                          writes eta = 1 dielectrics and thin dielectrics as ``null``)

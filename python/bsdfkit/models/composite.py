@@ -2,7 +2,7 @@
 
 ``Mix`` (Mitsuba 3 ``blendbsdf``, or pbrt-v4 ``MixMaterial`` with ``method="stochastic"``),
 ``TwoSided`` (Mitsuba ``twosided``), ``Mask`` (Mitsuba ``mask``) here; ``NormalMap`` (Mitsuba
-``normalmap``) in ``normal_map``. Each is a registered model: value semantics, specs (a child is
+``normalmap``) in ``normal_map``, ``BumpMap`` (Mitsuba ``bumpmap``) in ``bump_map``. Each is a registered model: value semantics, specs (a child is
 written in brackets: ``mix [diffuse 0.8] [conductor metal=Au alpha=0.3] 0.3``), the contract suite,
 plots, ``to_mitsuba`` and ``from_mitsuba``. Per-element parameters (``weight``, ``opacity``,
 ``normals``) are numpy arrays broadcasting against the call's batch shape (the directions' shape

@@ -31,11 +31,13 @@ def shadow_terminator(n, w):
     return np.where(np.isfinite(g), g, 0.0)
 
 
-def shading_frame(n, wo, flip=True):
+def shading_frame(n, wo, flip=True, tangent=None):
     """(s, t, n) of the shading frame of unit normals ``n`` (rows) for incident ``wo``, float64, as
-    Mitsuba 3.9 ``normalmap``'s ``frame``: with ``flip``, a normal on whose other side wo lies
-    (wo.z (wo . n) <= 0) has its tangential part negated (Schüssler et al. 2017's flip); then
-    s = normalize(x - n n_x) (the x axis projected), t = n x s."""
+    Mitsuba 3.9 ``normalmap``'s and ``bumpmap``'s ``frame``: with ``flip``, a normal on whose other
+    side wo lies (wo.z (wo . n) <= 0) has its tangential part negated (Schüssler et al. 2017's
+    flip); then s = normalize(d - n (n . d)) with d = ``tangent`` (rows; bumpmap: the surface's
+    dp/du) or the x axis (normalmap: s = normalize(x - n n_x)), t = n x s. A tangent along n
+    (nothing left after the projection) falls back to the x axis."""
     n = np.array(np.broadcast_to(n, np.broadcast_shapes(n.shape, wo.shape)), dtype=np.float64)
     if flip:
         bad = wo[:, 2] * np.einsum("ij,ij->i", wo, n) <= 0
@@ -43,6 +45,11 @@ def shading_frame(n, wo, flip=True):
     n /= np.linalg.norm(n, axis=1, keepdims=True)
     s = -n * n[:, :1]
     s[:, 0] += 1
+    if tangent is not None:
+        d = np.broadcast_to(tangent, n.shape).astype(np.float64)
+        sd = d - n * np.einsum("ij,ij->i", n, d)[:, None]   # Mitsuba bumpmap: s = dp_du - n (n . dp_du)
+        ok = np.einsum("ij,ij->i", sd, sd) > 1e-20 * np.einsum("ij,ij->i", d, d)
+        s = np.where(ok[:, None], sd, s)
     s /= np.linalg.norm(s, axis=1, keepdims=True)
     return s, np.cross(n, s), n
 
@@ -53,9 +60,10 @@ def _local(v, frame):
 
 
 def _world(v, frame):
+    """v (rows, shading frame) in the local frame: not renormalized (|w| = 1 to float64 rounding),
+    so a shading frame equal to the local one gives v back bit for bit."""
     s, t, n = frame
-    w = v[:, :1] * s + v[:, 1:2] * t + v[:, 2:] * n
-    return w / np.linalg.norm(w, axis=1, keepdims=True)
+    return v[:, :1] * s + v[:, 1:2] * t + v[:, 2:] * n
 
 
 def _normals(x, convention):
@@ -82,61 +90,15 @@ def _normals(x, convention):
     return a
 
 
-class NormalMap(_Composite):
-    """A model evaluated in the shading frame of tangent-space normals (Mitsuba 3 ``normalmap``).
-
-    model: the model. normals: unit vectors with z > 0 in the local (geometric) frame, (3,) or
-    (..., 3) per element (broadcast against the call's batch). convention: ``"opengl"`` (y up, as
-    given) or ``"directx"`` (y down: the normals' y is negated). ``wo``, ``wi`` and sampled
-    directions stay in the geometric local frame. The shading frame of a normal n is Mitsuba's:
-    s = normalize(x - n n_x), t = n x s (so anisotropic models keep their x axis as nearly as
-    possible).
-
-    The rule for the geometric vs the shading normal is Mitsuba 3.9's ``normalmap``:
-
-    * ``flip_invalid_normals`` (default True): where wo lies on the other side of the shading
-      normal than of the geometric one, the normal's tangential part is negated (Schüssler et al.
-      2017), so wo always sees the shading surface from the side it sees the geometry.
-    * No light leaks: f = pdf = 0 where wi lies on different sides of the geometric and the shading
-      normal (Mitsuba: cos_theta(wo) cos_theta(perturbed_wo) > 0); sampled directions there are
-      invalid.
-    * f is the model's f in the shading frame times |wi . n_s| / |wi . n_g| (Mitsuba's eval includes
-      the shading cosine; bsdfkit's excludes the geometric one), times Estevez et al. 2019's shadow
-      terminator G(wi) when ``shadowing`` (Mitsuba's use_shadowing_function, default True); pdf is
-      the model's (a solid-angle density does not depend on the frame).
-    * TransportMode.Importance: the adjoint (Veach 1997, §5.3; pbrt-v4 BDPT's CorrectShadingNormal):
-      the cosine ratio and G move to wo, f = f_model(Importance) |wo . n_s| / |wo . n_g| G(wo), the
-      frame still built from wo. So f(wo, wi, Radiance) = f(wi, wo, Importance) wherever no flip
-      occurs for either direction (the frames agree); a flip breaks it, as in Mitsuba.
-
-    Consequences: a normal-mapped white Lambertian reflects less than 1 in Radiance mode (the
-    cosine-weighted wedge where wi is above the shading but below the geometric surface is lost,
-    and G < 1); in Importance mode the ratio |wo . n_s| / |wo . n_g| exceeds 1 at grazing wo, so
-    the albedo can exceed 1 there (the known cost of shading normals): the class does not declare
-    ``energy_conserving``, and it is not ``reciprocal`` (the flip and G are one-sided).
-
-    Parameters
-    ----------
-    model : BxDF or str
-        The model evaluated in the shading frame.
-    normals : array_like, default (0, 0, 1)
-        Unit tangent-space normals with z > 0, (3,) or (..., 3) per element.
-    convention : {"opengl", "directx"}, default "opengl"
-        "directx" negates the normals' y.
-    flip_invalid_normals : bool, default True
-        Mitsuba's rule: the shading normal is flipped where wo sees it from the other side.
-    shadowing : bool, default True
-        Estevez et al. 2019's shadow terminator term.
-    """
+class _ShadingNormals(_Composite, register=False):
+    """The shared rule of NormalMap and BumpMap (Mitsuba 3.9 ``normalmap`` / ``bumpmap``, described
+    in NormalMap's docstring): a subclass's ``_param_arrays()`` gives ``normals`` (unit shading
+    normals with z > 0 in the local frame, (3,) or rows) and optionally ``tangent`` (the direction
+    the shading frame's s axis follows, default the x axis); its ``_params`` hold ``model``,
+    ``flip_invalid_normals`` and ``shadowing``."""
 
     __slots__ = ()
-    _param_tails = {"normals": (3,)}
-    description = "A model in the shading frame of tangent-space normals (Mitsuba normalmap)"
-    examples = {"tilted diffuse": "normal_map [diffuse 0.8] 0.36,-0.48,0.8",
-                "tilted rough gold": "normal_map [conductor metal=Au alpha=0.3 masking=separable] 0,0.28,0.96",
-                "no flip, no shadowing": "normal_map [plastic 0.5 alpha=0.2 masking=separable] 0.6,0,0.8 "
-                                         "flip_invalid_normals=false shadowing=false"}
-    mitsuba = "normalmap"
+    _param_tails = {"normals": (3,), "tangent": (3,)}
     energy_conserving = False
     exact_eval = _Flag(True, _all("exact_eval"))
     reciprocal = False
@@ -144,35 +106,16 @@ class NormalMap(_Composite):
     transmission = _Flag(False, _all("transmission"))
     delta_only = _Flag(False, _all("delta_only"))
 
-    def __init__(self, model, normals=(0.0, 0.0, 1.0), convention="opengl", flip_invalid_normals=True,
-                 shadowing=True):
-        """A NormalMap: the parameters are described in the class docstring (``help(bsdfkit.NormalMap)``);
-        a non-unit normal raises ValueError naming ``normals`` and the first bad index."""
-        for name, v in (("flip_invalid_normals", flip_invalid_normals), ("shadowing", shadowing)):
-            if not isinstance(v, (bool, np.bool_)):
-                raise TypeError(f"{name}: expected True or False, got {v!r}")
-        super().__init__(model=_model(model, "model"), normals=_normals(normals, convention), convention=convention,
-                         flip_invalid_normals=bool(flip_invalid_normals), shadowing=bool(shadowing))
-
-    def _param_arrays(self):
-        n = self._params["normals"]
-        if self._params["convention"] == "directx":
-            n = n * np.array([1.0, -1.0, 1.0])
-        return {"normals": n}
-
     def _flags(self) -> int:
         return int(self.model.flags)
-
-    def describe(self) -> str:
-        n = self._params["normals"]
-        txt = "(" + ", ".join(f"{x:.2g}" for x in n) + ")" if n.ndim == 1 else "map"
-        return f"NormalMap {type(self.model).__name__}, n={txt}"
 
     def _frame(self, wo, P):
         n = P["_n"]
         w = np.broadcast_to(wo.astype(np.float64), (n, 3))
+        t = P.get("tangent")
         return w, shading_frame(np.broadcast_to(P["normals"].astype(np.float64), (n, 3)), w,
-                                self._params["flip_invalid_normals"])
+                                self._params["flip_invalid_normals"], None if t is None else
+                                np.broadcast_to(t.astype(np.float64), (n, 3)))
 
     def _factor(self, wo, wi, wo_p, wi_p, frame, md):
         """|w . n_s| / |w . n_g| (times G(w) with shadowing) of wi (Radiance) or wo (Importance)."""
@@ -225,6 +168,83 @@ class NormalMap(_Composite):
         rows["wi"][inv] = (0, 0, 1)
         rows["pdf"][inv], rows["flags"][inv], rows["eta"][inv] = 0, 0, 1
         return rows
+
+
+class NormalMap(_ShadingNormals):
+    """A model evaluated in the shading frame of tangent-space normals (Mitsuba 3 ``normalmap``).
+
+    model: the model. normals: unit vectors with z > 0 in the local (geometric) frame, (3,) or
+    (..., 3) per element (broadcast against the call's batch). convention: ``"opengl"`` (y up, as
+    given) or ``"directx"`` (y down: the normals' y is negated). ``wo``, ``wi`` and sampled
+    directions stay in the geometric local frame. The shading frame of a normal n is Mitsuba's:
+    s = normalize(x - n n_x), t = n x s (so anisotropic models keep their x axis as nearly as
+    possible).
+
+    The rule for the geometric vs the shading normal is Mitsuba 3.9's ``normalmap``:
+
+    * ``flip_invalid_normals`` (default True): where wo lies on the other side of the shading
+      normal than of the geometric one, the normal's tangential part is negated (Schüssler et al.
+      2017), so wo always sees the shading surface from the side it sees the geometry.
+    * No light leaks: f = pdf = 0 where wi lies on different sides of the geometric and the shading
+      normal (Mitsuba: cos_theta(wo) cos_theta(perturbed_wo) > 0); sampled directions there are
+      invalid.
+    * f is the model's f in the shading frame times |wi . n_s| / |wi . n_g| (Mitsuba's eval includes
+      the shading cosine; bsdfkit's excludes the geometric one), times Estevez et al. 2019's shadow
+      terminator G(wi) when ``shadowing`` (Mitsuba's use_shadowing_function, default True); pdf is
+      the model's (a solid-angle density does not depend on the frame).
+    * TransportMode.Importance: the adjoint (Veach 1997, §5.3; pbrt-v4 BDPT's CorrectShadingNormal):
+      the cosine ratio and G move to wo, f = f_model(Importance) |wo . n_s| / |wo . n_g| G(wo), the
+      frame still built from wo. So f(wo, wi, Radiance) = f(wi, wo, Importance) wherever no flip
+      occurs for either direction (the frames agree); a flip breaks it, as in Mitsuba.
+
+    Consequences: a normal-mapped white Lambertian reflects less than 1 in Radiance mode (the
+    cosine-weighted wedge where wi is above the shading but below the geometric surface is lost,
+    and G < 1); in Importance mode the ratio |wo . n_s| / |wo . n_g| exceeds 1 at grazing wo, so
+    the albedo can exceed 1 there (the known cost of shading normals): the class does not declare
+    ``energy_conserving``, and it is not ``reciprocal`` (the flip and G are one-sided).
+
+    Parameters
+    ----------
+    model : BxDF or str
+        The model evaluated in the shading frame.
+    normals : array_like, default (0, 0, 1)
+        Unit tangent-space normals with z > 0, (3,) or (..., 3) per element.
+    convention : {"opengl", "directx"}, default "opengl"
+        "directx" negates the normals' y.
+    flip_invalid_normals : bool, default True
+        Mitsuba's rule: the shading normal is flipped where wo sees it from the other side.
+    shadowing : bool, default True
+        Estevez et al. 2019's shadow terminator term.
+    """
+
+    __slots__ = ()
+    description = "A model in the shading frame of tangent-space normals (Mitsuba normalmap)"
+    examples = {"tilted diffuse": "normal_map [diffuse 0.8] 0.36,-0.48,0.8",
+                "tilted rough gold": "normal_map [conductor metal=Au alpha=0.3 masking=separable] 0,0.28,0.96",
+                "no flip, no shadowing": "normal_map [plastic 0.5 alpha=0.2 masking=separable] 0.6,0,0.8 "
+                                         "flip_invalid_normals=false shadowing=false"}
+    mitsuba = "normalmap"
+
+    def __init__(self, model, normals=(0.0, 0.0, 1.0), convention="opengl", flip_invalid_normals=True,
+                 shadowing=True):
+        """A NormalMap: the parameters are described in the class docstring (``help(bsdfkit.NormalMap)``);
+        a non-unit normal raises ValueError naming ``normals`` and the first bad index."""
+        for name, v in (("flip_invalid_normals", flip_invalid_normals), ("shadowing", shadowing)):
+            if not isinstance(v, (bool, np.bool_)):
+                raise TypeError(f"{name}: expected True or False, got {v!r}")
+        super().__init__(model=_model(model, "model"), normals=_normals(normals, convention), convention=convention,
+                         flip_invalid_normals=bool(flip_invalid_normals), shadowing=bool(shadowing))
+
+    def _param_arrays(self):
+        n = self._params["normals"]
+        if self._params["convention"] == "directx":
+            n = n * np.array([1.0, -1.0, 1.0])
+        return {"normals": n}
+
+    def describe(self) -> str:
+        n = self._params["normals"]
+        txt = "(" + ", ".join(f"{x:.2g}" for x in n) + ")" if n.ndim == 1 else "map"
+        return f"NormalMap {type(self.model).__name__}, n={txt}"
 
     def to_mitsuba(self, approximate: bool = False) -> dict:
         """``normalmap`` with a constant ``rgb`` texture (n + 1) / 2 (the OpenGL normal: a DirectX

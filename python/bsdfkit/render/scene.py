@@ -68,7 +68,7 @@ class Camera:
 
 def is_compiled(model) -> bool:
     """True for a model whose code is compiled (the renderer shades those only); False for the
-    Python ones (``bk.Mix``, ``bk.TwoSided``, ``bk.Mask``, ``bk.NormalMap``, ``bk.Custom``)."""
+    Python ones (``bk.Mix``, ``bk.TwoSided``, ``bk.Mask``, ``bk.NormalMap``, ``bk.BumpMap``, ``bk.Custom``)."""
     return type(getattr(model, "_core", None)).__module__.startswith("bsdfkit._core")
 
 
@@ -77,7 +77,7 @@ def _model_check(material, name="material"):
     if core is None:
         raise TypeError(f"{name}: expected a bsdfkit model (e.g. bk.Diffuse(0.8)), got {type(material).__name__}")
     if not is_compiled(material):
-        # a Python-implemented model (bk.Mix, bk.TwoSided, bk.Mask, bk.NormalMap, bk.Custom): the
+        # a Python-implemented model (bk.Mix, bk.TwoSided, bk.Mask, bk.NormalMap, bk.BumpMap, bk.Custom): the
         # renderer's per-bounce shading runs compiled model code only
         raise TypeError(f"{name}: {type(material).__name__} ({material.describe()}) is implemented in Python and the "
                         "preview renderer takes compiled models only (e.g. bk.Diffuse, bk.Conductor); render one of "
