@@ -9,7 +9,7 @@ from .._arrays import broadcast_batch
 from . import _mitsuba_export as _me
 from ._composite_core import array_param
 from .composite import _model
-from .normal_map import _ShadingNormals
+from .normal_map import _rcross, _rnorm, _ShadingNormals
 
 __all__ = ["BumpMap", "height_gradient", "bump_normals"]
 
@@ -76,8 +76,8 @@ def bump_normals(dh_du, dh_dv, scale=1.0, dp_du=None, dp_dv=None):
     a, b = np.empty(shape + (3,)), np.empty(shape + (3,))
     a[..., :2], a[..., 2] = du[..., :2], gu
     b[..., :2], b[..., 2] = dv[..., :2], gv
-    n = np.cross(a, b)   # Mitsuba bumpmap: n = normalize(cross(dp_du', dp_dv'))
-    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    n = _rcross(a, b)   # Mitsuba bumpmap: n = normalize(cross(dp_du', dp_dv'))
+    n /= _rnorm(n)
     return np.where(n[..., 2:] < 0, -n, n)   # Mitsuba: n[dot(si.n, n) < 0] *= -1
 
 

@@ -31,6 +31,21 @@ def shadow_terminator(n, w):
     return np.where(np.isfinite(g), g, 0.0)
 
 
+def _rdot(a, b):
+    """Row-wise a . b, summed x, y, z in that order: the same bits for a row whatever the number of
+    rows (numpy's einsum / norm reductions may group the sums differently by array size)."""
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
+
+
+def _rnorm(a):
+    return np.sqrt(_rdot(a, a))[..., None]
+
+
+def _rcross(a, b):
+    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1], a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
+
+
 def shading_frame(n, wo, flip=True, tangent=None):
     """(s, t, n) of the shading frame of unit normals ``n`` (rows) for incident ``wo``, float64, as
     Mitsuba 3.9 ``normalmap``'s and ``bumpmap``'s ``frame``: with ``flip``, a normal on whose other
@@ -40,23 +55,23 @@ def shading_frame(n, wo, flip=True, tangent=None):
     (nothing left after the projection) falls back to the x axis."""
     n = np.array(np.broadcast_to(n, np.broadcast_shapes(n.shape, wo.shape)), dtype=np.float64)
     if flip:
-        bad = wo[:, 2] * np.einsum("ij,ij->i", wo, n) <= 0
+        bad = wo[:, 2] * _rdot(wo, n) <= 0
         n[bad, :2] *= -1
-    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    n /= _rnorm(n)
     s = -n * n[:, :1]
     s[:, 0] += 1
     if tangent is not None:
         d = np.broadcast_to(tangent, n.shape).astype(np.float64)
-        sd = d - n * np.einsum("ij,ij->i", n, d)[:, None]   # Mitsuba bumpmap: s = dp_du - n (n . dp_du)
-        ok = np.einsum("ij,ij->i", sd, sd) > 1e-20 * np.einsum("ij,ij->i", d, d)
+        sd = d - n * _rdot(n, d)[:, None]   # Mitsuba bumpmap: s = dp_du - n (n . dp_du)
+        ok = _rdot(sd, sd) > 1e-20 * _rdot(d, d)
         s = np.where(ok[:, None], sd, s)
-    s /= np.linalg.norm(s, axis=1, keepdims=True)
-    return s, np.cross(n, s), n
+    s /= _rnorm(s)
+    return s, _rcross(n, s), n
 
 
 def _local(v, frame):
     s, t, n = frame
-    return np.stack([np.einsum("ij,ij->i", v, s), np.einsum("ij,ij->i", v, t), np.einsum("ij,ij->i", v, n)], 1)
+    return np.stack([_rdot(v, s), _rdot(v, t), _rdot(v, n)], 1)
 
 
 def _world(v, frame):
@@ -69,7 +84,7 @@ def _world(v, frame):
 def _normals(x, convention):
     a = array_param(x, "normals", tail=(3,))
     items = a.reshape(-1, 3)
-    bad = ~(np.abs(np.einsum("ij,ij->i", items, items) - 1) <= 1e-4)
+    bad = ~(np.abs(_rdot(items, items) - 1) <= 1e-4)
     if bad.any():
         i = int(np.argmax(bad))
         idx = tuple(int(j) for j in np.unravel_index(i, a.shape[:-1])) if a.ndim > 1 else ()
