@@ -4,8 +4,8 @@ One batched Levenberg-Marquardt run for all texels: each iteration is one ``eval
 the (texels, pairs) batch of the still-active texels, with their parameters as per-element arrays
 (shape (T, 1), RGB (T, 1, 3)), then per-texel normal equations solved with numpy's batched
 ``linalg.solve`` on (T, P, P), per-texel damping (Nielsen's update) and the family's
-``param_ranges`` as bounds (a parameter at a bound whose step points outwards is held for that
-step). Each texel's iterations depend on its own data only, so splitting the texels into chunks
+``param_ranges`` as bounds (a step that crosses a bound goes 90 % of the way to it; a parameter at
+a bound whose descent direction points outwards is held for that step). Each texel's iterations depend on its own data only, so splitting the texels into chunks
 (``chunk=``, or Dask tasks with ``client=``) gives bit-identical results.
 
 Residuals are those of ``bk.fit`` on raw samples, per texel: on y = f |cos wi| with the floor
@@ -258,7 +258,19 @@ def _model(setup, x, fixed_t, per_texel_shape):
 
 
 def _fit_block(setup, wo, wi, values, w, x0, fixed_t, max_iter, tol):
-    """Batched Levenberg-Marquardt on one block of texels: returns the raw per-texel arrays."""
+    """Batched Levenberg-Marquardt on one block of texels, x0 (T, S, P): S starts per texel, the
+    lowest final cost kept; returns the raw per-texel arrays."""
+    T, S = x0.shape[:2]
+    if S > 1:
+        rep = lambda a: np.repeat(a, S, axis=0)  # noqa: E731
+        out = _fit_block(setup, rep(wo), rep(wi), rep(values), rep(np.broadcast_to(w, values.shape)),
+                         x0.reshape(T * S, 1, -1), {k: rep(v) for k, v in fixed_t.items()}, max_iter, tol)
+        best = np.argmin(out["cost"].reshape(T, S), axis=1)   # the first of equal costs
+        pick = np.arange(T) * S + best
+        res = {k: v[pick] for k, v in out.items()}
+        res["iterations"] = out["iterations"].reshape(T, S).sum(axis=1)
+        return res
+    x0 = x0[:, 0]
     T, M = values.shape[:2]
     P = x0.shape[1]
     lo, hi = setup["lo"], setup["hi"]
@@ -317,7 +329,12 @@ def _fit_block(setup, wo, wi, values, w, x0, fixed_t, max_iter, tol):
         Ad = A + (lam[act][:, None] * D)[..., None] * eye
         Ad = np.where(held[:, :, None] | held[:, None, :], 0.0, Ad) + held[:, :, None] * eye
         step = np.linalg.solve(Ad, -gp[..., None])[..., 0]
-        xn = np.clip(xa + step, lo, hi)
+        # a step crossing a bound goes 90 % of the way to it, coordinate by coordinate (landing on
+        # the bound stalls where the derivative vanishes there, e.g. a conductor's d f / d k at
+        # k = 0); a parameter already at its bound stays there
+        xn = xa + step
+        xn = np.where(xn < lo, np.where(xa > lo, xa + 0.9 * (lo - xa), lo), xn)
+        xn = np.where(xn > hi, np.where(xa < hi, xa + 0.9 * (hi - xa), hi), xn)
         dx = xn - xa
         rn, Jn, okn = evaluate(act, xn)
         cn = np.where(okn, 0.5 * np.einsum("tn,tn->t", rn, rn), np.inf)
@@ -373,7 +390,7 @@ def _chunk_task(setup, wo, wi, values, w, x0, fixed_t, max_iter, tol, kernel_thr
 
 
 def fit_texels(family, wo, wi, values, params=None, init=None, fixed=None, loss="log", weights=None, *,
-               max_iter=100, tol=1e-10, chunk=None, client=None, kernel_threads=1) -> TexelFit:
+               starts=1, seed=0, max_iter=100, tol=1e-10, chunk=None, client=None, kernel_threads=1) -> TexelFit:
     """Fit per-texel parameters of ``family`` to observations, all texels at once.
 
     A batched Levenberg-Marquardt: each iteration is one ``eval_grad`` call on the (T, M) batch
@@ -407,8 +424,15 @@ def fit_texels(family, wo, wi, values, params=None, init=None, fixed=None, loss=
         "l2"), or over max(y, floor); y = f |cos wi|.
     weights : array_like, shape (T, M) or (T, M, 3), optional
         Residual weights (0 drops an observation).
+    starts : int, optional
+        Starting points per texel: the given one plus ``starts - 1`` drawn uniformly within the
+        bounds (seeded by ``seed``, per texel, independent of chunking); the lowest cost is
+        kept. Several starts cost that many times the time and escape local minima at the
+        bounds (e.g. a Conductor's eta, k per channel).
+    seed : int, optional
+        Seed of the extra starts.
     max_iter : int, optional
-        Iterations per texel (default 100).
+        Iterations per texel and start (default 100).
     tol : float, optional
         Relative cost, step and gradient tolerances (default 1e-10).
     chunk : int, optional
@@ -453,8 +477,15 @@ def fit_texels(family, wo, wi, values, params=None, init=None, fixed=None, loss=
     if kernel_threads is not None and (isinstance(kernel_threads, bool) or not isinstance(kernel_threads, int)
                                        or kernel_threads < 1):
         raise ValueError(f"kernel_threads: must be an integer >= 1 or None, got {kernel_threads!r}")
+    if isinstance(starts, bool) or not isinstance(starts, (int, np.integer)) or starts < 1:
+        raise ValueError(f"starts: must be an integer >= 1, got {starts!r}")
     setup, (wo, wi, values, w, x0) = _prepare(family, wo, wi, values, params, init, fixed, loss, weights)
     T = values.shape[0]
+    lo, hi = setup["lo"], setup["hi"]
+    finite_hi = np.where(np.isfinite(hi), hi, np.maximum(lo, 0) + 4.0)
+    rng = np.random.default_rng([seed, 0x746578])
+    extra = lo + (finite_hi - lo) * rng.random((T, starts - 1, len(lo)))
+    x0 = np.concatenate([x0[:, None], extra], axis=1)
     fixed_t = setup["fixed_t"]
     if client is not None:
         from distributed import Client
