@@ -94,9 +94,12 @@ class TexelFit:
                  f"{np.median(self.iterations) if T else 0:g}, max {np.max(self.iterations) if T else 0}",
                  f"  rms         median {np.median(self.rms) if T else np.nan:.3g}, p99 "
                  f"{np.percentile(self.rms, 99) if T else np.nan:.3g}"]
+        w = max([11] + [len(c) for c in self.columns])
+        lines = [lines[0]] + [ln[:2] + ln[2:].split(" ", 1)[0].ljust(w) + " " + ln[2:].split(" ", 1)[1].lstrip()
+                              for ln in lines[1:]]
         for j, c in enumerate(self.columns):
             if T:
-                lines.append(f"  {c:<11} median {np.median(self.x[:, j]):.6g}, median s.e. "
+                lines.append(f"  {c:<{w}} median {np.median(self.x[:, j]):.6g}, median s.e. "
                              f"{np.median(self.stderr[:, j]):.3g}")
         return "\n".join(lines)
 
