@@ -373,3 +373,21 @@ def test_per_element_parameters_match_mitsuba_bitmaps(which):
     f, p = ours.eval(wo, wi), ours.pdf(wo, wi)
     assert np.quantile(_rel(f, f_ref), 0.999) <= 1e-5
     assert np.quantile(_rel(p, p_ref), 0.999) <= 1e-5
+
+
+def test_composites_over_per_element_children():
+    rng = np.random.default_rng(9)
+    n = 20
+    inner = bk.FilamentStandard(base_color=rng.uniform(0, 1, (n, 3)), roughness=rng.uniform(0.2, 1, n))
+    nm = bk.NormalMap(inner, normals=(0.1, 0.0, np.sqrt(1 - 0.01)))
+    wo, wi = random_dirs(rng, n, hemisphere=True), random_dirs(rng, n, hemisphere=True)
+    f = nm.eval(wo, wi)   # flat maps, one value per row: element i is NormalMap of element i's model
+    for i in (0, 7, 19):
+        ref = bk.NormalMap(bk.FilamentStandard(base_color=inner.base_color[i], roughness=inner.roughness[i]),
+                           normals=(0.1, 0.0, np.sqrt(1 - 0.01)))
+        _eq(f[i], ref.eval(wo[i:i + 1], wi[i:i + 1])[0], f"NormalMap element {i}")
+    with pytest.raises(NotImplementedError, match="inside a composite.*albedo"):
+        nm.albedo(wo, n_samples=8)
+    grid = bk.NormalMap(bk.Diffuse(rng.uniform(0, 1, (4, 5, 3))), normals=(0.0, 0.0, 1.0))
+    with pytest.raises(NotImplementedError, match=r"reflectance has shape \(4, 5\)"):
+        grid.eval(bk.direction(0.3, 0.0), bk.direction(0.4, 1.0))

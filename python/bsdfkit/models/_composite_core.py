@@ -57,15 +57,41 @@ def take(a, idx):
     return a[idx]
 
 
+def _check_varying_child(m, rows):
+    """A child with per-element parameters runs on the composite's rows (flattened, and for some
+    operations subsets or repeats of them): supported while its arrays are flat with one value
+    per row of the call; otherwise a clear refusal instead of a misleading broadcasting error."""
+    names = getattr(m, "varying", ())
+    if not names:
+        return
+    vp = type(m).varying_params
+    for k in names:
+        v = m._params[k]
+        shape = v.shape if vp[k] == 1 else v.shape[:-1]
+        if shape != (rows,):
+            raise NotImplementedError(
+                f"{type(m).__name__} inside a composite: per-element parameters ({', '.join(names)}) are supported "
+                f"there only as flat arrays with one value per element of the composite's call ({rows} here, "
+                f"{k} has shape {shape}), and not in the composite's albedo; flatten the maps and the "
+                "directions, or evaluate the inner model directly")
+
+
+def _rows(wo, wi) -> int:
+    return math.prod(np.broadcast_shapes(np.shape(wo)[:-1], np.shape(wi)[:-1]))
+
+
 def child_eval(m, wo, wi, md, lam):
+    _check_varying_child(m, _rows(wo, wi))
     return m.eval(wo, wi, md) if lam is None else m.eval(wo, wi, md, wavelengths=lam)
 
 
 def child_pdf(m, wo, wi, md, sf, lam):
+    _check_varying_child(m, _rows(wo, wi))
     return m.pdf(wo, wi, md, sf) if lam is None else m.pdf(wo, wi, md, sf, wavelengths=lam)
 
 
 def child_sample(m, wo, uc, u, md, sf, lam):
+    _check_varying_child(m, _rows(wo, np.zeros(np.shape(uc) + (3,))))
     if lam is None:
         return m.sample(wo, uc, u, mode=md, sample_flags=sf)
     return m.sample(wo, uc, u, mode=md, sample_flags=sf, wavelengths=lam)
