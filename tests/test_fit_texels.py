@@ -30,8 +30,8 @@ def _case(name, rng, T):
         return (bk.Conductor, {"k": rng.uniform(2, 4, (T, 3)), "alpha": rng.uniform(0.1, 0.6, T)}, ["k", "alpha"],
                 {"eta": eta}, {})
     if name == "FilamentStandard":   # 4 starts: one start stalls at a bound on a few texels of 300
-        return (bk.FilamentStandard, {"base_color": rng.uniform(0.1, 0.9, (T, 3)), "roughness": rng.uniform(0.3, 0.9, T),
-                                      "metallic": rng.uniform(0.1, 0.9, T)},
+        return (bk.FilamentStandard, {"base_color": rng.uniform(0.1, 0.9, (T, 3)),
+                                      "roughness": rng.uniform(0.3, 0.9, T), "metallic": rng.uniform(0.1, 0.9, T)},
                 ["base_color", "roughness", "metallic"], {}, {"starts": 4})
     raise KeyError(name)
 

@@ -5,7 +5,8 @@ the (texels, pairs) batch of the still-active texels, with their parameters as p
 (shape (T, 1), RGB (T, 1, 3)), then per-texel normal equations solved with numpy's batched
 ``linalg.solve`` on (T, P, P), per-texel damping (Nielsen's update) and the family's
 ``param_ranges`` as bounds (a step that crosses a bound goes 90 % of the way to it; a parameter at
-a bound whose descent direction points outwards is held for that step). Each texel's iterations depend on its own data only, so splitting the texels into chunks
+a bound whose descent direction points outwards is held for that step). Each texel's iterations
+depend on its own data only, so splitting the texels into chunks
 (``chunk=``, or Dask tasks with ``client=``) gives bit-identical results.
 
 Residuals are those of ``bk.fit`` on raw samples, per texel: on y = f |cos wi| with the floor
