@@ -12,7 +12,7 @@ Subpackages, by concern:
 ``models``    the model classes and their registry (one module per family; ``bk.MODELS``)
 ``plot``      matplotlib views (polar, hemisphere, half/diff, albedo, samples, gallery, pareto, ...)
 ``tuning``    speed versus accuracy: knobs, errors, costs, ``tradeoff`` and ``simplify``
-``fitting``   parameter gradients (``eval_grad``), least-squares fits (``fit``; ``fit_many`` on Dask)
+``fitting``   parameter gradients (``eval_grad``), least-squares fits (``fit``; ``fit_many`` on Dask; ``fit_texels`` per texel)
 ``interop``   scene materials in: Mitsuba 3 dictionaries, pbrt-v4 scene text
 ``render``    the path-traced preview renderer
 ``spectral``  spectra as values: named, sampled, RGB uplift; wavelength sampling, colour estimates
@@ -41,7 +41,7 @@ _LAZY_MODULES = ("filament", "fitting", "interop", "io", "measured", "plot", "re
 _LAZY_NAMES = {
     "from_mitsuba": "interop", "from_pbrt": "interop", "parse_pbrt_materials": "interop",
     "Table": "tuning", "knobs": "tuning", "simplify": "tuning", "tradeoff": "tuning",
-    "FitReport": "fitting", "fit": "fitting", "fit_many": "fitting",
+    "FitReport": "fitting", "fit": "fitting", "fit_many": "fitting", "fit_texels": "fitting",
     "__version__": "_version",
 }
 
@@ -64,4 +64,4 @@ __all__ = models.__all__ + [
     "BxDFFlags", "ReflTrans", "TransportMode", "direction", "get_num_threads", "hemisphere_grid", "release_memory", "set_num_threads",
     "Custom", "filament", "models", "plot", "tuning", "render", "io", "tradeoff", "simplify", "knobs", "Table", "from_mitsuba",
     "from_pbrt", "parse_pbrt_materials", "interop", "spectral", "Spectrum", "sample_wavelengths", "spectrum_to_rgb",
-    "__version__", "measured", "fitting", "fit", "fit_many", "FitReport"]
+    "__version__", "measured", "fitting", "fit", "fit_many", "fit_texels", "FitReport"]
