@@ -228,8 +228,13 @@ class BxDF:
     cosine factor; ``pdf`` is per unit solid angle. Inputs broadcast with numpy rules over
     their leading axes. float32 inputs run float32 kernels, anything else real runs float64.
 
+    Per-element parameters (spatially varying materials): the parameters a class lists in
+    ``varying_params`` also take numpy arrays, ``(...)`` for a real and ``(..., 3)`` for an RGB
+    value, broadcasting with the directions' leading axes; element i then gets exactly the values
+    of the model built from element i's parameters (docs/howto/arrays.md).
+
     Models are immutable values: equal parameters compare and hash equal, ``eval(repr(m)) == m``
-    and they pickle.
+    (arrays of more than 12 values print as their shape and digest) and they pickle.
 
     Parameters
     ----------
@@ -243,6 +248,12 @@ class BxDF:
     >>> m = bk.Conductor.from_metal("Cu", alpha=0.2)
     >>> isinstance(m, bk.BxDF), m == bk.Conductor.from_metal("Cu", alpha=0.2)
     (True, True)
+    >>> rough = np.array([[0.1, 0.3], [0.5, 0.7]])           # a 2 x 2 roughness map
+    >>> sv = bk.Conductor.from_metal("Cu", alpha=rough)
+    >>> f = sv.eval(bk.direction(0.3, 0.0), bk.direction(0.3, np.pi))   # one pair over the map
+    >>> f.shape, bool(np.all(f[1, 0] == bk.Conductor.from_metal("Cu", alpha=0.5).eval(
+    ...     bk.direction(0.3, 0.0), bk.direction(0.3, np.pi))))
+    ((2, 2, 3), True)
     """
 
     _fields: tuple = ()
