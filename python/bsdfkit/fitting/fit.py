@@ -136,18 +136,25 @@ def _target_samples(target, directions, n, seed):
     raise TypeError("target: expected a bsdfkit model or raw samples (wo, wi, value)")
 
 
-def _start_model(family, init, fixed):
-    """The family's model at the starting point: its first registered example, then ``fixed``
-    and ``init`` (a dict of parameter values, or a model of the family)."""
+def _check_family(family, init):
+    """TypeError unless ``family`` is a model class and ``init`` is None, a dict or a model of it;
+    returns the parameters of such a model, else ``init`` itself."""
     from ..models.base import BxDF
-    from ..models.spec import example_model
     if not (isinstance(family, type) and issubclass(family, BxDF)):
         raise TypeError(f"family: expected a model class (e.g. bk.Conductor), got {family!r}")
     if isinstance(init, family):
-        p = dict(init._params)
-    elif isinstance(init, BxDF):
+        return dict(init._params)
+    if isinstance(init, BxDF):
         raise TypeError(f"init: expected a {family.__name__} or a dict, got a {type(init).__name__}")
-    else:
+    return init
+
+
+def _start_model(family, init, fixed):
+    """The family's model at the starting point: its first registered example, then ``fixed``
+    and ``init`` (a dict of parameter values, or a model of the family)."""
+    from ..models.spec import example_model
+    p = _check_family(family, init)
+    if p is None or p is init:
         p = dict(example_model(family)._params)
     for name, d in (("fixed", fixed), ("init", init if isinstance(init, dict) else None)):
         if d is None:
@@ -226,6 +233,21 @@ def _residuals(loss, y_t, floor, w):
         return (lambda y: (y - y_t) * s), (lambda y: s)
     lt = np.log(y_t + floor)
     return (lambda y: w * (np.log(y + floor) - lt)), (lambda y: w / (y + floor))
+
+
+def _start_params(m0, cols) -> dict:
+    """The starting model's parameters for a fit of ``cols``: a parameter left to a default derived
+    from others (None, e.g. FilamentCloth's sheen_color = sqrt(base_color)) takes its starting
+    value, since eval_grad differentiates each field on its own; a fitted one still None raises."""
+    base = dict(m0._params)
+    for k, v in list(base.items()):
+        if v is None and hasattr(m0, "effective_" + k):
+            base[k] = np.asarray(getattr(m0, "effective_" + k), dtype=np.float64)
+    for col in cols:
+        for field, _ in col:
+            if base[field] is None:
+                raise ValueError(f"params: {field} is None in the starting model; give it in init")
+    return base
 
 
 def _family_setup(family, params, init, fixed, loss, starts):
@@ -343,16 +365,7 @@ def fit(target, family, params=None, init=None, fixed=None, directions=None, los
     if not np.any(w > 0):
         raise ValueError("weights: all zero; nothing would be fitted")
     res_fn, dres_fn = _residuals(loss, y_t, floor, w)
-    base = dict(m0._params)
-    # a parameter left to a default derived from others (None, e.g. FilamentCloth's sheen_color =
-    # sqrt(base_color)) takes its starting value: eval_grad differentiates each field on its own
-    for k, v in list(base.items()):
-        if v is None and hasattr(m0, "effective_" + k):
-            base[k] = np.asarray(getattr(m0, "effective_" + k), dtype=np.float64)
-    for col in cols:
-        for field_, _ in col:
-            if base[field_] is None:
-                raise ValueError(f"params: {field_} is None in the starting model; give it in init")
+    base = _start_params(m0, cols)
     m0 = family._from_params(base)
     x0 = np.clip(np.array([_get(m0, c) for c in cols]), lo, hi)
     cache = {}

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .fit import FLOOR_FRACTION, _family_setup, _one_blas_thread
+from .fit import FLOOR_FRACTION, _check_family, _family_setup, _one_blas_thread, _start_params
 
 __all__ = ["TexelFit", "fit_texels"]
 
@@ -192,13 +192,7 @@ def _prepare(family, wo, wi, values, params, init, fixed, loss, weights):
             raise ValueError(f"weights: shape {wa.shape} does not broadcast to (T, M) or (T, M, 3) = {shape}") from None
         if not (np.all(np.isfinite(w)) and np.all(w >= 0)):
             raise ValueError("weights: must be finite and >= 0")
-    from ..models.base import BxDF
-    if not (isinstance(family, type) and issubclass(family, BxDF)):
-        raise TypeError(f"family: expected a model class (e.g. bk.Conductor), got {family!r}")
-    if isinstance(init, family):
-        init = dict(init._params)
-    elif isinstance(init, BxDF):
-        raise TypeError(f"init: expected a {family.__name__} or a dict, got a {type(init).__name__}")
+    init = _check_family(family, init)
     init_u, init_t = _split(init, "init", family, T)
     fixed_u, fixed_t = _split(fixed, "fixed", family, T)
     m0, params, names, cols, lo, hi = _family_setup(family, params, init_u, fixed_u, _LOSSES[loss], 1)
@@ -215,14 +209,7 @@ def _prepare(family, wo, wi, values, params, init, fixed, loss, weights):
     for k, v in init_t.items():   # a per-texel start of a parameter not fitted: held per texel
         if k not in fitted:
             fixed_t.setdefault(k, v)
-    base = dict(m0._params)
-    for k, v in list(base.items()):
-        if v is None and hasattr(m0, "effective_" + k):
-            base[k] = np.asarray(getattr(m0, "effective_" + k), dtype=np.float64)
-    for col in cols:
-        for field, _ in col:
-            if base[field] is None:
-                raise ValueError(f"params: {field} is None in the starting model; give it in init")
+    base = _start_params(m0, cols)
     x0 = np.empty((T, len(cols)))
     for j, col in enumerate(cols):
         field, ch = col[0]
