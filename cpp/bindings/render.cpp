@@ -24,6 +24,8 @@ namespace py = pybind11;
 
 namespace bsdfkit::py_bind {
 
+void bind_texture(py::module_ &m);   // render_texture.cpp: image textures (OIIO TextureSystem)
+
 using namespace bsdfkit::render;
 
 using V3 = std::array<double, 3>;
@@ -465,6 +467,7 @@ PYBIND11_MODULE(_render, m) {
     m.doc() = "bsdfkit renderer and image I/O (Embree, OpenImageIO); use bsdfkit.render / bsdfkit.io";
     py_bind::load_abi();
     py_bind::bind_render(m);
+    py_bind::bind_texture(m);
 
     m.def("read_image", [](const std::string &path) {
         io::Image img;

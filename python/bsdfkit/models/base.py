@@ -1,7 +1,6 @@
 """The model base class (array API, value semantics) and the parameter validation shared by every model."""
 from __future__ import annotations
 
-import hashlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -15,6 +14,7 @@ from .._validate import check_real as _scalar  # noqa: F401
 from .._validate import check_rgb as _rgb  # noqa: F401
 from .._validate import check_sample_flags as _sflags  # noqa: F401
 from .._validate import raise_bad as _raise_bad  # noqa: F401
+from .._values import digest, fmt_param, key_value  # noqa: F401  (re-exported)
 from . import _spectral
 from . import registry as _registry
 
@@ -89,34 +89,6 @@ def rgb_dict(v) -> dict:
     """A Mitsuba ``rgb`` texture of a scalar or RGB value."""
     a = np.broadcast_to(np.asarray(v, dtype=np.float64), (3,))
     return {"type": "rgb", "value": [float(x) for x in a]}
-
-
-def digest(a: np.ndarray) -> str:
-    """Content digest of an array parameter (hash, ==, repr without printing the values)."""
-    h = hashlib.blake2b(digest_size=10)
-    h.update(str((a.shape, a.dtype.str)).encode())
-    h.update(np.ascontiguousarray(a).tobytes())
-    return h.hexdigest()
-
-
-def key_value(v):
-    """A parameter value as a hashable key: a small 1-D array (an RGB value) by its values, a
-    larger array (per-element parameters) by its shape and content digest."""
-    if isinstance(v, np.ndarray):
-        return tuple(v.tolist()) if v.ndim == 1 and v.size <= 12 else ("array", v.shape, digest(v))
-    return v
-
-
-def fmt_param(v) -> str:
-    """A parameter value in ``repr``: Python's shortest round-trip floats; an array of more than
-    12 values as its shape and digest (that repr cannot be evaluated back)."""
-    if isinstance(v, np.ndarray):
-        if v.size > 12:
-            return f"<array {v.shape} digest {digest(v)}>"
-        if v.ndim == 1:
-            return "[" + ", ".join(repr(float(x)) for x in v) + "]"
-        return repr(v.tolist())
-    return repr(v)
 
 
 #: pbrt-v4 / Mitsuba 3 alpha floor of the rough microfacet lobes.
@@ -302,6 +274,14 @@ class BxDF:
         difference; this one has none)."""
         raise NotImplementedError(f"{type(self).__name__}: Mitsuba 3 has no equivalent plugin")
 
+    def __new__(cls, *args, **kwargs):
+        # a texture among the arguments: a Textured model (looked up per call at uv=)
+        if args or kwargs:
+            from .textured import Textured, has_texture
+            if has_texture(args, kwargs):
+                return Textured._of(cls, args, kwargs)
+        return object.__new__(cls)
+
     def __init__(self, **params):
         object.__setattr__(self, "_params", params)
         object.__setattr__(self, "_core", self._make_core())
@@ -390,7 +370,7 @@ class BxDF:
     # takes the arguments as given, converts and checks what is not a plain array, words every
     # argument error and runs the kernels. Python only dispatches: spectral mode, Dask arrays.
     def eval(self, wo, wi, mode=TransportMode.Radiance, out=None, *, wavelengths=None, normal=None,
-             tangent=None) -> np.ndarray:
+             tangent=None, uv=None, duvdx=None, duvdy=None) -> np.ndarray:
         """BSDF value f(wo, wi), cosine excluded, per RGB channel.
 
         Specular (delta) lobes evaluate to 0 for every given pair, as in pbrt-v4; use
@@ -428,6 +408,11 @@ class BxDF:
             With ``normal``: the frame's x axis (anisotropic models), unit and perpendicular to
             the normal within 1e-4. Default: Duff et al. 2017's frame of the normal, Mitsuba 3's
             ``Frame3f(n)`` (the identity for n = (0, 0, 1)).
+        uv : array_like, shape (..., 2), optional
+            Texture coordinates, broadcast with the directions, for a model with textured
+            parameters (``bsdfkit.textures``; required there); ignored by other models.
+        duvdx, duvdy : array_like, shape (..., 2), optional
+            With ``uv``: its screen-space derivatives, for filtered (MIP-mapped) lookups.
 
         Returns
         -------
@@ -466,7 +451,7 @@ class BxDF:
         return self._core.eval(wo, wi, mode, out)
 
     def pdf(self, wo, wi, mode=TransportMode.Radiance, sample_flags=ReflTrans.All, out=None, *,
-            wavelengths=None, normal=None, tangent=None) -> np.ndarray:
+            wavelengths=None, normal=None, tangent=None, uv=None, duvdx=None, duvdy=None) -> np.ndarray:
         """Solid-angle density of ``sample`` producing wi from wo; 0 for delta lobes.
 
         Directions may be (N, 3) Fortran-ordered planes, read without transposition, with
@@ -494,6 +479,11 @@ class BxDF:
             With ``normal``: the frame's x axis (anisotropic models), unit and perpendicular to
             the normal within 1e-4. Default: Duff et al. 2017's frame of the normal, Mitsuba 3's
             ``Frame3f(n)`` (the identity for n = (0, 0, 1)).
+        uv : array_like, shape (..., 2), optional
+            Texture coordinates, broadcast with the directions, for a model with textured
+            parameters (``bsdfkit.textures``; required there); ignored by other models.
+        duvdx, duvdy : array_like, shape (..., 2), optional
+            With ``uv``: its screen-space derivatives, for filtered (MIP-mapped) lookups.
 
         Returns
         -------
@@ -523,7 +513,8 @@ class BxDF:
         return self._core.pdf(wo, wi, mode, sample_flags, out)
 
     def sample(self, wo, uc=None, u=None, *, n=None, seed=None, mode=TransportMode.Radiance,
-               sample_flags=ReflTrans.All, out=None, wavelengths=None, normal=None, tangent=None) -> SampleResult:
+               sample_flags=ReflTrans.All, out=None, wavelengths=None, normal=None, tangent=None, uv=None,
+               duvdx=None, duvdy=None) -> SampleResult:
         """Importance-sample wi given wo.
 
         Either pass the uniforms ``uc`` (...) (lobe choice) and ``u`` (..., 2) (direction), in
@@ -565,6 +556,11 @@ class BxDF:
             With ``normal``: the frame's x axis (anisotropic models), unit and perpendicular to
             the normal within 1e-4. Default: Duff et al. 2017's frame of the normal, Mitsuba 3's
             ``Frame3f(n)`` (the identity for n = (0, 0, 1)).
+        uv : array_like, shape (..., 2), optional
+            Texture coordinates, broadcast with the directions, for a model with textured
+            parameters (``bsdfkit.textures``; required there); ignored by other models.
+        duvdx, duvdy : array_like, shape (..., 2), optional
+            With ``uv``: its screen-space derivatives, for filtered (MIP-mapped) lookups.
 
         Returns
         -------
@@ -602,7 +598,7 @@ class BxDF:
         return _sample_result(self._core.sample(wo, uc, u, mode, sample_flags, None, n, seed))
 
     def albedo(self, wo, n_samples: int = 65536, seed: int = 0, mode=TransportMode.Radiance, *,
-               wavelengths=None, normal=None, tangent=None) -> np.ndarray:
+               wavelengths=None, normal=None, tangent=None, uv=None, duvdx=None, duvdy=None) -> np.ndarray:
         """Directional albedo rho(wo) = integral of f |cos wi| dwi, per channel: shape (..., 3).
 
         Monte Carlo with ``n_samples`` importance samples per direction (pbrt-v4 ``rho``);
@@ -631,6 +627,11 @@ class BxDF:
             With ``normal``: the frame's x axis (anisotropic models), unit and perpendicular to
             the normal within 1e-4. Default: Duff et al. 2017's frame of the normal, Mitsuba 3's
             ``Frame3f(n)`` (the identity for n = (0, 0, 1)).
+        uv : array_like, shape (..., 2), optional
+            Texture coordinates, broadcast with the directions, for a model with textured
+            parameters (``bsdfkit.textures``; required there); ignored by other models.
+        duvdx, duvdy : array_like, shape (..., 2), optional
+            With ``uv``: its screen-space derivatives, for filtered (MIP-mapped) lookups.
 
         Returns
         -------
@@ -655,7 +656,7 @@ class BxDF:
     #: Fitting bounds of the differentiable parameters, name -> (lo, hi) (bsdfkit.fitting.fit).
     param_ranges: dict = {}
 
-    def eval_grad(self, wo, wi, params=None, mode=TransportMode.Radiance):
+    def eval_grad(self, wo, wi, params=None, mode=TransportMode.Radiance, *, uv=None, duvdx=None, duvdy=None):
         """``(f, grad)``: f(wo, wi) (..., 3) and d f / d theta (..., 3, P), float64, from the
         model's own C++ code with forward-mode dual numbers. ``params``: names of the parameters
         (default: all differentiable ones); an RGB parameter gives three columns (``"eta"`` ->

@@ -91,7 +91,8 @@ class _Composite(BxDF, register=False):
 
     # the array API: the base's, with wavelengths= passed to this door (the children run spectral);
     # normal= / tangent= (world space) rotate the directions once here, the children run local
-    def eval(self, wo, wi, mode=0, out=None, *, wavelengths=None, normal=None, tangent=None):
+    def eval(self, wo, wi, mode=0, out=None, *, wavelengths=None, normal=None, tangent=None, uv=None, duvdx=None,
+             duvdy=None):
         if normal is not None or tangent is not None:
             return _frames.eval(self, wo, wi, mode, out, wavelengths, normal, tangent)
         if wavelengths is None:
@@ -99,7 +100,7 @@ class _Composite(BxDF, register=False):
         return self._core.eval(wo, wi, mode, out, wavelengths)
 
     def pdf(self, wo, wi, mode=0, sample_flags=ReflTrans.All, out=None, *, wavelengths=None, normal=None,
-            tangent=None):
+            tangent=None, uv=None, duvdx=None, duvdy=None):
         if normal is not None or tangent is not None:
             return _frames.pdf(self, wo, wi, mode, sample_flags, out, wavelengths, normal, tangent)
         if wavelengths is None:
@@ -107,7 +108,7 @@ class _Composite(BxDF, register=False):
         return self._core.pdf(wo, wi, mode, sample_flags, out, wavelengths)
 
     def sample(self, wo, uc=None, u=None, *, n=None, seed=None, mode=0, sample_flags=ReflTrans.All, out=None,
-               wavelengths=None, normal=None, tangent=None):
+               wavelengths=None, normal=None, tangent=None, uv=None, duvdx=None, duvdy=None):
         if normal is not None or tangent is not None:
             return _frames.sample(self, wo, uc, u, n, seed, mode, sample_flags, out, wavelengths, normal, tangent)
         if out is not None:
@@ -115,7 +116,7 @@ class _Composite(BxDF, register=False):
         return self._core.sample(wo, uc, u, mode, sample_flags, out, n, seed, wavelengths)
 
     def albedo(self, wo, n_samples: int = 65536, seed: int = 0, mode=0, *, wavelengths=None, normal=None,
-               tangent=None):
+               tangent=None, uv=None, duvdx=None, duvdy=None):
         if normal is not None or tangent is not None:
             return _frames.albedo(self, wo, n_samples, seed, mode, wavelengths, normal, tangent)
         return self._core.albedo(wo, n_samples, seed, mode, wavelengths)
