@@ -118,6 +118,12 @@ class Textured(BxDF, register=False):
         object.__setattr__(self, "model_class", model_class)
         object.__setattr__(self, "_call", (tuple(args), dict(kwargs)))
         object.__setattr__(self, "_params", params)
+        kinds = _kinds(model_class)
+        if model_class.varying_params:   # a compiled model: only its per-element parameters take textures
+            for name, v in params.items():
+                if isinstance(v, TextureBase) and name not in kinds and name + "_x" not in kinds:
+                    raise TypeError(f"{model_class.__name__}.{name}: takes one value for the whole material (a knob "
+                                    f"or a count); it cannot be a texture (textures go to: {', '.join(kinds)})")
         # built once at a few uv: the constructor's checks run now (a knob given a texture, a
         # 3-channel texture for a real, values out of range there) rather than at the first call
         object.__setattr__(self, "_probe", self.at(_PROBE_UV))
