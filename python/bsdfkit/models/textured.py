@@ -96,15 +96,22 @@ class Textured(BxDF, register=False):
     (..., 2), broadcast with the directions, and optionally ``duvdx=``, ``duvdy=`` (filtered
     lookups); ``at(uv)`` is the model with the textures looked up (per-element parameters).
 
+    Parameters
+    ----------
+    model_class : type
+        The model class (``bk.Conductor``, ...), read-only.
+    textures : dict
+        {argument name: texture (or textured child model)}, read-only.
+
     Examples
     --------
     >>> import numpy as np, bsdfkit as bk
-    >>> rough = bk.Texture(np.array([[0.1, 0.4], [0.2, 0.3]]), filter="nearest")
+    >>> rough = bk.Texture(np.array([[0.125, 0.5], [0.25, 0.375]]), filter="nearest")
     >>> m = bk.Conductor.from_metal("Cu", alpha=rough)
     >>> m.textures
-    {'alpha': Texture(source=[[[0.1], [0.4]], [[0.2], [0.3]]], filter='nearest')}
-    >>> m.at([[0.25, 0.25], [0.75, 0.25]]).alpha.tolist()
-    [0.1, 0.4]
+    {'alpha': Texture(source=[[[0.125], [0.5]], [[0.25], [0.375]]], filter='nearest')}
+    >>> m.at([[0.25, 0.25], [0.75, 0.25]]).alpha_x.tolist()
+    [0.125, 0.5]
     """
 
     def __init__(self, *a, **k):   # never called: models build these through BxDF.__new__
