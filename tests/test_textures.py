@@ -268,3 +268,33 @@ def test_bad_input_names_the_parameter(tmp_path):
         m.eval(WO, WI, uv=np.zeros((24, 3)))
     with pytest.raises(NotImplementedError):
         m.eval(WO, WI, uv=UV, wavelengths=np.full((24, 4), 550.0))
+
+
+@pytest.mark.parametrize("method", ["linear", "stochastic"])
+def test_textured_composites_on_an_image_of_uv(method):
+    """Composites around textured children, called with (H, W) uv: element by element the
+    composite of uniform models built from that element's texel values."""
+    rng = np.random.default_rng(11)
+    d = bk.Diffuse(bk.Texture(RGB, filter="nearest"))
+    c = bk.Conductor.from_metal("Cu", alpha=bk.Texture(GREY, filter="nearest"))
+    w = bk.Texture(GREY * 1.5, filter="nearest")
+    uv = rng.random((3, 4, 2))
+    wo = bk.direction(np.full((3, 4), 0.5), rng.random((3, 4)) * 6)
+    wi = bk.direction(np.full((3, 4), 0.4), rng.random((3, 4)) * 6)
+    cases = [bk.Mix(d, c, weight=w, method=method), bk.TwoSided(d, c), bk.Mask(c, opacity=w)]
+    for m in cases:
+        f = m.eval(wo, wi * [1, 1, -1] if isinstance(m, bk.Textured) and m.model_class is bk.TwoSided else wi, uv=uv)
+        s = m.sample(wo, n=4, seed=5, uv=uv)
+        assert f.shape == (3, 4, 3) and s.wi.shape == (3, 4, 3)
+        flat = m.at(uv.reshape(-1, 2))
+        s2 = flat.sample(wo.reshape(-1, 3), n=12, seed=5)
+        np.testing.assert_array_equal(s.f.reshape(-1, 3), s2.f)
+        np.testing.assert_array_equal(s.pdf.reshape(-1), s2.pdf)
+    m = cases[0]
+    f = m.eval(wo, wi, uv=uv).reshape(-1, 3)
+    for i, (x, y) in enumerate(uv.reshape(-1, 2)):
+        r, col = int(y * 5), int(x * 7)
+        one = bk.Mix(bk.Diffuse(RGB[r, col].astype(np.float64)),
+                     bk.Conductor.from_metal("Cu", alpha=float(GREY[r, col])),
+                     weight=float(np.float32(GREY[r, col] * 1.5)), method=method)
+        np.testing.assert_array_equal(f[i], one.eval(wo.reshape(-1, 3)[i], wi.reshape(-1, 3)[i]))

@@ -80,17 +80,47 @@ def _rows(wo, wi) -> int:
     return math.prod(np.broadcast_shapes(np.shape(wo)[:-1], np.shape(wi)[:-1]))
 
 
-def child_eval(m, wo, wi, md, lam):
+def row_view(m, rows):
+    """The child ``m`` on the composite's rows ``rows`` (an index array; None: all of them): its
+    per-element arrays, one value per row of the composite's call, indexed by ``rows``, so that a
+    subset of rows (a Mix's sampled child, a TwoSided side, a Mask's nested rows) runs the child
+    with its own values. Uniform children are returned as they are; composites recursively."""
+    if rows is None:
+        return m
+    tails = getattr(type(m), "_param_tails", None)
+    if tails is not None and hasattr(m, "_children"):   # a composite: its children and its row arrays
+        p = {}
+        for k, v in m._params.items():
+            if hasattr(v, "_params") and hasattr(v, "varying"):
+                p[k] = row_view(v, rows)
+            elif isinstance(v, np.ndarray) and v.ndim > len(tails.get(k, ())) and len(v) > 1:
+                p[k] = v[rows]
+            else:
+                p[k] = v
+        return type(m)._from_params(p)
+    names = getattr(m, "varying", ())
+    if not names:
+        return m
+    p = dict(m._params)
+    for k in names:
+        p[k] = m._params[k][rows]
+    return type(m)._from_params(p)
+
+
+def child_eval(m, wo, wi, md, lam, rows=None):
+    m = row_view(m, rows)
     _check_varying_child(m, _rows(wo, wi))
     return m.eval(wo, wi, md) if lam is None else m.eval(wo, wi, md, wavelengths=lam)
 
 
-def child_pdf(m, wo, wi, md, sf, lam):
+def child_pdf(m, wo, wi, md, sf, lam, rows=None):
+    m = row_view(m, rows)
     _check_varying_child(m, _rows(wo, wi))
     return m.pdf(wo, wi, md, sf) if lam is None else m.pdf(wo, wi, md, sf, wavelengths=lam)
 
 
-def child_sample(m, wo, uc, u, md, sf, lam):
+def child_sample(m, wo, uc, u, md, sf, lam, rows=None):
+    m = row_view(m, rows)
     _check_varying_child(m, _rows(wo, np.zeros(np.shape(uc) + (3,))))
     if lam is None:
         return m.sample(wo, uc, u, mode=md, sample_flags=sf)

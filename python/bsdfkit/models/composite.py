@@ -319,7 +319,7 @@ class Mix(_Composite):
             if not len(idx):
                 continue
             wo_i, lam_i = take(wo, idx), take(lam, idx)
-            s = child_sample(model, wo_i, (uc if stochastic else ucc)[idx], u[idx], md, sf, lam_i)
+            s = child_sample(model, wo_i, (uc if stochastic else ucc)[idx], u[idx], md, sf, lam_i, idx)
             put_sample(rows, idx, s)
             if stochastic:
                 continue
@@ -331,8 +331,8 @@ class Mix(_Composite):
             j = np.nonzero(mix)[0]
             if len(j):   # Mitsuba 3.9 blendbsdf: the mixture's f and pdf at the sampled direction
                 wo_j, lam_j = take(wo_i, j), take(lam_i, j)
-                fo = child_eval(other, wo_j, s.wi[j], md, lam_j)
-                po = child_pdf(other, wo_j, s.wi[j], md, sf, lam_j)
+                fo = child_eval(other, wo_j, s.wi[j], md, lam_j, idx[j])
+                po = child_pdf(other, wo_j, s.wi[j], md, sf, lam_j, idx[j])
                 f[j] += fo * tw[j][:, None]
                 p[j] += po * tw[j]
             rows["f"][idx], rows["pdf"][idx] = f, p
@@ -434,12 +434,12 @@ class TwoSided(_Composite):
 
     def _eval_rows(self, wo, wi, md, lam, P, out=None):
         def fn(m, r, sign):
-            return child_eval(m, _flip(take(wo, r), sign), _flip(take(wi, r), sign), md, take(lam, r))
+            return child_eval(m, _flip(take(wo, r), sign), _flip(take(wi, r), sign), md, take(lam, r), r)
         return self._split(wo, wi, P, fn, (3 if lam is None else 4,))
 
     def _pdf_rows(self, wo, wi, md, sf, lam, P, out=None):
         def fn(m, r, sign):
-            return child_pdf(m, _flip(take(wo, r), sign), _flip(take(wi, r), sign), md, sf & _REFL, take(lam, r))
+            return child_pdf(m, _flip(take(wo, r), sign), _flip(take(wi, r), sign), md, sf & _REFL, take(lam, r), r)
         return self._split(wo, wi, P, fn, ())
 
     def _sample_rows(self, wo, uc, u, md, sf, lam, P, n):
@@ -451,7 +451,7 @@ class TwoSided(_Composite):
         for model, r, sign in ((self.front, np.nonzero(z > 0)[0], 1), (back, np.nonzero(z < 0)[0], -1)):
             if not len(r):
                 continue
-            s = child_sample(model, _flip(take(wo, r), sign), uc[r], u[r], md, _REFL, take(lam, r))
+            s = child_sample(model, _flip(take(wo, r), sign), uc[r], u[r], md, _REFL, take(lam, r), r)
             put_sample(rows, r, s)
             rows["wi"][r, 2] *= sign
             rows["valid"][r] &= s.wi[:, 2] > 0
@@ -546,7 +546,7 @@ class Mask(_Composite):
         if len(r):
             with np.errstate(divide="ignore", invalid="ignore"):
                 ucr = np.minimum(uc[r] / op[r], 1).astype(dtype)
-            s = child_sample(self.model, take(wo, r), ucr, u[r], md, sf, take(lam, r))
+            s = child_sample(self.model, take(wo, r), ucr, u[r], md, sf, take(lam, r), r)
             put_sample(rows, r, s)
             rows["f"][r] = s.f * op[r, None]
             rows["pdf"][r] = s.pdf * op[r]
