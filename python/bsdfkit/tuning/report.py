@@ -535,9 +535,14 @@ def _same_value(a, b) -> bool:
 
 def simplify(model, tol, metric: str | None = None, directions=None, seed: int = 0, *, n: int | None = None,
              n_albedo: int | None = None, costs: dict | None = None, allow=(), margin: float | None = None,
-             families=None, progress=None):
+             families=None, progress=None, n_texels: int = 16):
     """The cheapest configuration of ``model`` whose error against ``model`` itself (called in
     float64) is <= ``tol``.
+
+    A textured model (``bk.Texture`` parameters) is measured at ``n_texels`` texels (uv on a
+    jittered grid; each texel's model against itself) and gets the cheapest configuration within
+    tol at every one of them; a lobe whose texture is negligible there is dropped
+    (``bsdfkit.tuning.textured``).
 
     The reference is the user's model as given. Approximation knobs (precision, Schlick/F82
     versus exact Fresnel, Filament's fast visibility, DFG table size, dropping a negligible lobe)
@@ -615,6 +620,8 @@ def simplify(model, tol, metric: str | None = None, directions=None, seed: int =
         within ``tol`` (``bsdfkit.fitting.simplify_families``: measured -> analytic).
     progress : bool or callable, optional
         As in :func:`tradeoff` (one step per configuration measured).
+    n_texels : int, optional
+        A textured model: the number of texels measured (default 16).
 
     Returns
     -------
@@ -646,20 +653,28 @@ def simplify(model, tol, metric: str | None = None, directions=None, seed: int =
         from ..fitting.simplify import simplify_families
         return simplify_families(model, tol, families, metric="p99" if metric is None else metric, directions=directions, seed=seed, costs=costs,
                                  **({} if n is None else {"n": n}))
-    _check_model(model)
+    from ..models.textured import Textured
+    textured = isinstance(model, Textured)
+    probe = model.at([0.5, 0.5]) if textured else model   # one texel: the model's knobs and defaults
+    if not textured:
+        _check_model(model)
     tol = _check_tol(tol)
-    sto = _any_stochastic(model)
+    sto = _any_stochastic(probe)
     if metric is None:
         metric = "rms" if sto else "p99"
     if margin is None:
         margin = 0.8 if metric == "rms" else 0.5
-    n, n_albedo = _stochastic_defaults(sto, n, n_albedo, is_stochastic(model))
+    n, n_albedo = _stochastic_defaults(sto, n, n_albedo, is_stochastic(probe))
     col = _check_metric(metric)
-    allowed = _check_allow(model, allow)
+    allowed = _check_allow(probe, allow)
     seed, n, n_albedo = _check_int(seed, "seed", 0), _check_int(n, "n", 16), _check_int(n_albedo, "n_albedo", 16)
     table = _check_costs(costs)
     if isinstance(margin, bool) or not isinstance(margin, (int, float)) or not 0 < margin <= 1:
         raise ValueError(f"margin: must be a number in (0, 1], got {margin!r}")
+    if textured:
+        from .textured import simplify_textured
+        return simplify_textured(model, tol, metric, col, margin, directions, seed, n, n_albedo, allow, costs,
+                                 check_progress(progress), _check_int(n_texels, "n_texels", 1))
     ev = _Evaluation(model, directions, n, seed, n_albedo, allow=allowed, reference="input",
                      progress=check_progress(progress), what="simplify")
     costs = _costs_for(model, ev.configs, table)
