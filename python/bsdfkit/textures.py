@@ -35,6 +35,7 @@ __all__ = ["TextureBase", "Texture", "Constant", "Scale", "Mix", "Checkerboard",
 # OpenImageIO TextureOpt enums (texture.h): InterpMode, MipMode, Wrap.
 _FILTERS = {"nearest": (0, 1), "bilinear": (1, 1), "bicubic": (2, 1), "trilinear": (1, 3), "anisotropic": (1, 4)}
 _WRAPS = {"black": 1, "clamp": 2, "periodic": 3, "mirror": 4}
+_CHUNK = 1 << 20   # lookups per call into bsdfkit._render
 
 
 def is_texture(x) -> bool:
@@ -445,11 +446,18 @@ class Texture(TextureBase):
                 px = render.read_image(src)
             except RuntimeError as e:
                 raise OSError(f"source: cannot read image {e}") from None
+            if integer:   # OpenImageIO gives k / max exactly: back to the stored integers
+                top = 255 if render.image_info(src)[3] in ("uint8", "int8") else 65535
+                src = np.rint(px * top).astype(np.uint8 if top == 255 else np.uint16)
+        if isinstance(src, np.ndarray) and integer:
+            # a table of the decoded value of every stored integer (the same values as decoding
+            # each texel, in a fraction of the time)
+            top = np.iinfo(src.dtype).max
+            table = _decode(np.arange(top + 1, dtype=np.float64) / top, self._decode).astype(np.float32)
+            px = table[src]
         else:
-            px = src.astype(np.float64)
-            if integer:
-                px = px / float(np.iinfo(src.dtype).max)
-        px = np.ascontiguousarray(_decode(np.asarray(px, np.float64), self._decode), dtype=np.float32)
+            px = _decode(np.asarray(src if isinstance(src, np.ndarray) else px, np.float64), self._decode)
+        px = np.ascontiguousarray(px, dtype=np.float32)
         path = os.path.join(_texture_dir(), f"{digest(px)}.tx")
         if not os.path.exists(path):
             render.make_texture(path, px)
@@ -479,9 +487,14 @@ class Texture(TextureBase):
             derivs = np.ascontiguousarray(np.concatenate([dx, dy], axis=1))
         interp, mip = _FILTERS[self.filter]
         first = self.channel or 0
-        out = _render_ext.load().texture_lookup(self._file, np.ascontiguousarray(uv), derivs, interp, mip,
-                                                 self._wraps[0], self._wraps[1], first, self.channels)
-        v = out.astype(np.float64)
+        lookup = _render_ext.load().texture_lookup
+        uv = np.ascontiguousarray(uv)
+        v = np.empty((len(uv), self.channels))
+        # in chunks: Ctrl-C (KeyboardInterrupt) stops a long lookup between two of them
+        for a in range(0, len(uv), _CHUNK):
+            b = min(a + _CHUNK, len(uv))
+            v[a:b] = lookup(self._file, uv[a:b], None if derivs is None else derivs[a:b], interp, mip,
+                            self._wraps[0], self._wraps[1], first, self.channels)
         if self.scale != 1.0:
             v = v * self.scale
         if self.invert:
