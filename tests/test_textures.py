@@ -266,8 +266,12 @@ def test_bad_input_names_the_parameter(tmp_path):
         m.eval(WO, WI)
     with pytest.raises(ValueError, match=r"uv: expected shape \(\.\.\., 2\)"):
         m.eval(WO, WI, uv=np.zeros((24, 3)))
-    with pytest.raises(NotImplementedError):
+    with pytest.raises(NotImplementedError, match="spectral mode"):
         m.eval(WO, WI, uv=UV, wavelengths=np.full((24, 4), 550.0))
+    with pytest.raises(NotImplementedError, match=r"tradeoff .*m\.at\(\[u, v\]\)"):
+        bk.tradeoff(m)
+    with pytest.raises(NotImplementedError, match=r"preview renderer does not look textures up.*at\(\[u, v\]\)"):
+        bk.render.preview(m)
 
 
 @pytest.mark.parametrize("method", ["linear", "stochastic"])

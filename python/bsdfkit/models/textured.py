@@ -180,7 +180,15 @@ class Textured(BxDF, register=False):
     def _need_uv(self, uv):
         if uv is None:
             raise ValueError(f"uv: {self.model_class.__name__} has textured parameters "
-                             f"({', '.join(self.textures)}); pass uv= (..., 2)")
+                             f"({', '.join(self.textures)}); pass uv= (..., 2), or use the material at one texel, "
+                             "m.at([u, v])")
+
+    def _refuse_varying(self, what: str) -> None:
+        if what.startswith("tradeoff"):
+            what = "tradeoff (bk.simplify measures textured materials texel by texel)"
+        raise NotImplementedError(
+            f"{self.model_class.__name__}: {what} is not supported with textured parameters yet "
+            f"({', '.join(self.textures)}); use the material at one texel, m.at([u, v]), or m.at(uv) per element")
 
     # the array API: look the textures up, then the model with per-element parameters. A
     # composite runs its children on flat rows, so its calls are flattened to one batch axis here

@@ -73,6 +73,10 @@ def is_compiled(model) -> bool:
 
 
 def _model_check(material, name="material"):
+    if hasattr(material, "textures") and hasattr(material, "model_class"):   # bsdfkit.models.textured
+        raise NotImplementedError(
+            f"{name}: the preview renderer does not look textures up yet ({material.describe()}); render the "
+            "material at one texel, material.at([u, v])")
     core = getattr(material, "_core", None)
     if core is None:
         raise TypeError(f"{name}: expected a bsdfkit model (e.g. bk.Diffuse(0.8)), got {type(material).__name__}")
