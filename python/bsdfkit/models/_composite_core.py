@@ -107,6 +107,68 @@ def row_view(m, rows):
     return type(m)._from_params(p)
 
 
+def _is_composite(m) -> bool:
+    return getattr(type(m), "_param_tails", None) is not None and hasattr(m, "_children")
+
+
+def _child_shapes(m) -> list:
+    """(name, batch shape) of every per-element array inside the children of composite ``m``
+    (recursively): they broadcast with the composite's call like its own arrays."""
+    out = []
+    for k, c in m._params.items():
+        if not (hasattr(c, "_params") and hasattr(c, "varying")):
+            continue
+        if _is_composite(c):
+            tails = type(c)._param_tails
+            for name, v in c._param_arrays().items():
+                if isinstance(v, np.ndarray):
+                    out.append((f"{k}.{name}", v.shape[:v.ndim - len(tails.get(name, ()))]))
+            out += [(f"{k}.{n}", s) for n, s in _child_shapes(c)]
+        else:
+            vp = type(c).varying_params
+            for name in c.varying:
+                v = c._params[name]
+                out.append((f"{k}.{name}", v.shape if vp[name] == 1 else v.shape[:-1]))
+    return out
+
+
+def flat_view(m, batch):
+    """Model ``m`` (a child of a composite called with batch shape ``batch``) with its per-element
+    arrays broadcast to the batch and flattened to one value per row of the composite's call (the
+    rows the children run on); uniform models unchanged, composites recursively."""
+    if _is_composite(m):
+        tails = type(m)._param_tails
+        p = {}
+        for k, v in m._params.items():
+            if hasattr(v, "_params") and hasattr(v, "varying"):
+                p[k] = flat_view(v, batch)
+            elif isinstance(v, np.ndarray) and k in m._param_arrays() and v.ndim > len(tails.get(k, ())):
+                t = tails.get(k, ())
+                p[k] = np.ascontiguousarray(np.broadcast_to(v, tuple(batch) + t)).reshape((-1,) + t)
+            else:
+                p[k] = v
+        return type(m)._from_params(p)
+    names = getattr(m, "varying", ())
+    if not names:
+        return m
+    vp = type(m).varying_params
+    p = dict(m._params)
+    for k in names:
+        t = () if vp[k] == 1 else (3,)
+        p[k] = np.ascontiguousarray(np.broadcast_to(m._params[k], tuple(batch) + t)).reshape((-1,) + t)
+    return type(m)._from_params(p)
+
+
+def _flat_composite(m, batch):
+    """Composite ``m`` with its children as flat views for a call of batch shape ``batch`` (itself
+    when no child has per-element parameters)."""
+    if not _child_shapes(m):
+        return m
+    p = {k: flat_view(v, batch) if hasattr(v, "_params") and hasattr(v, "varying") else v
+         for k, v in m._params.items()}
+    return type(m)._from_params(p)
+
+
 def child_eval(m, wo, wi, md, lam, rows=None):
     m = row_view(m, rows)
     _check_varying_child(m, _rows(wo, wi))
@@ -182,6 +244,9 @@ class Door:
                 tail = self.m._param_tails.get(name, ())
                 names.append(name)
                 shapes.append(v.shape[:v.ndim - len(tail)])
+        for name, shape in _child_shapes(self.m):   # the children's per-element arrays broadcast too
+            names.append(name)
+            shapes.append(shape)
         return tuple(names), tuple(shapes)
 
     def _lam(self, wavelengths):
@@ -222,7 +287,7 @@ class Door:
             wor, wir, lr, P = self._rows(wo, wi, lam, batch, dtype)
             buf = c_buffer(out)
             b2 = buf.reshape(-1, nch)
-            res = self.m._eval_rows(wor, wir, md, lr, P, b2)
+            res = _flat_composite(self.m, batch)._eval_rows(wor, wir, md, lr, P, b2)
             if res is not b2:
                 b2[...] = res
             if buf is not out:
@@ -237,7 +302,7 @@ class Door:
         if out.size:
             wor, wir, lr, P = self._rows(wo, wi, lam, batch, dtype)
             o1 = out.reshape(-1)
-            res = self.m._pdf_rows(wor, wir, md, sf, lr, P, o1)
+            res = _flat_composite(self.m, batch)._pdf_rows(wor, wir, md, sf, lr, P, o1)
             if res is not o1:
                 o1[...] = res
         return out
@@ -265,7 +330,7 @@ class Door:
                 lr = flatten_to(lam, batch, (4,), np.float64)
             ucf = np.ascontiguousarray(np.broadcast_to(uc, batch), dtype=dtype).reshape(-1)
             uf = np.ascontiguousarray(np.broadcast_to(u, batch + (2,)), dtype=dtype).reshape(-1, 2)
-            rows = self.m._sample_rows(flatten_to(wo, batch, (3,), dtype), ucf, uf, md, sf, lr,
+            rows = _flat_composite(self.m, batch)._sample_rows(flatten_to(wo, batch, (3,), dtype), ucf, uf, md, sf, lr,
                                        self._params(batch, dtype), count)
         else:
             rows = empty_sample(0, dtype, nch, lam is not None)

@@ -190,72 +190,18 @@ class Textured(BxDF, register=False):
             f"{self.model_class.__name__}: {what} is not supported with textured parameters yet "
             f"({', '.join(self.textures)}); use the material at one texel, m.at([u, v]), or m.at(uv) per element")
 
-    # the array API: look the textures up, then the model with per-element parameters. A
-    # composite runs its children on flat rows, so its calls are flattened to one batch axis here
-    # (every per-element argument broadcast to the batch shape) and reshaped back.
-    def _flat(self, lead: tuple, arrays: dict):
-        """(batch shape, flattened arrays) when the model is a composite and the batch has more
-        than one axis; None otherwise. ``arrays``: name -> (value, trailing ndim)."""
-        from .composite import _Composite
-        if not issubclass(self.model_class, _Composite):
-            return None
-        shapes = [np.shape(v)[:np.ndim(v) - t] for v, t in arrays.values() if v is not None]
-        batch = np.broadcast_shapes(lead, *shapes)
-        if len(batch) <= 1:
-            return None
-        flat = {}
-        for k, (v, t) in arrays.items():
-            if v is None:
-                flat[k] = None
-                continue
-            a = np.asarray(v)
-            tail = a.shape[a.ndim - t:] if t else ()
-            flat[k] = np.broadcast_to(a, batch + tail).reshape((-1,) + tail)
-        return batch, flat
-
+    # the array API: look the textures up, then the model with per-element parameters
     def eval(self, wo, wi, mode=0, out=None, *, uv=None, duvdx=None, duvdy=None, **kw):
         self._need_uv(uv)
-        fl = self._flat((), {"wo": (wo, 1), "wi": (wi, 1), "uv": (uv, 1), "duvdx": (duvdx, 1),
-                             "duvdy": (duvdy, 1), **{k: (v, 1) for k, v in kw.items()}})
-        if fl is None:
-            return self.at(uv, duvdx, duvdy).eval(wo, wi, mode, out, **kw)
-        batch, a = fl
-        f = self.at(a["uv"], a["duvdx"], a["duvdy"]).eval(a["wo"], a["wi"], mode, **{k: a[k] for k in kw})
-        return _put(out, f.reshape(batch + f.shape[1:]))
+        return self.at(uv, duvdx, duvdy).eval(wo, wi, mode, out, **kw)
 
     def pdf(self, wo, wi, mode=0, sample_flags=3, out=None, *, uv=None, duvdx=None, duvdy=None, **kw):
         self._need_uv(uv)
-        fl = self._flat((), {"wo": (wo, 1), "wi": (wi, 1), "uv": (uv, 1), "duvdx": (duvdx, 1),
-                             "duvdy": (duvdy, 1), **{k: (v, 1) for k, v in kw.items()}})
-        if fl is None:
-            return self.at(uv, duvdx, duvdy).pdf(wo, wi, mode, sample_flags, out, **kw)
-        batch, a = fl
-        p = self.at(a["uv"], a["duvdx"], a["duvdy"]).pdf(a["wo"], a["wi"], mode, sample_flags, **{k: a[k] for k in kw})
-        return _put(out, p.reshape(batch))
+        return self.at(uv, duvdx, duvdy).pdf(wo, wi, mode, sample_flags, out, **kw)
 
     def sample(self, wo, uc=None, u=None, *, uv=None, duvdx=None, duvdy=None, **kw):
         self._need_uv(uv)
-        n = kw.get("n")
-        per = {k: (kw[k], 1) for k in ("normal", "tangent", "wavelengths") if kw.get(k) is not None}
-        fl = self._flat((n,) if n is not None else (), {"wo": (wo, 1), "uc": (uc, 0), "u": (u, 1), "uv": (uv, 1),
-                                                         "duvdx": (duvdx, 1), "duvdy": (duvdy, 1), **per})
-        if fl is None:
-            return self.at(uv, duvdx, duvdy).sample(wo, uc, u, **kw)
-        batch, a = fl
-        kw2 = dict(kw, **{k: a[k] for k in per})
-        if n is not None:
-            kw2["n"] = int(np.prod(batch))
-        out = kw2.pop("out", None)
-        s = self.at(a["uv"], a["duvdx"], a["duvdy"]).sample(a["wo"], a["uc"], a["u"], **kw2)
-        for k, v in list(s.__dict__.items()):
-            if isinstance(v, np.ndarray):
-                s.__dict__[k] = v.reshape(batch + v.shape[1:])
-        if out is not None:
-            for k, v in s.__dict__.items():
-                if isinstance(v, np.ndarray):
-                    getattr(out, k)[...] = v
-            return out
-        return s
+        return self.at(uv, duvdx, duvdy).sample(wo, uc, u, **kw)
 
     def albedo(self, wo, n_samples: int = 65536, seed: int = 0, mode=0, *, uv=None, duvdx=None, duvdy=None, **kw):
         self._need_uv(uv)
@@ -303,13 +249,6 @@ class Textured(BxDF, register=False):
     def to_mitsuba(self, approximate: bool = False) -> dict:
         raise NotImplementedError(f"{self.model_class.__name__}: export of textured parameters "
                                   f"({', '.join(self.textures)}) to Mitsuba is not supported yet")
-
-
-def _put(out, v):
-    if out is None:
-        return v
-    out[...] = v
-    return out
 
 
 def _construct(cls, args, kwargs):
