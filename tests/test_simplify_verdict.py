@@ -10,6 +10,7 @@ import subprocess
 import sys
 import warnings
 
+import numpy as np
 import pytest
 
 import bsdfkit as bk
@@ -73,3 +74,15 @@ def test_cli_says_which_materials_miss_the_tolerance(tmp_path):
 
     r = _cli(scene, "--tol", "1e-3", "-n", "64", "--strict")
     assert r.returncode == 1 and "do NOT meet tol" in r.stderr and "gold lacquer" in r.stderr
+
+
+def test_simplify_of_a_composite_with_a_stochastic_child_measures_it():
+    """A Mix around a stochastic CoatedDiffuse (pbrt scenes' mix materials): the converged
+    reference is the composite with its stochastic child converged, not a KeyError on 'seed'."""
+    import warnings
+    m = bk.Mix(bk.CoatedDiffuse(0.5), bk.Conductor.from_metal("Cu", alpha=0.3), 0.4, method="stochastic")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        out, rep = bk.simplify(m, 0.5, n=128, n_albedo=64)
+    assert rep.metric == "rms" and np.isfinite(rep.error["rms"]) and 0 < rep.error["rms"] < 0.5
+    assert rep.within_tol

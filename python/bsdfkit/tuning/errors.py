@@ -393,8 +393,24 @@ def relative_rms(v_ref, v) -> float:
     return float(np.sqrt(np.mean((v - v_ref) ** 2) / den)) if den > 0 else 0.0
 
 
+def _children_mapped(model, fn):
+    """A composite (bk.Mix, ...) with ``fn`` applied to its child models; None for other models."""
+    kids = {k: v for k, v in model._params.items() if isinstance(v, BxDF)}
+    if not kids:
+        return None
+    p = dict(model._params)
+    p.update({k: fn(v) for k, v in kids.items()})
+    return type(model)._from_params(p)
+
+
 def _converged(model):
-    """The converged reference of a stochastic model (CONVERGED settings, its own realization)."""
+    """The converged reference of a stochastic model (CONVERGED settings, its own realization); a
+    composite's: its stochastic children's."""
+    if not is_stochastic(model):
+        return model
+    comp = _children_mapped(model, _converged)
+    if comp is not None:
+        return comp
     p = dict(model._params)
     p.update(CONVERGED, method="stochastic") if "method" in p else p.update(CONVERGED)
     p["seed"] = (p["seed"] + _REF_SEED) % (2 ** 31)
@@ -404,6 +420,9 @@ def _converged(model):
 def _reseeded(model, k):
     if not is_stochastic(model):
         return model
+    comp = _children_mapped(model, lambda c: _reseeded(c, k))
+    if comp is not None:
+        return comp
     p = dict(model._params)
     p["seed"] = (p["seed"] + k) % (2 ** 31)
     return type(model)._from_params(p)
