@@ -1,0 +1,16 @@
+"""pbrt-v4 scene text -> bsdfkit models: the ``Material`` / ``MakeNamedMaterial`` statements and the
+``Texture`` statements they use (``from_pbrt``, ``parse_pbrt_materials``).
+
+Modules: ``parser`` (tokens, statements, Include / Import, the parsed records), ``values``
+(parameter values: rgb, spectra, eta), ``textures`` (``Texture`` statements -> bsdfkit textures),
+``materials`` (material types -> models, ``from_pbrt``) and ``mix`` (pbrt-v4 ``mix`` materials).
+"""
+from __future__ import annotations
+
+from .materials import from_pbrt
+from .parser import (PBRT_MAX_INCLUDE_DEPTH, PBRT_MAX_INCLUDES, PbrtColorSpaceWarning, PbrtMaterial,
+                     PbrtMissingIncludeWarning, PbrtParam, PbrtSkipWarning, parse_pbrt_materials)
+from .values import PBRT_GLASS_ETA
+
+__all__ = ["PBRT_GLASS_ETA", "PbrtParam", "PbrtMaterial", "PbrtSkipWarning", "PbrtMissingIncludeWarning",
+           "PbrtColorSpaceWarning", "parse_pbrt_materials", "from_pbrt"]

@@ -1,0 +1,284 @@
+"""pbrt-v4 materials -> bsdfkit models (``from_pbrt``), following pbrt-v4's ``src/pbrt/materials.cpp``."""
+from __future__ import annotations
+
+import math
+import os
+import warnings
+
+import numpy as np
+
+from ...models import (BxDF, CoatedConductor, CoatedDiffuse, Conductor, Dielectric, Diffuse, DiffuseTransmission,
+                       ThinDielectric, roughness_to_alpha)
+from .parser import _PBRT_IGNORED, PbrtSkipWarning, _PbrtError, _scene_source, parse_pbrt_materials
+from .values import (_bool_param, _check_texture, _eta_param, _float_param, _int_param, _pfail, _pfail_param,
+                     _spectrum_param)
+
+_PBRT_SUPPORTED = ("diffuse", "diffusetransmission", "conductor", "dielectric", "thindielectric",
+                   "coateddiffuse", "coatedconductor", "hair")
+
+
+_PBRT_UNSUPPORTED = ("measured", "mix", "subsurface", "interface", "none", "")
+
+
+_PBRT_ROUGH = ("roughness", "uroughness", "vroughness", "remaproughness")
+
+
+_PBRT_PARAMS = {
+    "diffuse": ("reflectance",),
+    "diffusetransmission": ("reflectance", "transmittance", "scale"),
+    "conductor": ("eta", "k", "reflectance") + _PBRT_ROUGH,
+    "dielectric": ("eta",) + _PBRT_ROUGH,
+    "thindielectric": ("eta",),
+    "coateddiffuse": ("reflectance", "eta", "thickness", "albedo", "g", "maxdepth", "nsamples") + _PBRT_ROUGH,
+    "coatedconductor": ("interface.roughness", "interface.uroughness", "interface.vroughness", "interface.eta",
+                        "conductor.roughness", "conductor.uroughness", "conductor.vroughness", "conductor.eta",
+                        "conductor.k", "reflectance", "thickness", "albedo", "g", "maxdepth", "nsamples",
+                        "remaproughness"),
+    "hair": ("sigma_a", "reflectance", "eumelanin", "pheomelanin", "eta", "beta_m", "beta_n", "alpha"),
+}
+
+
+
+def _layer_kwargs(rec):
+    """pbrt-v4 LayeredBxDF parameters of coateddiffuse / coatedconductor (materials.cpp)."""
+    albedo = _spectrum_param(rec, "albedo", albedo=True)
+    g = _float_param(rec, "g", 0.0)
+    return dict(thickness=_float_param(rec, "thickness", 0.01), albedo=0.0 if albedo is None else albedo,
+                g=min(max(g, -1.0), 1.0), max_depth=_int_param(rec, "maxdepth", 10),
+                n_samples=_int_param(rec, "nsamples", 1))
+
+
+def _alphas(rec, prefix=""):
+    r = _float_param(rec, prefix + "roughness", 0.0)
+    u = _float_param(rec, prefix + "uroughness", r)
+    v = _float_param(rec, prefix + "vroughness", r)
+    for val, n in ((u, "uroughness"), (v, "vroughness")):
+        if not (math.isfinite(val) and val >= 0):
+            _pfail(rec, f"{prefix + n if prefix + n in rec.params else prefix + 'roughness'} must be finite "
+                   f"and >= 0, got {val}")
+    if _bool_param(rec, "remaproughness", True):
+        return roughness_to_alpha(u), roughness_to_alpha(v)
+    return u, v
+
+
+def _pbrt_bxdf(rec, ctx=None):
+    ctx = ctx or {}
+    mtype = rec.type
+    if mtype not in _PBRT_SUPPORTED:
+        kind = "unsupported" if mtype in _PBRT_UNSUPPORTED else "unknown"
+        _pfail(rec, f"{kind} material type {mtype!r}; supported: {', '.join(_PBRT_SUPPORTED)}")
+    allowed = _PBRT_PARAMS[mtype] + _PBRT_IGNORED
+    for p in rec.params.values():
+        if p.name not in allowed:
+            _pfail_param(rec, p, f"not a parameter of pbrt-v4's {mtype} material; it takes "
+                         + ", ".join(_PBRT_PARAMS[mtype]))
+    try:
+        if mtype == "diffuse":
+            r = _spectrum_param(rec, "reflectance", albedo=True)
+            return Diffuse(0.5 if r is None else r)
+        if mtype == "diffusetransmission":
+            r = _spectrum_param(rec, "reflectance", albedo=True)
+            t = _spectrum_param(rec, "transmittance", albedo=True)
+            s = _float_param(rec, "scale", 1.0)
+            r = np.full(3, 0.25) if r is None else r
+            t = np.full(3, 0.25) if t is None else t
+            return DiffuseTransmission(np.clip(s * r, 0, 1), np.clip(s * t, 0, 1))
+        if mtype == "conductor":
+            ax, ay = _alphas(rec)
+            refl = _spectrum_param(rec, "reflectance", albedo=True, ctx=ctx)
+            eta = _spectrum_param(rec, "eta", albedo=False, ctx=ctx)
+            k = _spectrum_param(rec, "k", albedo=False, ctx=ctx)
+            if refl is not None:
+                if eta is not None or k is not None:
+                    _pfail(rec, "give either \"reflectance\" or \"eta\"/\"k\", not both (pbrt-v4 refuses it)")
+                return Conductor.from_reflectance(refl, alpha_x=ax, alpha_y=ay, masking="correlated")
+            eta = _default_copper("eta", ctx) if eta is None else eta
+            k = _default_copper("k", ctx) if k is None else k
+            return Conductor(eta, k, alpha_x=ax, alpha_y=ay, masking="correlated")
+        if mtype == "dielectric":
+            ax, ay = _alphas(rec)
+            return Dielectric(_eta_param(rec, ctx=ctx), alpha_x=ax, alpha_y=ay, masking="correlated")
+        if mtype == "coateddiffuse":
+            ax, ay = _alphas(rec)
+            r = _spectrum_param(rec, "reflectance", albedo=True, ctx=ctx)
+            return CoatedDiffuse(0.5 if r is None else r, eta=_eta_param(rec), alpha_x=ax, alpha_y=ay,
+                                 **_layer_kwargs(rec))
+        if mtype == "coatedconductor":
+            iax, iay = _alphas(rec, "interface.")
+            cax, cay = _alphas(rec, "conductor.")
+            ieta = _eta_param(rec, param="interface.eta")
+            refl = _spectrum_param(rec, "reflectance", albedo=True, ctx=ctx)
+            eta = _spectrum_param(rec, "conductor.eta", albedo=False, ctx=ctx)
+            k = _spectrum_param(rec, "conductor.k", albedo=False, ctx=ctx)
+            kw = dict(conductor_alpha_x=cax, conductor_alpha_y=cay, interface_eta=ieta, interface_alpha_x=iax,
+                      interface_alpha_y=iay, **_layer_kwargs(rec))
+            if refl is not None:
+                if eta is not None or k is not None:
+                    _pfail(rec, "give either \"reflectance\" or \"conductor.eta\"/\"conductor.k\", not both")
+                return CoatedConductor.from_reflectance(refl, **kw)
+            eta = _default_copper("eta", ctx) if eta is None else eta
+            k = _default_copper("k", ctx) if k is None else k
+            return CoatedConductor(eta, k, **kw)
+        if mtype == "hair":
+            return _pbrt_hair(rec)
+        return ThinDielectric(_eta_param(rec, ctx=ctx))
+    except _PbrtError:
+        raise
+    except (ValueError, TypeError) as e:
+        _pfail(rec, str(e))
+
+
+def _default_copper(part, ctx):
+    """pbrt-v4's default conductor: metal-Cu-eta / metal-Cu-k, from the named-spectra table."""
+    from ...spectral.spectrum import Spectrum
+    s = Spectrum.named(f"metal-Cu-{part}")
+    return s if ctx.get("spectral") else np.asarray(s.to_rgb("unbounded", illuminant=None), dtype=np.float64)
+
+
+def _pbrt_hair(rec):
+    """pbrt-v4 ``HairMaterial``: sigma_a, else reflectance, else eumelanin/pheomelanin (each
+    ignored when an earlier one is given, as pbrt-v4 warns and does); neither -> eumelanin 1.3.
+    beta_m / beta_n clamped to [0.01, 1] and reflectance to [0, 1] as pbrt-v4's material does."""
+    from ...models.hair import Hair, sigma_a_from_concentration, sigma_a_from_reflectance
+
+    bm = min(max(_float_param(rec, "beta_m", 0.3), 0.01), 1.0)
+    bn = min(max(_float_param(rec, "beta_n", 0.3), 0.01), 1.0)
+    kw = dict(eta=_float_param(rec, "eta", 1.55), beta_m=bm, beta_n=bn, alpha=_float_param(rec, "alpha", 2.0), h=0.0)
+    sigma_a = _spectrum_param(rec, "sigma_a", albedo=False)
+    if sigma_a is None:
+        p = rec.params.get("reflectance")
+        if p is not None:
+            _check_texture(rec, p)
+            c = _spectrum_param(rec, "reflectance", albedo=False)
+            sigma_a = sigma_a_from_reflectance(np.clip(c, 0.0, 1.0), bn)
+        else:
+            ce = _float_param(rec, "eumelanin", None)
+            cp = _float_param(rec, "pheomelanin", None)
+            if ce is None and cp is None:
+                ce = 1.3
+            sigma_a = sigma_a_from_concentration(ce or 0.0, cp or 0.0)
+    return Hair(sigma_a=sigma_a, **kw)
+
+
+def from_pbrt(source, *, skip_unsupported: bool = False, skip_missing_includes: bool = False,
+              spectral: bool = False) -> dict:
+    """bsdfkit models for the materials of a pbrt-v4 scene: ``{name: BxDF}`` in file order.
+
+    ``source``: scene text, or the path of a scene file (an ``os.PathLike``, or a ``str``
+    without a newline that names an existing file; ``.gz`` files are decompressed).
+    ``Include``/``Import`` are followed relative to the including file (text: the working
+    directory); a missing include raises ``OSError`` naming it, or, with
+    ``skip_missing_includes=True``, is skipped with one :class:`PbrtMissingIncludeWarning` per
+    include (a scene's geometry files are not needed for its materials).
+
+    Named materials keep their names; anonymous ``Material`` statements are called
+    ``"material#<n> (line <line>)"`` (see :func:`parse_pbrt_materials` for the syntax handled).
+    Types and parameters follow pbrt-v4's ``src/pbrt/materials.cpp`` (defaults in brackets):
+
+    * ``diffuse``: reflectance [0.5] -> ``Diffuse`` (clamped to [0, 1] as pbrt does).
+    * ``diffusetransmission``: reflectance [0.25], transmittance [0.25], scale [1]
+      -> ``DiffuseTransmission(clamp(scale r), clamp(scale t))``.
+    * ``conductor``: eta/k [metal-Cu-eta / metal-Cu-k] or reflectance (pbrt's artist form,
+      ``Conductor.from_reflectance``); roughness [0], uroughness/vroughness [roughness],
+      remaproughness [true] -> ``Conductor``.
+    * ``dielectric``: eta [1.5], roughness as conductor -> ``Dielectric``.
+    * ``thindielectric``: eta [1.5] -> ``ThinDielectric``.
+    * ``coateddiffuse``: reflectance [0.5], eta [1.5], roughness/uroughness/vroughness [0],
+      thickness [0.01], albedo [0], g [0], maxdepth [10], nsamples [1] -> ``CoatedDiffuse``.
+    * ``coatedconductor``: interface.eta [1.5], interface.(u|v)roughness [0],
+      conductor.eta/conductor.k [metal-Cu-eta / metal-Cu-k] or reflectance,
+      conductor.(u|v)roughness [0], thickness, albedo, g, maxdepth, nsamples as coateddiffuse
+      -> ``CoatedConductor`` (which divides the conductor's eta and k by interface.eta, as
+      pbrt-v4 does).
+    * ``hair``: sigma_a, else reflectance (``Hair.from_reflectance``, clamped to [0, 1]), else
+      eumelanin / pheomelanin [1.3 / 0] (``Hair.from_concentration``); eta [1.55], beta_m, beta_n
+      [0.3] (clamped to [0.01, 1]), alpha [2 degrees] -> ``Hair(..., h=0)`` (pbrt-v4 takes h from
+      the curve's v coordinate per hit).
+    * ``mix``: materials [two names of materials of the scene, in any order, mixes too], amount
+      [0.5] (a constant) -> ``Mix(first, second, amount, method="stochastic")`` (pbrt-v4
+      MixMaterial: the second material with probability amount, per shading point). Mixes of
+      mixes are refused past 64 levels or 1,024 materials counted once per path
+      (``bk.Mix`` evaluates every path; pbrt-v4 picks one).
+
+    pbrt-v4's microfacet models use height-correlated Smith masking: ``masking="correlated"``.
+    Roughness: with remaproughness true, alpha = sqrt(roughness) (``bk.roughness_to_alpha``),
+    else alpha = roughness; uroughness is alpha along local x, vroughness along y.
+
+    Values: ``"rgb"`` (3 numbers, used as they are: pbrt's RGB-to-spectrum upsampling followed by
+    a projection back to sRGB returns them up to the upsampling error), ``"float"`` (grey; pbrt itself only takes it for dielectric
+    eta), ``"spectrum"`` as wavelength/value pairs (projected to linear sRGB as Mitsuba's RGB
+    variants do: CIE 1931 and D65, see :func:`spectrum_to_rgb`), as a spectrum file (pbrt-v4: a
+    name that is not a named spectrum; whitespace-separated wavelength/value pairs, ``#``
+    comments; relative to the scene file's directory, pbrt-v4's search directory, or the working
+    directory for text; read as pairs), or as a named spectrum from the one table of
+    ``bsdfkit.Spectrum.named``: ``metal-<X>-eta``/``metal-<X>-k`` for every pbrt-v4 metal (Ag,
+    Al, Au, Cu, CuZn, MgO, TiO2; also ``mitsuba-<X>-...`` and ``jc-<X>-...``), projected to RGB
+    as ``Conductor`` projects a spectral eta / k (so RGB mode equals the spectral model's RGB
+    mode), and pbrt's glasses ``glass-<X>`` for dielectric eta. Dielectric eta is one number: a
+    float, a grey rgb, a named glass (``PBRT_GLASS_ETA``), pairs or a file, evaluated at 550 nm.
+    ``spectral=True`` keeps named and file spectra of metal eta / k and of dielectric /
+    thin-dielectric eta as ``bsdfkit.Spectrum`` values instead (a named glass then disperses in
+    spectral mode, as pbrt renders it; reflectances, the coats' interface eta and rgb values
+    stay RGB / scalar). ``displacement`` and
+    ``normalmap`` change the geometry, not the BxDF, and are left out
+    (``PbrtMaterial.ignored``).
+
+    Parameters
+    ----------
+    source : str or os.PathLike
+        Scene text, or the path of a scene file (above).
+    skip_unsupported : bool, optional
+        Leave out materials that cannot be converted (unsupported types, textures, unknown
+        spectra) instead of raising, with one :class:`PbrtSkipWarning` per material naming it,
+        its line and the reason (its ``material``, ``line`` and ``reason`` attributes carry
+        them); malformed text still raises.
+    skip_missing_includes : bool, optional
+        Skip an ``Include`` / ``Import`` of a missing file, with a
+        :class:`PbrtMissingIncludeWarning`.
+    spectral : bool, optional
+        Keep named and file spectra of metal eta / k and dielectric eta as ``bsdfkit.Spectrum``.
+
+    Returns
+    -------
+    dict
+        ``{name: BxDF}`` in file order.
+
+    Raises
+    ------
+    ValueError
+        Naming the material, its line and the parameter for unsupported types (measured, mix,
+        subsurface, interface, ...), texture-valued or unknown parameters, bad values, and
+        malformed text (with the line).
+    OSError
+        A missing scene file or include (unless ``skip_missing_includes``).
+
+    Examples
+    --------
+    >>> import bsdfkit as bk
+    >>> bk.from_pbrt('''MakeNamedMaterial "gold" "string type" "conductor"
+    ...     "spectrum eta" "metal-Au-eta" "spectrum k" "metal-Au-k" "float roughness" 0.04''')["gold"].alpha_x
+    0.2
+    """
+    if not isinstance(spectral, (bool, np.bool_)):
+        raise TypeError(f"spectral: expected True or False, got {spectral!r}")
+    text, path = _scene_source(source)
+    base = None if path is None else os.path.dirname(os.path.abspath(path))
+    out, records = {}, parse_pbrt_materials(text, path=path, skip_missing_includes=skip_missing_includes)
+
+    def skip(rec, e):
+        if not skip_unsupported:
+            raise e
+        w = PbrtSkipWarning(f"from_pbrt: skipped {e}" + (f" [in {rec.file}]" if rec.file else ""))
+        w.material, w.line, w.file, w.reason = rec.name, rec.line, rec.file, str(e)
+        warnings.warn(w, stacklevel=3)
+    for rec in records:
+        if rec.type == "mix":   # needs the others: resolved below (interop/_pbrt_mix.py)
+            continue
+        try:
+            out[rec.name] = rec.to_bxdf(spectral=spectral, base_dir=base)
+        except _PbrtError as e:
+            skip(rec, e)
+    from .mix import resolve_mixes
+    resolve_mixes([r for r in records if r.type == "mix"], out, _pfail, _pfail_param, _float_param, skip)
+    return {rec.name: out[rec.name] for rec in records if rec.name in out}   # file order
+
