@@ -9,19 +9,24 @@ import numpy as np
 
 from ...models import (BxDF, CoatedConductor, CoatedDiffuse, Conductor, Dielectric, Diffuse, DiffuseTransmission,
                        ThinDielectric, roughness_to_alpha)
-from .parser import _PBRT_IGNORED, PbrtSkipWarning, _PbrtError, _scene_source, parse_pbrt_materials
+from ...textures import Scale
+from .parser import _PBRT_SHADING, PbrtSkipWarning, _context, _PbrtError, _scene_source, parse_pbrt_materials
+from .mix import resolve_mixes
+from .shading import shading
+from .textures import float_value, is_texture, lookup_op, spectrum_value
 from .values import (_bool_param, _check_texture, _eta_param, _float_param, _int_param, _pfail, _pfail_param,
                      _spectrum_param)
 
 _PBRT_SUPPORTED = ("diffuse", "diffusetransmission", "conductor", "dielectric", "thindielectric",
-                   "coateddiffuse", "coatedconductor", "hair")
+                   "coateddiffuse", "coatedconductor", "hair", "measured", "mix")
 
+#: pbrt-v4 material types with no BSDF: ``interface`` (and ``none`` / ``""``) mark a boundary
+#: between participating media that rays pass through unchanged; skipped with their own reason.
+_PBRT_NO_BSDF = ("interface", "none", "")
 
-_PBRT_UNSUPPORTED = ("measured", "mix", "subsurface", "interface", "none", "")
-
+_PBRT_UNSUPPORTED = ("subsurface",)
 
 _PBRT_ROUGH = ("roughness", "uroughness", "vroughness", "remaproughness")
-
 
 _PBRT_PARAMS = {
     "diffuse": ("reflectance",),
@@ -35,97 +40,124 @@ _PBRT_PARAMS = {
                         "conductor.k", "reflectance", "thickness", "albedo", "g", "maxdepth", "nsamples",
                         "remaproughness"),
     "hair": ("sigma_a", "reflectance", "eumelanin", "pheomelanin", "eta", "beta_m", "beta_n", "alpha"),
+    "measured": ("filename",),
 }
 
 
+def _layer_kwargs(rec, ctx):
+    """pbrt-v4 LayeredBxDF parameters of coateddiffuse / coatedconductor (materials.cpp): albedo
+    clamped to [0, 1] and g to [-1, 1] per lookup; thickness, albedo and g may be textures."""
+    albedo = spectrum_value(rec, "albedo", albedo=True, ctx=ctx)
+    g = lookup_op("clamp", float_value(rec, "g", 0.0, ctx), (-1.0, 1.0))
+    return dict(thickness=float_value(rec, "thickness", 0.01, ctx), albedo=0.0 if albedo is None else albedo,
+                g=g, max_depth=_int_param(rec, "maxdepth", 10), n_samples=_int_param(rec, "nsamples", 1))
 
-def _layer_kwargs(rec):
-    """pbrt-v4 LayeredBxDF parameters of coateddiffuse / coatedconductor (materials.cpp)."""
-    albedo = _spectrum_param(rec, "albedo", albedo=True)
-    g = _float_param(rec, "g", 0.0)
-    return dict(thickness=_float_param(rec, "thickness", 0.01), albedo=0.0 if albedo is None else albedo,
-                g=min(max(g, -1.0), 1.0), max_depth=_int_param(rec, "maxdepth", 10),
-                n_samples=_int_param(rec, "nsamples", 1))
 
-
-def _alphas(rec, prefix=""):
-    r = _float_param(rec, prefix + "roughness", 0.0)
-    u = _float_param(rec, prefix + "uroughness", r)
-    v = _float_param(rec, prefix + "vroughness", r)
+def _alphas(rec, ctx, prefix=""):
+    """(alpha_x, alpha_y): uroughness / vroughness, default roughness [0], each a float or a float
+    texture; with remaproughness [true] alpha = sqrt(roughness), per lookup for a texture."""
+    r = float_value(rec, prefix + "roughness", 0.0, ctx)
+    u = float_value(rec, prefix + "uroughness", r, ctx)
+    v = float_value(rec, prefix + "vroughness", r, ctx)
     for val, n in ((u, "uroughness"), (v, "vroughness")):
-        if not (math.isfinite(val) and val >= 0):
+        if not is_texture(val) and not (math.isfinite(val) and val >= 0):
             _pfail(rec, f"{prefix + n if prefix + n in rec.params else prefix + 'roughness'} must be finite "
                    f"and >= 0, got {val}")
     if _bool_param(rec, "remaproughness", True):
-        return roughness_to_alpha(u), roughness_to_alpha(v)
+        return tuple(lookup_op("remap_roughness", x) if is_texture(x) else roughness_to_alpha(x) for x in (u, v))
     return u, v
 
 
 def _pbrt_bxdf(rec, ctx=None):
     ctx = ctx or {}
     mtype = rec.type
+    if mtype in _PBRT_NO_BSDF:
+        _pfail(rec, f"{mtype or 'empty'!r} material: no BSDF (pbrt-v4: a boundary between participating media that "
+               "rays pass through unchanged); nothing to model")
     if mtype not in _PBRT_SUPPORTED:
         kind = "unsupported" if mtype in _PBRT_UNSUPPORTED else "unknown"
         _pfail(rec, f"{kind} material type {mtype!r}; supported: {', '.join(_PBRT_SUPPORTED)}")
-    allowed = _PBRT_PARAMS[mtype] + _PBRT_IGNORED
+    if mtype == "mix":
+        _pfail(rec, "a mix material needs the scene's other materials: use from_pbrt")
+    allowed = _PBRT_PARAMS[mtype] + _PBRT_SHADING
     for p in rec.params.values():
         if p.name not in allowed:
             _pfail_param(rec, p, f"not a parameter of pbrt-v4's {mtype} material; it takes "
-                         + ", ".join(_PBRT_PARAMS[mtype]))
+                         + ", ".join(_PBRT_PARAMS[mtype] + _PBRT_SHADING))
     try:
-        if mtype == "diffuse":
-            r = _spectrum_param(rec, "reflectance", albedo=True)
-            return Diffuse(0.5 if r is None else r)
-        if mtype == "diffusetransmission":
-            r = _spectrum_param(rec, "reflectance", albedo=True)
-            t = _spectrum_param(rec, "transmittance", albedo=True)
-            s = _float_param(rec, "scale", 1.0)
-            r = np.full(3, 0.25) if r is None else r
-            t = np.full(3, 0.25) if t is None else t
-            return DiffuseTransmission(np.clip(s * r, 0, 1), np.clip(s * t, 0, 1))
-        if mtype == "conductor":
-            ax, ay = _alphas(rec)
-            refl = _spectrum_param(rec, "reflectance", albedo=True, ctx=ctx)
-            eta = _spectrum_param(rec, "eta", albedo=False, ctx=ctx)
-            k = _spectrum_param(rec, "k", albedo=False, ctx=ctx)
-            if refl is not None:
-                if eta is not None or k is not None:
-                    _pfail(rec, "give either \"reflectance\" or \"eta\"/\"k\", not both (pbrt-v4 refuses it)")
-                return Conductor.from_reflectance(refl, alpha_x=ax, alpha_y=ay, masking="correlated")
-            eta = _default_copper("eta", ctx) if eta is None else eta
-            k = _default_copper("k", ctx) if k is None else k
-            return Conductor(eta, k, alpha_x=ax, alpha_y=ay, masking="correlated")
-        if mtype == "dielectric":
-            ax, ay = _alphas(rec)
-            return Dielectric(_eta_param(rec, ctx=ctx), alpha_x=ax, alpha_y=ay, masking="correlated")
-        if mtype == "coateddiffuse":
-            ax, ay = _alphas(rec)
-            r = _spectrum_param(rec, "reflectance", albedo=True, ctx=ctx)
-            return CoatedDiffuse(0.5 if r is None else r, eta=_eta_param(rec), alpha_x=ax, alpha_y=ay,
-                                 **_layer_kwargs(rec))
-        if mtype == "coatedconductor":
-            iax, iay = _alphas(rec, "interface.")
-            cax, cay = _alphas(rec, "conductor.")
-            ieta = _eta_param(rec, param="interface.eta")
-            refl = _spectrum_param(rec, "reflectance", albedo=True, ctx=ctx)
-            eta = _spectrum_param(rec, "conductor.eta", albedo=False, ctx=ctx)
-            k = _spectrum_param(rec, "conductor.k", albedo=False, ctx=ctx)
-            kw = dict(conductor_alpha_x=cax, conductor_alpha_y=cay, interface_eta=ieta, interface_alpha_x=iax,
-                      interface_alpha_y=iay, **_layer_kwargs(rec))
-            if refl is not None:
-                if eta is not None or k is not None:
-                    _pfail(rec, "give either \"reflectance\" or \"conductor.eta\"/\"conductor.k\", not both")
-                return CoatedConductor.from_reflectance(refl, **kw)
-            eta = _default_copper("eta", ctx) if eta is None else eta
-            k = _default_copper("k", ctx) if k is None else k
-            return CoatedConductor(eta, k, **kw)
-        if mtype == "hair":
-            return _pbrt_hair(rec)
-        return ThinDielectric(_eta_param(rec, ctx=ctx))
+        model = _base_model(rec, ctx)
     except _PbrtError:
         raise
     except (ValueError, TypeError) as e:
         _pfail(rec, str(e))
+    return shading(rec, model, ctx)
+
+
+def _base_model(rec, ctx):
+    mtype = rec.type
+    if mtype == "diffuse":
+        r = spectrum_value(rec, "reflectance", albedo=True, ctx=ctx)
+        return Diffuse(0.5 if r is None else r)
+    if mtype == "diffusetransmission":
+        # pbrt-v4 DiffuseTransmissionMaterial: clamp(scale * texture, 0, 1) per lookup
+        r = spectrum_value(rec, "reflectance", albedo=True, ctx=ctx)
+        t = spectrum_value(rec, "transmittance", albedo=True, ctx=ctx)
+        s = _float_param(rec, "scale", 1.0)
+        r = np.full(3, 0.25) if r is None else r
+        t = np.full(3, 0.25) if t is None else t
+        return DiffuseTransmission(*(lookup_op("clamp01", Scale(x, s)) if is_texture(x) else np.clip(s * x, 0, 1)
+                                     for x in (r, t)))
+    if mtype == "conductor":
+        ax, ay = _alphas(rec, ctx)
+        refl = _conductor_parts(rec, "reflectance", "eta", "k", ctx)
+        if refl is not None:
+            if is_texture(refl) or is_texture(ax) or is_texture(ay):
+                return Conductor(1.0, lookup_op("conductor_k", refl),
+                                 alpha_x=ax, alpha_y=ay, masking="correlated")
+            return Conductor.from_reflectance(refl, alpha_x=ax, alpha_y=ay, masking="correlated")
+        eta = spectrum_value(rec, "eta", albedo=False, ctx=ctx)
+        k = spectrum_value(rec, "k", albedo=False, ctx=ctx)
+        eta = _default_copper("eta", ctx) if eta is None else eta
+        k = _default_copper("k", ctx) if k is None else k
+        return Conductor(eta, k, alpha_x=ax, alpha_y=ay, masking="correlated")
+    if mtype == "dielectric":
+        ax, ay = _alphas(rec, ctx)
+        return Dielectric(_eta_param(rec, ctx=ctx), alpha_x=ax, alpha_y=ay, masking="correlated")
+    if mtype == "coateddiffuse":
+        ax, ay = _alphas(rec, ctx)
+        r = spectrum_value(rec, "reflectance", albedo=True, ctx=ctx)
+        return CoatedDiffuse(0.5 if r is None else r, eta=_eta_param(rec), alpha_x=ax, alpha_y=ay,
+                             **_layer_kwargs(rec, ctx))
+    if mtype == "coatedconductor":
+        iax, iay = _alphas(rec, ctx, "interface.")
+        cax, cay = _alphas(rec, ctx, "conductor.")
+        kw = dict(conductor_alpha_x=cax, conductor_alpha_y=cay, interface_eta=_eta_param(rec, param="interface.eta"),
+                  interface_alpha_x=iax, interface_alpha_y=iay, **_layer_kwargs(rec, ctx))
+        refl = _conductor_parts(rec, "reflectance", "conductor.eta", "conductor.k", ctx)
+        if refl is not None:
+            if any(is_texture(v) for v in kw.values()) or is_texture(refl):
+                return CoatedConductor(1.0, lookup_op("conductor_k", refl), **kw)
+            return CoatedConductor.from_reflectance(refl, **kw)
+        eta = spectrum_value(rec, "conductor.eta", albedo=False, ctx=ctx)
+        k = spectrum_value(rec, "conductor.k", albedo=False, ctx=ctx)
+        eta = _default_copper("eta", ctx) if eta is None else eta
+        k = _default_copper("k", ctx) if k is None else k
+        return CoatedConductor(eta, k, **kw)
+    if mtype == "hair":
+        return _pbrt_hair(rec, ctx)
+    if mtype == "measured":
+        return _measured(rec, ctx)
+    return ThinDielectric(_eta_param(rec, ctx=ctx))
+
+
+def _conductor_parts(rec, refl_name, eta_name, k_name, ctx):
+    """The reflectance (a [0, 1] clamp of its texture) if given, after checking that eta / k are not
+    given too (pbrt-v4 refuses both); None without one."""
+    refl = spectrum_value(rec, refl_name, albedo=True, ctx=ctx)
+    if refl is not None and (eta_name in rec.params or k_name in rec.params):
+        which = f'"{eta_name}"/"{k_name}"'
+        _pfail(rec, f"give either \"{refl_name}\" or {which}, not both (pbrt-v4 refuses it)")
+    return refl
 
 
 def _default_copper(part, ctx):
@@ -135,29 +167,56 @@ def _default_copper(part, ctx):
     return s if ctx.get("spectral") else np.asarray(s.to_rgb("unbounded", illuminant=None), dtype=np.float64)
 
 
-def _pbrt_hair(rec):
+def _pbrt_hair(rec, ctx):
     """pbrt-v4 ``HairMaterial``: sigma_a, else reflectance, else eumelanin/pheomelanin (each
     ignored when an earlier one is given, as pbrt-v4 warns and does); neither -> eumelanin 1.3.
-    beta_m / beta_n clamped to [0.01, 1] and reflectance to [0, 1] as pbrt-v4's material does."""
+    beta_m / beta_n clamped to [0.01, 1] and reflectance to [0, 1] as pbrt-v4's material does.
+    sigma_a, eta, beta_m, beta_n and alpha may be textures; reflectance and the melanins not yet
+    (their conversion to sigma_a is not a per-lookup operation here)."""
     from ...models.hair import Hair, sigma_a_from_concentration, sigma_a_from_reflectance
 
-    bm = min(max(_float_param(rec, "beta_m", 0.3), 0.01), 1.0)
-    bn = min(max(_float_param(rec, "beta_n", 0.3), 0.01), 1.0)
-    kw = dict(eta=_float_param(rec, "eta", 1.55), beta_m=bm, beta_n=bn, alpha=_float_param(rec, "alpha", 2.0), h=0.0)
-    sigma_a = _spectrum_param(rec, "sigma_a", albedo=False)
+    bm = lookup_op("clamp", float_value(rec, "beta_m", 0.3, ctx), (0.01, 1.0))
+    bn = lookup_op("clamp", float_value(rec, "beta_n", 0.3, ctx), (0.01, 1.0))
+    kw = dict(eta=float_value(rec, "eta", 1.55, ctx), beta_m=bm, beta_n=bn, alpha=float_value(rec, "alpha", 2.0, ctx),
+              h=0.0)
+    sigma_a = spectrum_value(rec, "sigma_a", albedo=False, ctx=ctx)
     if sigma_a is None:
         p = rec.params.get("reflectance")
         if p is not None:
             _check_texture(rec, p)
+            if is_texture(bn):
+                _pfail_param(rec, p, "a hair reflectance with a textured beta_n is not supported")
             c = _spectrum_param(rec, "reflectance", albedo=False)
             sigma_a = sigma_a_from_reflectance(np.clip(c, 0.0, 1.0), bn)
         else:
+            for n in ("eumelanin", "pheomelanin"):
+                if n in rec.params:
+                    _check_texture(rec, rec.params[n])
             ce = _float_param(rec, "eumelanin", None)
             cp = _float_param(rec, "pheomelanin", None)
             if ce is None and cp is None:
                 ce = 1.3
             sigma_a = sigma_a_from_concentration(ce or 0.0, cp or 0.0)
     return Hair(sigma_a=sigma_a, **kw)
+
+
+def _measured(rec, ctx):
+    """pbrt-v4 ``measured``: ``"string filename"``, an RGL tensor file (``.bsdf``) relative to the
+    scene file's directory -> ``bk.Measured``."""
+    from ...models.measured import Measured
+
+    p = rec.params.get("filename")
+    if p is None or p.type != "string" or len(p.values) != 1 or not isinstance(p.values[0], str) or not p.values[0]:
+        _pfail(rec, "needs a \"string filename\" naming an RGL tensor file (.bsdf)")
+    base = ctx.get("base") or os.getcwd()
+    name = p.values[0]
+    full = os.path.normpath(name if os.path.isabs(name) else os.path.join(base, name))
+    if not os.path.isfile(full):
+        _pfail_param(rec, p, f"no measured BSDF file {full!r}")
+    try:
+        return Measured(full)
+    except (OSError, ValueError) as e:
+        _pfail_param(rec, p, f"{full!r}: {e}")
 
 
 def from_pbrt(source, *, skip_unsupported: bool = False, skip_missing_includes: bool = False,
@@ -271,14 +330,15 @@ def from_pbrt(source, *, skip_unsupported: bool = False, skip_missing_includes: 
         w = PbrtSkipWarning(f"from_pbrt: skipped {e}" + (f" [in {rec.file}]" if rec.file else ""))
         w.material, w.line, w.file, w.reason = rec.name, rec.line, rec.file, str(e)
         warnings.warn(w, stacklevel=3)
+    ctx = _context(records[0].textures if records else {}, spectral, base)   # textures converted once per scene
     for rec in records:
-        if rec.type == "mix":   # needs the others: resolved below (interop/_pbrt_mix.py)
+        if rec.type == "mix":   # needs the others: resolved below (mix.py)
             continue
         try:
-            out[rec.name] = rec.to_bxdf(spectral=spectral, base_dir=base)
+            out[rec.name] = _pbrt_bxdf(rec, ctx)
         except _PbrtError as e:
             skip(rec, e)
-    from .mix import resolve_mixes
-    resolve_mixes([r for r in records if r.type == "mix"], out, _pfail, _pfail_param, _float_param, skip)
+    resolve_mixes([r for r in records if r.type == "mix"], out, _pfail, _pfail_param,
+                  lambda rec, name, default: float_value(rec, name, default, ctx), skip)
     return {rec.name: out[rec.name] for rec in records if rec.name in out}   # file order
 

@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import math
 
+from ...textures import TextureBase
+from .textures import PbrtLookup
+
 __all__ = ["resolve_mixes", "PBRT_MAX_MIX_DEPTH", "PBRT_MAX_MIX_LEAVES"]
 
 _PARAMS = ("materials", "amount")
@@ -27,9 +30,11 @@ def _check(rec, fail, fail_param, float_param):
     if p is None or p.type != "string" or len(p.values) != 2 or not all(isinstance(v, str) for v in p.values):
         fail(rec, 'expected "string materials" [ "a" "b" ] naming two materials (pbrt-v4 MixMaterial)')
     amount = float_param(rec, "amount", 0.5)
+    if isinstance(amount, TextureBase):   # a float texture: clamped per lookup
+        return tuple(p.values), PbrtLookup("clamp01", amount)
     if math.isnan(amount):
         fail_param(rec, rec.params["amount"], "is NaN")
-    # pbrt-v4 takes <= 0 as the first and >= 1 as the second material
+    # pbrt-v4 MixMaterial::ChooseMaterial takes <= 0 as the first and >= 1 as the second material
     return tuple(p.values), min(max(amount, 0.0), 1.0)
 
 

@@ -13,8 +13,10 @@ import numpy as np
 
 from ...models import BxDF
 
-#: Parameters that shape the geometry, not the BxDF: recorded and left out.
-_PBRT_IGNORED = ("displacement", "normalmap")
+#: Parameters of every pbrt-v4 material that shape the surface, not the BxDF: ``normalmap`` ->
+#: ``bk.NormalMap``, ``displacement`` -> ``bk.BumpMap`` (``materials``); a constant displacement
+#: moves a flat element without tilting it, and is left out (``PbrtMaterial.ignored``).
+_PBRT_SHADING = ("displacement", "normalmap")
 
 @dataclass(frozen=True)
 class PbrtParam:
@@ -44,17 +46,50 @@ class PbrtMaterial:
     params: dict = field(repr=False, hash=False)
     shapes: int = 0
     file: str | None = None  # the scene file the statement is in (Include/Import), None for text
+    #: The scene's ``Texture`` statements, ``{("float" | "spectrum", name): PbrtTexture}`` (shared
+    #: by every record of one parse; ``"texture <param>" "<name>"`` values refer to them).
+    textures: dict = field(default_factory=dict, repr=False, hash=False, compare=False)
+    kind = "material"
 
     @property
     def ignored(self) -> tuple:
-        """Parameters present but left out of the BxDF (``displacement``, ``normalmap``)."""
-        return tuple(p for p in self.params if p in _PBRT_IGNORED)
+        """Parameters present but left out of the model: a constant ``"float displacement"`` (it
+        moves a flat surface element without tilting it: no bump)."""
+        p = self.params.get("displacement")
+        return ("displacement",) if p is not None and p.type != "texture" else ()
 
     def to_bxdf(self, *, spectral: bool = False, base_dir=None) -> BxDF:
         """The bsdfkit model of this material (``ValueError`` if not representable).
-        ``spectral``, ``base_dir`` (where spectrum files are looked up): see :func:`from_pbrt`."""
+        ``spectral``, ``base_dir`` (where spectrum files and images are looked up): see
+        :func:`from_pbrt`. Textures are looked up in :attr:`textures`."""
         from .materials import _pbrt_bxdf
-        return _pbrt_bxdf(self, {"spectral": bool(spectral), "base": None if base_dir is None else os.fspath(base_dir)})
+        return _pbrt_bxdf(self, _context(self.textures, spectral, base_dir))
+
+
+@dataclass(frozen=True)
+class PbrtTexture:
+    """A parsed ``Texture "name" "float" | "spectrum" "class" params...`` statement.
+
+    type: ``"float"`` or ``"spectrum"`` (pbrt-v3's ``"color"`` is read as ``"spectrum"``); cls: the
+    texture class (``"imagemap"``, ``"checkerboard"``, ...); line, file as for :class:`PbrtMaterial`.
+    Float and spectrum textures have separate names, as in pbrt-v4.
+    """
+
+    name: str
+    type: str
+    cls: str
+    line: int
+    params: dict = field(repr=False, hash=False)
+    file: str | None = None
+    kind = "texture"
+
+
+def _context(textures, spectral, base_dir, cache=None):
+    """What converting a record needs besides the record: the scene's textures and the converted
+    ones (``cache``, shared across the records of one scene), the spectral flag and the directory
+    relative file names start from (None: the working directory)."""
+    return {"spectral": bool(spectral), "base": None if base_dir is None else os.fspath(base_dir),
+            "textures": textures, "tex_cache": {} if cache is None else cache, "tex_stack": []}
 
 
 class _PbrtError(ValueError):
@@ -312,11 +347,11 @@ def parse_pbrt_materials(text: str, *, path=None, skip_missing_includes: bool = 
         raise TypeError(f"text: expected str (pbrt scene text), got {type(text).__name__}")
     if not isinstance(skip_missing_includes, (bool, np.bool_)):
         raise TypeError(f"skip_missing_includes: expected True or False, got {skip_missing_includes!r}")
-    st = {"recs": [], "by_name": {}, "current": None, "stack": [], "n_anon": 0,
+    st = {"recs": [], "by_name": {}, "current": None, "stack": [], "n_anon": 0, "textures": {},
           "skip_missing": bool(skip_missing_includes), "colorspace_warned": set()}
     _parse_into(st, text, None if path is None else os.fspath(path), 0)
-    return [PbrtMaterial(name=r[0], type=r[1], line=r[2], named=r[3], params=r[4], shapes=r[5], file=r[6])
-            for r in st["recs"]]
+    return [PbrtMaterial(name=r[0], type=r[1], line=r[2], named=r[3], params=r[4], shapes=r[5], file=r[6],
+                         textures=st["textures"]) for r in st["recs"]]
 
 
 def _parse_into(st, text, path, depth):
@@ -368,6 +403,8 @@ def _parse_statements(st, text, path, depth, where):
             rec = [name, tp.values[0], line, True, params, 0, path if depth else None]
             recs.append(rec)
             by_name[name] = rec
+        elif kw == "Texture":
+            _texture_statement(st, ts, line, path if depth else None)
         elif kw in ("Include", "Import"):
             fname = _statement_name(ts, kw, line)
             base = os.path.dirname(path) if path is not None else os.getcwd()
@@ -429,6 +466,25 @@ def _parse_statements(st, text, path, depth, where):
             _skip_args(ts)
         else:
             _skip_args(ts)
+
+
+def _texture_statement(st, ts, line, file):
+    """``Texture "name" "float" | "spectrum" "class" params...`` into ``st["textures"]``; a redefined
+    texture is an error, as in pbrt-v4 (BasicSceneBuilder::Texture)."""
+    name = _statement_name(ts, "Texture", line)
+    ttype = _statement_name(ts, f"Texture {name!r}", line)
+    cls = _statement_name(ts, f"Texture {name!r}", line)
+    params = _read_params(ts, f"Texture {name!r}")
+    if ttype == "color":   # pbrt-v3 spelling, upgraded by pbrt-v4
+        ttype = "spectrum"
+    if ttype not in ("float", "spectrum"):
+        raise _PbrtError(f"line {line}: Texture {name!r}: type {ttype!r} is not \"float\" or \"spectrum\"")
+    old = st["textures"].get((ttype, name))
+    if old is not None:
+        where = f" of {old.file}" if old.file and old.file != file else ""
+        raise _PbrtError(f"line {line}: Texture {name!r}: {ttype} texture redefined (first defined on line "
+                         f"{old.line}{where})")
+    st["textures"][(ttype, name)] = PbrtTexture(name=name, type=ttype, cls=cls, line=line, params=params, file=file)
 
 
 def _read_scene_file(path) -> str:

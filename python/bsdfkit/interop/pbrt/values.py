@@ -26,18 +26,28 @@ PBRT_GLASS_ETA = {
 #: Wavelength at which dielectric eta spectra are evaluated.
 _ETA_WAVELENGTH = 550.0
 
+def _label(rec, line):
+    """``pbrt material 'm' (conductor, line 3`` / ``pbrt texture 't' (float imagemap, line 2 of f.pbrt``."""
+    if rec.kind == "texture":
+        where = f" of {os.path.basename(rec.file)}" if rec.file else ""
+        return f"pbrt texture {rec.name!r} ({rec.type} {rec.cls}, line {line}{where}"
+    return f"pbrt material {rec.name!r} ({rec.type}, line {line}"
+
+
 def _pfail(rec, msg):
-    raise _PbrtError(f"pbrt material {rec.name!r} ({rec.type}, line {rec.line}): {msg}")
+    raise _PbrtError(f"{_label(rec, rec.line)}): {msg}")
 
 
 def _pfail_param(rec, p, msg):
-    raise _PbrtError(f"pbrt material {rec.name!r} ({rec.type}, line {p.line}): parameter {p.name!r}: {msg}")
+    raise _PbrtError(f"{_label(rec, p.line)}): parameter {p.name!r}: {msg}")
 
 
 def _check_texture(rec, p):
+    """A texture reference where pbrt-v4 takes only a value (dielectric eta, maxdepth, ...)."""
     if p.type == "texture":
         tex = p.values[0] if p.values else "?"
-        _pfail_param(rec, p, f"is a texture ({tex!r}); only constant values are supported")
+        _pfail_param(rec, p, f"is a texture ({tex!r}); pbrt-v4's {rec.type} {rec.kind} takes only a constant value "
+                     "for it")
 
 
 def _numbers(rec, p):
