@@ -315,3 +315,48 @@ def test_image_relative_to_main_scene(scene, tmp_path):
     (tmp_path / "sub" / "tex.pbrt").write_text('Texture "img" "spectrum" "imagemap" "string filename" "c.png"\n')
     ms = scene('Include "sub/tex.pbrt"\nMakeNamedMaterial "a" "string type" "diffuse" "texture reflectance" "img"\n')
     np.testing.assert_allclose(_at(ms["a"]).reflectance, pbrt_image(srgb_decode(PX / 255.0), UV), atol=2e-6)
+
+
+TEXTURED = '''Texture "img" "spectrum" "imagemap" "string filename" "c.png" "float uscale" 2 "string wrap" "clamp"
+Texture "r" "float" "imagemap" "string filename" "c.png" "string encoding" "linear" "float scale" 0.5 "bool invert" true
+Texture "k" "spectrum" "checkerboard" "float uscale" 4 "rgb tex1" [0.9 0.1 0.1] "texture tex2" "img"
+Texture "s" "float" "scale" "texture tex" "r" "float scale" 2
+Texture "m" "float" "mix" "float tex1" 0.1 "texture tex2" "s" "texture amount" "r"
+MakeNamedMaterial "a" "string type" "diffuse" "texture reflectance" "k" "texture displacement" "r"
+MakeNamedMaterial "b" "string type" "conductor" "texture reflectance" "img" "texture uroughness" "m"
+MakeNamedMaterial "c" "string type" "coateddiffuse" "texture reflectance" "img" "texture g" "s" "string normalmap" "c.png"
+MakeNamedMaterial "d" "string type" "mix" "string materials" ["a" "b"] "texture amount" "m"
+'''
+TOKENS = ['"', "[", "]", "0", "-1", "1e308", "nan", "inf", '"float', '"texture', '"spectrum', '"imagemap"', '"mix"',
+          '"checkerboard"', '"scale"', '"constant"', '"marble"', "Texture", '"c.png"', '"nope.png"', '"r"', '"k"', "\n"]
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_mutated_textured_scene(scene, seed):
+    """Mutated textured scenes (the interop fuzz's mutations, texture tokens): each imports into
+    models that evaluate finite at uv, or raises ValueError / OSError naming a line."""
+    import random
+    rng = random.Random(seed)
+    wo, wi = np.broadcast_to(bk.direction(0.4, 0.1), (5, 3)), np.broadcast_to(bk.direction(0.7, 2.0), (5, 3))
+    for k in range(60):
+        s = list(TEXTURED)
+        for _ in range(rng.randint(1, 3)):
+            i = rng.randrange(len(s) + 1)
+            op = rng.random()
+            if op < 0.3 and s:
+                del s[min(i, len(s) - 1)]
+            elif op < 0.7:
+                s.insert(i, rng.choice(TOKENS))
+            else:
+                s[i:i] = s[i:min(len(s), i + rng.randint(1, 40))]
+        text = "".join(s)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                ms = scene(text, skip_unsupported=k % 4 != 0)
+        except (ValueError, OSError) as e:
+            assert "line" in str(e), (str(e), text)
+            continue
+        for m in ms.values():
+            f = m.eval(wo, wi, uv=UV)
+            assert np.all(np.isfinite(f)) and np.all(f >= 0), (m, text)

@@ -9,8 +9,9 @@ from __future__ import annotations
 
 from .materials import from_pbrt
 from .parser import (PBRT_MAX_INCLUDE_DEPTH, PBRT_MAX_INCLUDES, PbrtColorSpaceWarning, PbrtMaterial,
-                     PbrtMissingIncludeWarning, PbrtParam, PbrtSkipWarning, parse_pbrt_materials)
+                     PbrtMissingIncludeWarning, PbrtParam, PbrtSkipWarning, PbrtTexture, parse_pbrt_materials)
+from .textures import PBRT_TEXTURE_CLASSES, PbrtLookup
 from .values import PBRT_GLASS_ETA
 
-__all__ = ["PBRT_GLASS_ETA", "PbrtParam", "PbrtMaterial", "PbrtSkipWarning", "PbrtMissingIncludeWarning",
-           "PbrtColorSpaceWarning", "parse_pbrt_materials", "from_pbrt"]
+__all__ = ["PBRT_GLASS_ETA", "PbrtParam", "PbrtMaterial", "PbrtTexture", "PbrtSkipWarning", "PbrtMissingIncludeWarning",
+           "PbrtColorSpaceWarning", "PbrtLookup", "PBRT_TEXTURE_CLASSES", "parse_pbrt_materials", "from_pbrt"]

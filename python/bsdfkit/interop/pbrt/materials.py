@@ -254,10 +254,43 @@ def from_pbrt(source, *, skip_unsupported: bool = False, skip_missing_includes: 
       [0.3] (clamped to [0.01, 1]), alpha [2 degrees] -> ``Hair(..., h=0)`` (pbrt-v4 takes h from
       the curve's v coordinate per hit).
     * ``mix``: materials [two names of materials of the scene, in any order, mixes too], amount
-      [0.5] (a constant) -> ``Mix(first, second, amount, method="stochastic")`` (pbrt-v4
-      MixMaterial: the second material with probability amount, per shading point). Mixes of
-      mixes are refused past 64 levels or 1,024 materials counted once per path
-      (``bk.Mix`` evaluates every path; pbrt-v4 picks one).
+      [0.5] (a float or a float texture, clamped to [0, 1]) -> ``Mix(first, second, amount,
+      method="stochastic")`` (pbrt-v4 MixMaterial: the second material with probability amount,
+      per shading point). Mixes of mixes are refused past 64 levels or 1,024 materials counted
+      once per path (``bk.Mix`` evaluates every path; pbrt-v4 picks one).
+    * ``measured``: filename (an RGL ``.bsdf`` tensor file, relative to the scene file's
+      directory) -> ``bk.Measured``.
+    * ``interface`` (and ``none``): no BSDF (a boundary between media): skipped with that reason.
+      ``subsurface`` is unsupported.
+
+    Every material also takes ``"string normalmap"`` -> ``bk.NormalMap`` of the image (read
+    linearly, bilinear with repeat wrap at (u, 1 - v), normals normalize(2 rgb - 1) turned to the
+    outside) and ``"texture displacement"`` -> ``bk.BumpMap`` whose gradient is pbrt-v4
+    BumpMap()'s forward difference (step (|du/dx| + |du/dy|) / 2 with uv derivatives, else 0.0005),
+    both with ``flip_invalid_normals=False, shadowing=False`` (pbrt-v4 has neither); a normal map
+    wins over a displacement, as in pbrt-v4, and a constant displacement tilts nothing
+    (``PbrtMaterial.ignored``). bk.BumpMap takes the local frame's x and y axes as dp/du, dp/dv
+    (pbrt scales the gradient by the mesh's |dp/du|, which a material alone does not have).
+
+    Textures: ``Texture "name" "float" | "spectrum" "class" params`` of the classes
+    ``imagemap`` (filename relative to the scene file's directory; filter point / bilinear /
+    trilinear / ewa (OpenImageIO's anisotropic filter); wrap repeat / black / clamp; encoding
+    [sRGB for .png files, linear otherwise]; scale; invert), ``constant``, ``scale``, ``mix`` and
+    2-D ``checkerboard``, with the uv mapping (uscale, vscale, udelta, vdelta; pbrt's v runs up
+    the image: the texture's ``transform`` is [[su, 0, du], [0, -sv, 1 - dv]]) become
+    ``bk.Texture`` / ``bsdfkit.textures`` textures, converted once per scene. A parameter
+    ``"texture <p>" "<name>"`` takes the float or spectrum texture of that name wherever pbrt-v4
+    takes a texture: reflectance, transmittance, eta / k of conductors, (u|v)roughness,
+    thickness, albedo, g, a mix's amount, hair's sigma_a / eta / beta_m / beta_n / alpha. The
+    model is then textured (``bsdfkit.models.textured``: evaluate with ``uv=``), and pbrt-v4's
+    per-lookup arithmetic is applied to the looked-up values (:class:`~bsdfkit.interop.pbrt.textures.PbrtLookup`:
+    reflectances and albedos clamped to [0, 1], g to [-1, 1], beta to [0.01, 1], alpha =
+    sqrt(roughness) with remaproughness, a conductor's k = 2 sqrt(r) / sqrt(1 - r) of a
+    reflectance texture with eta 1). A float texture of an RGB image reads channel 0, a spectrum
+    texture of an RGBA image its RGB. Other classes (ptex, marble, fbm, wrinkled, windy, dots,
+    bilerp, directionmix), 3-D checkerboards, other mappings and the octahedralsphere wrap are
+    refused naming the class and the Texture statement's line, as are undefined textures and
+    cycles; a missing image names its path and the line.
 
     pbrt-v4's microfacet models use height-correlated Smith masking: ``masking="correlated"``.
     Roughness: with remaproughness true, alpha = sqrt(roughness) (``bk.roughness_to_alpha``),
@@ -278,17 +311,15 @@ def from_pbrt(source, *, skip_unsupported: bool = False, skip_missing_includes: 
     ``spectral=True`` keeps named and file spectra of metal eta / k and of dielectric /
     thin-dielectric eta as ``bsdfkit.Spectrum`` values instead (a named glass then disperses in
     spectral mode, as pbrt renders it; reflectances, the coats' interface eta and rgb values
-    stay RGB / scalar). ``displacement`` and
-    ``normalmap`` change the geometry, not the BxDF, and are left out
-    (``PbrtMaterial.ignored``).
+    stay RGB / scalar).
 
     Parameters
     ----------
     source : str or os.PathLike
         Scene text, or the path of a scene file (above).
     skip_unsupported : bool, optional
-        Leave out materials that cannot be converted (unsupported types, textures, unknown
-        spectra) instead of raising, with one :class:`PbrtSkipWarning` per material naming it,
+        Leave out materials that cannot be converted (unsupported types or textures, missing
+        images, unknown spectra) instead of raising, with one :class:`PbrtSkipWarning` per material naming it,
         its line and the reason (its ``material``, ``line`` and ``reason`` attributes carry
         them); malformed text still raises.
     skip_missing_includes : bool, optional
@@ -305,9 +336,9 @@ def from_pbrt(source, *, skip_unsupported: bool = False, skip_missing_includes: 
     Raises
     ------
     ValueError
-        Naming the material, its line and the parameter for unsupported types (measured, mix,
-        subsurface, interface, ...), texture-valued or unknown parameters, bad values, and
-        malformed text (with the line).
+        Naming the material, its line and the parameter for unsupported types (subsurface,
+        interface, ...), unsupported or undefined textures (naming the texture and its line),
+        missing images, unknown parameters, bad values, and malformed text (with the line).
     OSError
         A missing scene file or include (unless ``skip_missing_includes``).
 

@@ -54,9 +54,10 @@ class PbrtMaterial:
     @property
     def ignored(self) -> tuple:
         """Parameters present but left out of the model: a constant ``"float displacement"`` (it
-        moves a flat surface element without tilting it: no bump)."""
+        moves a flat surface element without tilting it: no bump), or a displacement beside a
+        ``normalmap`` (pbrt-v4 uses the normal map then)."""
         p = self.params.get("displacement")
-        return ("displacement",) if p is not None and p.type != "texture" else ()
+        return ("displacement",) if p is not None and (p.type != "texture" or "normalmap" in self.params) else ()
 
     def to_bxdf(self, *, spectral: bool = False, base_dir=None) -> BxDF:
         """The bsdfkit model of this material (``ValueError`` if not representable).
@@ -296,7 +297,9 @@ def parse_pbrt_materials(text: str, *, path=None, skip_missing_includes: bool = 
     Understands pbrt's tokens (quoted strings with escapes, numbers, ``true``/``false``,
     brackets, ``#`` comments to the end of the line; statements may span lines) and reads
     ``Material "type" params...`` and ``MakeNamedMaterial "name" "string type" "..."
-    params...``. ``AttributeBegin``/``AttributeEnd``, ``NamedMaterial`` and ``Shape`` are
+    params...``, and the ``Texture "name" "float" | "spectrum" "class" params...`` statements
+    (every record's ``textures``: ``{(type, name): PbrtTexture}``; a texture redefined with the
+    same type is an error, as in pbrt-v4). ``AttributeBegin``/``AttributeEnd``, ``NamedMaterial`` and ``Shape`` are
     followed to count the shapes using each material; ``Include "file"`` and ``Import "file"``
     are read in place, relative to the including file (``path``; the working directory for text
     without one), at most :data:`PBRT_MAX_INCLUDE_DEPTH` deep; every other pbrt directive is
@@ -330,7 +333,8 @@ def parse_pbrt_materials(text: str, *, path=None, skip_missing_includes: bool = 
     ValueError
         With the line number (and file) for malformed text: unterminated strings or brackets,
         stray ``]``, non-numbers in lists, malformed parameter declarations, a word that is not
-        a pbrt directive, a bad ``ActiveTransform`` argument, a ``MakeNamedMaterial`` without
+        a pbrt directive, a bad ``ActiveTransform`` argument, a redefined texture or a texture
+        type other than float / spectrum, a ``MakeNamedMaterial`` without
         ``"string type"``, a redefined named material, Include nested too deep or followed more
         than ``PBRT_MAX_INCLUDES`` times, an include that is not text (or a corrupt ``.gz``).
     OSError
