@@ -26,7 +26,8 @@ __all__ = ["PbrtLookup", "PBRT_TEXTURE_CLASSES"]
 #: Texture classes converted (pbrt-v4 textures.cpp); the others are refused by name.
 PBRT_TEXTURE_CLASSES = ("imagemap", "constant", "scale", "mix", "checkerboard")
 
-_MAPPING = ("mapping", "uscale", "vscale", "udelta", "vdelta")
+# pbrt-v4 TextureMapping2D::Create: uv (uscale, vscale, udelta, vdelta); planar also v1, v2
+_MAPPING = ("mapping", "uscale", "vscale", "udelta", "vdelta", "v1", "v2")
 _PARAMS = {
     "imagemap": ("filename", "filter", "wrap", "encoding", "scale", "invert", "maxanisotropy") + _MAPPING,
     "constant": ("value",),
