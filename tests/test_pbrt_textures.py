@@ -360,3 +360,21 @@ def test_mutated_textured_scene(scene, seed):
         for m in ms.values():
             f = m.eval(wo, wi, uv=UV)
             assert np.all(np.isfinite(f)) and np.all(f >= 0), (m, text)
+
+
+def test_cli_simplify_lists_textured_materials(scene):
+    """python -m bsdfkit simplify on a textured scene: uniform materials are simplified, textured ones
+    are listed as not simplified (simplify measures one uniform material), exit status 0."""
+    import subprocess
+    import sys
+    scene('Texture "img" "spectrum" "imagemap" "string filename" "c.png"\n'
+          'MakeNamedMaterial "plain" "string type" "diffuse" "rgb reflectance" [0.5 0.4 0.3]\n'
+          'MakeNamedMaterial "tex" "string type" "diffuse" "texture reflectance" "img"\n')
+    pkg = os.path.dirname(os.path.dirname(bk.__file__))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([pkg, os.environ.get("PYTHONPATH", "")]))
+    r = subprocess.run([sys.executable, "-m", "bsdfkit", "simplify", str(scene.dir / "scene.pbrt"), "--tol", "1e-2",
+                        "-n", "2000"], capture_output=True, text=True, env=env, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert "not simplified: textured (reflectance)" in r.stdout
+    assert "1 textured material(s) not simplified: tex" in r.stdout
+    assert "all 1 material(s) meet tol 0.01 (the textured ones not simplified)" in r.stdout
