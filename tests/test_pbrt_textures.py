@@ -378,3 +378,13 @@ def test_cli_simplify_lists_textured_materials(scene):
     assert "not simplified: textured (reflectance)" in r.stdout
     assert "1 textured material(s) not simplified: tex" in r.stdout
     assert "all 1 material(s) meet tol 0.01 (the textured ones not simplified)" in r.stdout
+
+
+def test_float_image_ignores_encoding(scene, tmp_path):
+    """An EXR is a float image: pbrt-v4 applies "encoding" to 8-bit images only, so an sRGB encoding
+    given for an EXR leaves its values as stored."""
+    img = RNG.uniform(0.0, 2.0, size=(3, 4, 3))
+    bk.io.write_image(tmp_path / "f.exr", img)
+    ms = scene('Texture "f" "spectrum" "imagemap" "string filename" "f.exr" "string encoding" "sRGB"\n'
+               'MakeNamedMaterial "c" "string type" "conductor" "texture eta" "f" "rgb k" [1 1 1]\n')
+    np.testing.assert_allclose(_at(ms["c"]).eta, pbrt_image(img.astype(np.float32), UV), rtol=1e-6, atol=1e-6)

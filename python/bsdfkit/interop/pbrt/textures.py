@@ -38,6 +38,8 @@ _PARAMS = {
 # pbrt-v4 imagemap "filter" -> bk.Texture filter (EWA: OpenImageIO's anisotropic filter stands in)
 _FILTERS = {"point": "nearest", "bilinear": "bilinear", "trilinear": "trilinear", "ewa": "anisotropic"}
 _WRAPS = {"repeat": "periodic", "black": "black", "clamp": "clamp"}
+# image formats pbrt-v4 reads as floats (Image::Read), where "encoding" does not apply
+_FLOAT_FORMATS = (".exr", ".pfm", ".hdr")
 
 
 def _clamp01(v):
@@ -256,7 +258,8 @@ def image_path(rec, p, name, ctx):
 def _imagemap(trec, ctx):
     """pbrt-v4 ``imagemap``: bk.Texture of the file with pbrt's v flip and uv mapping as its transform
     (pbrt-v4 looks up st = (su u + du, 1 - (sv v + dv)), its images' first row at the top), filter,
-    wrap, encoding (default sRGB for .png files, linear otherwise, as pbrt-v4), scale and invert;
+    wrap, encoding (default sRGB for .png files, linear otherwise, as pbrt-v4; float images (.exr,
+    .pfm, .hdr) are linear whatever it says), scale and invert;
     a float texture reads the image's channel 0 (pbrt-v4 MIPMap texel<Float>), a spectrum texture
     the first three channels."""
     p = trec.params.get("filename")
@@ -272,6 +275,8 @@ def _imagemap(trec, ctx):
         what = "is not supported" if wrap == "octahedralsphere" else "is not a pbrt-v4 wrap mode"
         _pfail_param(trec, trec.params["wrap"], f"{wrap!r} {what} (repeat, black, clamp)")
     enc = _string(trec, "encoding", "sRGB" if fname.lower().endswith(".png") else "linear")
+    if os.path.splitext(fname)[1].lower() in _FLOAT_FORMATS:
+        enc = "linear"   # pbrt-v4 reads these as float images: the encoding applies to 8-bit ones only
     su, sv, du, dv = _uv_mapping(trec)
     transform = [[su, 0.0, du], [0.0, -sv, 1.0 - dv]]
     scale = _float_param(trec, "scale", 1.0)
