@@ -388,3 +388,29 @@ def test_float_image_ignores_encoding(scene, tmp_path):
     ms = scene('Texture "f" "spectrum" "imagemap" "string filename" "f.exr" "string encoding" "sRGB"\n'
                'MakeNamedMaterial "c" "string type" "conductor" "texture eta" "f" "rgb k" [1 1 1]\n')
     np.testing.assert_allclose(_at(ms["c"]).eta, pbrt_image(img.astype(np.float32), UV), rtol=1e-6, atol=1e-6)
+
+
+def test_scene_idioms(scene):
+    """Constructs of the public pbrt-v4 scenes, written here: a Texture inside TransformBegin /
+    TransformEnd, vscale -1, an imagemap-driven mix scaled for reflectance and for a displacement,
+    and a 3-D (wrinkled) displacement, which skips its material naming the texture."""
+    with pytest.warns(bk.interop.PbrtSkipWarning, match=r"'couch'.*'displacement': pbrt texture 'swr' \(float scale, line 4\): "
+                                                        r"parameter 'tex': pbrt texture 'wr' \(float wrinkled, line 3\): "
+                                                        r"unsupported texture class 'wrinkled'"):
+        ms = scene('TransformBegin\n  Scale 3 3 3\n  Texture "wr" "float" "wrinkled"\n'
+                   '  Texture "swr" "float" "scale" "texture tex" "wr" "float scale" 0.005\nTransformEnd\n'
+                   'MakeNamedMaterial "couch" "string type" "coateddiffuse" "texture displacement" "swr"\n'
+                   'Texture "amt" "float" "imagemap" "string filename" "c.png" "float uscale" 2 "float vscale" -2\n'
+                   '   "float udelta" -0.5 "float vdelta" 0.5\n'
+                   'Texture "kd" "spectrum" "mix" "rgb tex1" [0.01 0.009 0.006] "rgb tex2" [0.036 0.027 0.019]\n'
+                   '   "texture amount" "amt"\n'
+                   'Texture "kds" "spectrum" "scale" "float scale" 0.8 "texture tex" "kd"\n'
+                   'Texture "bump" "float" "mix" "texture amount" "amt" "float tex1" 0 "float tex2" 0.01\n'
+                   'MakeNamedMaterial "bark" "string type" "diffuse" "texture reflectance" "kds"\n'
+                   '   "texture displacement" "bump"\n', skip_unsupported=True)
+    assert list(ms) == ["bark"]
+    m = _at(ms["bark"])
+    assert isinstance(m, bk.BumpMap)
+    a = pbrt_image(srgb_decode(PX[..., :1] / 255.0), UV, 2, -2, -0.5, 0.5)   # png: sRGB by default
+    want = 0.8 * ((1 - a) * [0.01, 0.009, 0.006] + a * [0.036, 0.027, 0.019])
+    np.testing.assert_allclose(m.model.reflectance, want, rtol=1e-5, atol=1e-8)

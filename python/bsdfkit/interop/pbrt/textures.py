@@ -156,7 +156,7 @@ def resolve(rec, p, kind, ctx):
     if key in cache:
         got = cache[key]
         if isinstance(got, Exception):
-            _pfail_param(rec, p, f"{kind} texture {name!r}: {got}")
+            _pfail_param(rec, p, str(got))   # names the texture, its class and line
         return got
     trec = (ctx.get("textures") or {}).get(key)
     if trec is None:
@@ -172,7 +172,7 @@ def resolve(rec, p, kind, ctx):
         tex = _build(trec, ctx)
     except ValueError as e:
         cache[key] = e
-        _pfail_param(rec, p, f"{kind} texture {name!r}: {e}")
+        _pfail_param(rec, p, str(e))   # "pbrt texture 'name' (float imagemap, line n): ..."
     finally:
         stack.pop()
     cache[key] = tex
