@@ -236,7 +236,9 @@ def _uv_mapping(trec):
     """(uscale, vscale, udelta, vdelta) of pbrt-v4's ``uv`` mapping (TexCoord2D st = (su u + du, sv v + dv))."""
     mapping = _string(trec, "mapping", "uv")
     if mapping != "uv":
-        _pfail_param(trec, trec.params["mapping"], f"the {mapping!r} mapping is not supported (uv only)")
+        _pfail_param(trec, trec.params["mapping"], f"the {mapping!r} mapping is not supported (uv only: bsdfkit "
+                     "textures are looked up at uv, and pbrt's planar / spherical / cylindrical mappings take the "
+                     "3-D point)")
     out = tuple(_float_param(trec, n, d) for n, d in (("uscale", 1.0), ("vscale", 1.0), ("udelta", 0.0),
                                                       ("vdelta", 0.0)))
     for n, v in zip(("uscale", "vscale", "udelta", "vdelta"), out):
