@@ -93,8 +93,10 @@ def test_imagemap_options(scene):
                '   "float scale" 0.5 "bool invert" true\n'
                'Texture "pt" "spectrum" "imagemap" "string filename" "c.png" "string filter" "point"\n'
                '   "string wrap" "clamp" "string encoding" "gamma 2.2"\n'
-               'MakeNamedMaterial "lin" "string type" "dielectric" "texture roughness" "lin" "bool remaproughness" false\n'
-               'MakeNamedMaterial "inv" "string type" "dielectric" "texture roughness" "inv" "bool remaproughness" false\n'
+               'MakeNamedMaterial "lin" "string type" "dielectric" "texture roughness" "lin"\n'
+               '   "bool remaproughness" false\n'
+               'MakeNamedMaterial "inv" "string type" "dielectric" "texture roughness" "inv"\n'
+               '   "bool remaproughness" false\n'
                'MakeNamedMaterial "pt" "string type" "diffuse" "texture reflectance" "pt"\n')
     raw = PX / 255.0
     r = pbrt_image(raw[..., :1], UV)[:, 0]
@@ -112,8 +114,10 @@ def test_roughness_textures_remapped(scene):
     """roughness / uroughness / vroughness textures: alpha = sqrt(value) per lookup with
     remaproughness true (pbrt-v4 TrowbridgeReitzDistribution::RoughnessToAlpha), as given without."""
     common = 'Texture "r" "float" "imagemap" "string filename" "c.png" "string encoding" "linear"\n'
-    ms = scene(common + 'MakeNamedMaterial "c" "string type" "conductor" "texture uroughness" "r" "float vroughness" 0.25\n'
-               'MakeNamedMaterial "d" "string type" "coateddiffuse" "texture roughness" "r" "bool remaproughness" false\n'
+    ms = scene(common + 'MakeNamedMaterial "c" "string type" "conductor" "texture uroughness" "r"\n'
+               '   "float vroughness" 0.25\n'
+               'MakeNamedMaterial "d" "string type" "coateddiffuse" "texture roughness" "r"\n'
+               '   "bool remaproughness" false\n'
                'MakeNamedMaterial "cc" "string type" "coatedconductor" "texture conductor.roughness" "r"\n'
                '   "float interface.roughness" 0.04\n')
     r = pbrt_image(PX[..., :1] / 255.0, UV)[:, 0]
@@ -135,7 +139,8 @@ def test_checkerboard_constant_scale_mix(scene):
                '   "texture tex2" "half"\n'
                'Texture "grey" "spectrum" "constant" "rgb value" [0.8 0.6 0.4]\n'
                'Texture "half" "spectrum" "scale" "texture tex" "grey" "float scale" 0.5\n'
-               'Texture "amt" "float" "checkerboard" "float uscale" 2 "float vscale" 2 "float tex1" 0.25 "float tex2" 0.75\n'
+               'Texture "amt" "float" "checkerboard" "float uscale" 2 "float vscale" 2 "float tex1" 0.25\n'
+               '   "float tex2" 0.75\n'
                'Texture "m" "spectrum" "mix" "rgb tex1" [1 0 0] "rgb tex2" [0 0 1] "texture amount" "amt"\n'
                'MakeNamedMaterial "k" "string type" "diffuse" "texture reflectance" "k"\n'
                'MakeNamedMaterial "m" "string type" "diffuse" "texture reflectance" "m"\n')
@@ -153,7 +158,8 @@ def test_mix_material_texture_amount(scene):
     ms = scene('Texture "a" "float" "imagemap" "string filename" "c.png" "string encoding" "linear" "float scale" 2\n'
                'Texture "s" "float" "scale" "texture tex" "a" "float scale" -1\n'
                'MakeNamedMaterial "red" "string type" "diffuse" "rgb reflectance" [0.8 0.1 0.1]\n'
-               'MakeNamedMaterial "gold" "string type" "conductor" "spectrum eta" "metal-Au-eta" "spectrum k" "metal-Au-k"\n'
+               'MakeNamedMaterial "gold" "string type" "conductor" "spectrum eta" "metal-Au-eta"\n'
+               '   "spectrum k" "metal-Au-k"\n'
                'MakeNamedMaterial "m" "string type" "mix" "string materials" ["red" "gold"] "texture amount" "a"\n'
                'MakeNamedMaterial "neg" "string type" "mix" "string materials" ["red" "gold"] "texture amount" "s"\n')
     m = ms["m"].at(UV)
@@ -183,7 +189,8 @@ def test_conductor_reflectance_texture(scene):
 
 
 def test_layered_textures(scene):
-    """coateddiffuse: reflectance and albedo (``_params``: ``.albedo`` is the method) clamped to [0, 1], g to [-1, 1], thickness as given
+    """coateddiffuse: reflectance and albedo (``_params``: ``.albedo`` is the method) clamped to
+    [0, 1], g to [-1, 1], thickness as given
     (pbrt-v4 CoatedDiffuseMaterial::GetBxDF)."""
     ms = scene('Texture "t" "float" "imagemap" "string filename" "c.png" "string encoding" "linear"\n'
                'Texture "g" "float" "scale" "texture tex" "t" "float scale" 4\n'
@@ -206,7 +213,8 @@ def test_normalmap(scene, tmp_path):
     n /= np.linalg.norm(n, axis=-1, keepdims=True)
     px = np.round((n + 1) / 2 * 255).astype(np.uint8)
     PIL.fromarray(px).save(tmp_path / "n.png")
-    ms = scene('MakeNamedMaterial "nm" "string type" "diffuse" "rgb reflectance" [0.5 0.5 0.5] "string normalmap" "n.png"\n')
+    ms = scene('MakeNamedMaterial "nm" "string type" "diffuse" "rgb reflectance" [0.5 0.5 0.5]\n'
+               '   "string normalmap" "n.png"\n')
     m = _at(ms["nm"])
     assert isinstance(m, bk.NormalMap) and m.model == bk.Diffuse(0.5)
     assert m.flip_invalid_normals is False and m.shadowing is False
@@ -324,7 +332,8 @@ Texture "s" "float" "scale" "texture tex" "r" "float scale" 2
 Texture "m" "float" "mix" "float tex1" 0.1 "texture tex2" "s" "texture amount" "r"
 MakeNamedMaterial "a" "string type" "diffuse" "texture reflectance" "k" "texture displacement" "r"
 MakeNamedMaterial "b" "string type" "conductor" "texture reflectance" "img" "texture uroughness" "m"
-MakeNamedMaterial "c" "string type" "coateddiffuse" "texture reflectance" "img" "texture g" "s" "string normalmap" "c.png"
+MakeNamedMaterial "c" "string type" "coateddiffuse" "texture reflectance" "img" "texture g" "s"
+    "string normalmap" "c.png"
 MakeNamedMaterial "d" "string type" "mix" "string materials" ["a" "b"] "texture amount" "m"
 '''
 TOKENS = ['"', "[", "]", "0", "-1", "1e308", "nan", "inf", '"float', '"texture', '"spectrum', '"imagemap"', '"mix"',
@@ -394,9 +403,9 @@ def test_scene_idioms(scene):
     """Constructs of the public pbrt-v4 scenes, written here: a Texture inside TransformBegin /
     TransformEnd, vscale -1, an imagemap-driven mix scaled for reflectance and for a displacement,
     and a 3-D (wrinkled) displacement, which skips its material naming the texture."""
-    with pytest.warns(bk.interop.PbrtSkipWarning, match=r"'couch'.*'displacement': pbrt texture 'swr' \(float scale, line 4\): "
-                                                        r"parameter 'tex': pbrt texture 'wr' \(float wrinkled, line 3\): "
-                                                        r"unsupported texture class 'wrinkled'"):
+    want = (r"'couch'.*'displacement': pbrt texture 'swr' \(float scale, line 4\): parameter 'tex': "
+            r"pbrt texture 'wr' \(float wrinkled, line 3\): unsupported texture class 'wrinkled'")
+    with pytest.warns(bk.interop.PbrtSkipWarning, match=want):
         ms = scene('TransformBegin\n  Scale 3 3 3\n  Texture "wr" "float" "wrinkled"\n'
                    '  Texture "swr" "float" "scale" "texture tex" "wr" "float scale" 0.005\nTransformEnd\n'
                    'MakeNamedMaterial "couch" "string type" "coateddiffuse" "texture displacement" "swr"\n'
