@@ -448,18 +448,24 @@ def test_pbrt_tokens():
 
 
 def test_pbrt_ignored_params():
-    rec = bk.parse_pbrt_materials('Material "diffuse" "string normalmap" "n.png" "float displacement" 0.1')[0]
-    assert rec.ignored == ("normalmap", "displacement")
+    # A constant displacement moves a flat element without tilting it: left out, and listed. A
+    # normal map is used (tests/test_pbrt_textures.py): a missing image names the path and line.
+    rec = bk.parse_pbrt_materials('Material "diffuse" "float displacement" 0.1')[0]
+    assert rec.ignored == ("displacement",)
     assert rec.to_bxdf() == bk.Diffuse(0.5)
+    rec = bk.parse_pbrt_materials('\nMaterial "diffuse" "string normalmap" "n.png" "float displacement" 0.1')[0]
+    with pytest.raises(ValueError, match=r"line 2\): parameter 'normalmap': no image file '.*n\.png'"):
+        rec.to_bxdf()
 
 
-@pytest.mark.parametrize("mtype", ["measured", "interface", "subsurface", "plastic"])
+@pytest.mark.parametrize("mtype", ["subsurface", "plastic"])
 def test_pbrt_unsupported_types(mtype):
     text = f'WorldBegin\n\nMakeNamedMaterial "thing" "string type" "{mtype}" "float roughness" 0.1'
     with pytest.raises(ValueError) as e:
         bk.from_pbrt(text)
     msg = str(e.value)
-    for w in ("'thing'", "line 3", repr(mtype), "diffuse, diffusetransmission, conductor, dielectric, thindielectric, coateddiffuse, coatedconductor, hair"):
+    for w in ("'thing'", "line 3", repr(mtype), "diffuse, diffusetransmission, conductor, dielectric, thindielectric, "
+              "coateddiffuse, coatedconductor, hair, measured, mix"):
         assert w in msg, (w, msg)
     # The syntax is fine: parse_pbrt_materials lists it, skip_unsupported leaves it out.
     assert bk.parse_pbrt_materials(text)[0].type == mtype

@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import math
 
+from ...textures import TextureBase
+from .textures import PbrtLookup
+
 __all__ = ["resolve_mixes", "PBRT_MAX_MIX_DEPTH", "PBRT_MAX_MIX_LEAVES"]
 
 _PARAMS = ("materials", "amount")
@@ -27,9 +30,11 @@ def _check(rec, fail, fail_param, float_param):
     if p is None or p.type != "string" or len(p.values) != 2 or not all(isinstance(v, str) for v in p.values):
         fail(rec, 'expected "string materials" [ "a" "b" ] naming two materials (pbrt-v4 MixMaterial)')
     amount = float_param(rec, "amount", 0.5)
+    if isinstance(amount, TextureBase):   # a float texture: clamped per lookup
+        return tuple(p.values), PbrtLookup("clamp01", amount)
     if math.isnan(amount):
         fail_param(rec, rec.params["amount"], "is NaN")
-    # pbrt-v4 takes <= 0 as the first and >= 1 as the second material
+    # pbrt-v4 MixMaterial::ChooseMaterial takes <= 0 as the first and >= 1 as the second material
     return tuple(p.values), min(max(amount, 0.0), 1.0)
 
 
@@ -38,7 +43,7 @@ def resolve_mixes(mixes, done, fail, fail_param, float_param, on_error):
     children looked up there (mixes of mixes in any order); ``on_error(rec, error)`` handles a
     mix that cannot be converted (raise, or warn and skip). Children first, without recursion
     (an explicit depth-first stack), each mix once: linear in the number of mixes."""
-    from ..models import Mix
+    from ...models import Mix
 
     pending = {rec.name: rec for rec in mixes}
     height, leaves, failed = {}, {}, {}   # per mix: levels of mixes, materials per path; errors
@@ -54,12 +59,12 @@ def resolve_mixes(mixes, done, fail, fail_param, float_param, on_error):
         h = 1 + max(height.get(n, 0) for n in names)
         if h > PBRT_MAX_MIX_DEPTH:
             fail(rec, f"mixes of mixes nested {h} deep (more than {PBRT_MAX_MIX_DEPTH}; "
-                 "bsdfkit.interop._pbrt_mix.PBRT_MAX_MIX_DEPTH)")
+                 "bsdfkit.interop.pbrt.mix.PBRT_MAX_MIX_DEPTH)")
         n = leaves.get(names[0], 1) + leaves.get(names[1], 1)
         if n > PBRT_MAX_MIX_LEAVES:
             fail(rec, f"the mix expands to {n} materials counted once per path (more than {PBRT_MAX_MIX_LEAVES}: "
                  "mixes that name the same material through several paths; bk.Mix evaluates each path, "
-                 "bsdfkit.interop._pbrt_mix.PBRT_MAX_MIX_LEAVES)")
+                 "bsdfkit.interop.pbrt.mix.PBRT_MAX_MIX_LEAVES)")
         try:
             m = Mix(done[names[0]], done[names[1]], amount, method="stochastic")
         except (ValueError, TypeError) as e:
