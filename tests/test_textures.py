@@ -302,3 +302,23 @@ def test_textured_composites_on_an_image_of_uv(method):
                      bk.Conductor.from_metal("Cu", alpha=float(GREY[r, col])),
                      weight=float(np.float32(GREY[r, col] * 1.5)), method=method)
         np.testing.assert_array_equal(f[i], one.eval(wo.reshape(-1, 3)[i], wi.reshape(-1, 3)[i]))
+
+
+def test_composites_around_per_element_maps_of_any_shape():
+    """Without textures: children with (H, W) parameter maps broadcast with the composite's call;
+    element by element the composite of uniform models (nested composites too)."""
+    rng = np.random.default_rng(4)
+    R, A, W = rng.random((3, 4, 3)), rng.uniform(0.1, 0.5, (3, 4)), rng.random((3, 4))
+    wo = bk.direction(0.5, 0.3)
+    wi = bk.direction(np.full((3, 4), 0.4), rng.random((3, 4)) * 6)
+    inner = bk.Mix(bk.Diffuse(R), bk.Diffuse(0.2), weight=W)
+    m = bk.Mix(inner, bk.Conductor.from_metal("Cu", alpha=A), weight=0.3, method="stochastic", key=np.arange(12).reshape(3, 4))
+    f, p = m.eval(wo, wi), m.pdf(wo, wi)
+    assert m.sample(wo, n=4, seed=1).f.shape == (3, 4, 3)
+    for i in range(3):
+        for j in range(4):
+            one = bk.Mix(bk.Mix(bk.Diffuse(R[i, j]), bk.Diffuse(0.2), weight=float(W[i, j])),
+                         bk.Conductor.from_metal("Cu", alpha=float(A[i, j])), weight=0.3, method="stochastic",
+                         key=4 * i + j)
+            np.testing.assert_array_equal(f[i, j], one.eval(wo, wi[i, j]))
+            np.testing.assert_array_equal(p[i, j], one.pdf(wo, wi[i, j]))

@@ -80,35 +80,52 @@ def _rows(wo, wi) -> int:
     return math.prod(np.broadcast_shapes(np.shape(wo)[:-1], np.shape(wi)[:-1]))
 
 
-def row_view(m, rows):
-    """The child ``m`` on the composite's rows ``rows`` (an index array; None: all of them): its
-    per-element arrays, one value per row of the composite's call, indexed by ``rows``, so that a
-    subset of rows (a Mix's sampled child, a TwoSided side, a Mask's nested rows) runs the child
-    with its own values. Uniform children are returned as they are; composites recursively."""
-    if rows is None:
-        return m
-    tails = getattr(type(m), "_param_tails", None)
-    if tails is not None and hasattr(m, "_children"):   # a composite: its children and its row arrays
+def _is_model(v) -> bool:
+    return hasattr(v, "_params") and hasattr(v, "varying")
+
+
+def _is_composite(m) -> bool:
+    return getattr(type(m), "_param_tails", None) is not None and hasattr(m, "_children")
+
+
+def _map_arrays(m, fn):
+    """``m`` with ``fn(array, tail)`` applied to each of its per-element arrays: a compiled model's
+    varying parameters, a composite's own row arrays and, recursively, its children's. Uniform
+    models are returned as they are."""
+    if _is_composite(m):
+        tails, own = type(m)._param_tails, m._param_arrays()
         p = {}
         for k, v in m._params.items():
-            if hasattr(v, "_params") and hasattr(v, "varying"):
-                p[k] = row_view(v, rows)
-            elif isinstance(v, np.ndarray) and v.ndim > len(tails.get(k, ())) and len(v) > 1:
-                p[k] = v[rows]
+            if _is_model(v):
+                p[k] = _map_arrays(v, fn)
+            elif isinstance(v, np.ndarray) and k in own and v.ndim > len(tails.get(k, ())):
+                p[k] = fn(v, tails.get(k, ()))
             else:
                 p[k] = v
         return type(m)._from_params(p)
     names = getattr(m, "varying", ())
     if not names:
         return m
+    vp = type(m).varying_params
     p = dict(m._params)
     for k in names:
-        p[k] = m._params[k][rows]
+        p[k] = fn(m._params[k], () if vp[k] == 1 else (3,))
     return type(m)._from_params(p)
 
 
-def _is_composite(m) -> bool:
-    return getattr(type(m), "_param_tails", None) is not None and hasattr(m, "_children")
+def row_view(m, rows):
+    """The child ``m`` on the composite's rows ``rows`` (an index array; None: all of them): its
+    per-element arrays, one value per row of the composite's call, indexed by ``rows``, so that a
+    subset of rows (a Mix's sampled child, a TwoSided side, a Mask's nested rows) runs the child
+    with its own values (a 1-row array broadcasts and stays)."""
+    return m if rows is None else _map_arrays(m, lambda v, t: v[rows] if len(v) > 1 else v)
+
+
+def flat_view(m, batch):
+    """Model ``m`` (a child of a composite called with batch shape ``batch``) with its per-element
+    arrays broadcast to the batch and flattened to one value per row of the composite's call (the
+    rows the children run on)."""
+    return _map_arrays(m, lambda v, t: np.ascontiguousarray(np.broadcast_to(v, tuple(batch) + t)).reshape((-1,) + t))
 
 
 def _child_shapes(m) -> list:
@@ -116,7 +133,7 @@ def _child_shapes(m) -> list:
     (recursively): they broadcast with the composite's call like its own arrays."""
     out = []
     for k, c in m._params.items():
-        if not (hasattr(c, "_params") and hasattr(c, "varying")):
+        if not _is_model(c):
             continue
         if _is_composite(c):
             tails = type(c)._param_tails
@@ -132,40 +149,12 @@ def _child_shapes(m) -> list:
     return out
 
 
-def flat_view(m, batch):
-    """Model ``m`` (a child of a composite called with batch shape ``batch``) with its per-element
-    arrays broadcast to the batch and flattened to one value per row of the composite's call (the
-    rows the children run on); uniform models unchanged, composites recursively."""
-    if _is_composite(m):
-        tails = type(m)._param_tails
-        p = {}
-        for k, v in m._params.items():
-            if hasattr(v, "_params") and hasattr(v, "varying"):
-                p[k] = flat_view(v, batch)
-            elif isinstance(v, np.ndarray) and k in m._param_arrays() and v.ndim > len(tails.get(k, ())):
-                t = tails.get(k, ())
-                p[k] = np.ascontiguousarray(np.broadcast_to(v, tuple(batch) + t)).reshape((-1,) + t)
-            else:
-                p[k] = v
-        return type(m)._from_params(p)
-    names = getattr(m, "varying", ())
-    if not names:
-        return m
-    vp = type(m).varying_params
-    p = dict(m._params)
-    for k in names:
-        t = () if vp[k] == 1 else (3,)
-        p[k] = np.ascontiguousarray(np.broadcast_to(m._params[k], tuple(batch) + t)).reshape((-1,) + t)
-    return type(m)._from_params(p)
-
-
 def _flat_composite(m, batch):
     """Composite ``m`` with its children as flat views for a call of batch shape ``batch`` (itself
     when no child has per-element parameters)."""
     if not _child_shapes(m):
         return m
-    p = {k: flat_view(v, batch) if hasattr(v, "_params") and hasattr(v, "varying") else v
-         for k, v in m._params.items()}
+    p = {k: flat_view(v, batch) if _is_model(v) else v for k, v in m._params.items()}
     return type(m)._from_params(p)
 
 
