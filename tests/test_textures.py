@@ -322,3 +322,19 @@ def test_composites_around_per_element_maps_of_any_shape():
                          key=4 * i + j)
             np.testing.assert_array_equal(f[i, j], one.eval(wo, wi[i, j]))
             np.testing.assert_array_equal(p[i, j], one.pdf(wo, wi[i, j]))
+
+
+def test_png_with_alpha_reads_its_stored_colour(tmp_path):
+    """OpenImageIO multiplies a PNG's colour by its alpha by default; a texture (and bk.io) reads
+    the stored values: (64, 124, 231, alpha 128) stays (64, 124, 231)."""
+    from PIL import Image
+    px = np.zeros((2, 2, 4), np.uint8)
+    px[...] = (64, 124, 231, 128)
+    Image.fromarray(px, "RGBA").save(tmp_path / "a.png")
+    np.testing.assert_allclose(bk.io.read_image(tmp_path / "a.png", linear=False)[0, 0] * 255, px[0, 0], atol=1e-3)
+    t = bk.Texture(tmp_path / "a.png", filter="nearest", encoding="linear")
+    np.testing.assert_allclose(t.lookup([0.25, 0.25]) * 255, px[0, 0], atol=1e-3)
+    c = px[0, 0, :3] / 255.0
+    srgb = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    np.testing.assert_allclose(bk.Texture(tmp_path / "a.png", filter="nearest").lookup([0.25, 0.25])[:3], srgb,
+                               atol=1e-6)

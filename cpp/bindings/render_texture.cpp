@@ -28,6 +28,8 @@ OIIO::TextureSystem *texsys() {
         OIIO::TextureSystem *t = OIIO::TextureSystem::create(true);
         t->attribute("automip", 1);
         t->attribute("autotile", 64);
+        // stored colours: not multiplied by alpha (bk.io.read_image reads them the same way)
+        t->attribute("unassociatedalpha", 1);
         return t;
     }();
     return ts;

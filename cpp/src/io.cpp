@@ -10,7 +10,11 @@
 namespace bsdfkit::io {
 
 std::string read_image(const std::string &path, Image &img) {
-    auto in = OIIO::ImageInput::open(path);
+    // The stored values: a PNG's colour is not multiplied by its alpha (OpenImageIO's default
+    // converts to associated alpha, which darkens a base colour texture wherever alpha < 1).
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    auto in = OIIO::ImageInput::open(path, &config);
     if (!in) return path + ": " + OIIO::geterror();
     const OIIO::ImageSpec &spec = in->spec();
     img.width = spec.width;
