@@ -336,5 +336,6 @@ def test_png_with_alpha_reads_its_stored_colour(tmp_path):
     np.testing.assert_allclose(t.lookup([0.25, 0.25]) * 255, px[0, 0], atol=1e-3)
     c = px[0, 0, :3] / 255.0
     srgb = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-    np.testing.assert_allclose(bk.Texture(tmp_path / "a.png", filter="nearest").lookup([0.25, 0.25])[:3], srgb,
-                               atol=1e-6)
+    rgba = bk.Texture(tmp_path / "a.png", filter="nearest").lookup([0.25, 0.25])
+    np.testing.assert_allclose(rgba[:3], srgb, atol=1e-6)
+    np.testing.assert_allclose(rgba[3], 128 / 255, atol=1e-6)     # alpha is not sRGB-decoded

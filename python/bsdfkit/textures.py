@@ -337,7 +337,8 @@ class Texture(TextureBase):
     encoding : str, optional
         How stored values map to linear ones: ``"auto"`` (default: 8- and 16-bit integer images
         are sRGB, float images linear), ``"sRGB"``, ``"linear"`` or ``"gamma <g>"``. Decoding
-        happens per texel, before filtering (as pbrt-v4 does).
+        happens per texel, before filtering (as pbrt-v4 does); an alpha channel (the last of 2 or 4)
+        stays linear.
     scale : float, optional
         Multiplies the filtered value (pbrt-v4 ``imagemap`` ``scale``).
     invert : bool, optional
@@ -455,8 +456,13 @@ class Texture(TextureBase):
             top = np.iinfo(src.dtype).max
             table = _decode(np.arange(top + 1, dtype=np.float64) / top, self._decode).astype(np.float32)
             px = table[src]
+            if src.shape[-1] in (2, 4):   # alpha is stored linear
+                px[..., -1] = src[..., -1] / np.float32(top)
         else:
-            px = _decode(np.asarray(src if isinstance(src, np.ndarray) else px, np.float64), self._decode)
+            raw = np.asarray(src if isinstance(src, np.ndarray) else px, np.float64)
+            px = _decode(raw, self._decode)
+            if raw.shape[-1] in (2, 4):
+                px[..., -1] = raw[..., -1]
         px = np.ascontiguousarray(px, dtype=np.float32)
         path = os.path.join(_texture_dir(), f"{digest(px)}.tx")
         if not os.path.exists(path):
