@@ -263,3 +263,213 @@ def test_glb_factors(tmp_path):
     p.write_bytes(_glb(_asset([{"name": "red", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.1, 0.1, 1],
                                                                          "metallicFactor": 0}}]), b"\x01\x02\x03"))
     _same(bk.from_gltf(p)["red"], bk.FilamentStandard(base_color=[0.8, 0.1, 0.1], metallic=0.0, roughness=1.0))
+
+
+# ---------------------------------------------------------------- textures
+#
+# 2 x 2 images written with exact 8-bit values (PIL); texel (row i, column j) has its centre at
+# uv = ((j + 0.5) / 2, (i + 0.5) / 2): glTF's uv origin is the image's top-left corner.
+
+BASE = np.array([[[255, 128, 0, 255], [64, 124, 231, 128]],
+                 [[10, 200, 30, 0], [250, 250, 250, 77]]], dtype=np.uint8)          # RGBA, sRGB colour
+MR = np.array([[[0, 51, 255], [9, 204, 0]], [[0, 255, 128], [99, 10, 77]]], dtype=np.uint8)   # G rough, B metal
+NORMAL = np.array([[[128, 128, 255], [200, 90, 230]], [[30, 160, 200], [128, 255, 180]]], dtype=np.uint8)
+CENTRES = np.array([[0.25, 0.25], [0.75, 0.25], [0.25, 0.75], [0.75, 0.75]])   # texels (0,0) (0,1) (1,0) (1,1)
+TEXEL = [(0, 0), (0, 1), (1, 0), (1, 1)]
+NEAREST = {"magFilter": 9728, "minFilter": 9728}
+
+
+def _png(path, a):
+    from PIL import Image
+    Image.fromarray(a).save(path)
+    return path
+
+
+def _texel(img, uv):
+    """The texel (row, column) nearest to uv in [0, 1)^2 of a 2 x 2 image."""
+    return img[int(uv[1] * 2), int(uv[0] * 2)]
+
+
+def _textured_doc(tmp_path, images=None, sampler=NEAREST, mat_extra=None, pbr_extra=None, **info_extra):
+    _png(tmp_path / "base.png", BASE)
+    _png(tmp_path / "mr.png", MR)
+    pbr = {"baseColorFactor": [0.9, 0.8, 0.7, 1.0], "baseColorTexture": dict({"index": 0}, **info_extra),
+           "metallicFactor": 0.6, "roughnessFactor": 0.8, "metallicRoughnessTexture": dict({"index": 1}, **info_extra)}
+    pbr.update(pbr_extra or {})
+    mat = dict({"name": "tex", "pbrMetallicRoughness": pbr}, **(mat_extra or {}))
+    return _asset([mat], textures=[{"source": 0, "sampler": 0}, {"source": 1, "sampler": 0}],
+                  images=images or [{"uri": "base.png"}, {"uri": "mr.png"}], samplers=[sampler])
+
+
+def _expected(uvs, base_factor=(0.9, 0.8, 0.7), metal=0.6, rough=0.8):
+    """FilamentStandard with the per-element parameters the glTF spec gives at the texels of uvs."""
+    bc = np.array([np.asarray(base_factor) * _srgb(_texel(BASE, uv)[:3]) for uv in uvs])
+    m = np.array([metal * _texel(MR, uv)[2] / 255 for uv in uvs])
+    r = np.array([rough * _texel(MR, uv)[1] / 255 for uv in uvs])
+    return bk.FilamentStandard(base_color=bc, metallic=m, roughness=r, reflectance=0.5)
+
+
+def test_textured_base_color_metallic_roughness(tmp_path):
+    mats, warned = _load(_write(tmp_path, _textured_doc(tmp_path)))
+    m = mats["tex"]
+    assert not warned
+    np.testing.assert_allclose(m.eval(WO, WI, uv=CENTRES), _expected(CENTRES).eval(WO, WI), rtol=1e-6)
+    # the spec's own worked example: [64, 124, 231] x [0.2, 1.0, 0.7] -> [0.0102, 0.202, 0.5593]
+    np.testing.assert_allclose(_srgb([64, 124, 231]) * [0.2, 1.0, 0.7], [0.0102, 0.202, 0.5593], atol=6e-4)
+
+
+@pytest.mark.parametrize("wrap, texels", [
+    (10497, [(0, 0), (0, 1)]),     # repeat: u 1.25 -> 0.25, u -0.25 -> 0.75
+    (33648, [(0, 1), (0, 0)]),     # mirrored repeat: 1.25 -> 0.75, -0.25 -> 0.25
+    (33071, [(0, 1), (0, 0)]),     # clamp to edge: the last / first column
+])
+def test_wrap_modes(tmp_path, wrap, texels):
+    doc = _textured_doc(tmp_path, sampler=dict(NEAREST, wrapS=wrap, wrapT=10497))
+    m = bk.from_gltf(_write(tmp_path, doc))["tex"]
+    uv = np.array([[1.25, 0.25], [-0.25, 0.25]])
+    ref_uv = np.array([[(j + 0.5) / 2, (i + 0.5) / 2] for i, j in texels])
+    np.testing.assert_allclose(m.eval(WO[:2], WI[:2], uv=uv), _expected(ref_uv).eval(WO[:2], WI[:2]), rtol=1e-6)
+
+
+def test_bilinear_roughness(tmp_path):
+    """magFilter LINEAR: the roughness between two texel centres is the linear blend of G/255."""
+    doc = _textured_doc(tmp_path, sampler={"magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071})
+    doc["materials"][0]["pbrMetallicRoughness"].pop("baseColorTexture")
+    m = bk.from_gltf(_write(tmp_path, doc))["tex"]
+    uv = np.array([[0.25 + 0.5 * 0.3, 0.25]])      # 30 % of the way from texel (0,0) to (0,1)
+    g = (0.7 * MR[0, 0, 1] + 0.3 * MR[0, 1, 1]) / 255
+    b = (0.7 * MR[0, 0, 2] + 0.3 * MR[0, 1, 2]) / 255
+    ref = bk.FilamentStandard(base_color=[0.9, 0.8, 0.7], metallic=0.6 * b, roughness=0.8 * g)
+    np.testing.assert_allclose(m.eval(WO[:1], WI[:1], uv=uv), ref.eval(WO[:1], WI[:1]), rtol=1e-5)
+
+
+def test_texture_transform(tmp_path):
+    off, rot, sc = [0.5, 0.0], math.pi / 2, [0.5, 0.5]
+    doc = _textured_doc(tmp_path, sampler=dict(NEAREST), extensions={"KHR_texture_transform": {
+        "offset": off, "rotation": rot, "scale": sc}})
+    m = bk.from_gltf(_write(tmp_path, doc))["tex"]
+    uv = np.array([[0.2, 0.3], [0.9, 0.6], [0.4, 0.95], [0.6, 0.1]])
+    # KHR_texture_transform: u' = sx cos u + sy sin v + ox, v' = -sx sin u + sy cos v + oy (its README's
+    # example: offset [0, 1], rotation 90 degrees, scale 0.5 maps the unit square onto the lower-left quadrant)
+    c, s = math.cos(rot), math.sin(rot)
+    ref_uv = np.stack([sc[0] * c * uv[:, 0] + sc[1] * s * uv[:, 1] + off[0],
+                       -sc[0] * s * uv[:, 0] + sc[1] * c * uv[:, 1] + off[1]], axis=-1) % 1.0
+    np.testing.assert_allclose(m.eval(WO, WI, uv=uv), _expected(ref_uv).eval(WO, WI), rtol=1e-6)
+
+
+def test_embedded_images_data_uri_and_glb(tmp_path):
+    b64 = [base64.b64encode(_png(tmp_path / n, a).read_bytes()).decode() for n, a in (("b.png", BASE), ("m.png", MR))]
+    doc = _textured_doc(tmp_path, images=[{"uri": "data:image/png;base64," + x} for x in b64])
+    m = bk.from_gltf(_write(tmp_path, doc))["tex"]
+    np.testing.assert_allclose(m.eval(WO, WI, uv=CENTRES), _expected(CENTRES).eval(WO, WI), rtol=1e-6)
+    # GLB: both PNGs in buffer views of the BIN chunk (the second at a 4-aligned offset)
+    pngs = [base64.b64decode(x) for x in b64]
+    off = len(pngs[0]) + (-len(pngs[0]) % 4)
+    binary = pngs[0] + b"\0" * (off - len(pngs[0])) + pngs[1]
+    doc = _textured_doc(tmp_path, images=[{"bufferView": 0, "mimeType": "image/png"},
+                                          {"bufferView": 1, "mimeType": "image/png"}])
+    doc.update(bufferViews=[{"buffer": 0, "byteLength": len(pngs[0])},
+                            {"buffer": 0, "byteOffset": off, "byteLength": len(pngs[1])}],
+               buffers=[{"byteLength": len(binary)}])
+    p = tmp_path / "tex.glb"
+    p.write_bytes(_glb(doc, binary))
+    m = bk.from_gltf(p)["tex"]
+    np.testing.assert_allclose(m.eval(WO, WI, uv=CENTRES), _expected(CENTRES).eval(WO, WI), rtol=1e-6)
+    # a corrupt embedded PNG: a clear error naming the image
+    bad = bytearray(binary)
+    bad[20:60] = bytes(40)
+    p.write_bytes(_glb(doc, bytes(bad)))
+    with pytest.raises(ValueError, match=r"images\[0\]"):
+        bk.from_gltf(p)
+
+
+def test_normal_map(tmp_path):
+    _png(tmp_path / "n.png", NORMAL)
+    scale = 0.5
+    doc = _asset([{"name": "n", "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0.0,
+                                                         "roughnessFactor": 0.4},
+                   "normalTexture": {"index": 0, "scale": scale}}],
+                 textures=[{"source": 0, "sampler": 0}], images=[{"uri": "n.png"}], samplers=[NEAREST])
+    m = bk.from_gltf(_write(tmp_path, doc))["n"]
+    assert m.model_class is bk.NormalMap
+    n = np.array([(_texel(NORMAL, uv) / 255 * 2 - 1) * [scale, scale, 1] for uv in CENTRES])
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)    # glTF: normalise after scaling
+    ref = bk.NormalMap(bk.FilamentStandard(base_color=0.5, metallic=0.0, roughness=0.4), n)
+    np.testing.assert_allclose(m.eval(WO, WI, uv=CENTRES), ref.eval(WO, WI), rtol=1e-6, atol=1e-12)
+
+
+def test_alpha_texture_and_extension_textures(tmp_path):
+    _png(tmp_path / "base.png", BASE)
+    _png(tmp_path / "mr.png", MR)
+    doc = _asset([{"name": "x", "alphaMode": "BLEND",
+                   "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 0.5], "baseColorTexture": {"index": 0},
+                                            "metallicFactor": 0.0, "roughnessFactor": 0.5},
+                   "extensions": {
+                       "KHR_materials_clearcoat": {"clearcoatFactor": 0.9, "clearcoatTexture": {"index": 1},
+                                                   "clearcoatRoughnessFactor": 0.5,
+                                                   "clearcoatRoughnessTexture": {"index": 1}},
+                       "KHR_materials_sheen": {"sheenColorFactor": [1, 0.5, 0.25], "sheenColorTexture": {"index": 0},
+                                               "sheenRoughnessFactor": 0.8, "sheenRoughnessTexture": {"index": 0}}}}],
+                 textures=[{"source": 0, "sampler": 0}, {"source": 1, "sampler": 0}],
+                 images=[{"uri": "base.png"}, {"uri": "mr.png"}], samplers=[NEAREST])
+    m = bk.from_gltf(_write(tmp_path, doc))["x"]
+    assert m.model_class is bk.Mask
+    px = np.array([_texel(BASE, uv) for uv in CENTRES])
+    mr = np.array([_texel(MR, uv) for uv in CENTRES])
+    inner = bk.FilamentStandard(
+        base_color=_srgb(px[:, :3]), metallic=0.0, roughness=0.5,
+        clear_coat=0.9 * mr[:, 0] / 255, clear_coat_roughness=0.5 * mr[:, 1] / 255,     # R and G, linear
+        sheen_color=[1, 0.5, 0.25] * _srgb(px[:, :3]), sheen_roughness=0.8 * px[:, 3] / 255)  # sRGB RGB, linear A
+    ref = bk.Mask(inner, 0.5 * px[:, 3] / 255)                                          # alpha: linear
+    np.testing.assert_allclose(m.eval(WO, WI, uv=CENTRES), ref.eval(WO, WI), rtol=1e-6, atol=1e-15)
+
+
+def test_second_uv_set_left_out(tmp_path):
+    doc = _textured_doc(tmp_path, texCoord=1)
+    mats, warned = _load(_write(tmp_path, doc))
+    assert len(warned) == 1 and "TEXCOORD_1" in str(warned[0]) and "baseColorTexture" in str(warned[0])
+    _same(mats["tex"], bk.FilamentStandard(base_color=[0.9, 0.8, 0.7], metallic=0.6, roughness=0.8))
+
+
+def test_textured_specular_anisotropy_and_mask(tmp_path):
+    """KHR_materials_specular's A-channel strength, KHR_materials_anisotropy over a roughness map
+    and alphaMode MASK over a texture alpha: nonlinear functions of texels, by hand per texel."""
+    doc = _textured_doc(tmp_path, mat_extra={
+        "alphaMode": "MASK", "alphaCutoff": 0.4,
+        "extensions": {"KHR_materials_ior": {"ior": 1.7},
+                       "KHR_materials_specular": {"specularFactor": 0.9, "specularTexture": {"index": 0}},
+                       "KHR_materials_anisotropy": {"anisotropyStrength": 0.7}}})
+    mats, warned = _load(_write(tmp_path, doc))
+    m = mats["tex"]
+    assert m.model_class is bk.Mask and len(warned) == 1 and "f90 = specularFactor" in str(warned[0])
+    px = np.array([_texel(BASE, uv) for uv in CENTRES])
+    mr = np.array([_texel(MR, uv) for uv in CENTRES])
+    f0 = ((1.7 - 1) / 2.7) ** 2 * 0.9 * px[:, 3] / 255          # KHR_materials_ior x specularFactor x A
+    a = (0.8 * mr[:, 1] / 255) ** 2                            # alpha = roughness^2
+    at, ab = a + (1 - a) * 0.49, a                             # KHR_materials_anisotropy
+    inner = bk.FilamentStandard(base_color=[0.9, 0.8, 0.7] * _srgb(px[:, :3]), metallic=0.6 * mr[:, 2] / 255,
+                                roughness=np.sqrt((at + ab) / 2), anisotropy=(at - ab) / (at + ab),
+                                reflectance=np.sqrt(np.minimum(f0, 0.16) / 0.16))
+    ref = bk.Mask(inner, (px[:, 3] / 255 >= 0.4).astype(float))
+    np.testing.assert_allclose(m.eval(WO, WI, uv=CENTRES), ref.eval(WO, WI), rtol=1e-6, atol=1e-15)
+
+
+def test_textured_models_are_values(tmp_path):
+    import pickle
+    p = _write(tmp_path, _textured_doc(tmp_path, mat_extra={"normalTexture": {"index": 1, "scale": 2.0}}))
+    a, b = bk.from_gltf(p)["tex"], bk.from_gltf(p)["tex"]
+    assert a == b and hash(a) == hash(b)
+    c = pickle.loads(pickle.dumps(a))
+    np.testing.assert_array_equal(c.eval(WO, WI, uv=CENTRES), a.eval(WO, WI, uv=CENTRES))
+    np.testing.assert_array_equal(a.at(CENTRES).eval(WO, WI), a.eval(WO, WI, uv=CENTRES))
+
+
+def test_filters_from_sampler(tmp_path):
+    cases = [({}, "bilinear"), ({"magFilter": 9728}, "nearest"), ({"magFilter": 9728, "minFilter": 9984}, "nearest"),
+             ({"magFilter": 9729, "minFilter": 9987}, "trilinear"), ({"minFilter": 9986}, "trilinear"),
+             ({"magFilter": 9729, "minFilter": 9985}, "bilinear")]
+    for sampler, filt in cases:
+        doc = _textured_doc(tmp_path, sampler=dict(sampler, wrapS=33071, wrapT=33648))
+        t = bk.from_gltf(_write(tmp_path, doc))["tex"].textures["base_color"]
+        t = t.a if isinstance(t, bk.interop.gltf.GltfValue) else t
+        assert (t.filter, t.wrap) == (filt, ("clamp", "mirror")), sampler

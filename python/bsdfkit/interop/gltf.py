@@ -12,18 +12,20 @@ from __future__ import annotations
 
 import base64
 import binascii
+import io
 import json
 import math
 import os
 import struct
-import tempfile
 import urllib.parse
 import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["GltfMaterial", "GltfWarning", "read_gltf_materials", "from_gltf", "GLTF_SUPPORTED_EXTENSIONS"]
+from ..textures import TextureBase, is_texture
+
+__all__ = ["GltfMaterial", "GltfWarning", "GltfValue", "read_gltf_materials", "from_gltf", "GLTF_SUPPORTED_EXTENSIONS"]
 
 
 #: Material extensions mapped onto FilamentStandard parameters (what each sets: see from_gltf).
@@ -224,9 +226,12 @@ class _Doc:
                 out = _decode(data, mime, w)
             else:
                 p = self.file(uri, "image", w)
-                ext = os.path.splitext(p)[1].lower()
-                out = (p, None) if ext in (".png", ".jpg", ".jpeg") else \
-                    (None, f"{w}: image {os.path.basename(p)!r} is neither PNG nor JPEG (glTF 2.0's image formats)")
+                with open(p, "rb") as f:
+                    head = f.read(8)
+                if head[:8] != _PNG_MAGIC and head[:3] != _JPEG_MAGIC:
+                    out = (None, f"{w}: image {os.path.basename(p)!r} is neither PNG nor JPEG (glTF 2.0's image formats)")
+                else:
+                    out = _open_image(p, w)
         elif "bufferView" in img:
             bv = self.item("bufferViews", img["bufferView"], w)
             off, n = bv.get("byteOffset", 0), bv.get("byteLength")
@@ -245,23 +250,36 @@ class _Doc:
 
 
 def _decode(data, mime, where):
-    """Embedded PNG / JPEG bytes -> (float32 array (H, W, C) in [0, 1], None), or (None, reason)."""
-    kind = ".png" if data[:8] == _PNG_MAGIC else ".jpg" if data[:3] == _JPEG_MAGIC else None
-    if kind is None:
+    """Embedded PNG / JPEG bytes -> (an image array, None), or (None, reason) for another format."""
+    if data[:8] != _PNG_MAGIC and data[:3] != _JPEG_MAGIC:
         if mime not in _MIME_SUFFIX and mime is not None:
             return None, f"{where}: embedded {mime} image (only PNG and JPEG are read)"
         raise _GltfError(f"{where}: embedded image data is neither PNG nor JPEG (mimeType {mime!r})")
-    from .. import io as _io
-    fd, tmp = tempfile.mkstemp(suffix=kind, prefix="bsdfkit-gltf-")
+    return _open_image(io.BytesIO(data), where)
+
+
+def _open_image(src, where):
+    """(path or array, None) of a PNG / JPEG file or stream. OpenImageIO reads PNGs with alpha
+    premultiplied (associated), glTF's colours are not: images with alpha, and embedded ones, are
+    decoded by Pillow (matplotlib's dependency) to uint8 / uint16 arrays, which bk.Texture scales
+    to [0, 1]; other files go to bk.Texture by path (any bit depth). Pillow reads 16-bit RGB(A)
+    PNGs as 8-bit (16-bit grey stays 16-bit): such images, with alpha or embedded, lose their low byte."""
+    from PIL import Image
     try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        try:
-            return _io.read_image(tmp, linear=False), None
-        except OSError as e:
-            raise _GltfError(f"{where}: cannot decode the embedded image: {e}") from None
-    finally:
-        os.unlink(tmp)
+        with Image.open(src) as im:
+            mode, alpha = im.mode, "A" in im.mode or "transparency" in im.info
+            if isinstance(src, str) and not alpha:
+                return src, None
+            if mode in ("I;16", "I;16B", "I;16L"):
+                return np.asarray(im, dtype=np.uint16), None
+            if alpha:
+                im = im.convert("LA" if mode in ("L", "LA", "I", "I;16") else "RGBA")
+            elif mode not in ("L", "RGB"):
+                im = im.convert("RGB")
+            a = np.asarray(im)
+    except (OSError, SyntaxError, ValueError) as e:   # Pillow: UnidentifiedImageError is an OSError
+        raise _GltfError(f"{where}: cannot decode the image: {e}") from None
+    return a, None
 
 
 # ---------------------------------------------------------------- value checks
@@ -343,25 +361,25 @@ class _Tex:
 
     def __init__(self, source, filt, wrap, transform, where):
         self.source, self.filter, self.wrap, self.transform, self.where = source, filt, wrap, transform, where
+        self.channels = None
 
     def make(self, channel, encoding):
-        """The bk texture of ``channel`` (an int, or (0, 1, 2) for RGB), or 1.0 where the image lacks
-        the channel: alpha of an image without one (opaque); a grey (+ alpha) image's R, G and B
-        are its grey channel."""
+        """The bk texture of ``channel`` (an int; "rgb" for an RGB value), or 1.0 where the image
+        lacks the channel: the alpha of an image without one (opaque). A grey (+ alpha) image's
+        R, G and B are its grey channel, its alpha the second channel."""
         from ..textures import Texture
-        kw = dict(filter=self.filter, wrap=self.wrap, transform=self.transform)
-        n = self.source.shape[2] if isinstance(self.source, np.ndarray) else \
-            Texture(self.source, encoding="linear", **kw).channels
-        if channel == (0, 1, 2):
-            if n in (3, 4):
-                t = Texture(self.source, encoding=encoding, **kw)
-                return t if n == 3 else _derived(lambda v: v[..., :3], [t], 3)
-            return Texture(self.source, encoding=encoding, channel=0, **kw)   # grey: replicated to RGB
+        kw = dict(filter=self.filter, wrap=self.wrap, transform=self.transform, encoding=encoding)
+        if self.channels is None:
+            self.channels = self.source.shape[2] if isinstance(self.source, np.ndarray) else \
+                Texture(self.source, filter=self.filter).channels
+        n = self.channels
+        if channel == "rgb":   # 1 (replicated), 3 or 4 channels (RGBA: the first three) make an RGB value
+            return Texture(self.source, channel=0 if n == 2 else None, **kw)
         if channel == 3 and n in (1, 3):
             return 1.0
         if n <= 2:
             channel = 1 if channel == 3 else 0
-        return Texture(self.source, encoding=encoding, channel=channel, **kw)
+        return Texture(self.source, channel=channel, **kw)
 
 
 def _texture_ref(doc, mat, key, where, notes):
@@ -399,11 +417,6 @@ def _texture_ref(doc, mat, key, where, notes):
 
 # ---------------------------------------------------------------- derived values
 
-def _srgb_decode(x):
-    x = np.asarray(x, dtype=np.float64)
-    return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)
-
-
 def _product(factor, tex, channel, encoding):
     """factor x texture (a bk texture), or the factor when there is no texture."""
     if tex is None:
@@ -411,9 +424,13 @@ def _product(factor, tex, channel, encoding):
     t = tex.make(channel, encoding)
     if not _is_texture(t):
         return factor * t
-    from .. import textures as tx
     f = np.asarray(factor, dtype=np.float64)
-    return t if np.all(f == 1.0) else tx.Scale(t, f if f.ndim else float(f))
+    if np.all(f == 1.0):
+        return t
+    if f.ndim == 0:
+        from .. import textures as tx
+        return tx.Scale(t, float(f))
+    return GltfValue("product", t, params=f)
 
 
 def _f0_to_reflectance(f0):
@@ -445,7 +462,7 @@ def _material(doc, i, mat, options):
     metal = _num(pbr, "metallicFactor", 1.0, wp, 0.0, 1.0)
     rough = _num(pbr, "roughnessFactor", 1.0, wp, 0.0, 1.0)
     mrt = _texture_ref(doc, pbr, "metallicRoughnessTexture", wp, notes)
-    p = {"base_color": _product(bcf[:3], bct, (0, 1, 2), "sRGB"),
+    p = {"base_color": _product(bcf[:3], bct, "rgb", "sRGB"),
          "metallic": _product(metal, mrt, 2, "linear")}
     # glTF roughness is perceptual: alpha = roughness^2 (glTF 2.0 spec, Appendix B "Microfacet
     # Surfaces"), which is FilamentStandard's roughness (alpha = roughness^2): passed as it is
@@ -504,7 +521,7 @@ def _material(doc, i, mat, options):
         e, w = exts["KHR_materials_sheen"], f"{where}.extensions.KHR_materials_sheen"
         col = _vec(e, "sheenColorFactor", [0.0, 0.0, 0.0], 3, w)
         if np.any(col > 0):
-            p["sheen_color"] = _product(col, _texture_ref(doc, e, "sheenColorTexture", w, notes), (0, 1, 2), "sRGB")
+            p["sheen_color"] = _product(col, _texture_ref(doc, e, "sheenColorTexture", w, notes), "rgb", "sRGB")
             p["sheen_roughness"] = _product(_num(e, "sheenRoughnessFactor", 0.0, w, 0.0, 1.0),
                                             _texture_ref(doc, e, "sheenRoughnessTexture", w, notes), 3, "linear")
 
@@ -566,38 +583,23 @@ def _material(doc, i, mat, options):
 
 def _derived_reflectance(f0, spec, spec_tex, col, col_tex):
     """Textured KHR_materials_specular: reflectance = sqrt(min(f0 max(specularColor), 1) specular / 0.16)."""
-    s_in = spec_tex.make(3, "linear") if spec_tex is not None else 1.0
-    c_in = col_tex.make((0, 1, 2), "sRGB") if col_tex is not None else 1.0
-
-    def fn(sv, cv):
-        c = np.max(np.asarray(col) * cv, axis=-1)
-        return _f0_to_reflectance(np.minimum(f0 * c, 1.0) * spec * sv[..., 0])[..., None]
-    return _derived(fn, [s_in, c_in], 1)
+    s_in = spec_tex.make(3, "linear") if spec_tex is not None else None
+    c_in = col_tex.make("rgb", "sRGB") if col_tex is not None else None
+    s_in, c_in = (None if not _is_texture(x) else x for x in (s_in, c_in))
+    p = np.concatenate([[f0, spec], np.broadcast_to(np.asarray(col, dtype=np.float64), (3,))])
+    return _value("reflectance", s_in, c_in, p)
 
 
 def _anisotropic(rough, strength, sign):
     """(roughness, anisotropy) of FilamentStandard for KHR_materials_anisotropy (see _material)."""
-    def fn(r):
-        a = np.asarray(r, dtype=np.float64) ** 2
-        at = a + (1 - a) * strength ** 2
-        tot = at + a
-        k = np.divide(at - a, tot, out=np.zeros_like(tot), where=tot > 0)
-        return np.sqrt(tot / 2), sign * k + 0.0
-    if not _is_texture(rough):
-        r, k = fn(rough)
-        return float(r), float(k)
-    return (_derived(lambda v: fn(v[..., 0])[0][..., None], [rough], 1),
-            _derived(lambda v: fn(v[..., 0])[1][..., None], [rough], 1))
+    t = rough if _is_texture(rough) else None
+    p = np.array([strength, sign] + ([] if t is not None else [rough]), dtype=np.float64)
+    return _value("aniso_roughness", t, None, p), _value("aniso_k", t, None, p)
 
 
 def _normal_texture(tex, scale):
-    t = tex.make((0, 1, 2), "linear")
-
-    def fn(v):
-        n = (2 * np.asarray(v, dtype=np.float64) - 1) * np.array([scale, scale, 1.0])
-        n[..., 2] = np.maximum(n[..., 2], 1e-6)   # blue <= 0.5 is invalid in glTF: keep the normal above
-        return n / np.sqrt(n[..., 0] ** 2 + n[..., 1] ** 2 + n[..., 2] ** 2)[..., None]
-    return _derived(fn, [t], 3)
+    """n = normalize((2 rgb - 1) (scale, scale, 1)) of the normal texture (linear)."""
+    return GltfValue("normal", tex.make("rgb", "linear"), params=np.array([float(scale)]))
 
 
 def _opacity(factor, tex, cutoff):
@@ -606,41 +608,89 @@ def _opacity(factor, tex, cutoff):
     if cutoff is None:
         return _product(factor, tex, 3, "linear")
     t = tex.make(3, "linear")
-    return _derived(lambda v: (factor * v >= cutoff).astype(np.float64), [t], 1)
+    return _value("cutoff", t if _is_texture(t) else None, None, np.array([factor * (1.0 if _is_texture(t) else t),
+                                                                            cutoff]))
 
 
 def _is_texture(x):
-    if x is None or isinstance(x, (int, float, np.ndarray, np.floating)):
-        return False
-    from ..textures import TextureBase
-    return isinstance(x, TextureBase)
+    return is_texture(x)
 
 
-def _derived(fn, inputs, channels):
-    """A texture whose value is fn of the looked-up values of ``inputs`` (textures, or constants
-    standing for a missing channel), per element after their own filtering; fn's value itself
-    when no input is a texture."""
-    if not any(_is_texture(t) for t in inputs):
-        v = np.asarray(fn(*[np.atleast_1d(np.asarray(t, dtype=np.float64))[None] for t in inputs]))[0]
-        return float(v[0]) if channels == 1 else v
-    from ..textures import TextureBase
+# the derived values, per element after each input texture's own filtering: (a, b, params) -> (..., C)
+def _f_product(a, b, p):
+    a = a if a.shape[-1] != 4 else a[..., :3]
+    return a * p
 
-    class _Derived(TextureBase):
-        """fn of the looked-up values of other textures (per element, after their filtering)."""
 
-        def __init__(self):
-            self.inputs, self.fn = tuple(inputs), fn
+def _f_normal(a, b, p):
+    n = (2 * a[..., :3] - 1) * np.array([p[0], p[0], 1.0])
+    # blue <= 0.5 is invalid in glTF: such a normal is raised to just above the surface (z = 1e-4 |xy|)
+    n[..., 2] = np.maximum(n[..., 2], 1e-4 * np.sqrt(n[..., 0] ** 2 + n[..., 1] ** 2) + 1e-300)
+    return n / np.sqrt(n[..., 0] ** 2 + n[..., 1] ** 2 + n[..., 2] ** 2)[..., None]
 
-        @property
-        def channels(self):
-            return channels
 
-        def lookup(self, uv, duvdx=None, duvdy=None):
-            shape = np.shape(uv)[:-1]
-            vals = [t.lookup(uv, duvdx, duvdy) if _is_texture(t) else np.full(shape + (1,), float(t))
-                    for t in self.inputs]
-            return np.asarray(self.fn(*vals), dtype=np.float64)
-    return _Derived()
+def _aniso(a, p):
+    r = a[..., 0] if a is not None else np.asarray(p[2])
+    al = r * r
+    at = al + (1 - al) * p[0] ** 2
+    tot = at + al
+    k = np.divide(at - al, tot, out=np.zeros_like(tot), where=tot > 0)
+    return np.sqrt(tot / 2), p[1] * k + 0.0
+
+
+def _f_aniso_roughness(a, b, p):
+    return _aniso(a, p)[0][..., None]
+
+
+def _f_aniso_k(a, b, p):
+    return _aniso(a, p)[1][..., None]
+
+
+def _f_reflectance(a, b, p):
+    s = p[1] * (a[..., 0] if a is not None else 1.0)
+    c = np.max(p[2:5] * (b[..., :3] if b is not None else 1.0), axis=-1)
+    return _f0_to_reflectance(np.minimum(p[0] * c, 1.0) * s)[..., None]
+
+
+def _f_cutoff(a, b, p):
+    v = a[..., 0] * p[0] if a is not None else np.asarray(p[0])
+    return (v >= p[1]).astype(np.float64)[..., None]
+
+
+_KINDS = {"product": (_f_product, 3), "normal": (_f_normal, 3), "aniso_roughness": (_f_aniso_roughness, 1),
+          "aniso_k": (_f_aniso_k, 1), "reflectance": (_f_reflectance, 1), "cutoff": (_f_cutoff, 1)}
+
+
+def _value(kind, a, b, params):
+    """A GltfValue, or its value (a float) when neither input is a texture."""
+    if a is None and b is None:
+        return float(np.asarray(_KINDS[kind][0](None, None, params)).reshape(-1)[0])
+    return GltfValue(kind, a, b, params)
+
+
+class GltfValue(TextureBase):
+    """A glTF material value derived from textures, per element after their own filtering:
+    ``kind`` is "product" (a texture times an RGB factor), "normal" (normalize((2 rgb - 1)
+    (scale, scale, 1))), "aniso_roughness" / "aniso_k" (KHR_materials_anisotropy as
+    FilamentStandard's roughness / anisotropy), "reflectance" (KHR_materials_specular /
+    _ior) or "cutoff" (alphaMode MASK); ``a``, ``b`` the input textures (or None),
+    ``params`` the factors."""
+
+    def __init__(self, kind, a=None, b=None, params=None):
+        if kind not in _KINDS:
+            raise ValueError(f"kind: expected one of {list(_KINDS)}, got {kind!r}")
+        p = np.array([] if params is None else params, dtype=np.float64).reshape(-1)
+        p.setflags(write=False)
+        for k, v in (("kind", kind), ("a", a), ("b", b), ("params", p), ("channels", _KINDS[kind][1])):
+            object.__setattr__(self, k, v)
+
+    def _args(self):
+        return {"kind": self.kind, "a": self.a, "b": self.b, "params": self.params}
+
+    def _lookup(self, uv, dx, dy):
+        va = None if self.a is None else self.a._lookup(uv, dx, dy)
+        vb = None if self.b is None else self.b._lookup(uv, dx, dy)
+        return np.asarray(_KINDS[self.kind][0](va, vb, self.params), dtype=np.float64)
 
 
 # ---------------------------------------------------------------- public
