@@ -473,3 +473,21 @@ def test_filters_from_sampler(tmp_path):
         t = bk.from_gltf(_write(tmp_path, doc))["tex"].textures["base_color"]
         t = t.a if isinstance(t, bk.interop.gltf.GltfValue) else t
         assert (t.filter, t.wrap) == (filt, ("clamp", "mirror")), sampler
+
+
+def test_grey_images(tmp_path):
+    """A grey image's R, G and B are its grey value; a grey + alpha image's alpha is its second
+    channel (PNG colour types 0 and 4)."""
+    grey = np.array([[40, 200], [120, 255]], dtype=np.uint8)
+    ga = np.stack([grey, 255 - grey], -1)
+    _png(tmp_path / "g.png", grey)
+    _png(tmp_path / "ga.png", ga)
+    doc = _asset([{"name": "g", "alphaMode": "BLEND",
+                   "pbrMetallicRoughness": {"baseColorTexture": {"index": 1}, "metallicRoughnessTexture": {"index": 0}}}],
+                 textures=[{"source": 0, "sampler": 0}, {"source": 1, "sampler": 0}],
+                 images=[{"uri": "g.png"}, {"uri": "ga.png"}], samplers=[NEAREST])
+    m = bk.from_gltf(_write(tmp_path, doc))["g"]
+    g = np.array([_texel(grey[..., None], uv)[0] for uv in CENTRES])
+    ref = bk.Mask(bk.FilamentStandard(base_color=np.repeat(_srgb(g)[:, None], 3, 1), metallic=g / 255,
+                                      roughness=g / 255), (255 - g) / 255)
+    np.testing.assert_allclose(m.eval(WO, WI, uv=CENTRES), ref.eval(WO, WI), rtol=1e-6, atol=1e-15)

@@ -569,7 +569,7 @@ def _gltf_case(path, what):
             assert str(path) in str(e), (type(e).__name__, str(e)[:500], what)
             return
         for m in mats.values():
-            _sound(m, what)
+            _sound(m.at(np.array([[0.1, 0.2], [0.7, 0.4], [1.3, -0.2]])) if isinstance(m, bk.Textured) else m, what)
 
 
 def test_gltf_json_mutations(tmp_path):
@@ -590,10 +590,23 @@ def test_gltf_json_mutations(tmp_path):
 
 def test_glb_byte_mutations(tmp_path):
     """Byte flips and truncations of a GLB container (header, chunk headers, JSON, BIN)."""
+    from PIL import Image
+    import io
     rng = random.Random(4100)
     bk.FilamentStandard(clear_coat=0.5, sheen_color=0.5).eval(WO, WI)
-    seed = _glb_bytes(GLTF, b"\x01\x02\x03\x04\x05")
+    png = io.BytesIO()
+    Image.fromarray(np.arange(48, dtype=np.uint8).reshape(2, 6, 4)).save(png, format="PNG")
+    png = png.getvalue()
+    doc = copy.deepcopy(GLTF)
+    doc["materials"][2]["pbrMetallicRoughness"]["baseColorTexture"] = {"index": 0}
+    doc.update(textures=[{"source": 0}], images=[{"bufferView": 0, "mimeType": "image/png"}],
+               bufferViews=[{"buffer": 0, "byteLength": len(png)}], buffers=[{"byteLength": len(png)}])
+    seed = _glb_bytes(doc, png)
     p = tmp_path / "m.glb"
+    p.write_bytes(seed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", bk.interop.GltfWarning)
+        assert isinstance(bk.from_gltf(p)["material#2"], bk.Textured)   # the seed loads, textured
     for k in range(250 * SCALE):
         b = bytearray(seed)
         if rng.random() < 0.3:

@@ -211,8 +211,8 @@ class _Doc:
         return data
 
     def image(self, k, where):
-        """Image ``k``: (a path, or a float32 array (H, W, C) in [0, 1] decoded from embedded bytes),
-        or (None, reason) for a format left out."""
+        """Image ``k``: (a path, or a uint8 / uint16 array (H, W, C) decoded by Pillow, None), or
+        (None, reason) for a format left out."""
         if k in self._images:
             return self._images[k]
         img = self.item("images", k, where)
@@ -367,19 +367,27 @@ class _Tex:
         """The bk texture of ``channel`` (an int; "rgb" for an RGB value), or 1.0 where the image
         lacks the channel: the alpha of an image without one (opaque). A grey (+ alpha) image's
         R, G and B are its grey channel, its alpha the second channel."""
-        from ..textures import Texture
         kw = dict(filter=self.filter, wrap=self.wrap, transform=self.transform, encoding=encoding)
-        if self.channels is None:
+        if self.channels is None:   # (a linear probe of a file reads nothing but its header)
             self.channels = self.source.shape[2] if isinstance(self.source, np.ndarray) else \
-                Texture(self.source, filter=self.filter).channels
+                self._texture(encoding="linear").channels
         n = self.channels
         if channel == "rgb":   # 1 (replicated), 3 or 4 channels (RGBA: the first three) make an RGB value
-            return Texture(self.source, channel=0 if n == 2 else None, **kw)
+            return self._texture(channel=0 if n == 2 else None, **kw)
         if channel == 3 and n in (1, 3):
             return 1.0
         if n <= 2:
             channel = 1 if channel == 3 else 0
-        return Texture(self.source, channel=channel, **kw)
+        return self._texture(channel=channel, **kw)
+
+    def _texture(self, **kw):
+        from ..textures import Texture
+        try:
+            return Texture(self.source, **kw)
+        except FileNotFoundError:
+            raise
+        except (OSError, ValueError) as e:
+            raise _GltfError(f"{self.where}: {e}") from None
 
 
 def _texture_ref(doc, mat, key, where, notes):
@@ -790,6 +798,12 @@ def from_gltf(path, *, options=None) -> dict:
       repeat) and filter (magFilter NEAREST -> ``"nearest"``; a ``*_MIPMAP_LINEAR`` minFilter ->
       ``"trilinear"``; otherwise ``"bilinear"``), and ``KHR_texture_transform`` as the texture's
       uv ``transform``. Lookups at ``uv=`` use glTF's convention: (0, 0) is the image's top-left.
+      Images with alpha and embedded images are decoded by Pillow (OpenImageIO would premultiply
+      a PNG's colour by its alpha; glTF's is not premultiplied), at 8 bits (16 for grey); other
+      image files are read by bk.Texture at their own bit depth. A grey image's R, G and B are its
+      grey value. Derived values (base colour x factor, scaled normals, anisotropy over a
+      roughness map, specular, alpha cutoff) are :class:`GltfValue` textures, computed per
+      element from their inputs' filtered values.
 
     Raises
     ------
