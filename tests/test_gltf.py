@@ -491,3 +491,14 @@ def test_grey_images(tmp_path):
     ref = bk.Mask(bk.FilamentStandard(base_color=np.repeat(_srgb(g)[:, None], 3, 1), metallic=g / 255,
                                       roughness=g / 255), (255 - g) / 255)
     np.testing.assert_allclose(m.eval(WO, WI, uv=CENTRES), ref.eval(WO, WI), rtol=1e-6, atol=1e-15)
+
+
+def test_textured_lambert_closed_form(tmp_path):
+    """With ior 1 (f0 = 0: no specular, f90 = saturate(16.5 sum f0) = 0) and metallic 0, Filament's
+    standard model is Lambert: f = baseColor / pi, baseColor = factor x srgb_decode(texel / 255) --
+    a closed form, independent of FilamentStandard's parameters."""
+    doc = _textured_doc(tmp_path, pbr_extra={"metallicFactor": 0.0, "baseColorFactor": [0.5, 0.25, 1.0, 1.0]},
+                        mat_extra={"extensions": {"KHR_materials_ior": {"ior": 1.0}}})
+    m = bk.from_gltf(_write(tmp_path, doc))["tex"]
+    expected = np.array([[0.5, 0.25, 1.0] * _srgb(_texel(BASE, uv)[:3]) / np.pi for uv in CENTRES])
+    np.testing.assert_allclose(m.eval(WO, WI, uv=CENTRES), expected, rtol=1e-6)

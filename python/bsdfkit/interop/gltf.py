@@ -6,7 +6,9 @@ URI buffers and images; a ``.glb`` file is a 12-byte header (magic ``glTF``, ver
 and chunks (a JSON chunk, then an optional ``BIN`` chunk holding buffer 0) -- glTF 2.0
 specification, "Binary glTF Layout". Only what materials use is read: the ``materials``,
 ``textures``, ``samplers``, ``images`` and, for images stored in buffers, the ``bufferViews``
-and ``buffers`` they name (a buffer holding only geometry is never opened).
+and ``buffers`` they name (a buffer holding only geometry is never opened). A glTF library
+(pygltflib) would add a dependency for this much parsing and still leave the errors, the image
+decoding and every material rule to this module.
 """
 from __future__ import annotations
 
