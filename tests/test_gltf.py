@@ -375,6 +375,12 @@ def test_embedded_images_data_uri_and_glb(tmp_path):
     p.write_bytes(_glb(doc, binary))
     m = bk.from_gltf(p)["tex"]
     np.testing.assert_allclose(m.eval(WO, WI, uv=CENTRES), _expected(CENTRES).eval(WO, WI), rtol=1e-6)
+    # .gltf with the same buffer as an external .bin file (percent-encoded name)
+    (tmp_path / "tex data.bin").write_bytes(binary)
+    doc["buffers"] = [{"uri": "tex%20data.bin", "byteLength": len(binary)}]
+    m = bk.from_gltf(_write(tmp_path, doc))["tex"]
+    np.testing.assert_allclose(m.eval(WO, WI, uv=CENTRES), _expected(CENTRES).eval(WO, WI), rtol=1e-6)
+    del doc["buffers"][0]["uri"]
     # a corrupt embedded PNG: a clear error naming the image
     bad = bytearray(binary)
     bad[20:60] = bytes(40)
