@@ -27,7 +27,7 @@ import importlib.metadata as md, sys
 need = {"scikit-build-core": None, "pybind11": None, "numpy": None, "matplotlib": None, "pytest": None,
         "pytest-xdist": None, "hypothesis": None, "mitsuba": "3.9.1", "drjit": None, "scipy": None,
         "nbclient": None, "nbmake": None, "ipykernel": None, "nbformat": None, "ipywidgets": None,
-        "colour-science": "0.4.4", "pybind11-stubgen": None, "dask": None, "distributed": None, "threadpoolctl": None,
+        "colour-science": "0.4.4", "pillow": None, "pybind11-stubgen": None, "dask": None, "distributed": None, "threadpoolctl": None,
         "sphinx": None, "myst-parser": None, "furo": None}  # docs: scripts/docs, tests/test_docs.py
 for name, least in need.items():
     v = md.version(name)
@@ -38,7 +38,7 @@ then
   echo "[setup] pip install build and test dependencies"
   $PY -m pip install -q --disable-pip-version-check "scikit-build-core>=0.10" "pybind11>=2.12" numpy matplotlib \
       pytest pytest-xdist hypothesis "mitsuba>=3.9.1" drjit scipy nbclient nbmake ipykernel nbformat ipywidgets \
-      "colour-science>=0.4.4" pybind11-stubgen "dask[distributed]" threadpoolctl sphinx myst-parser furo
+      "colour-science>=0.4.4" pillow pybind11-stubgen "dask[distributed]" threadpoolctl sphinx myst-parser furo
 fi
 
 # Rebuild only when a source file changed since the last install.

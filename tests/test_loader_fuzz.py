@@ -19,6 +19,7 @@ All of it takes ~30 s on 2 cores. BSDFKIT_FUZZ_SCALE=<k> runs k times as many ca
 seeds included (e.g. BSDFKIT_FUZZ_SCALE=50 for a long local run).
 """
 import copy
+import json
 import os
 import random
 import re
@@ -502,6 +503,120 @@ def test_mitsuba_loaded_unsupported_class():
     mi.set_variant("scalar_rgb")
     with pytest.raises(ValueError, match="from_mitsuba: unsupported loaded Mitsuba BSDF 'Hair'"):
         bk.from_mitsuba(mi.load_dict({"type": "hair"}))
+
+
+# ==================================================================================== glTF
+
+GLTF = {"asset": {"version": "2.0"}, "materials": [
+    {"name": "gold", "pbrMetallicRoughness": {"baseColorFactor": [1, 0.766, 0.336, 1], "metallicFactor": 1.0,
+                                              "roughnessFactor": 0.3}},
+    {"alphaMode": "MASK", "alphaCutoff": 0.5, "doubleSided": True, "emissiveFactor": [1.0, 0.0, 0.0],
+     "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.4, 0.6, 0.7], "roughnessFactor": 0.6},
+     "extensions": {"KHR_materials_ior": {"ior": 1.33}, "KHR_materials_specular": {"specularFactor": 0.8},
+                    "KHR_materials_clearcoat": {"clearcoatFactor": 0.7, "clearcoatRoughnessFactor": 0.15},
+                    "KHR_materials_sheen": {"sheenColorFactor": [0.3, 0.2, 0.1], "sheenRoughnessFactor": 0.45},
+                    "KHR_materials_anisotropy": {"anisotropyStrength": 0.5, "anisotropyRotation": 1.5707963},
+                    "KHR_materials_transmission": {"transmissionFactor": 1.0}}},
+    {"alphaMode": "BLEND", "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 0.3]}}]}
+GLTF_KEYS = ["materials", "asset", "version", "pbrMetallicRoughness", "baseColorFactor", "metallicFactor",
+             "roughnessFactor", "baseColorTexture", "metallicRoughnessTexture", "normalTexture", "index", "texCoord",
+             "textures", "images", "samplers", "buffers", "bufferViews", "uri", "bufferView", "source", "sampler",
+             "alphaMode", "alphaCutoff", "doubleSided", "extensions", "ior", "clearcoatFactor", "anisotropyStrength",
+             "anisotropyRotation", "sheenColorFactor", "specularColorFactor", "name", "scale"]
+GLTF_VALUES = [None, True, 0, -1, 1, 2, 10**30, 1e308, -1e308, 0.5, "2.0", "1.0", "", "OPAQUE", "MASK", "BLEND",
+               [], [0.5], [0.5] * 3, [0.5] * 4, [-1.0] * 4, [2.0] * 4, [1e400] * 4, {}, {"index": 0},
+               {"index": 10**20}, {"index": -1}, "data:application/octet-stream;base64,AAAA", "missing.png",
+               "../../../etc/passwd", "data:,x", [{"source": 0}], [{"uri": "nope.png"}], [{"bufferView": 0}]]
+
+
+def mutate_gltf(rng, d):
+    d = copy.deepcopy(d)
+    for _ in range(rng.randint(1, 4)):
+        tgt, r = rng.choice(_dicts(d) + [m for m in d.get("materials", []) if isinstance(m, dict)]), rng.random()
+        if r < 0.5:
+            tgt[rng.choice(GLTF_KEYS)] = copy.deepcopy(rng.choice(GLTF_VALUES))
+        elif r < 0.7 and tgt:
+            tgt.pop(rng.choice(list(tgt)))
+        elif tgt:
+            k = rng.choice(list(tgt))
+            v = tgt[k]
+            if isinstance(v, float):
+                tgt[k] = v * rng.choice([-1, 0, 1e10, 1e-10, float("inf"), float("nan")])
+            elif isinstance(v, list) and v:
+                v[rng.randrange(len(v))] = copy.deepcopy(rng.choice(GLTF_VALUES))
+            else:
+                tgt[k] = copy.deepcopy(rng.choice(GLTF_VALUES))
+    return d
+
+
+def _glb_bytes(doc, binary=b""):
+    import struct
+    js = json.dumps(doc).encode()
+    js += b" " * (-len(js) % 4)
+    binary += b"\0" * (-len(binary) % 4)
+    body = struct.pack("<II", len(js), 0x4E4F534A) + js + struct.pack("<II", len(binary), 0x004E4942) + binary
+    return struct.pack("<III", 0x46546C67, 2, 12 + len(body)) + body
+
+
+def _gltf_case(path, what):
+    with _Timer(what):
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", bk.interop.GltfWarning)
+                warnings.simplefilter("error", RuntimeWarning)    # no silent overflow / nan on the way
+                mats = bk.from_gltf(path)
+        except (ValueError, TypeError, OSError) as e:
+            assert str(path) in str(e), (type(e).__name__, str(e)[:500], what)
+            return
+        for m in mats.values():
+            _sound(m.at(np.array([[0.1, 0.2], [0.7, 0.4], [1.3, -0.2]])) if isinstance(m, bk.Textured) else m, what)
+
+
+def test_gltf_json_mutations(tmp_path):
+    """JSON-level mutations of a glTF document (materials with every extension, buffers, images):
+    a clear error naming the file, or sound models."""
+    rng = random.Random(4000)
+    p = tmp_path / "m.gltf"
+    bk.FilamentStandard(clear_coat=0.5, sheen_color=0.5).eval(WO, WI)   # the DFG table's first build is untimed
+    for k in range(250 * SCALE):
+        d = mutate_gltf(rng, GLTF)
+        text = json.dumps(d, allow_nan=True)
+        if rng.random() < 0.1:   # and text edits
+            i = rng.randrange(len(text))
+            text = text[:i] + rng.choice(["", "{", "]", '"', "\x00", "\\", "1e999", "," * 3]) + text[i + 1:]
+        p.write_text(text)
+        _gltf_case(p, text[:2000])
+
+
+def test_glb_byte_mutations(tmp_path):
+    """Byte flips and truncations of a GLB container (header, chunk headers, JSON, BIN)."""
+    from PIL import Image
+    import io
+    rng = random.Random(4100)
+    bk.FilamentStandard(clear_coat=0.5, sheen_color=0.5).eval(WO, WI)
+    png = io.BytesIO()
+    Image.fromarray(np.arange(48, dtype=np.uint8).reshape(2, 6, 4)).save(png, format="PNG")
+    png = png.getvalue()
+    doc = copy.deepcopy(GLTF)
+    doc["materials"][2]["pbrMetallicRoughness"]["baseColorTexture"] = {"index": 0}
+    doc.update(textures=[{"source": 0}], images=[{"bufferView": 0, "mimeType": "image/png"}],
+               bufferViews=[{"buffer": 0, "byteLength": len(png)}], buffers=[{"byteLength": len(png)}])
+    seed = _glb_bytes(doc, png)
+    p = tmp_path / "m.glb"
+    p.write_bytes(seed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", bk.interop.GltfWarning)
+        assert isinstance(bk.from_gltf(p)["material#2"], bk.Textured)   # the seed loads, textured
+    for k in range(250 * SCALE):
+        b = bytearray(seed)
+        if rng.random() < 0.3:
+            b = b[:rng.randrange(len(b))]
+        else:
+            for _ in range(rng.randint(1, 4)):
+                i = rng.randrange(28) if rng.random() < 0.5 else rng.randrange(len(b))   # headers often
+                b[i] = rng.randrange(256)
+        p.write_bytes(bytes(b))
+        _gltf_case(p, f"case {k}: {bytes(b[:40])!r}")
 
 
 # ============================================================================ tensor files

@@ -1,10 +1,13 @@
-"""Scene materials in (one module per source: ``mitsuba``, ``pbrt``; ``spectra`` for spectral data): Mitsuba 3 plugin dictionaries and pbrt-v4 scene text as bsdfkit models.
+"""Scene materials in (one module per source: ``mitsuba``, ``pbrt``, ``gltf``; ``spectra`` for spectral data): Mitsuba 3 plugin dictionaries, pbrt-v4 scene text and glTF 2.0 materials as bsdfkit models.
 
 * :func:`from_mitsuba` turns a Mitsuba 3 BSDF dictionary (what ``mi.load_dict`` takes) into a
   model; it inverts :func:`bsdfkit.testing.mitsuba.to_mitsuba`.
 * :func:`from_pbrt` reads the ``Material`` / ``MakeNamedMaterial`` statements of pbrt-v4 scene
   text; :func:`parse_pbrt_materials` gives the parsed statements (type, parameters, line, how
   many shapes use them) without converting them.
+* :func:`from_gltf` reads the materials of a glTF 2.0 file (``.gltf`` or ``.glb``) as
+  ``FilamentStandard`` models (with ``NormalMap`` / ``Mask`` / ``TwoSided`` where asked for);
+  :func:`read_gltf_materials` also gives what each leaves out (occlusion, emission, ...).
 * ``model.to_mitsuba()`` is the other direction: it exports only a model Mitsuba has exactly and
   otherwise raises :class:`MitsubaExportError` naming the reason (e.g. height-correlated masking)
   and the measured difference; ``to_mitsuba(approximate=True)`` exports the nearest Mitsuba
@@ -18,11 +21,13 @@ measured materials, Beckmann roughness, ``specular_reflectance`` tints ...) is r
 """
 
 from ..models._mitsuba_export import MitsubaApproximationWarning, MitsubaExportError
+from .gltf import GLTF_SUPPORTED_EXTENSIONS, GltfMaterial, GltfWarning, from_gltf, read_gltf_materials
 from .mitsuba import MIRROR_ETA, MITSUBA_IOR, from_mitsuba
 from .pbrt import (PBRT_GLASS_ETA, PbrtColorSpaceWarning, PbrtMaterial, PbrtMissingIncludeWarning, PbrtParam,
                    PbrtSkipWarning, from_pbrt, parse_pbrt_materials)
 from .spectra import spectrum_to_rgb
 
-__all__ = ["from_mitsuba", "from_pbrt", "parse_pbrt_materials", "PbrtMaterial", "PbrtParam",
+__all__ = ["from_mitsuba", "from_pbrt", "from_gltf", "read_gltf_materials", "GltfMaterial", "GltfWarning",
+           "GLTF_SUPPORTED_EXTENSIONS", "parse_pbrt_materials", "PbrtMaterial", "PbrtParam",
            "spectrum_to_rgb", "MITSUBA_IOR", "PBRT_GLASS_ETA", "MIRROR_ETA", "MitsubaExportError",
            "MitsubaApproximationWarning", "PbrtSkipWarning", "PbrtMissingIncludeWarning", "PbrtColorSpaceWarning"]
