@@ -20,7 +20,7 @@ def _nested(d, where, fail, keys=()):
     still say alphanumeric order), refusing other keys than ``keys``."""
     nested, bad = [], []
     for key, v in d.items():
-        if key in ("type", "id") or key in keys:
+        if key in ("type", "id", "__line__") or key in keys:
             continue
         if isinstance(v, dict) and "type" in v:
             nested.append((key, v))

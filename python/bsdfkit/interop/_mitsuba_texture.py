@@ -1,0 +1,203 @@
+"""Mitsuba 3 ``bitmap`` textures <-> bsdfkit textures, for :func:`bsdfkit.from_mitsuba` and the
+textured ``to_mitsuba`` export (:func:`bitmap_dict`).
+
+Mitsuba 3.9's ``bitmap`` (measured with the installed Mitsuba, see tests/test_mitsuba_textures.py):
+
+* uv (0, 0) is the top-left corner of the image as stored: v = 0.1 reads the first row (of a
+  4-row image; OpenImageIO's and bsdfkit's convention, no flip); texel centres at (i + 0.5) / W.
+* ``filter_type``: "bilinear" (default) or "nearest"; ``wrap_mode``: "repeat" (default),
+  "mirror", "clamp".
+* ``raw=false`` (default): a file whose format stores sRGB (PNG of 8 or 16 bits, JPEG, ...;
+  ``mi.Bitmap.srgb_gamma()``) is sRGB-decoded, EXR / HDR / PFM stay linear; ``raw=true``: no
+  decoding. An in-memory ``data`` tensor is linear either way; an ``mi.Bitmap`` is decoded when
+  its ``srgb_gamma()`` flag is set and raw is false.
+* ``to_uv``: uv' = M (u, v, 1) with M the 3x3 (a 4x4 transform gives its rows and columns 0, 1, 3).
+* A float parameter (roughness, a blend weight, an opacity) given an RGB bitmap takes its
+  luminance, 0.212671 R + 0.715160 G + 0.072169 B (``eval_1``); a 1-channel bitmap for a colour is
+  replicated (``eval_3``).
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["LUMINANCE", "MI_SRGB_EXTENSIONS", "MI_LINEAR_EXTENSIONS", "parse_bitmap", "bitmap_texture",
+           "bitmap_dict", "texture_source", "MiBitmap"]
+
+#: Mitsuba 3's ``luminance()`` weights (linear sRGB primaries, CIE Y row).
+LUMINANCE = np.array([0.212671, 0.715160, 0.072169])
+#: File formats Mitsuba's ``raw=false`` sRGB-decodes (their ``mi.Bitmap`` has srgb_gamma set).
+MI_SRGB_EXTENSIONS = (".png", ".jpg", ".jpeg", ".bmp", ".tga", ".ppm", ".pgm")
+#: File formats Mitsuba reads as linear.
+MI_LINEAR_EXTENSIONS = (".exr", ".hdr", ".rgbe", ".pfm")
+
+_FILTERS = {"nearest": "nearest", "bilinear": "bilinear"}
+_WRAPS = {"repeat": "periodic", "mirror": "mirror", "clamp": "clamp"}
+_KEYS = ("type", "id", "filename", "bitmap", "data", "filter_type", "wrap_mode", "raw", "to_uv", "accel", "format")
+
+
+class MiBitmap:
+    """A parsed Mitsuba ``bitmap``: ``source`` (an absolute path, or a float64 (H, W, C) array of
+    linear or sRGB-encoded values per ``encoding``), bsdfkit's ``filter`` / ``wrap`` /
+    ``encoding`` names, ``transform`` ((2, 3) or None) and where it was found (for messages)."""
+
+    __slots__ = ("source", "filter", "wrap", "encoding", "transform", "where")
+
+    def __init__(self, source, filter, wrap, encoding, transform, where):
+        self.source, self.filter, self.wrap, self.encoding = source, filter, wrap, encoding
+        self.transform, self.where = transform, where
+
+    def __repr__(self):
+        src = self.source if isinstance(self.source, str) else f"<array {self.source.shape}>"
+        return (f"MiBitmap({src!r}, filter={self.filter!r}, wrap={self.wrap!r}, encoding={self.encoding!r}, "
+                f"transform={None if self.transform is None else self.transform.tolist()})")
+
+
+def _matrix(v, where, fail):
+    """A Mitsuba to_uv transform (mi.ScalarTransform3f/4f, a 3x3 / 4x4 / 2x3 array) -> (2, 3)."""
+    m = getattr(v, "matrix", v)
+    try:
+        a = np.array(m, dtype=np.float64)
+    except (TypeError, ValueError):
+        fail(where, f"'to_uv': expected a transform (mi.ScalarTransform3f/4f or a 3x3 matrix), got {type(v).__name__}")
+    if a.shape == (4, 4):   # Mitsuba's bitmap: rows and columns 0, 1, 3 of a 4x4 (measured)
+        a = a[np.ix_([0, 1, 3], [0, 1, 3])]
+    if a.shape == (2, 3):
+        a = np.vstack([a, [0.0, 0.0, 1.0]])
+    if a.shape != (3, 3):
+        fail(where, f"'to_uv': expected a 3x3 (or 4x4) matrix, got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        fail(where, f"'to_uv': entries must be finite, got {a.tolist()}")
+    if not np.allclose(a[2], [0.0, 0.0, 1.0], rtol=0, atol=1e-12):
+        fail(where, f"'to_uv': a projective uv transform (last row {a[2].tolist()}) is not supported; "
+             "only affine ones")
+    return None if np.array_equal(a[:2], np.eye(3)[:2]) else a[:2].copy()
+
+
+def _resolve(fn, base_dir, where, fail):
+    if not isinstance(fn, (str, os.PathLike)):
+        fail(where, f"'filename': expected a path (str), got {type(fn).__name__}")
+    p = Path(os.fspath(fn)).expanduser()
+    if not p.is_absolute():
+        p = Path(base_dir or os.getcwd()) / p
+    if not p.is_file():
+        raise FileNotFoundError(f"from_mitsuba: {where}: image file not found: {str(p)!r}"
+                                + (f" (from {fn!r}, relative to {str(base_dir)!r})" if base_dir else ""))
+    return str(p)
+
+
+def parse_bitmap(d, where, base_dir, fail) -> MiBitmap:
+    """A Mitsuba ``bitmap`` dict -> :class:`MiBitmap` (no image read). Relative filenames are
+    resolved against ``base_dir`` (the XML file's folder; default the working directory); a
+    missing file raises FileNotFoundError naming the path."""
+    extra = [k for k in d if k not in _KEYS and k != "__line__"]
+    if extra:
+        fail(where, f"bitmap: unsupported parameters {extra}; bitmap takes: " + ", ".join(_KEYS[2:]))
+    given = [k for k in ("filename", "bitmap", "data") if k in d]
+    if len(given) != 1:
+        fail(where, f"bitmap: give exactly one of 'filename', 'bitmap', 'data', got {given or 'none'}")
+    ft = d.get("filter_type", "bilinear")
+    if ft not in _FILTERS:
+        fail(where, f"bitmap: filter_type {ft!r} is not one of Mitsuba's {tuple(_FILTERS)}")
+    wm = d.get("wrap_mode", "repeat")
+    if wm not in _WRAPS:
+        fail(where, f"bitmap: wrap_mode {wm!r} is not one of Mitsuba's {tuple(_WRAPS)}")
+    raw = d.get("raw", False)
+    if not isinstance(raw, (bool, np.bool_)):
+        fail(where, f"bitmap: 'raw': expected True or False, got {raw!r}")
+    transform = _matrix(d["to_uv"], where, fail) if "to_uv" in d else None
+    if "filename" in d:
+        path = _resolve(d["filename"], base_dir, where, fail)
+        ext = Path(path).suffix.lower()
+        if raw:
+            enc = "linear"
+        elif ext in MI_SRGB_EXTENSIONS:
+            enc = "sRGB"
+        elif ext in MI_LINEAR_EXTENSIONS:
+            enc = "linear"
+        else:
+            fail(where, f"bitmap {path!r}: Mitsuba's colour decoding of {ext!r} files is not known here; "
+                 f"give raw=true (no decoding) or a {'/'.join(MI_SRGB_EXTENSIONS + MI_LINEAR_EXTENSIONS)} file")
+        return MiBitmap(path, _FILTERS[ft], _WRAPS[wm], enc, transform, where)
+    if "data" in d:   # a tensor: linear whatever raw says (measured)
+        a, enc = _array(d["data"], where, "data", fail), "linear"
+    else:
+        b = d["bitmap"]
+        srgb = bool(b.srgb_gamma()) if hasattr(b, "srgb_gamma") else False
+        a = _array(b, where, "bitmap", fail)
+        enc = "sRGB" if srgb and not raw else "linear"
+    return MiBitmap(a, _FILTERS[ft], _WRAPS[wm], enc, transform, where)
+
+
+def _array(v, where, key, fail):
+    try:
+        a = np.array(v)
+    except Exception as e:
+        fail(where, f"bitmap: cannot read '{key}' as an array ({type(e).__name__}: {e})")
+    if a.dtype == np.uint8:
+        a = a.astype(np.float64) / 255.0
+    elif a.dtype == np.uint16:
+        a = a.astype(np.float64) / 65535.0
+    try:
+        a = a.astype(np.float64)
+    except (TypeError, ValueError):
+        fail(where, f"bitmap: '{key}' is not numeric (dtype {a.dtype})")
+    if a.ndim == 2:
+        a = a[..., None]
+    if a.ndim != 3 or a.shape[0] == 0 or a.shape[1] == 0 or a.shape[2] not in (1, 3):
+        fail(where, f"bitmap: '{key}' must be (H, W), (H, W, 1) or (H, W, 3), got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        fail(where, f"bitmap: '{key}' holds non-finite texels")
+    return a
+
+
+def _srgb_decode(x):
+    # IEC 61966-2-1 (the sRGB transfer function; Mitsuba's srgb_to_linear)
+    return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)
+
+
+def bitmap_texture(bm: MiBitmap, channels: int, fail):
+    """The ``bk.Texture`` of a parsed bitmap for a parameter of ``channels`` (1: a float, 3: a
+    colour). A float parameter of an RGB bitmap is its luminance, as Mitsuba's ``eval_1``: an
+    in-memory image is reduced here (linear values), an RGB image file is refused (its decoded
+    luminance would need a texture of a texture)."""
+    try:
+        from ..textures import Texture
+    except ImportError:   # pragma: no cover - until bsdfkit.textures lands
+        raise NotImplementedError(f"from_mitsuba: {bm.where}: image textures need bsdfkit.textures "
+                                  "(bk.Texture), which this build does not have") from None
+    kw = dict(filter=bm.filter, wrap=bm.wrap, transform=bm.transform)
+    if isinstance(bm.source, str):
+        try:
+            t = Texture(bm.source, encoding=bm.encoding, **kw)
+        except (ValueError, TypeError, OSError, RuntimeError) as e:
+            fail(bm.where, f"bitmap {bm.source!r}: {e}")
+        if channels == 1 and t.channels != 1:
+            if t.channels == 3 or t.channels == 4:
+                fail(bm.where, f"bitmap {bm.source!r} has {t.channels} channels and is used as a float: Mitsuba takes "
+                     "the luminance of its RGB, which bsdfkit does not compute from an image file; give a one-channel "
+                     "image")
+            fail(bm.where, f"bitmap {bm.source!r} has {t.channels} channels; expected 1 or 3")
+        if channels == 3 and t.channels == 4:
+            fail(bm.where, f"bitmap {bm.source!r} has 4 channels (RGBA); Mitsuba drops the alpha, bsdfkit's texture "
+                 "keeps it: give an RGB image")
+        return t
+    a = bm.source
+    if channels == 1 and a.shape[2] == 3:
+        lin = _srgb_decode(a) if bm.encoding == "sRGB" else a
+        return Texture(lin @ LUMINANCE, encoding="linear", **kw)
+    src = a[..., 0] if a.shape[2] == 1 else a
+    return Texture(src, encoding=bm.encoding, **kw)
+
+
+# -------------------------------------------------------------------------------------- export
+
+def texture_source(tex):
+    """(source, attributes) of a bsdfkit texture, read defensively: ``source`` is the path or the
+    array it was built from."""
+    src = getattr(tex, "source", None)
+    if src is None:
+        src = getattr(tex, "path", None) or getattr(tex, "filename", None)
+    return src
