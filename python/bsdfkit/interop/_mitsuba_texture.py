@@ -23,8 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..textures import TextureBase
+
 __all__ = ["LUMINANCE", "MI_SRGB_EXTENSIONS", "MI_LINEAR_EXTENSIONS", "parse_bitmap", "bitmap_texture",
-           "bitmap_dict", "texture_source", "MiBitmap"]
+           "luminance", "height_gradients", "height_texels", "MiBitmap"]
 
 #: Mitsuba 3's ``luminance()`` weights (linear sRGB primaries, CIE Y row).
 LUMINANCE = np.array([0.212671, 0.715160, 0.072169])
@@ -153,51 +155,121 @@ def _array(v, where, key, fail):
     return a
 
 
-def _srgb_decode(x):
-    # IEC 61966-2-1 (the sRGB transfer function; Mitsuba's srgb_to_linear)
-    return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)
+class Luminance(TextureBase):
+    """Mitsuba's ``eval_1`` of an RGB bitmap: 0.212671 R + 0.715160 G + 0.072169 B of the
+    filtered linear RGB (a linear map: the same as filtering the luminance)."""
+
+    channels = 1
+
+    def __init__(self, tex):
+        if not isinstance(tex, TextureBase) or tex.channels < 3:
+            raise ValueError(f"tex: expected a texture of 3 (or 4) channels, got {tex!r}")
+        object.__setattr__(self, "tex", tex)
+
+    def _args(self):
+        return {"tex": self.tex}
+
+    def _lookup(self, uv, dx, dy):
+        return (self.tex._lookup(uv, dx, dy)[..., :3] @ LUMINANCE)[..., None]
+
+
+def luminance(tex):
+    """The :class:`Luminance` texture of an RGB(A) texture (Mitsuba's ``eval_1`` of it)."""
+    return Luminance(tex)
 
 
 def bitmap_texture(bm: MiBitmap, channels: int, fail):
-    """The ``bk.Texture`` of a parsed bitmap for a parameter of ``channels`` (1: a float, 3: a
-    colour). A float parameter of an RGB bitmap is its luminance, as Mitsuba's ``eval_1``: an
-    in-memory image is reduced here (linear values), an RGB image file is refused (its decoded
-    luminance would need a texture of a texture)."""
+    """The texture of a parsed bitmap for a parameter of ``channels`` (1: a float, 3: a colour):
+    a ``bk.Texture``, wrapped in :func:`luminance` for a float parameter given an RGB(A) bitmap
+    (Mitsuba's ``eval_1``). A 1-channel bitmap for a colour is replicated by the model; an RGBA
+    one for a colour gives its RGB (Mitsuba drops the alpha too)."""
+    from ..textures import Texture
+    kw = dict(filter=bm.filter, wrap=bm.wrap, transform=bm.transform, encoding=bm.encoding)
     try:
-        from ..textures import Texture
-    except ImportError:   # pragma: no cover - until bsdfkit.textures lands
-        raise NotImplementedError(f"from_mitsuba: {bm.where}: image textures need bsdfkit.textures "
-                                  "(bk.Texture), which this build does not have") from None
-    kw = dict(filter=bm.filter, wrap=bm.wrap, transform=bm.transform)
+        t = Texture(bm.source, **kw)
+    except FileNotFoundError:
+        raise
+    except (ValueError, TypeError, OSError, RuntimeError) as e:
+        fail(bm.where, f"bitmap {bm.source if isinstance(bm.source, str) else 'data'}: {e}")
+    if t.channels not in (1, 3, 4):
+        fail(bm.where, f"bitmap has {t.channels} channels; Mitsuba reads 1 (Y), 3 (RGB) or 4 (RGBA)")
+    if channels == 1 and t.channels != 1:
+        return luminance(t)
+    return t
+
+
+def height_texels(bm: MiBitmap, fail) -> np.ndarray:
+    """The one-channel texels (H, W), float32-rounded as Mitsuba stores them, of a height bitmap:
+    decoded per ``encoding``, the luminance of an RGB(A) one (Mitsuba's eval_1)."""
     if isinstance(bm.source, str):
+        from .. import _render_ext
         try:
-            t = Texture(bm.source, encoding=bm.encoding, **kw)
-        except (ValueError, TypeError, OSError, RuntimeError) as e:
-            fail(bm.where, f"bitmap {bm.source!r}: {e}")
-        if channels == 1 and t.channels != 1:
-            if t.channels == 3 or t.channels == 4:
-                fail(bm.where, f"bitmap {bm.source!r} has {t.channels} channels and is used as a float: Mitsuba takes "
-                     "the luminance of its RGB, which bsdfkit does not compute from an image file; give a one-channel "
-                     "image")
-            fail(bm.where, f"bitmap {bm.source!r} has {t.channels} channels; expected 1 or 3")
-        if channels == 3 and t.channels == 4:
-            fail(bm.where, f"bitmap {bm.source!r} has 4 channels (RGBA); Mitsuba drops the alpha, bsdfkit's texture "
-                 "keeps it: give an RGB image")
-        return t
-    a = bm.source
-    if channels == 1 and a.shape[2] == 3:
-        lin = _srgb_decode(a) if bm.encoding == "sRGB" else a
-        return Texture(lin @ LUMINANCE, encoding="linear", **kw)
-    src = a[..., 0] if a.shape[2] == 1 else a
-    return Texture(src, encoding=bm.encoding, **kw)
+            px = np.asarray(_render_ext.load().read_image(bm.source), np.float64)
+        except (RuntimeError, OSError) as e:
+            fail(bm.where, f"bitmap {bm.source!r}: cannot read the image ({e})")
+    else:
+        px = np.asarray(bm.source, np.float64)
+    if px.ndim == 2:
+        px = px[..., None]
+    if bm.encoding == "sRGB":
+        from ..io import srgb_to_linear
+        px = srgb_to_linear(px)
+    px = px.astype(np.float32).astype(np.float64)
+    if px.shape[2] >= 3:
+        px = (px[..., :3] @ LUMINANCE).astype(np.float32).astype(np.float64)
+    return px[..., 0]
 
 
-# -------------------------------------------------------------------------------------- export
+class HeightGradient(TextureBase):
+    """d height / d u (``axis=0``) or d v (``axis=1``) of a height image (H, W) at uv, as Mitsuba
+    3's bilinear ``bitmap.eval_1_grad`` computes it (``bsdfkit.models.bump_map.height_gradient``),
+    after the bitmap's ``to_uv`` (scale and translation: the scale multiplies the gradient,
+    measured with Mitsuba 3.9)."""
 
-def texture_source(tex):
-    """(source, attributes) of a bsdfkit texture, read defensively: ``source`` is the path or the
-    array it was built from."""
-    src = getattr(tex, "source", None)
-    if src is None:
-        src = getattr(tex, "path", None) or getattr(tex, "filename", None)
-    return src
+    channels = 1
+
+    def __init__(self, height, axis, wrap_mode="repeat", transform=None):
+        h = np.array(height, dtype=np.float64)
+        if h.ndim != 2 or h.size == 0 or axis not in (0, 1):
+            raise ValueError(f"HeightGradient: expected an (H, W) height and axis 0 or 1, got {h.shape}, {axis!r}")
+        h.setflags(write=False)
+        if transform is not None:
+            transform = np.array(transform, np.float64)
+            transform.setflags(write=False)
+        object.__setattr__(self, "height", h)
+        object.__setattr__(self, "axis", int(axis))
+        object.__setattr__(self, "wrap_mode", wrap_mode)
+        object.__setattr__(self, "transform", transform)
+
+    def _args(self):
+        return {"height": self.height, "axis": self.axis, "wrap_mode": self.wrap_mode, "transform": self.transform}
+
+    def _lookup(self, uv, dx, dy):
+        from ..models.bump_map import height_gradient
+        m = self.transform
+        if m is not None:
+            uv = uv @ m[:, :2].T + m[:, 2]
+        g = height_gradient(self.height, uv, self.wrap_mode)[self.axis]
+        if m is not None:
+            g = g * m[self.axis, self.axis]
+        return np.asarray(g, np.float64)[..., None]
+
+
+_WRAP_MI = {v: k for k, v in _WRAPS.items()}
+
+
+def height_gradients(bm: MiBitmap, fail):
+    """(dh/du, dh/dv) textures of a bumpmap's height bitmap (``HeightGradient``), or (0.0, 0.0)
+    for ``filter_type="nearest"`` (Mitsuba's gradient of a nearest lookup is 0)."""
+    if bm.transform is not None and (bm.transform[0, 1] != 0 or bm.transform[1, 0] != 0):
+        fail(bm.where, f"a height bitmap's to_uv with rotation or shear ({bm.transform.tolist()}): Mitsuba's "
+             "gradient under it is not reproduced here (only scale and translation are)")
+    if bm.filter == "nearest":
+        return 0.0, 0.0
+    h = height_texels(bm, fail)
+    if np.all(h == h.flat[0]):   # constant texels: a zero gradient everywhere
+        return 0.0, 0.0
+    cls = HeightGradient
+    return (cls(h, 0, _WRAP_MI[bm.wrap], bm.transform), cls(h, 1, _WRAP_MI[bm.wrap], bm.transform))
+
+

@@ -321,9 +321,9 @@ def _mi_plugin(d, where, ctx):
         if kind == "twosided":
             return mc.mi_twosided(d, label, build, _mi_fail)
         if kind == "blendbsdf":
-            return _mi_build(label, lambda: mc.mi_blend(d, label, build, _mi_fail, _mi_float))
+            return _mi_build(label, lambda: mc.mi_blend(d, label, build, _mi_fail, _mi_float_tex))
         if kind == "mask":
-            return _mi_build(label, lambda: mc.mi_mask(d, label, build, _mi_fail, _mi_float))
+            return _mi_build(label, lambda: mc.mi_mask(d, label, build, _mi_fail, _mi_float_tex))
         if kind == "bumpmap":
             return _mi_build(label, lambda: mc.mi_bumpmap(d, label, build, _mi_fail, _mi_float))
         return _mi_build(label, lambda: mc.mi_normalmap(d, label, build, _mi_fail, _mi_color))

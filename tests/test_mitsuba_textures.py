@@ -1,0 +1,414 @@
+"""Mitsuba 3 ``bitmap`` textures and textured composites, imported with ``from_mitsuba`` and
+exported with ``to_mitsuba``, against Mitsuba 3.9 (llvm_ad_rgb, float32) evaluating the same
+plugin dictionaries at the same uv and frames.
+
+The textures are small images the tests write (PNG through Pillow, EXR through ``mi.Bitmap``) or
+in-memory tensors. Mitsuba evaluates in float32: both libraries get the same float32-rounded
+directions and uv, and the relative error has a floor of 1e-5 of the set's p99 value (as
+tests/test_mitsuba.py). Tolerance: p99.9 <= 1e-5 for lookups, eval and pdf.
+"""
+import os
+
+import numpy as np
+import pytest
+
+import bsdfkit as bk
+from bsdfkit.interop import _mitsuba_texture as mt
+from bsdfkit.testing import mitsuba as ref
+from conftest import random_dirs
+
+mi = pytest.importorskip("mitsuba")
+pytest.importorskip("bsdfkit.textures")
+Image = pytest.importorskip("PIL.Image")
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _variant():
+    ref.variant()   # llvm_ad_rgb, before any mi.TensorXf / mi.Bitmap is built
+
+TOL = 1e-5
+N = 6000
+
+
+def _f32(x):
+    return np.asarray(x, np.float64).astype(np.float32).astype(np.float64)
+
+
+def _err(ours, theirs):
+    pos = np.abs(theirs[theirs != 0])
+    scale = np.quantile(pos, 0.99) if pos.size else 1.0
+    err = np.abs(ours - theirs) / np.maximum(np.abs(theirs), 1e-5 * scale)
+    return err.reshape(len(err), -1).max(1)
+
+
+def _check(ours, theirs, what, ok=None):
+    e = _err(ours, theirs)
+    if ok is not None:
+        e = e[ok]
+    p = np.quantile(e, 0.999)
+    print(f"{what}: max {e.max():.3g}, p99.9 {p:.3g}")
+    assert p <= TOL, f"{what}: p99.9 relative error {p:.3g} > {TOL}"
+
+
+def _si(wo, uv):
+    mi_, dr = ref._mi()
+    n = len(uv)
+    si = ref._make_si(np.broadcast_to(np.asarray(wo, np.float32), (n, 3)))
+    si.uv = mi_.Point2f(mi_.Float(uv[:, 0].astype(np.float32)), mi_.Float(uv[:, 1].astype(np.float32)))
+    si.dp_du = ref._v3(np.tile(np.float32([1, 0, 0]), (n, 1)))   # bumpmap: bsdfkit's default dp/du, dp/dv
+    si.dp_dv = ref._v3(np.tile(np.float32([0, 1, 0]), (n, 1)))
+    return si
+
+
+def _mi_texture(d, uv, channels):
+    """Mitsuba's eval_1 (channels 1) or eval (3) of a texture dict at uv."""
+    mi_, dr = ref._mi()
+    t = mi_.load_dict(d)
+    si = _si([0, 0, 1], uv)
+    v = t.eval_1(si) if channels == 1 else t.eval(si)
+    dr.eval(v)
+    return ref._np(v, len(uv), None if channels == 1 else 3)
+
+
+def _mi_eval_pdf(d, wo, wi, uv):
+    mi_, dr = ref._mi()
+    bsdf = mi_.load_dict(d)
+    wi32 = wi.astype(np.float32)
+    val, pdf = bsdf.eval_pdf(mi_.BSDFContext(), _si(wo.astype(np.float32), uv), ref._v3(wi32))
+    dr.eval(val, pdf)
+    n = len(wo)
+    return ref._div_cos(ref._np(val, n, 3), np.abs(wi32[:, 2].astype(np.float64))), ref._np(pdf, n)
+
+
+def _uv(rng, n, lo=-1.3, hi=2.4):
+    return _f32(rng.uniform(lo, hi, (n, 2)))
+
+
+# ---------------------------------------------------------------------------------- images
+
+H, W = 6, 9
+
+
+@pytest.fixture(scope="module")
+def images(tmp_path_factory, _variant):
+    """Small test images: an 8-bit sRGB PNG (RGB), an 8-bit grey PNG, a 1-channel float EXR and a
+    3-channel float EXR, and the arrays they hold."""
+    d = tmp_path_factory.mktemp("mitex")
+    rng = np.random.default_rng(48)
+    rgb8 = rng.integers(0, 256, (H, W, 3), dtype=np.uint8)
+    grey8 = rng.integers(0, 256, (H, W), dtype=np.uint8)
+    rough = rng.uniform(0.05, 0.7, (H, W, 1)).astype(np.float32)
+    col = rng.uniform(0.1, 2.5, (H, W, 3)).astype(np.float32)
+    Image.fromarray(rgb8).save(d / "rgb8.png")
+    Image.fromarray(grey8).save(d / "grey8.png")
+    mi.Bitmap(rough).write(str(d / "rough.exr"))
+    mi.Bitmap(col).write(str(d / "col.exr"))
+    return {"dir": str(d), "rgb8": rgb8, "grey8": grey8, "rough": rough, "col": col}
+
+
+def test_uv_orientation_matches_mitsuba():
+    """Which row does v = 0.1 read? Mitsuba 3's bitmap: the first stored row (and bk.Texture the
+    same, TEXTURE_API.md's claim): u picks the column, v the row, from the top of the image as
+    stored, no flip."""
+    img = (10.0 * np.arange(4)[:, None] + np.arange(5)[None, :])[..., None].astype(np.float32)  # row r, col c: 10r + c
+    uv = np.array([[0.1, 0.1], [0.1, 0.9], [0.5, 0.1], [0.9, 0.6]])
+    theirs = _mi_texture({"type": "bitmap", "data": mi.TensorXf(img), "filter_type": "nearest", "raw": True}, uv, 1)
+    assert theirs.tolist() == [0.0, 30.0, 2.0, 24.0]   # v = 0.1 -> row 0, v = 0.9 -> row 3
+    m = bk.from_mitsuba({"type": "diffuse", "reflectance": {"type": "bitmap", "data": mi.TensorXf(img / 40),
+                                                            "filter_type": "nearest", "raw": True}})
+    ours = m.at(uv).reflectance[:, 0] * 40
+    np.testing.assert_allclose(ours, theirs, rtol=1e-6)
+
+
+def _bitmap_cases(images):
+    dd = images["dir"]
+    cases = []
+    for ft in ("nearest", "bilinear"):
+        for wm in ("repeat", "mirror", "clamp"):
+            cases.append((f"rgb8.png sRGB {ft} {wm}", lambda ft=ft, wm=wm: {
+                "type": "bitmap", "filename": "rgb8.png", "filter_type": ft, "wrap_mode": wm}, 3))
+            cases.append((f"rough.exr {ft} {wm}", lambda ft=ft, wm=wm: {
+                "type": "bitmap", "filename": "rough.exr", "filter_type": ft, "wrap_mode": wm}, 1))
+    cases += [
+        ("rgb8.png raw", lambda: {"type": "bitmap", "filename": "rgb8.png", "raw": True}, 3),
+        ("grey8.png sRGB as a colour", lambda: {"type": "bitmap", "filename": os.path.join(dd, "grey8.png")}, 3),
+        ("col.exr luminance (eval_1)", lambda: {"type": "bitmap", "filename": "col.exr", "wrap_mode": "mirror"}, 1),
+        ("rgb8.png luminance of sRGB-decoded", lambda: {"type": "bitmap", "filename": "rgb8.png"}, 1),
+        ("data tensor, to_uv", lambda: {"type": "bitmap", "data": mi.TensorXf(images["col"]),
+                                        "to_uv": mi.ScalarTransform4f().translate([0.3, -0.2, 0]) @
+                                        mi.ScalarTransform4f().scale([1.5, 0.7, 1])}, 3),
+        ("mi.Bitmap uint8 (sRGB flag)", lambda: {"type": "bitmap", "bitmap": mi.Bitmap(images["rgb8"]),
+                                                 "filter_type": "nearest", "wrap_mode": "clamp"}, 3),
+        ("data tensor luminance", lambda: {"type": "bitmap", "data": mi.TensorXf(images["col"]),
+                                           "filter_type": "nearest"}, 1),
+    ]
+    return cases
+
+
+def test_bitmap_lookups_match_mitsuba(images):
+    """Every filter_type x wrap_mode on sRGB PNG and linear EXR files, raw, grey, luminance (a float
+    parameter of an RGB bitmap), in-memory tensors and bitmaps, to_uv: bsdfkit's texture
+    (OpenImageIO) against Mitsuba's bitmap at the same uv, inside and outside [0, 1]."""
+    ref.variant()
+    rng = np.random.default_rng(1)
+    uv = _uv(rng, 4000)
+    fail = bk.interop.mitsuba._mi_fail
+    for name, make, channels in _bitmap_cases(images):
+        d = make()
+        bm = mt.parse_bitmap(d, name, images["dir"], fail)
+        ours = mt.bitmap_texture(bm, channels, fail).lookup(uv)
+        if channels == 3 and ours.shape[-1] == 1:
+            ours = np.repeat(ours, 3, -1)
+        dm = make()
+        if "filename" in dm:
+            dm["filename"] = os.path.join(images["dir"], dm["filename"])
+        theirs = _mi_texture(dm, uv, channels)
+        _check(ours.reshape(theirs.shape), theirs, name)
+
+
+# ------------------------------------------------------------------------------ models
+
+def _pairs(model, rng, uv):
+    n = len(uv)
+    wo = random_dirs(rng, n, hemisphere=True)
+    wo[:, 2] = np.maximum(wo[:, 2], 0.05)
+    wo /= np.linalg.norm(wo, axis=1, keepdims=True)
+    wi = random_dirs(rng, n)
+    s = model.sample(wo, rng.random(n), rng.random((n, 2)), uv=uv)
+    half = np.arange(n) < n // 2
+    wi = np.where((half & s.valid)[:, None], s.wi, wi)
+    return _f32(wo), _f32(wi)
+
+
+GOLD = {"type": "roughconductor", "material": "Au", "distribution": "ggx", "alpha": 0.3}
+
+
+def _model_cases(images):
+    col, rough = images["col"], images["rough"]
+    w = np.random.default_rng(3).uniform(0, 1, (5, 7, 1)).astype(np.float32)
+    nrm = np.random.default_rng(4).normal(0, 0.35, (7, 5, 3))
+    nrm[..., 2] = 1.0
+    nrm /= np.linalg.norm(nrm, axis=-1, keepdims=True)
+    nrm_rgb = ((nrm + 1) / 2).astype(np.float32)
+    height = np.random.default_rng(5).uniform(0, 0.2, (8, 6, 1)).astype(np.float32)
+    return {
+        "diffuse rgb8.png": lambda: {"type": "diffuse", "reflectance": {"type": "bitmap", "filename": "rgb8.png"}},
+        "roughconductor alpha exr, eta/k": lambda: {
+            "type": "roughconductor", "distribution": "ggx",
+            "alpha": {"type": "bitmap", "filename": "rough.exr", "filter_type": "nearest", "wrap_mode": "mirror"},
+            "eta": {"type": "bitmap", "data": mi.TensorXf(col)}, "k": {"type": "rgb", "value": [3.9, 2.4, 2.1]}},
+        "twosided roughconductor alpha_u/v": lambda: {"type": "twosided", "bsdf": {
+            "type": "roughconductor", "distribution": "ggx", "material": "Cu",
+            "alpha_u": {"type": "bitmap", "filename": "rough.exr", "wrap_mode": "clamp"},
+            "alpha_v": {"type": "bitmap", "data": mi.TensorXf(rough[::-1].copy()), "filter_type": "nearest"}}},
+        "roughdielectric alpha luminance": lambda: {
+            "type": "roughdielectric", "distribution": "ggx", "int_ior": 1.5, "ext_ior": 1.0,
+            "alpha": {"type": "bitmap", "data": mi.TensorXf(col / 4)}},
+        "blendbsdf bitmap weight": lambda: {
+            "type": "blendbsdf", "weight": {"type": "bitmap", "data": mi.TensorXf(w), "wrap_mode": "mirror"},
+            "a": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.8, 0.3, 0.1]}}, "b": GOLD},
+        "blendbsdf textured child": lambda: {
+            "type": "blendbsdf", "weight": {"type": "bitmap", "data": mi.TensorXf(w), "wrap_mode": "mirror"},
+            "a": {"type": "diffuse", "reflectance": {"type": "bitmap", "filename": "rgb8.png"}}, "b": GOLD},
+        "mask bitmap opacity": lambda: {
+            "type": "mask", "opacity": {"type": "bitmap", "filename": "grey8.png", "filter_type": "nearest"},
+            "material": GOLD},
+        "twosided two-faced, textured": lambda: {
+            "type": "twosided", "front": {"type": "diffuse", "reflectance": {"type": "bitmap", "filename": "rgb8.png"}},
+            "back": {"type": "roughconductor", "distribution": "ggx", "material": "Al",
+                     "alpha": {"type": "bitmap", "filename": "rough.exr"}}},
+        "normalmap bitmap": lambda: {
+            "type": "normalmap", "normalmap": {"type": "bitmap", "data": mi.TensorXf(nrm_rgb), "raw": True},
+            "bsdf": {"type": "roughconductor", "distribution": "ggx", "material": "Au",
+                     "alpha": {"type": "bitmap", "filename": "rough.exr"}}},
+        "bumpmap bitmap": lambda: {
+            "type": "bumpmap", "height": {"type": "bitmap", "data": mi.TensorXf(height), "raw": True},
+            "scale": 0.5, "bsdf": {"type": "diffuse", "reflectance": {"type": "bitmap", "filename": "rgb8.png"}}},
+        "bumpmap bitmap mirror, scaled to_uv": lambda: {
+            "type": "bumpmap", "height": {"type": "bitmap", "data": mi.TensorXf(height), "raw": True,
+                                          "wrap_mode": "mirror", "to_uv": mi.ScalarTransform4f().scale([2, 0.5, 1])},
+            "bsdf": GOLD},
+    }
+
+
+def _abs_filenames(d, folder):
+    if isinstance(d, dict):
+        out = {k: _abs_filenames(v, folder) for k, v in d.items()}
+        if out.get("type") == "bitmap" and "filename" in out:
+            out["filename"] = os.path.join(folder, out["filename"])
+        return out
+    return d
+
+
+def _well_conditioned(model, wo, wi, uv):
+    """NormalMap / BumpMap: pairs whose shading or geometric cosine of wi is >= 0.02 (Mitsuba's
+    float32 shading frame is ~1e-7 off in a cosine: a relative error above 1e-5 below that; as in
+    tests/models/test_composite_mitsuba.py)."""
+    from bsdfkit.models.normal_map import shading_frame
+    inner = model.at(uv)
+    if not isinstance(inner, (bk.NormalMap, bk.BumpMap)):
+        return np.ones(len(wo), bool)
+    _, _, n = shading_frame(np.broadcast_to(inner._param_arrays()["normals"], wo.shape), wo,
+                            inner.flip_invalid_normals)
+    return (np.abs(wi[:, 2]) >= 0.02) & (np.abs(np.einsum("ij,ij->i", wi, n)) >= 0.02)
+
+
+# A textured child of Mix / TwoSided runs on a subset of the composite's rows (the front / back split,
+# the lobes a blend evaluates), which bsdfkit's composite core refuses for per-element children
+# (_composite_core._check_varying_child): the import is right, the evaluation is the lead's to enable.
+_SUBSET_ROWS = pytest.mark.xfail(raises=NotImplementedError, strict=False,
+                                 reason="composite core: per-element children on a subset of rows")
+
+
+@pytest.mark.parametrize("name", ["diffuse rgb8.png", "roughconductor alpha exr, eta/k",
+                                  "twosided roughconductor alpha_u/v", "roughdielectric alpha luminance",
+                                  "blendbsdf bitmap weight", "mask bitmap opacity",
+                                  pytest.param("blendbsdf textured child", marks=_SUBSET_ROWS),
+                                  pytest.param("twosided two-faced, textured", marks=_SUBSET_ROWS),
+                                  "normalmap bitmap", "bumpmap bitmap", "bumpmap bitmap mirror, scaled to_uv"])
+def test_textured_import_evaluates_as_mitsuba(name, images):
+    """from_mitsuba(dict) evaluated at uv against Mitsuba's BSDF of the same dict at the same uv."""
+    ref.variant()
+    make = _model_cases(images)[name]
+    m = bk.from_mitsuba(make(), base_dir=images["dir"])
+    assert m.textures, m
+    rng = np.random.default_rng(7)
+    uv = _uv(rng, N)
+    wo, wi = _pairs(m, rng, uv)
+    f_mi, p_mi = _mi_eval_pdf(_abs_filenames(make(), images["dir"]), wo, wi, uv)
+    ok = _well_conditioned(m, wo, wi, uv)
+    _check(m.eval(wo, wi, uv=uv), f_mi, f"{name} f", ok)
+    _check(m.pdf(wo, wi, uv=uv), p_mi, f"{name} pdf", ok)
+
+
+def _mi_sample(d, wo, uc, u, uv):
+    mi_, dr = ref._mi()
+    bsdf = mi_.load_dict(d)
+    bs, w = bsdf.sample(mi_.BSDFContext(), _si(wo.astype(np.float32), uv), mi_.Float(uc.astype(np.float32)),
+                        mi_.Point2f(mi_.Float(u[:, 0].astype(np.float32)), mi_.Float(u[:, 1].astype(np.float32))))
+    dr.eval(bs, w)
+    n = len(wo)
+    return ref._np(bs.wo, n, 3), ref._np(bs.pdf, n), ref._np(w, n, 3)
+
+
+def _sampled_cases(images):
+    """Diffuse children only: bsdfkit's and Mitsuba's cosine samplers are the same mapping (their
+    microfacet samplers are not), as tests/models/test_composite_mitsuba.py."""
+    w = mi.TensorXf(np.random.default_rng(3).uniform(0, 1, (5, 7, 1)).astype(np.float32))
+    tex = {"type": "diffuse", "reflectance": {"type": "bitmap", "filename": "rgb8.png", "wrap_mode": "clamp"}}
+    return {
+        "diffuse": lambda: tex,
+        "blendbsdf": lambda: {"type": "blendbsdf", "weight": {"type": "bitmap", "data": mi.TensorXf(w)},
+                              "a": {"type": "diffuse", "reflectance": 0.9},
+                              "b": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.1, 0.7, 0.3]}}},
+        "mask": lambda: {"type": "mask", "opacity": {"type": "bitmap", "filename": "grey8.png"},
+                         "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.8, 0.5, 0.2]}}},
+        "normalmap": lambda: _model_cases(images)["normalmap bitmap"]() | {"bsdf": tex},
+        "bumpmap": lambda: _model_cases(images)["bumpmap bitmap"](),
+    }
+
+
+@pytest.mark.parametrize("name", ["diffuse", "blendbsdf", "mask", "normalmap", "bumpmap"])
+def test_textured_sample_directions_agree(name, images):
+    """The same uniforms at the same uv give Mitsuba's sampled direction, pdf and weight (to
+    float32: 1e-4 on pdf and weight at the float32 direction, as test_composite_mitsuba)."""
+    make = _sampled_cases(images)[name]
+    m = bk.from_mitsuba(make(), base_dir=images["dir"])
+    rng = np.random.default_rng(11)
+    n = 4000
+    uv = _uv(rng, n)
+    wo = random_dirs(rng, n, hemisphere=True)
+    wo[:, 2] = np.maximum(wo[:, 2], 0.05)
+    wo = _f32(wo / np.linalg.norm(wo, axis=1, keepdims=True))
+    uc, u = _f32(rng.random(n)), _f32(rng.random((n, 2)))
+    s = m.sample(wo, uc, u, uv=uv)
+    wi, pdf, weight = _mi_sample(_abs_filenames(make(), images["dir"]), wo, uc, u, uv)
+    valid = np.any(weight != 0, axis=-1)
+    assert np.mean(s.valid != valid) < 1e-3
+    both = s.valid & valid
+    assert both.mean() > 0.5
+    both &= _well_conditioned(m, wo, np.where(both[:, None], s.wi, wo), uv)   # normalmap / bumpmap: see eval
+    dmax = np.abs(s.wi - wi)[both].max()
+    ew, ep = _err(s.weight[both], weight[both]), _err(s.pdf[both], pdf[both])
+    print(f"{name}: sampled wi max |diff| {dmax:.3g}, weight p99.9 {np.quantile(ew, 0.999):.3g}, "
+          f"pdf p99.9 {np.quantile(ep, 0.999):.3g}")
+    assert dmax < 1e-5
+    assert np.quantile(ew, 0.999) <= 1e-4 and np.quantile(ep, 0.999) <= 1e-4
+
+
+def test_scene_file_relative_paths(images, tmp_path):
+    """A scene file whose bitmap filenames are relative to it (read from another working
+    directory), with a ref'd texture, to_uv and a $default: the same models as the dicts."""
+    folder = images["dir"]
+    xml = f"""<scene version="3.0.0">
+  <default name="rough" value="rough.exr"/>
+  <texture type="bitmap" id="albedo">
+    <string name="filename" value="rgb8.png"/>
+    <string name="wrap_mode" value="mirror"/>
+    <transform name="to_uv"><scale x="2" y="3"/><translate x="0.25" y="0.5"/></transform>
+  </texture>
+  <bsdf type="blendbsdf" id="mix">
+    <ref name="weight" id="albedo"/>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.5, 0.2"/></bsdf>
+    <bsdf type="roughconductor"><string name="material" value="Au"/><string name="distribution" value="ggx"/>
+      <float name="alpha" value="0.3"/></bsdf>
+  </bsdf>
+  <bsdf type="roughconductor" id="rough">
+    <string name="material" value="Cu"/><string name="distribution" value="ggx"/>
+    <texture type="bitmap" name="alpha"><string name="filename" value="$rough"/>
+      <string name="filter_type" value="nearest"/></texture>
+  </bsdf>
+  <shape type="sphere"><bsdf type="beckmannish"/></shape>
+</scene>"""
+    path = os.path.join(folder, "scene.xml")
+    with open(path, "w") as fh:
+        fh.write(xml)
+    cwd = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        with pytest.warns(bk.interop.mitsuba.MitsubaSkipWarning, match=r"line 19.*'beckmannish'"):
+            ms = bk.from_mitsuba(path)
+    finally:
+        os.chdir(cwd)
+    assert list(ms) == ["mix", "rough"]
+    albedo = {"type": "bitmap", "filename": os.path.join(folder, "rgb8.png"), "wrap_mode": "mirror",
+              "to_uv": mi.ScalarTransform4f().translate([0.25, 0.5, 0]) @ mi.ScalarTransform4f().scale([2, 3, 1])}
+    dicts = {"mix": {"type": "blendbsdf", "weight": albedo,
+                     "a": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.8, 0.5, 0.2]}}, "b": GOLD},
+             "rough": {"type": "roughconductor", "material": "Cu", "distribution": "ggx",
+                       "alpha": {"type": "bitmap", "filename": os.path.join(folder, "rough.exr"),
+                                 "filter_type": "nearest"}}}
+    rng = np.random.default_rng(8)
+    for name, d in dicts.items():
+        m = ms[name]
+        assert m == bk.from_mitsuba(d)
+        uv = _uv(rng, N)
+        wo, wi = _pairs(m, rng, uv)
+        f_mi, _ = _mi_eval_pdf(d, wo, wi, uv)
+        _check(m.eval(wo, wi, uv=uv), f_mi, f"scene file {name} f")
+
+
+def test_bad_textures_are_named(images, tmp_path):
+    fail_cases = [
+        ({"type": "diffuse", "reflectance": {"type": "bitmap", "filename": "nope.png"}}, FileNotFoundError,
+         ["nope.png", "not found"]),
+        ({"type": "diffuse", "reflectance": {"type": "bitmap", "filename": "rgb8.png", "filter_type": "bicubic"}},
+         ValueError, ["filter_type", "'bicubic'"]),
+        ({"type": "diffuse", "reflectance": {"type": "bitmap", "filename": "rgb8.png", "wrap_mode": "black"}},
+         ValueError, ["wrap_mode", "'black'"]),
+        ({"type": "diffuse", "reflectance": {"type": "bitmap"}}, ValueError, ["exactly one of"]),
+        ({"type": "roughplastic", "distribution": "ggx", "alpha": {"type": "bitmap", "filename": "rough.exr"}},
+         ValueError, ["'alpha'", "roughplastic", "float"]),
+        ({"type": "diffuse", "reflectance": {"type": "bitmap", "filename": "rgb8.png",
+                                             "to_uv": np.array([[1, 0, 0], [0, 1, 0], [0.5, 0, 1.0]])}},
+         ValueError, ["to_uv", "projective"]),
+    ]
+    for d, exc, words in fail_cases:
+        with pytest.raises(exc) as e:
+            bk.from_mitsuba(d, base_dir=images["dir"])
+        for w in words:
+            assert w in str(e.value), (w, str(e.value))
+    bad = tmp_path / "bad.xml"
+    bad.write_text('<scene version="3.0.0"><bsdf type="diffuse" id="a"><rgb name="reflectance" value="0.5"/>')
+    with pytest.raises(ValueError, match="line 1.*not well-formed"):
+        bk.from_mitsuba(str(bad))
