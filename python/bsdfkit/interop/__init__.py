@@ -18,11 +18,12 @@ measured materials, Beckmann roughness, ``specular_reflectance`` tints ...) is r
 """
 
 from ..models._mitsuba_export import MitsubaApproximationWarning, MitsubaExportError
-from .mitsuba import MIRROR_ETA, MITSUBA_IOR, from_mitsuba
+from ._mitsuba_xml import to_mitsuba_file
+from .mitsuba import MIRROR_ETA, MITSUBA_IOR, MitsubaSkipWarning, from_mitsuba
 from .pbrt import (PBRT_GLASS_ETA, PbrtColorSpaceWarning, PbrtMaterial, PbrtMissingIncludeWarning, PbrtParam,
                    PbrtSkipWarning, from_pbrt, parse_pbrt_materials)
 from .spectra import spectrum_to_rgb
 
-__all__ = ["from_mitsuba", "from_pbrt", "parse_pbrt_materials", "PbrtMaterial", "PbrtParam",
+__all__ = ["from_mitsuba", "to_mitsuba_file", "MitsubaSkipWarning", "from_pbrt", "parse_pbrt_materials", "PbrtMaterial", "PbrtParam",
            "spectrum_to_rgb", "MITSUBA_IOR", "PBRT_GLASS_ETA", "MIRROR_ETA", "MitsubaExportError",
            "MitsubaApproximationWarning", "PbrtSkipWarning", "PbrtMissingIncludeWarning", "PbrtColorSpaceWarning"]

@@ -115,10 +115,8 @@ def parse_bitmap(d, where, base_dir, fail) -> MiBitmap:
         ext = Path(path).suffix.lower()
         if raw:
             enc = "linear"
-        elif ext in MI_SRGB_EXTENSIONS:
-            enc = "sRGB"
-        elif ext in MI_LINEAR_EXTENSIONS:
-            enc = "linear"
+        elif ext in MI_SRGB_EXTENSIONS + MI_LINEAR_EXTENSIONS:
+            enc = "auto"   # bk.Texture's auto: integer (PNG, JPEG) images sRGB, float (EXR, HDR, PFM) linear: Mitsuba's
         else:
             fail(where, f"bitmap {path!r}: Mitsuba's colour decoding of {ext!r} files is not known here; "
                  f"give raw=true (no decoding) or a {'/'.join(MI_SRGB_EXTENSIONS + MI_LINEAR_EXTENSIONS)} file")

@@ -48,8 +48,15 @@ _WHY_FLOAT = {(Dielectric, "eta"): "Mitsuba's int_ior is a float", (Plastic, "et
 
 
 class _Ctx:
-    def __init__(self, texture_dir, approximate):
-        self.dir, self.approximate = texture_dir, approximate
+    def __init__(self, texture_dir, approximate, plain=False):
+        self.dir, self.approximate, self.plain = texture_dir, approximate, plain
+
+
+class PlainTransform:
+    """A to_uv transform for the XML writer (``.matrix``: 4x4), where no Mitsuba variant is needed."""
+
+    def __init__(self, matrix):
+        self.matrix = matrix
 
 
 def _name(m):
@@ -68,13 +75,15 @@ def _mi():
     return mi
 
 
-def _to_uv(m, where):
-    mi = _mi()
-    if mi is None:
-        _refuse(where, "a texture transform becomes Mitsuba's to_uv, an mi.ScalarTransform4f: install the mitsuba "
-                "package")
+def _to_uv(m, where, ctx):
     a = np.eye(4)
     a[np.ix_([0, 1, 3], [0, 1, 3])] = np.vstack([m, [0.0, 0.0, 1.0]])   # Mitsuba reads rows/columns 0, 1, 3
+    if ctx.plain:
+        return PlainTransform(a)
+    mi = _mi()
+    if mi is None or not mi.variant():
+        _refuse(where, "a texture transform becomes Mitsuba's to_uv, an mi.ScalarTransform4f: install the mitsuba "
+                "package and select a variant (mi.set_variant)")
     return mi.ScalarTransform4f(a)
 
 
@@ -128,7 +137,7 @@ def _image_bitmap(t, where, ctx):
         elif ext in mt.MI_LINEAR_EXTENSIONS:
             if dec != "linear":
                 _refuse(where, f"{t!r}: Mitsuba reads {ext} files as linear, not {dec!r}")
-            raw = True
+            raw = t.encoding == "linear"   # the same in RGB variants; "auto" comes back as auto
         else:
             _refuse(where, f"{t!r}: Mitsuba's decoding of {ext!r} files is not known here (PNG, JPEG, EXR, HDR, PFM "
                     "are)")
@@ -141,7 +150,7 @@ def _image_bitmap(t, where, ctx):
             px = px[..., t.channel:t.channel + 1]
         d.update(_array_bitmap(px, where, ctx))
     if t.transform is not None:
-        d["to_uv"] = _to_uv(t.transform, where)
+        d["to_uv"] = _to_uv(t.transform, where, ctx)
     return d
 
 
@@ -286,17 +295,17 @@ def _bumpmap(p, ctx):
     h = _array_bitmap(du.height[..., None], "BumpMap(height)", ctx)
     height = {"type": "bitmap", "filter_type": "bilinear", "wrap_mode": du.wrap_mode, **h}
     if du.transform is not None:
-        height["to_uv"] = _to_uv(du.transform, "BumpMap")
+        height["to_uv"] = _to_uv(du.transform, "BumpMap", ctx)
     return {"type": "bumpmap", "height": height, "scale": float(scale),
             "flip_invalid_normals": bool(p.get("flip_invalid_normals", True)),
             "use_shadowing_function": bool(p.get("shadowing", True)), "bsdf": _export(p["model"], ctx)}
 
 
-def textured_to_mitsuba(model, approximate: bool = False, texture_dir=None) -> dict:
+def textured_to_mitsuba(model, approximate: bool = False, texture_dir=None, *, _plain=False) -> dict:
     """The Mitsuba 3 plugin dictionary of a textured model (its textures as ``bitmap`` dicts; see
     the module docstring for what is exported and what is refused). ``texture_dir``: where the
     texels of textures built from arrays are written (EXR files named by content); without it they
     become in-memory ``data`` tensors (the ``mitsuba`` package is needed, and the dict loads in
     this process only). Untextured models are exported by their own ``to_mitsuba``."""
     approximate = _me.check_approximate(approximate)
-    return _export(model, _Ctx(texture_dir, approximate))
+    return _export(model, _Ctx(texture_dir, approximate, _plain))

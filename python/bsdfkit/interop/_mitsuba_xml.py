@@ -275,3 +275,107 @@ def from_mitsuba_file(path, params=None, strict=False):
             warnings.warn(f"from_mitsuba: {path}: skipped BSDF {name!r} (line {d.get(LINE_KEY)}): {e}",
                           MitsubaSkipWarning, stacklevel=3)
     return out
+
+
+# --------------------------------------------------------------------------------------- writing
+
+_BSDF_KEYS_TEXTURE = ("bitmap", "checkerboard", "mesh_attribute")
+
+
+def _xml_attr(s) -> str:
+    return (str(s).replace("&", "&amp;").replace('"', "&quot;").replace("<", "&lt;").replace(">", "&gt;"))
+
+
+def _fmt_num(x) -> str:
+    return repr(float(x))
+
+
+def _xml_value(name, v, folder, texture_dir, indent, where):
+    """One property or nested object of a plugin dict as XML lines."""
+    pad = "  " * indent
+    na = f' name="{_xml_attr(name)}"' if name is not None else ""
+    if isinstance(v, dict):
+        kind = v.get("type")
+        if kind in ("rgb", "srgb") and set(v) <= {"type", "value", "color"}:
+            val = np.broadcast_to(np.asarray(v.get("value", v.get("color")), np.float64).reshape(-1), (3,))
+            return [f'{pad}<rgb{na} value="{", ".join(_fmt_num(x) for x in val)}"/>']
+        if kind == "spectrum" and set(v) <= {"type", "value"} and np.ndim(v["value"]) == 0:
+            return [f'{pad}<spectrum{na} value="{_fmt_num(v["value"])}"/>']
+        tag = "texture" if kind in _BSDF_KEYS_TEXTURE else "bsdf"
+        v = dict(v)
+        if kind == "bitmap" and "data" in v:   # an in-memory tensor: written as an EXR file
+            from .. import _render_ext
+            from .._values import digest
+            px = np.ascontiguousarray(np.array(v.pop("data")), dtype=np.float32)
+            os.makedirs(texture_dir, exist_ok=True)
+            path = os.path.join(texture_dir, f"bsdfkit-{digest(px)}.exr")
+            if not os.path.exists(path):
+                _render_ext.load().write_image(path, px)
+            v["filename"], v["raw"] = path, True
+        if kind == "bitmap" and "bitmap" in v:
+            raise ValueError(f"to_mitsuba_file: {where}: an in-memory mi.Bitmap has no file to refer to")
+        if kind == "bitmap" and isinstance(v.get("filename"), str):
+            fn = os.path.abspath(v["filename"])
+            rel = os.path.relpath(fn, folder)
+            v["filename"] = fn if rel.startswith("..") else rel.replace(os.sep, "/")
+        lines = [f'{pad}<{tag} type="{_xml_attr(kind)}"{na}>']
+        for k, x in v.items():
+            if k in ("type", LINE_KEY):
+                continue
+            lines += _xml_value(None if k.startswith("_arg_") else k, x, folder, texture_dir, indent + 1,
+                                f"{where}.{k}")
+        return lines + [f"{pad}</{tag}>"]
+    if isinstance(v, (bool, np.bool_)):
+        return [f'{pad}<boolean{na} value="{"true" if v else "false"}"/>']
+    if isinstance(v, (int, np.integer)):
+        return [f'{pad}<integer{na} value="{int(v)}"/>']
+    if isinstance(v, (float, np.floating)):
+        return [f'{pad}<float{na} value="{_fmt_num(v)}"/>']
+    if isinstance(v, str):
+        return [f'{pad}<string{na} value="{_xml_attr(v)}"/>']
+    m = getattr(v, "matrix", None)
+    if m is not None:   # a Mitsuba transform (to_uv)
+        a = np.array(m, np.float64)
+        if a.shape == (3, 3):
+            b = np.eye(4)
+            b[np.ix_([0, 1, 3], [0, 1, 3])] = a
+            a = b
+        return [f'{pad}<transform{na}>', f'{pad}  <matrix value="{" ".join(_fmt_num(x) for x in a.reshape(-1))}"/>',
+                f"{pad}</transform>"]
+    a = np.asarray(v, dtype=np.float64)
+    if a.shape == (3,):
+        return [f'{pad}<rgb{na} value="{", ".join(_fmt_num(x) for x in a)}"/>']
+    raise ValueError(f"to_mitsuba_file: {where}: cannot write {type(v).__name__} {v!r} as Mitsuba XML"[:300])
+
+
+def to_mitsuba_file(models, path, *, texture_dir=None, approximate=False):
+    """Write models as a Mitsuba 3 scene file of ``<bsdf id=...>`` elements (``mi.load_file``
+    parses it; ``from_mitsuba(path)`` reads it back): ``models`` is ``{id: model}`` (or one model,
+    id ``"bsdf"``). Each is exported by its ``to_mitsuba`` (textured models: image files are
+    referenced relative to the file when inside its folder, absolute otherwise; textures built
+    from arrays are written as EXR files into ``texture_dir``, default the file's folder).
+    Returns the path."""
+    from ..models.base import BxDF
+    if isinstance(models, BxDF):
+        models = {"bsdf": models}
+    if not isinstance(models, dict) or not all(isinstance(m, BxDF) for m in models.values()):
+        raise TypeError("to_mitsuba_file: models: expected a bsdfkit model or a dict {id: model}")
+    path = os.path.abspath(os.fspath(path))
+    folder = os.path.dirname(path)
+    texture_dir = os.path.abspath(os.fspath(texture_dir)) if texture_dir is not None else folder
+    lines = ['<scene version="3.0.0">']
+    for name, m in models.items():
+        if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_.\-]*", name):
+            raise ValueError(f"to_mitsuba_file: model id {name!r}: expected an XML-safe name (letters, digits, _ . -)")
+        if getattr(m, "textures", None):
+            from ._mitsuba_textured_export import textured_to_mitsuba
+            d = textured_to_mitsuba(m, approximate, texture_dir, _plain=True)
+        else:
+            d = m.to_mitsuba(approximate=approximate)
+        body = _xml_value(None, d, folder, texture_dir, 1, name)
+        body[0] = body[0][:-1] + f' id="{_xml_attr(name)}">'
+        lines += body
+    lines.append("</scene>")
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write("\n".join(lines) + "\n")
+    return path
