@@ -514,7 +514,8 @@ def test_export_refusals(images):
         (bk.Diffuse(bk.Texture(png, wrap="black")), ["repeat", "'black'"]),
         (bk.Diffuse(bk.Texture(png, wrap=("clamp", "periodic"))), ["one for u and v"]),
         (bk.Diffuse(bk.Texture(png, encoding="gamma 2.2")), ["sRGB", "gamma 2.2"]),
-        (bk.Diffuse(tx.Checkerboard(0.2, 0.8)), ["Checkerboard", "no Mitsuba bitmap"]),
+        (bk.Diffuse(tx.Mix(0.2, bk.Texture(png), 0.3)), ["Mix", "no Mitsuba bitmap"]),
+        (bk.Mask(bk.Diffuse(0.5), tx.Checkerboard(0.2, 0.8)), ["Checkerboard", "no Mitsuba bitmap"]),
         (bk.Dielectric(bk.Texture(np.full((2, 2), 1.5)), alpha=0.3, masking="separable"), ["'eta'", "int_ior"]),
         (bk.Plastic(0.5, alpha=bk.Texture(np.full((2, 2), 0.3)), masking="separable"), ["'alpha'", "roughplastic"]),
         (bk.Conductor.from_metal("Au", alpha=bk.Texture(png, channel=0), masking="separable"),
@@ -570,3 +571,26 @@ def test_scene_file_export_loads_in_mitsuba(images, tmp_path):
         f = m.eval(wo, wi, uv=uv)
         _check(f, f_mi, f"{k}: bsdfkit vs mi.load_file, f", ok)
         np.testing.assert_allclose(back[k].eval(wo, wi, uv=uv), f, rtol=1e-6, atol=1e-12)
+
+
+def test_checkerboard_colours(images, tmp_path):
+    """Mitsuba's checkerboard (colour parameters) is pbrt-v4's with uscale = vscale = 2 (to_uv:
+    scales and deltas), both ways; a float parameter's checkerboard is refused (Mitsuba 3.9's
+    eval_1 of it returns the other square, measured: see _mitsuba_texture.checkerboard_texture)."""
+    from bsdfkit import textures as tx
+    rng = np.random.default_rng(51)
+    uv = _uv(rng, 4000)
+    c0, c1 = {"type": "rgb", "value": [0.9, 0.1, 0.2]}, 0.3
+    d = {"type": "diffuse", "reflectance": {"type": "checkerboard", "color0": c0, "color1": c1,
+                                            "to_uv": mi.ScalarTransform4f().translate([0.1, -0.3, 0]) @
+                                            mi.ScalarTransform4f().scale([3, 1.5, 1])}}
+    m = bk.from_mitsuba(d)
+    assert m == bk.Diffuse(tx.Checkerboard([0.9, 0.1, 0.2], [0.3, 0.3, 0.3], uscale=6, vscale=3,   # float32 to_uv
+                                           udelta=2 * float(_f32(0.1)), vdelta=2 * float(_f32(-0.3))))
+    theirs = _mi_texture(d["reflectance"], uv, 3)
+    _check(m.at(uv).reflectance, theirs, "checkerboard lookups")
+    wo, wi = _pairs(m, rng, uv)
+    f_mi, _ = _mi_eval_pdf(m.to_mitsuba(), wo, wi, uv)
+    _check(m.eval(wo, wi, uv=uv), f_mi, "checkerboard diffuse, exported, f")
+    with pytest.raises(ValueError, match="eval_1 swaps"):
+        bk.from_mitsuba({"type": "roughconductor", "distribution": "ggx", "alpha": {"type": "checkerboard"}})

@@ -160,7 +160,7 @@ def test_from_mitsuba_composites():
         ({"type": "blendbsdf", "weight": {"type": "checkerboard"}, "a": inner, "b": inner},
          ["'weight'", "texture", "'checkerboard'"]),
         ({"type": "blendbsdf", "a": inner}, ["two nested"]),
-        ({"type": "normalmap", "normalmap": {"type": "checkerboard"}, "bsdf": inner},
+        ({"type": "normalmap", "normalmap": {"type": "mesh_attribute", "name": "n"}, "bsdf": inner},
          ["'normalmap'", "texture"]),
         ({"type": "twosided", "bsdf": {"type": "roughdielectric", "distribution": "ggx"}},
          ["twosided", "'roughdielectric'", "transmit"]),

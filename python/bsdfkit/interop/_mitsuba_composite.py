@@ -94,7 +94,7 @@ def mi_normalmap(d, where, build, fail, to_color):
     if isinstance(v, dict) and not isinstance(v.get("type"), str):
         fail(where, f"parameter 'normalmap': the value dict's 'type' must be a string, got "
              f"{type(v.get('type')).__name__}")
-    if isinstance(v, dict) and v["type"] == "bitmap":   # n = normalize(2 rgb - 1) of the filtered rgb, as Mitsuba
+    if isinstance(v, dict) and v["type"] in ("bitmap", "checkerboard"):   # n = normalize(2 rgb - 1), as Mitsuba
         from ..textures import Normals
         from .mitsuba import _mi_texture
         tex = _mi_texture(v, where, "normalmap", 3)

@@ -271,3 +271,26 @@ def height_gradients(bm: MiBitmap, fail):
     return (cls(h, 0, _WRAP_MI[bm.wrap], bm.transform), cls(h, 1, _WRAP_MI[bm.wrap], bm.transform))
 
 
+
+
+def checkerboard_texture(d, where, channels, fail, color):
+    """Mitsuba 3's ``checkerboard`` (``color0`` 0.4, ``color1`` 0.2, ``to_uv``) -> pbrt-v4's
+    ``tx.Checkerboard`` with uscale = vscale = 2: Mitsuba picks color0 where the fractional parts
+    of u and v are both above or both at most 1/2, i.e. where floor(2u) + floor(2v) is even (they
+    differ only on the lines u, v = k / 2); to_uv (scale and translation) gives the scales and
+    deltas. Colour parameters only: Mitsuba 3.9's ``eval_1`` of a checkerboard (a float
+    parameter) returns the other square's value, as the mean of its RGB (measured), which is not
+    reproduced."""
+    from ..textures import Checkerboard
+    if channels == 1:
+        fail(where, "a checkerboard for a float parameter: Mitsuba 3.9's checkerboard eval_1 swaps the two squares "
+             "(and takes the mean of an RGB colour); only colour parameters take a checkerboard here")
+    extra = [k for k in d if k not in ("type", "id", "color0", "color1", "to_uv", "__line__")]
+    if extra:
+        fail(where, f"checkerboard: unsupported parameters {extra}; checkerboard takes color0, color1, to_uv")
+    c0 = color(d.get("color0", 0.4), where, "color0", bounded=False)
+    c1 = color(d.get("color1", 0.2), where, "color1", bounded=False)
+    m = _matrix(d["to_uv"], where, fail) if "to_uv" in d else np.array([[1.0, 0, 0], [0, 1.0, 0]])
+    if m[0, 1] != 0 or m[1, 0] != 0:
+        fail(where, f"checkerboard: a to_uv with rotation or shear ({m.tolist()}) has no pbrt-style checkerboard")
+    return Checkerboard(c0, c1, uscale=2 * m[0, 0], vscale=2 * m[1, 1], udelta=2 * m[0, 2], vdelta=2 * m[1, 2])

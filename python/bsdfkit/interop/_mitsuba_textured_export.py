@@ -167,6 +167,16 @@ def _texture_value(v, where, channels, ctx):
         if channels != 1:
             _refuse(where, f"{v!r}: a luminance texture for a colour parameter")
         return _image_bitmap(v.tex, where, ctx)
+    if isinstance(v, tx.Checkerboard) and channels == 3:
+        if not (isinstance(v.tex1, tx.Constant) and isinstance(v.tex2, tx.Constant)):
+            _refuse(where, f"{v!r}: Mitsuba's checkerboard takes constant colours here")
+        # Mitsuba: color0 where floor(2u') + floor(2v') is even, uv' = to_uv(uv) (see _mitsuba_texture)
+        m = np.array([[v.uscale / 2, 0.0, v.udelta / 2], [0.0, v.vscale / 2, v.vdelta / 2]])
+        d = {"type": "checkerboard", "color0": _texture_value(v.tex1, where, 3, ctx),
+             "color1": _texture_value(v.tex2, where, 3, ctx)}
+        if not np.array_equal(m, np.eye(3)[:2]):
+            d["to_uv"] = _to_uv(m, where, ctx)
+        return d
     if isinstance(v, tx.Texture):
         if channels == 1 and v.channels != 1:
             _refuse(where, f"{v!r}: a {v.channels}-channel texture for a float parameter")

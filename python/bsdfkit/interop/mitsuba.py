@@ -156,12 +156,15 @@ def _mi_float(v, where, param):
 
 
 def _is_texture_dict(v) -> bool:
-    return isinstance(v, dict) and isinstance(v.get("type"), str) and v["type"] == "bitmap"
+    return isinstance(v, dict) and isinstance(v.get("type"), str) and v["type"] in ("bitmap", "checkerboard")
 
 
 def _mi_texture(v, where, param, channels):
-    """A Mitsuba ``bitmap`` value -> ``bk.Texture`` (``interop/_mitsuba_texture.py``)."""
+    """A Mitsuba ``bitmap`` (``checkerboard``) value -> ``bk.Texture`` (``tx.Checkerboard``);
+    ``interop/_mitsuba_texture.py``."""
     from . import _mitsuba_texture as mt
+    if v["type"] == "checkerboard":
+        return mt.checkerboard_texture(v, f"{where}: parameter {param!r}", channels, _mi_fail, _mi_color)
     bm = mt.parse_bitmap(v, f"{where}: parameter {param!r}", _BASE_DIR.get(), _mi_fail)
     return mt.bitmap_texture(bm, channels, _mi_fail)
 
