@@ -1,7 +1,9 @@
 """Scene materials in (one module per source: ``mitsuba``, ``pbrt``; ``spectra`` for spectral data): Mitsuba 3 plugin dictionaries and pbrt-v4 scene text as bsdfkit models.
 
 * :func:`from_mitsuba` turns a Mitsuba 3 BSDF dictionary (what ``mi.load_dict`` takes) into a
-  model; it inverts :func:`bsdfkit.testing.mitsuba.to_mitsuba`.
+  model, ``bitmap`` textures into ``bk.Texture`` values; it inverts
+  :func:`bsdfkit.testing.mitsuba.to_mitsuba`. Given a scene file (``.xml``) it returns
+  ``{id: model}``; :func:`to_mitsuba_file` writes one.
 * :func:`from_pbrt` reads the ``Material`` / ``MakeNamedMaterial`` statements of pbrt-v4 scene
   text; :func:`parse_pbrt_materials` gives the parsed statements (type, parameters, line, how
   many shapes use them) without converting them.
@@ -12,8 +14,8 @@
 * :func:`spectrum_to_rgb` projects a wavelength/value spectrum to linear sRGB the way Mitsuba's
   RGB variants do, so spectra in either format give the RGB values Mitsuba would use.
 
-Only what bsdfkit can represent exactly is accepted; everything else (textures, layered and
-measured materials, Beckmann roughness, ``specular_reflectance`` tints ...) is refused with a
+Only what bsdfkit can represent exactly is accepted; everything else (procedural textures but
+Mitsuba's checkerboard, layered materials, Beckmann roughness, ``specular_reflectance`` tints ...) is refused with a
 ``ValueError`` that names the plugin or material, the parameter and what is supported.
 """
 
