@@ -231,6 +231,13 @@ def _mi_alphas(d, where):
     return ax, ay
 
 
+def _alpha_kw(ax, ay):
+    """Constructor keywords of the alphas: one texture for both (Mitsuba's ``alpha``) as ``alpha=``."""
+    if ax is ay and not isinstance(ax, float):
+        return {"alpha": ax}
+    return {"alpha_x": ax, "alpha_y": ay}
+
+
 def _mi_build(where, fn):
     """Run a model constructor, prefixing its validation errors with the plugin path."""
     try:
@@ -263,7 +270,7 @@ def _mi_conductor(d, where, rough):
     _mi_unit(d, where, "specular_reflectance")
     if rough:
         ax, ay = _mi_alphas(d, where)
-        return _mi_build(where, lambda: Conductor(eta, k, alpha_x=ax, alpha_y=ay, masking="separable"))
+        return _mi_build(where, lambda: Conductor(eta, k, **_alpha_kw(ax, ay), masking="separable"))
     return _mi_build(where, lambda: Conductor(eta, k))
 
 
@@ -356,7 +363,7 @@ def _mi_plugin(d, where, ctx):
         return _mi_build(label, lambda: Dielectric(eta))
     if kind == "roughdielectric":
         ax, ay = _mi_alphas(d, label)
-        return _mi_build(label, lambda: Dielectric(eta, alpha_x=ax, alpha_y=ay, masking="separable"))
+        return _mi_build(label, lambda: Dielectric(eta, **_alpha_kw(ax, ay), masking="separable"))
     return _mi_build(label, lambda: ThinDielectric(eta))
 
 
