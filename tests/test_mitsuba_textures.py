@@ -409,6 +409,10 @@ def test_bad_textures_are_named(images, tmp_path):
             bk.from_mitsuba(d, base_dir=images["dir"])
         for w in words:
             assert w in str(e.value), (w, str(e.value))
+    loaded = mi.load_dict({"type": "twosided", "bsdf": {"type": "roughconductor", "distribution": "ggx", "alpha": {
+        "type": "bitmap", "filename": os.path.join(images["dir"], "rough.exr")}}})
+    with pytest.raises(ValueError, match="loaded Mitsuba BSDF.*bitmap textures.*plugin dict"):
+        bk.from_mitsuba(loaded)
     bad = tmp_path / "bad.xml"
     bad.write_text('<scene version="3.0.0"><bsdf type="diffuse" id="a"><rgb name="reflectance" value="0.5"/>')
     with pytest.raises(ValueError, match="line 1.*not well-formed"):

@@ -580,6 +580,11 @@ def _loaded_to_dict(bsdf) -> dict:
         raise ValueError(f"from_mitsuba: cannot read the parameters of the loaded Mitsuba BSDF {name!r} "
                          f"(mi.traverse: {e})") from None
     text = str(bsdf)
+    tex = sorted({k.rsplit(".", 1)[0] for k in vals if k.endswith((".data", ".to_uv"))})
+    if tex or "BitmapTexture[" in text:
+        raise ValueError(f"from_mitsuba: the loaded Mitsuba BSDF {name!r} has bitmap textures ({', '.join(tex)}): a "
+                         "loaded bitmap keeps neither its file name nor its filter and wrap modes; pass the plugin "
+                         "dict (mi.load_dict's argument) or the scene file instead")
     if name.startswith("TwoSided"):
         kids = re.findall(r"brdf\[(\d)\] = (\w+)\[", text)
         cls = dict(kids).get("0")
