@@ -147,7 +147,7 @@ class _Reader:
                 t = np.diag(list(s) + [1.0])
             elif op.tag == "rotate":
                 axis = np.array(_xyz(a, 0.0, self.where(op)))
-                ang = np.radians(float(a.get("angle", 0)))
+                ang = np.radians(_floats(a.get("angle", "0"), self.where(op))[0] if a.get("angle", "0").strip() else 0.0)
                 nrm = np.linalg.norm(axis)
                 if nrm == 0:
                     raise MitsubaXMLError(f"{self.where(op)}: <rotate> needs a nonzero axis")
