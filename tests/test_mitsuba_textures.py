@@ -102,6 +102,10 @@ def images(tmp_path_factory, _variant):
     col = rng.uniform(0.1, 2.5, (H, W, 3)).astype(np.float32)
     Image.fromarray(rgb8).save(d / "rgb8.png")
     Image.fromarray(grey8).save(d / "grey8.png")
+    nrm = rng.normal(0, 0.4, (H, W, 3))
+    nrm[..., 2] = 1.0
+    nrm /= np.linalg.norm(nrm, axis=-1, keepdims=True)
+    Image.fromarray(np.round((nrm + 1) / 2 * 255).astype(np.uint8)).save(d / "normals8.png")
     mi.Bitmap(rough).write(str(d / "rough.exr"))
     mi.Bitmap(col).write(str(d / "col.exr"))
     return {"dir": str(d), "rgb8": rgb8, "grey8": grey8, "rough": rough, "col": col}
@@ -225,6 +229,12 @@ def _model_cases(images):
         "bumpmap bitmap": lambda: {
             "type": "bumpmap", "height": {"type": "bitmap", "data": mi.TensorXf(height), "raw": True},
             "scale": 0.5, "bsdf": {"type": "diffuse", "reflectance": {"type": "bitmap", "filename": "rgb8.png"}}},
+        "bumpmap grey8.png (sRGB-decoded heights)": lambda: {
+            "type": "bumpmap", "height": {"type": "bitmap", "filename": "grey8.png", "wrap_mode": "clamp"},
+            "scale": 0.05, "bsdf": GOLD},
+        "normalmap normals8.png raw": lambda: {
+            "type": "normalmap", "normalmap": {"type": "bitmap", "filename": "normals8.png", "raw": True,
+                                               "filter_type": "nearest"}, "bsdf": {"type": "diffuse"}},
         "bumpmap bitmap mirror, scaled to_uv": lambda: {
             "type": "bumpmap", "height": {"type": "bitmap", "data": mi.TensorXf(height), "raw": True,
                                           "wrap_mode": "mirror", "to_uv": mi.ScalarTransform4f().scale([2, 0.5, 1])},
@@ -266,7 +276,8 @@ _SUBSET_ROWS = pytest.mark.xfail(raises=NotImplementedError, strict=False,
                                   "blendbsdf bitmap weight", "mask bitmap opacity",
                                   pytest.param("blendbsdf textured child", marks=_SUBSET_ROWS),
                                   pytest.param("twosided two-faced, textured", marks=_SUBSET_ROWS),
-                                  "normalmap bitmap", "bumpmap bitmap", "bumpmap bitmap mirror, scaled to_uv"])
+                                  "normalmap bitmap", "normalmap normals8.png raw", "bumpmap bitmap",
+                                  "bumpmap grey8.png (sRGB-decoded heights)", "bumpmap bitmap mirror, scaled to_uv"])
 def test_textured_import_evaluates_as_mitsuba(name, images):
     """from_mitsuba(dict) evaluated at uv against Mitsuba's BSDF of the same dict at the same uv."""
     ref.variant()
@@ -447,6 +458,7 @@ def _compare_mitsuba(d_ours, d_ref, m, name, rng, bk_too=True):
                                          "twosided roughconductor alpha_u/v", "blendbsdf bitmap weight",
                                          "blendbsdf textured child", "mask bitmap opacity",
                                          "twosided two-faced, textured", "normalmap bitmap", "bumpmap bitmap",
+                                         "normalmap normals8.png raw", "bumpmap grey8.png (sRGB-decoded heights)",
                                          "bumpmap bitmap mirror, scaled to_uv"]))
 def test_import_export_round_trip(name, images, tmp_path):
     """from_mitsuba(d).to_mitsuba(texture_dir=...) loads in Mitsuba and evaluates as d (in-memory

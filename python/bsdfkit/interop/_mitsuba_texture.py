@@ -199,17 +199,21 @@ def bitmap_texture(bm: MiBitmap, channels: int, fail):
 def height_texels(bm: MiBitmap, fail) -> np.ndarray:
     """The one-channel texels (H, W), float32-rounded as Mitsuba stores them, of a height bitmap:
     decoded per ``encoding``, the luminance of an RGB(A) one (Mitsuba's eval_1)."""
+    enc = bm.encoding
     if isinstance(bm.source, str):
         from .. import _render_ext
         try:
-            px = np.asarray(_render_ext.load().read_image(bm.source), np.float64)
+            render = _render_ext.load()
+            px = np.asarray(render.read_image(bm.source), np.float64)
+            if enc == "auto":   # bk.Texture's rule (Mitsuba's): integer images sRGB, float ones linear
+                enc = "sRGB" if render.image_info(bm.source)[3] in ("uint8", "uint16", "int8", "int16") else "linear"
         except (RuntimeError, OSError) as e:
             fail(bm.where, f"bitmap {bm.source!r}: cannot read the image ({e})")
     else:
         px = np.asarray(bm.source, np.float64)
     if px.ndim == 2:
         px = px[..., None]
-    if bm.encoding == "sRGB":
+    if enc == "sRGB":
         from ..io import srgb_to_linear
         px = srgb_to_linear(px)
     px = px.astype(np.float32).astype(np.float64)
