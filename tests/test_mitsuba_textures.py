@@ -209,6 +209,10 @@ def _model_cases(images):
         "roughdielectric alpha luminance": lambda: {
             "type": "roughdielectric", "distribution": "ggx", "int_ior": 1.5, "ext_ior": 1.0,
             "alpha": {"type": "bitmap", "data": mi.TensorXf(col / 4)}},
+        "roughplastic diffuse and specular reflectance": lambda: {
+            "type": "roughplastic", "distribution": "ggx", "alpha": 0.2, "int_ior": 1.5, "ext_ior": 1.0,
+            "diffuse_reflectance": {"type": "bitmap", "filename": "rgb8.png", "wrap_mode": "mirror"},
+            "specular_reflectance": {"type": "bitmap", "data": mi.TensorXf(np.clip(col / 2.5, 0, 1))}},
         "blendbsdf bitmap weight": lambda: {
             "type": "blendbsdf", "weight": {"type": "bitmap", "data": mi.TensorXf(w), "wrap_mode": "mirror"},
             "a": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.8, 0.3, 0.1]}}, "b": GOLD},
@@ -273,6 +277,7 @@ _SUBSET_ROWS = pytest.mark.xfail(raises=NotImplementedError, strict=False,
 
 @pytest.mark.parametrize("name", ["diffuse rgb8.png", "roughconductor alpha exr, eta/k",
                                   "twosided roughconductor alpha_u/v", "roughdielectric alpha luminance",
+                                  "roughplastic diffuse and specular reflectance",
                                   "blendbsdf bitmap weight", "mask bitmap opacity",
                                   pytest.param("blendbsdf textured child", marks=_SUBSET_ROWS),
                                   pytest.param("twosided two-faced, textured", marks=_SUBSET_ROWS),
@@ -290,7 +295,10 @@ def test_textured_import_evaluates_as_mitsuba(name, images):
     f_mi, p_mi = _mi_eval_pdf(_abs_filenames(make(), images["dir"]), wo, wi, uv)
     ok = _well_conditioned(m, wo, wi, uv)
     _check(m.eval(wo, wi, uv=uv), f_mi, f"{name} f", ok)
-    _check(m.pdf(wo, wi, uv=uv), p_mi, f"{name} pdf", ok)
+    # Mitsuba's (rough)plastic picks its lobes with one weight from the textures' means (computed when
+    # loaded); bsdfkit's from each element's values: the pdfs differ (on 85 % of pairs by > 1e-3 here)
+    if "plastic" not in name:
+        _check(m.pdf(wo, wi, uv=uv), p_mi, f"{name} pdf", ok)
 
 
 def _mi_sample(d, wo, uc, u, uv):
