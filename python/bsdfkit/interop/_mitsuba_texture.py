@@ -1,5 +1,5 @@
-"""Mitsuba 3 ``bitmap`` textures <-> bsdfkit textures, for :func:`bsdfkit.from_mitsuba` and the
-textured ``to_mitsuba`` export (:func:`bitmap_dict`).
+"""Mitsuba 3 ``bitmap`` (and colour ``checkerboard``) textures -> bsdfkit textures, for
+:func:`bsdfkit.from_mitsuba` (the other way: ``_mitsuba_textured_export``).
 
 Mitsuba 3.9's ``bitmap`` (measured with the installed Mitsuba, see tests/test_mitsuba_textures.py):
 
