@@ -268,19 +268,11 @@ def _well_conditioned(model, wo, wi, uv):
     return (np.abs(wi[:, 2]) >= 0.02) & (np.abs(np.einsum("ij,ij->i", wi, n)) >= 0.02)
 
 
-# A textured child of Mix / TwoSided runs on a subset of the composite's rows (the front / back split,
-# the lobes a blend evaluates), which bsdfkit's composite core refuses for per-element children
-# (_composite_core._check_varying_child): the import is right, the evaluation is the lead's to enable.
-_SUBSET_ROWS = pytest.mark.xfail(raises=NotImplementedError, strict=False,
-                                 reason="composite core: per-element children on a subset of rows")
-
-
 @pytest.mark.parametrize("name", ["diffuse rgb8.png", "roughconductor alpha exr, eta/k",
                                   "twosided roughconductor alpha_u/v", "roughdielectric alpha luminance",
                                   "roughplastic diffuse and specular reflectance",
                                   "blendbsdf bitmap weight", "mask bitmap opacity",
-                                  pytest.param("blendbsdf textured child", marks=_SUBSET_ROWS),
-                                  pytest.param("twosided two-faced, textured", marks=_SUBSET_ROWS),
+                                  "blendbsdf textured child", "twosided two-faced, textured",
                                   "normalmap bitmap", "normalmap normals8.png raw", "bumpmap bitmap",
                                   "bumpmap grey8.png (sRGB-decoded heights)", "bumpmap bitmap mirror, scaled to_uv"])
 def test_textured_import_evaluates_as_mitsuba(name, images):
@@ -321,14 +313,15 @@ def _sampled_cases(images):
         "blendbsdf": lambda: {"type": "blendbsdf", "weight": {"type": "bitmap", "data": mi.TensorXf(w)},
                               "a": {"type": "diffuse", "reflectance": 0.9},
                               "b": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.1, 0.7, 0.3]}}},
-        "mask": lambda: {"type": "mask", "opacity": {"type": "bitmap", "filename": "grey8.png"},
-                         "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.8, 0.5, 0.2]}}},
+        "mask": lambda: {"type": "mask", "opacity": {"type": "bitmap", "filename": "grey8.png"}, "bsdf": tex},
+        "twosided": lambda: {"type": "twosided", "front": tex, "back": {"type": "diffuse", "reflectance": {
+            "type": "bitmap", "data": mi.TensorXf(w), "filter_type": "nearest"}}},
         "normalmap": lambda: _model_cases(images)["normalmap bitmap"]() | {"bsdf": tex},
         "bumpmap": lambda: _model_cases(images)["bumpmap bitmap"](),
     }
 
 
-@pytest.mark.parametrize("name", ["diffuse", "blendbsdf", "mask", "normalmap", "bumpmap"])
+@pytest.mark.parametrize("name", ["diffuse", "blendbsdf", "mask", "twosided", "normalmap", "bumpmap"])
 def test_textured_sample_directions_agree(name, images):
     """The same uniforms at the same uv give Mitsuba's sampled direction, pdf and weight (to
     float32: 1e-4 on pdf and weight at the float32 direction, as test_composite_mitsuba)."""
@@ -340,6 +333,8 @@ def test_textured_sample_directions_agree(name, images):
     wo = random_dirs(rng, n, hemisphere=True)
     wo[:, 2] = np.maximum(wo[:, 2], 0.05)
     wo = _f32(wo / np.linalg.norm(wo, axis=1, keepdims=True))
+    if name == "twosided":   # both faces
+        wo[::2, 2] *= -1
     uc, u = _f32(rng.random(n)), _f32(rng.random((n, 2)))
     s = m.sample(wo, uc, u, uv=uv)
     wi, pdf, weight = _mi_sample(_abs_filenames(make(), images["dir"]), wo, uc, u, uv)
@@ -444,22 +439,13 @@ def _compare_mitsuba(d_ours, d_ref, m, name, rng, bk_too=True):
     """Mitsuba's BSDF of the exported dict against Mitsuba's of the reference dict (and against
     bsdfkit's model) at the same uv and directions."""
     uv = _uv(rng, N)
-    try:
-        wo, wi = _pairs(m, rng, uv)
-    except NotImplementedError:   # a textured child inside Mix / TwoSided (see _SUBSET_ROWS)
-        bk_too = False
-        wo, wi = _f32(random_dirs(rng, N, hemisphere=True)), _f32(random_dirs(rng, N))
+    wo, wi = _pairs(m, rng, uv)
     f_exp, p_exp = _mi_eval_pdf(d_ours, wo, wi, uv)
     f_ref, p_ref = _mi_eval_pdf(d_ref, wo, wi, uv)
     _check(f_exp, f_ref, f"{name}: exported vs original dict, f")
     _check(p_exp, p_ref, f"{name}: exported vs original dict, pdf")
     if bk_too:
-        try:
-            ours = m.eval(wo, wi, uv=uv)
-        except NotImplementedError as e:   # a textured child inside Mix / TwoSided (see _SUBSET_ROWS)
-            assert "inside a composite" in str(e)
-            return
-        _check(ours, f_exp, f"{name}: bsdfkit vs exported dict, f", _well_conditioned(m, wo, wi, uv))
+        _check(m.eval(wo, wi, uv=uv), f_exp, f"{name}: bsdfkit vs exported dict, f", _well_conditioned(m, wo, wi, uv))
 
 
 @pytest.mark.parametrize("name", sorted(["diffuse rgb8.png", "roughconductor alpha exr, eta/k",
