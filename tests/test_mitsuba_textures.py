@@ -381,8 +381,10 @@ def test_scene_file_relative_paths(images, tmp_path):
     cwd = os.getcwd()
     os.chdir(tmp_path)
     try:
-        with pytest.warns(bk.interop.mitsuba.MitsubaSkipWarning, match=r"line 19.*'beckmannish'"):
+        with pytest.warns(bk.interop.mitsuba.MitsubaSkipWarning, match=r"line 19.*'beckmannish'") as rec:
             ms = bk.from_mitsuba(path)
+        w = rec[0].message
+        assert (w.material, w.line, w.file) == ("shape 0 (line 19)", 19, path) and "unsupported plugin" in w.reason
     finally:
         os.chdir(cwd)
     assert list(ms) == ["mix", "rough"]

@@ -272,8 +272,9 @@ def from_mitsuba_file(path, params=None, strict=False):
         except (ValueError, NotImplementedError, FileNotFoundError, TypeError) as e:
             if strict:
                 raise
-            warnings.warn(f"from_mitsuba: {path}: skipped BSDF {name!r} (line {d.get(LINE_KEY)}): {e}",
-                          MitsubaSkipWarning, stacklevel=3)
+            w = MitsubaSkipWarning(f"from_mitsuba: {path}: skipped BSDF {name!r} (line {d.get(LINE_KEY)}): {e}")
+            w.material, w.line, w.file, w.reason = name, d.get(LINE_KEY), os.fspath(path), str(e)
+            warnings.warn(w, stacklevel=3)
     return out
 
 

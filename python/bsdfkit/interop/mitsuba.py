@@ -16,8 +16,9 @@ __all__ = ["MITSUBA_IOR", "MIRROR_ETA", "MI_MAX_DEPTH", "MI_MAX_PLUGINS", "from_
 
 
 class MitsubaSkipWarning(UserWarning):
-    """``from_mitsuba(scene_file)`` skipped a BSDF it cannot convert (the message names it, its line
-    and the reason); ``strict=True`` raises instead."""
+    """``from_mitsuba(scene_file)`` skipped a BSDF it cannot convert (attributes, as
+    ``PbrtSkipWarning``'s: ``material``, ``line``, ``file``, ``reason``); ``strict=True`` raises
+    instead."""
 
 
 #: Folder that relative ``bitmap`` filenames are resolved against (the scene file's, or
