@@ -563,10 +563,11 @@ def test_scene_file_export_loads_in_mitsuba(images, tmp_path):
         "normals": bk.NormalMap(bk.Diffuse(0.6), tx.Normals(bk.Texture(np.clip(rng.normal([0.5, 0.5, 0.9], 0.1, (4, 6, 3)),
                                                                                0.05, 1.0)))),
         "plain": bk.Plastic([0.7, 0.2, 0.1], 1.5, alpha=0.2, masking="separable"),
+        "flat_bump": bk.BumpMap(bk.Diffuse(0.4), scale=2.0),   # its height is an in-memory mi.Bitmap
     }
     path = to_mitsuba_file(models, folder / "materials.xml")
     text = open(path).read()
-    assert 'value="albedo.png"' in text and text.count(".exr") == 3
+    assert 'value="albedo.png"' in text and text.count(".exr") == 4
     back = bk.from_mitsuba(path)
     assert list(back) == list(models)
     assert back["albedo"] == models["albedo"] and back["plain"] == models["plain"]

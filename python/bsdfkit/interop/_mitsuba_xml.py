@@ -304,17 +304,25 @@ def _xml_value(name, v, folder, texture_dir, indent, where):
             return [f'{pad}<spectrum{na} value="{_fmt_num(v["value"])}"/>']
         tag = "texture" if kind in _BSDF_KEYS_TEXTURE else "bsdf"
         v = dict(v)
-        if kind == "bitmap" and "data" in v:   # an in-memory tensor: written as an EXR file
+        if kind == "bitmap" and ("data" in v or "bitmap" in v):   # in memory: written as an EXR file
             from .. import _render_ext
             from .._values import digest
-            px = np.ascontiguousarray(np.array(v.pop("data")), dtype=np.float32)
+            from ._mitsuba_texture import parse_bitmap
+
+            def fail(w, msg):
+                raise ValueError(f"to_mitsuba_file: {where}: {msg}")
+            bm = parse_bitmap({k: x for k, x in v.items() if k in ("type", "data", "bitmap", "raw")}, where, None, fail)
+            px = bm.source
+            if bm.encoding == "sRGB":
+                from ..io import srgb_to_linear
+                px = srgb_to_linear(px)
+            v.pop("data", None), v.pop("bitmap", None)
+            px = np.ascontiguousarray(px, dtype=np.float32)
             os.makedirs(texture_dir, exist_ok=True)
             path = os.path.join(texture_dir, f"bsdfkit-{digest(px)}.exr")
             if not os.path.exists(path):
                 _render_ext.load().write_image(path, px)
             v["filename"], v["raw"] = path, True
-        if kind == "bitmap" and "bitmap" in v:
-            raise ValueError(f"to_mitsuba_file: {where}: an in-memory mi.Bitmap has no file to refer to")
         if kind == "bitmap" and isinstance(v.get("filename"), str):
             fn = os.path.abspath(v["filename"])
             rel = os.path.relpath(fn, folder)
