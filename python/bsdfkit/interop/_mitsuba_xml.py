@@ -47,9 +47,14 @@ def _parse(text, path):
     except xml.parsers.expat.ExpatError as e:
         raise MitsubaXMLError(f"{path}: line {e.lineno}: not well-formed XML ({xml.parsers.expat.ErrorString(e.code)})") \
             from None
-    if len(root.children) != 1 or root.children[0].tag != "scene":
-        raise MitsubaXMLError(f"{path}: expected one <scene> root element")
-    return root.children[0]
+    if len(root.children) != 1 or root.children[0].tag not in ("scene", "bsdf"):
+        raise MitsubaXMLError(f"{path}: expected one <scene> (or <bsdf>) root element")
+    top = root.children[0]
+    if top.tag == "bsdf":   # a file of one BSDF (mi.load_file takes it too)
+        scene = _Node("scene", {"version": top.attrs.get("version", "")}, top.line)
+        scene.children.append(top)
+        return scene
+    return top
 
 
 _NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
@@ -105,11 +110,7 @@ class _Reader:
         if tag == "string":
             return name, v
         if tag == "rgb":
-            if v.startswith("#") and len(v) == 7:   # Mitsuba accepts #rrggbb (sRGB-encoded 8-bit)
-                c = np.array([int(v[i:i + 2], 16) for i in (1, 3, 5)]) / 255.0
-                c = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-                return name, {"type": "rgb", "value": [float(x) for x in c]}
-            f = _floats(v, self.where(n))
+            f = _floats(v, self.where(n))   # Mitsuba 3.9 refuses "#rrggbb" too
             if len(f) not in (1, 3):
                 raise MitsubaXMLError(f"{self.where(n)}: <rgb name={name!r}>: expected 1 or 3 numbers, got {v!r}")
             return name, {"type": "rgb", "value": f * 3 if len(f) == 1 else f}
