@@ -32,6 +32,11 @@ def _nested(d, where, fail, keys=()):
     return nested
 
 
+def _shown(key):
+    """A nested plugin's key in messages: an unnamed XML child ('_arg_<i>') as '[i]'."""
+    return f"[{key[5:]}]" if key.startswith("_arg_") else key
+
+
 def _constant(v, where, param, fail, to_float):
     if isinstance(v, dict) and not isinstance(v.get("type"), str):
         fail(where, f"parameter {param!r}: the value dict's 'type' must be a string, got {type(v.get('type')).__name__}")
@@ -53,7 +58,7 @@ def mi_twosided(d, where, build, fail):
     if len(nested) > 2:
         fail(where, f"at most two nested BSDFs, got {len(nested)}")
     kinds = [sub.get("type") for _, sub in nested]
-    models = [build(sub, f"{where}.{key}") for key, sub in nested]
+    models = [build(sub, f"{where}.{_shown(key)}") for key, sub in nested]
     for (key, sub), m in zip(nested, models):
         if m.flags & BxDFFlags.Transmission:
             fail(where, f"nested plugin {sub.get('type')!r} ({key}) transmits: Mitsuba's twosided refuses "
@@ -71,7 +76,7 @@ def mi_blend(d, where, build, fail, to_float):
     if len(nested) != 2:
         fail(where, f"blendbsdf takes two nested BSDFs, got {len(nested)}")
     w = _constant(d.get("weight", 0.5), where, "weight", fail, to_float)
-    a, b = (build(sub, f"{where}.{key}") for key, sub in nested)
+    a, b = (build(sub, f"{where}.{_shown(key)}") for key, sub in nested)
     return Mix(a, b, _clip01(w))
 
 
@@ -81,7 +86,7 @@ def mi_mask(d, where, build, fail, to_float):
         fail(where, f"mask takes one nested BSDF, got {len(nested)}")
     o = _constant(d.get("opacity", 0.5), where, "opacity", fail, to_float)
     key, sub = nested[0]
-    return Mask(build(sub, f"{where}.{key}"), _clip01(o))
+    return Mask(build(sub, f"{where}.{_shown(key)}"), _clip01(o))
 
 
 def mi_normalmap(d, where, build, fail, to_color):
@@ -101,7 +106,7 @@ def mi_normalmap(d, where, build, fail, to_color):
         if tex.channels < 3:
             fail(where, "parameter 'normalmap': a one-channel bitmap holds no normals (give an RGB image)")
         key, sub = nested[0]
-        return NormalMap(build(sub, f"{where}.{key}"), Normals(tex), **_flags(d, where, fail))
+        return NormalMap(build(sub, f"{where}.{_shown(key)}"), Normals(tex), **_flags(d, where, fail))
     if isinstance(v, dict) and v.get("type") not in ("rgb", "srgb", "uniform"):
         fail(where, f"parameter 'normalmap' is a texture ({v.get('type')!r}); only a constant rgb normal is supported "
              "(per-element normals: bk.NormalMap(model, normals=array))")
@@ -114,7 +119,7 @@ def mi_normalmap(d, where, build, fail, to_color):
     if not norm > 0:
         fail(where, f"parameter 'normalmap': the decoded normal {n.tolist()} is zero")
     key, sub = nested[0]
-    return NormalMap(build(sub, f"{where}.{key}"), n / norm, **_flags(d, where, fail))
+    return NormalMap(build(sub, f"{where}.{_shown(key)}"), n / norm, **_flags(d, where, fail))
 
 
 #: Mitsuba 3 texture plugins (a bumpmap's nested objects are one texture and one BSDF).
@@ -155,4 +160,4 @@ def mi_bumpmap(d, where, build, fail, to_float):
     du, dv = mt.height_gradients(bm, fail)
     scale = to_float(d.get("scale", 1.0), where, "scale")
     key, sub = bsdfs[0]
-    return BumpMap(build(sub, f"{where}.{key}"), du, dv, scale=scale, **_flags(d, where, fail))
+    return BumpMap(build(sub, f"{where}.{_shown(key)}"), du, dv, scale=scale, **_flags(d, where, fail))

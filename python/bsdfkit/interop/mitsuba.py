@@ -319,9 +319,8 @@ def _mi_plugin(d, where, ctx):
     kind = d.get("type")
     if not isinstance(kind, str):
         raise _MiError(f"from_mitsuba: {where or 'd'}: 'type': expected a plugin name (str), got {kind!r}"[:400])
-    label = f"{where} ({kind!r})" if where else f"plugin {kind!r}"
-    if isinstance(d.get(_LINE), int):
-        label += f" at line {d[_LINE]}"
+    line = f", line {d[_LINE]}" if isinstance(d.get(_LINE), int) else ""
+    label = f"{where} ({kind!r}{line})" if where else f"plugin {kind!r}" + (f" ({line[2:]})" if line else "")
     if kind not in _MI_SUPPORTED:
         _mi_fail(label, "unsupported plugin; supported: " + ", ".join(_MI_SUPPORTED))
     if kind in ("twosided", "blendbsdf", "mask", "normalmap", "bumpmap"):   # composites: interop/_mitsuba_composite.py
