@@ -219,6 +219,9 @@ def _model_cases(images):
         "blendbsdf textured child": lambda: {
             "type": "blendbsdf", "weight": {"type": "bitmap", "data": mi.TensorXf(w), "wrap_mode": "mirror"},
             "a": {"type": "diffuse", "reflectance": {"type": "bitmap", "filename": "rgb8.png"}}, "b": GOLD},
+        "blendbsdf exr weight beyond [0, 1] (clipped)": lambda: {
+            "type": "blendbsdf", "weight": {"type": "bitmap", "data": mi.TensorXf(w * 3 - 1)},
+            "a": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.8, 0.3, 0.1]}}, "b": GOLD},
         "mask bitmap opacity": lambda: {
             "type": "mask", "opacity": {"type": "bitmap", "filename": "grey8.png", "filter_type": "nearest"},
             "material": GOLD},
@@ -272,7 +275,7 @@ def _well_conditioned(model, wo, wi, uv):
                                   "twosided roughconductor alpha_u/v", "roughdielectric alpha luminance",
                                   "roughplastic diffuse and specular reflectance",
                                   "blendbsdf bitmap weight", "mask bitmap opacity",
-                                  "blendbsdf textured child", "twosided two-faced, textured",
+                                  "blendbsdf exr weight beyond [0, 1] (clipped)", "blendbsdf textured child", "twosided two-faced, textured",
                                   "normalmap bitmap", "normalmap normals8.png raw", "bumpmap bitmap",
                                   "bumpmap grey8.png (sRGB-decoded heights)", "bumpmap bitmap mirror, scaled to_uv"])
 def test_textured_import_evaluates_as_mitsuba(name, images):
@@ -453,6 +456,7 @@ def _compare_mitsuba(d_ours, d_ref, m, name, rng, bk_too=True):
 @pytest.mark.parametrize("name", sorted(["diffuse rgb8.png", "roughconductor alpha exr, eta/k",
                                          "twosided roughconductor alpha_u/v", "blendbsdf bitmap weight",
                                          "blendbsdf textured child", "mask bitmap opacity",
+                                         "blendbsdf exr weight beyond [0, 1] (clipped)",
                                          "twosided two-faced, textured", "normalmap bitmap", "bumpmap bitmap",
                                          "normalmap normals8.png raw", "bumpmap grey8.png (sRGB-decoded heights)",
                                          "bumpmap bitmap mirror, scaled to_uv"]))

@@ -47,8 +47,9 @@ def _constant(v, where, param, fail, to_float):
 
 
 def _clip01(w):
-    """Mitsuba clips blendbsdf's weight and mask's opacity to [0, 1] (a texture: its values must be)."""
-    return float(np.clip(w, 0.0, 1.0)) if isinstance(w, float) else w
+    """Mitsuba clips blendbsdf's weight and mask's opacity to [0, 1] (a texture too: Clip01)."""
+    from ._mitsuba_texture import clip01
+    return clip01(w)
 
 
 def mi_twosided(d, where, build, fail):

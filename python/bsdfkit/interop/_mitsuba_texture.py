@@ -171,6 +171,46 @@ class Luminance(TextureBase):
         return (self.tex._lookup(uv, dx, dy)[..., :3] @ LUMINANCE)[..., None]
 
 
+class Clip01(TextureBase):
+    """A float texture clipped to [0, 1], as Mitsuba's blendbsdf and mask clip their weight and
+    opacity (``dr::clip(eval_1(si), 0, 1)``)."""
+
+    channels = 1
+
+    def __init__(self, tex):
+        if not isinstance(tex, TextureBase) or tex.channels != 1:
+            raise ValueError(f"tex: expected a 1-channel texture, got {tex!r}")
+        object.__setattr__(self, "tex", tex)
+
+    def _args(self):
+        return {"tex": self.tex}
+
+    def _lookup(self, uv, dx, dy):
+        return np.clip(self.tex._lookup(uv, dx, dy), 0.0, 1.0)
+
+
+def _in_unit(tex) -> bool:
+    """Whether a texture's values are known to lie in [0, 1] (integer images, arrays in range)."""
+    from ..textures import Texture
+    if isinstance(tex, Luminance):
+        return _in_unit(tex.tex)
+    if not isinstance(tex, Texture) or tex.scale != 1.0 or tex.invert:
+        return False
+    if isinstance(tex.source, str):
+        from .. import _render_ext
+        return _render_ext.load().image_info(tex.source)[3] in ("uint8", "uint16")
+    a = tex.source
+    return bool(a.dtype.kind == "u" or (a.size and a.min() >= 0 and a.max() <= 1))
+
+
+def clip01(w):
+    """Mitsuba's clip of a blend weight / opacity to [0, 1]: a float clipped, a texture wrapped in
+    :class:`Clip01` unless its values are known to lie in [0, 1]."""
+    if isinstance(w, float):
+        return float(np.clip(w, 0.0, 1.0))
+    return w if _in_unit(w) else Clip01(w)
+
+
 def luminance(tex):
     """The :class:`Luminance` texture of an RGB(A) texture (Mitsuba's ``eval_1`` of it)."""
     return Luminance(tex)

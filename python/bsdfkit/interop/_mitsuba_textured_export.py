@@ -225,6 +225,8 @@ def _leaf(m, ctx):
 # -------------------------------------------------------------------------------------- composites
 
 def _scalar_or_texture(v, where, ctx, lo=0.0, hi=1.0):
+    if isinstance(v, mt.Clip01):   # Mitsuba clips blendbsdf's weight and mask's opacity itself
+        v = v.tex
     if _is_tex(v):
         return _texture_value(v, where, 1, ctx)
     if isinstance(v, np.ndarray) and v.ndim:
