@@ -242,6 +242,11 @@ def _model_cases(images):
         "normalmap normals8.png raw": lambda: {
             "type": "normalmap", "normalmap": {"type": "bitmap", "filename": "normals8.png", "raw": True,
                                                "filter_type": "nearest"}, "bsdf": {"type": "diffuse"}},
+        "bumpmap bitmap, rotated and sheared to_uv": lambda: {
+            "type": "bumpmap", "height": {"type": "bitmap", "data": mi.TensorXf(height), "raw": True,
+                                          "to_uv": mi.ScalarTransform4f(np.array([[1.2, 0.5, 0, 0.1], [-0.3, 0.8, 0, 0.2],
+                                                                                  [0, 0, 1, 0], [0, 0, 0, 1.0]]))},
+            "scale": 0.3, "bsdf": {"type": "diffuse", "reflectance": {"type": "bitmap", "filename": "rgb8.png"}}},
         "bumpmap bitmap mirror, scaled to_uv": lambda: {
             "type": "bumpmap", "height": {"type": "bitmap", "data": mi.TensorXf(height), "raw": True,
                                           "wrap_mode": "mirror", "to_uv": mi.ScalarTransform4f().scale([2, 0.5, 1])},
@@ -277,7 +282,8 @@ def _well_conditioned(model, wo, wi, uv):
                                   "blendbsdf bitmap weight", "mask bitmap opacity",
                                   "blendbsdf exr weight beyond [0, 1] (clipped)", "blendbsdf textured child", "twosided two-faced, textured",
                                   "normalmap bitmap", "normalmap normals8.png raw", "bumpmap bitmap",
-                                  "bumpmap grey8.png (sRGB-decoded heights)", "bumpmap bitmap mirror, scaled to_uv"])
+                                  "bumpmap grey8.png (sRGB-decoded heights)", "bumpmap bitmap mirror, scaled to_uv",
+                                  "bumpmap bitmap, rotated and sheared to_uv"])
 def test_textured_import_evaluates_as_mitsuba(name, images):
     """from_mitsuba(dict) evaluated at uv against Mitsuba's BSDF of the same dict at the same uv."""
     ref.variant()
@@ -459,6 +465,7 @@ def _compare_mitsuba(d_ours, d_ref, m, name, rng, bk_too=True):
                                          "blendbsdf exr weight beyond [0, 1] (clipped)",
                                          "twosided two-faced, textured", "normalmap bitmap", "bumpmap bitmap",
                                          "normalmap normals8.png raw", "bumpmap grey8.png (sRGB-decoded heights)",
+                                         "bumpmap bitmap, rotated and sheared to_uv",
                                          "bumpmap bitmap mirror, scaled to_uv"]))
 def test_import_export_round_trip(name, images, tmp_path):
     """from_mitsuba(d).to_mitsuba(texture_dir=...) loads in Mitsuba and evaluates as d (in-memory

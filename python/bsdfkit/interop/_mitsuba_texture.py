@@ -265,8 +265,8 @@ def height_texels(bm: MiBitmap, fail) -> np.ndarray:
 class HeightGradient(TextureBase):
     """d height / d u (``axis=0``) or d v (``axis=1``) of a height image (H, W) at uv, as Mitsuba
     3's bilinear ``bitmap.eval_1_grad`` computes it (``bsdfkit.models.bump_map.height_gradient``),
-    after the bitmap's ``to_uv`` (scale and translation: the scale multiplies the gradient,
-    measured with Mitsuba 3.9)."""
+    after the bitmap's ``to_uv`` M: (W, H) times M^T times the per-texel differences, as Mitsuba
+    3.9 orders it."""
 
     channels = 1
 
@@ -289,11 +289,15 @@ class HeightGradient(TextureBase):
     def _lookup(self, uv, dx, dy):
         from ..models.bump_map import height_gradient
         m = self.transform
-        if m is not None:
-            uv = uv @ m[:, :2].T + m[:, 2]
-        g = height_gradient(self.height, uv, self.wrap_mode)[self.axis]
-        if m is not None:
-            g = g * m[self.axis, self.axis]
+        if m is None:
+            return np.asarray(height_gradient(self.height, uv, self.wrap_mode)[self.axis], np.float64)[..., None]
+        gu, gv = height_gradient(self.height, uv @ m[:, :2].T + m[:, 2], self.wrap_mode)
+        rows, cols = self.height.shape
+        # Mitsuba 3.9 bitmap.cpp eval_1_grad: res * (M^T (per-texel differences)), the resolution
+        # applied after the transpose (the chain rule would apply it before: they differ for a
+        # rotated or sheared to_uv of a non-square image; reproduced as Mitsuba computes it)
+        px, py = gu / cols, gv / rows
+        g = cols * (m[0, 0] * px + m[1, 0] * py) if self.axis == 0 else rows * (m[0, 1] * px + m[1, 1] * py)
         return np.asarray(g, np.float64)[..., None]
 
 
@@ -303,9 +307,6 @@ _WRAP_MI = {v: k for k, v in _WRAPS.items()}
 def height_gradients(bm: MiBitmap, fail):
     """(dh/du, dh/dv) textures of a bumpmap's height bitmap (``HeightGradient``), or (0.0, 0.0)
     for ``filter_type="nearest"`` (Mitsuba's gradient of a nearest lookup is 0)."""
-    if bm.transform is not None and (bm.transform[0, 1] != 0 or bm.transform[1, 0] != 0):
-        fail(bm.where, f"a height bitmap's to_uv with rotation or shear ({bm.transform.tolist()}): Mitsuba's "
-             "gradient under it is not reproduced here (only scale and translation are)")
     if bm.filter == "nearest":
         return 0.0, 0.0
     h = height_texels(bm, fail)
