@@ -243,9 +243,9 @@ def _model_cases(images):
             "type": "normalmap", "normalmap": {"type": "bitmap", "filename": "normals8.png", "raw": True,
                                                "filter_type": "nearest"}, "bsdf": {"type": "diffuse"}},
         "bumpmap bitmap, rotated and sheared to_uv": lambda: {
-            "type": "bumpmap", "height": {"type": "bitmap", "data": mi.TensorXf(height), "raw": True,
-                                          "to_uv": mi.ScalarTransform4f(np.array([[1.2, 0.5, 0, 0.1], [-0.3, 0.8, 0, 0.2],
-                                                                                  [0, 0, 1, 0], [0, 0, 0, 1.0]]))},
+            "type": "bumpmap", "height": {"type": "bitmap", "data": mi.TensorXf(height), "raw": True, "to_uv":
+                                          mi.ScalarTransform4f(np.array([[1.2, 0.5, 0, 0.1], [-0.3, 0.8, 0, 0.2],
+                                                                         [0, 0, 1, 0], [0, 0, 0, 1.0]]))},
             "scale": 0.3, "bsdf": {"type": "diffuse", "reflectance": {"type": "bitmap", "filename": "rgb8.png"}}},
         "bumpmap bitmap mirror, scaled to_uv": lambda: {
             "type": "bumpmap", "height": {"type": "bitmap", "data": mi.TensorXf(height), "raw": True,
@@ -280,7 +280,8 @@ def _well_conditioned(model, wo, wi, uv):
                                   "twosided roughconductor alpha_u/v", "roughdielectric alpha luminance",
                                   "roughplastic diffuse and specular reflectance",
                                   "blendbsdf bitmap weight", "mask bitmap opacity",
-                                  "blendbsdf exr weight beyond [0, 1] (clipped)", "blendbsdf textured child", "twosided two-faced, textured",
+                                  "blendbsdf exr weight beyond [0, 1] (clipped)", "blendbsdf textured child",
+                                  "twosided two-faced, textured",
                                   "normalmap bitmap", "normalmap normals8.png raw", "bumpmap bitmap",
                                   "bumpmap grey8.png (sRGB-decoded heights)", "bumpmap bitmap mirror, scaled to_uv",
                                   "bumpmap bitmap, rotated and sheared to_uv"])
@@ -571,8 +572,8 @@ def test_scene_file_export_loads_in_mitsuba(images, tmp_path):
                                               masking="separable"),
         "blend": bk.Mix(bk.Diffuse(0.2), bk.Conductor.from_metal("Cu", alpha=0.3, masking="separable"),
                         bk.Texture(rng.uniform(0, 1, (3, 7)), wrap="clamp")),
-        "normals": bk.NormalMap(bk.Diffuse(0.6), tx.Normals(bk.Texture(np.clip(rng.normal([0.5, 0.5, 0.9], 0.1, (4, 6, 3)),
-                                                                               0.05, 1.0)))),
+        "normals": bk.NormalMap(bk.Diffuse(0.6), tx.Normals(bk.Texture(
+            np.clip(rng.normal([0.5, 0.5, 0.9], 0.1, (4, 6, 3)), 0.05, 1.0)))),
         "plain": bk.Plastic([0.7, 0.2, 0.1], 1.5, alpha=0.2, masking="separable"),
         "flat_bump": bk.BumpMap(bk.Diffuse(0.4), scale=2.0),   # its height is an in-memory mi.Bitmap
     }
@@ -641,7 +642,8 @@ def test_scene_file_fuzz(images, tmp_path):
   <shape type="sphere"><bsdf type="mask"><rgb name="opacity" value="0.5"/><bsdf type="diffuse"/></bsdf></shape>
 </scene>"""
     rng = random.Random(48)
-    tokens = ['"', "<", ">", "/", "$a", "$b", "x", "1e400", "nan", "-1", " ", "bitmap", "ref", 'id="tx"', "#ff00zz", ":"]
+    tokens = ['"', "<", ">", "/", "$a", "$b", "x", "1e400", "nan", "-1", " ", "bitmap", "ref", 'id="tx"', "#ff00zz",
+              ":"]
     path = os.path.join(images["dir"], "fuzz.xml")
     for _ in range(300):
         s = list(base)

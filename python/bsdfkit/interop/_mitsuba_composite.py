@@ -39,7 +39,8 @@ def _shown(key):
 
 def _constant(v, where, param, fail, to_float):
     if isinstance(v, dict) and not isinstance(v.get("type"), str):
-        fail(where, f"parameter {param!r}: the value dict's 'type' must be a string, got {type(v.get('type')).__name__}")
+        fail(where, f"parameter {param!r}: the value dict's 'type' must be a string, got "
+             f"{type(v.get('type')).__name__}")
     if isinstance(v, dict) and v.get("type") not in ("rgb", "spectrum", "uniform", "srgb", "bitmap"):
         fail(where, f"parameter {param!r} is a texture ({v.get('type')!r}); only a constant or a bitmap is supported "
              "(a per-element array is a bsdfkit parameter: build the model directly)")

@@ -45,8 +45,8 @@ def _parse(text, path):
     try:
         p.Parse(text, True)
     except xml.parsers.expat.ExpatError as e:
-        raise MitsubaXMLError(f"{path}: line {e.lineno}: not well-formed XML ({xml.parsers.expat.ErrorString(e.code)})") \
-            from None
+        why = xml.parsers.expat.ErrorString(e.code)
+        raise MitsubaXMLError(f"{path}: line {e.lineno}: not well-formed XML ({why})") from None
     if len(root.children) != 1 or root.children[0].tag not in ("scene", "bsdf"):
         raise MitsubaXMLError(f"{path}: expected one <scene> (or <bsdf>) root element")
     top = root.children[0]
@@ -79,7 +79,8 @@ class _Reader:
         def rep(m):
             name = m.group(1)
             if name not in self.params:
-                raise MitsubaXMLError(f"{self.where(n)}: ${name} has no value (no <default name={name!r}> and none given)")
+                raise MitsubaXMLError(f"{self.where(n)}: ${name} has no value (no <default name={name!r}> and "
+                                      "none given)")
             return str(self.params[name])
         return re.sub(r"\$([A-Za-z_][A-Za-z0-9_]*)", rep, s)
 
@@ -148,7 +149,8 @@ class _Reader:
                 t = np.diag(list(s) + [1.0])
             elif op.tag == "rotate":
                 axis = np.array(_xyz(a, 0.0, self.where(op)))
-                ang = np.radians(_floats(a.get("angle", "0"), self.where(op))[0] if a.get("angle", "0").strip() else 0.0)
+                angle = a.get("angle", "0")
+                ang = np.radians(_floats(angle, self.where(op))[0] if angle.strip() else 0.0)
                 nrm = np.linalg.norm(axis)
                 if nrm == 0:
                     raise MitsubaXMLError(f"{self.where(op)}: <rotate> needs a nonzero axis")

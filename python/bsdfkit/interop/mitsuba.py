@@ -5,11 +5,10 @@ import contextvars
 import math
 import numbers
 import os
-import warnings
 
 import numpy as np
 
-from ..models import BxDF, Conductor, Dielectric, Diffuse, METALS, Plastic, ThinDielectric
+from ..models import Conductor, Dielectric, Diffuse, METALS, Plastic, ThinDielectric
 from .spectra import spectrum_to_rgb
 
 __all__ = ["MITSUBA_IOR", "MIRROR_ETA", "MI_MAX_DEPTH", "MI_MAX_PLUGINS", "from_mitsuba", "MitsubaSkipWarning"]
