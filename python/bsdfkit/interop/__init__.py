@@ -14,9 +14,10 @@
 * :func:`spectrum_to_rgb` projects a wavelength/value spectrum to linear sRGB the way Mitsuba's
   RGB variants do, so spectra in either format give the RGB values Mitsuba would use.
 
-Only what bsdfkit can represent exactly is accepted; everything else (procedural textures but
-Mitsuba's checkerboard, layered materials, Beckmann roughness, ``specular_reflectance`` tints ...) is refused with a
-``ValueError`` that names the plugin or material, the parameter and what is supported.
+Only what bsdfkit can represent exactly is accepted; everything else (Mitsuba's procedural
+textures but its checkerboard, layered materials, Beckmann roughness, ``specular_reflectance``
+tints ...) is refused with a ``ValueError`` that names the plugin or material, the parameter and
+what is supported.
 """
 
 from ..models._mitsuba_export import MitsubaApproximationWarning, MitsubaExportError
@@ -26,6 +27,7 @@ from .pbrt import (PBRT_GLASS_ETA, PbrtColorSpaceWarning, PbrtMaterial, PbrtMiss
                    PbrtSkipWarning, from_pbrt, parse_pbrt_materials)
 from .spectra import spectrum_to_rgb
 
-__all__ = ["from_mitsuba", "to_mitsuba_file", "MitsubaSkipWarning", "from_pbrt", "parse_pbrt_materials", "PbrtMaterial", "PbrtParam",
-           "spectrum_to_rgb", "MITSUBA_IOR", "PBRT_GLASS_ETA", "MIRROR_ETA", "MitsubaExportError",
-           "MitsubaApproximationWarning", "PbrtSkipWarning", "PbrtMissingIncludeWarning", "PbrtColorSpaceWarning"]
+__all__ = ["from_mitsuba", "to_mitsuba_file", "MitsubaSkipWarning", "from_pbrt", "parse_pbrt_materials",
+           "PbrtMaterial", "PbrtParam", "spectrum_to_rgb", "MITSUBA_IOR", "PBRT_GLASS_ETA", "MIRROR_ETA",
+           "MitsubaExportError", "MitsubaApproximationWarning", "PbrtSkipWarning", "PbrtMissingIncludeWarning",
+           "PbrtColorSpaceWarning"]
