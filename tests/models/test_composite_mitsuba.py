@@ -157,10 +157,10 @@ def test_from_mitsuba_composites():
                           "use_shadowing_function": False, "bsdf": inner})
     assert nm == bk.NormalMap(GOLD, (0.0, 0.0, 1.0), shadowing=False)
     for bad, words in [
-        ({"type": "blendbsdf", "weight": {"type": "bitmap", "filename": "w.png"}, "a": inner, "b": inner},
-         ["'weight'", "texture"]),
+        ({"type": "blendbsdf", "weight": {"type": "checkerboard"}, "a": inner, "b": inner},
+         ["'weight'", "texture", "'checkerboard'"]),
         ({"type": "blendbsdf", "a": inner}, ["two nested"]),
-        ({"type": "normalmap", "normalmap": {"type": "bitmap", "filename": "n.png"}, "bsdf": inner},
+        ({"type": "normalmap", "normalmap": {"type": "mesh_attribute", "name": "n"}, "bsdf": inner},
          ["'normalmap'", "texture"]),
         ({"type": "twosided", "bsdf": {"type": "roughdielectric", "distribution": "ggx"}},
          ["twosided", "'roughdielectric'", "transmit"]),

@@ -1,7 +1,9 @@
 """Scene materials in (one module per source: ``mitsuba``, ``pbrt``, ``gltf``; ``spectra`` for spectral data): Mitsuba 3 plugin dictionaries, pbrt-v4 scene text and glTF 2.0 materials as bsdfkit models.
 
 * :func:`from_mitsuba` turns a Mitsuba 3 BSDF dictionary (what ``mi.load_dict`` takes) into a
-  model; it inverts :func:`bsdfkit.testing.mitsuba.to_mitsuba`.
+  model, ``bitmap`` textures into ``bk.Texture`` values; it inverts
+  :func:`bsdfkit.testing.mitsuba.to_mitsuba`. Given a scene file (``.xml``) it returns
+  ``{id: model}``; :func:`to_mitsuba_file` writes one.
 * :func:`from_pbrt` reads the ``Material`` / ``MakeNamedMaterial`` statements of pbrt-v4 scene
   text; :func:`parse_pbrt_materials` gives the parsed statements (type, parameters, line, how
   many shapes use them) without converting them.
@@ -15,19 +17,21 @@
 * :func:`spectrum_to_rgb` projects a wavelength/value spectrum to linear sRGB the way Mitsuba's
   RGB variants do, so spectra in either format give the RGB values Mitsuba would use.
 
-Only what bsdfkit can represent exactly is accepted; everything else (textures, layered and
-measured materials, Beckmann roughness, ``specular_reflectance`` tints ...) is refused with a
-``ValueError`` that names the plugin or material, the parameter and what is supported.
+Only what bsdfkit can represent exactly is accepted; everything else (Mitsuba's procedural
+textures but its checkerboard, layered materials, Beckmann roughness, ``specular_reflectance``
+tints ...) is refused with a ``ValueError`` that names the plugin or material, the parameter and
+what is supported.
 """
 
 from ..models._mitsuba_export import MitsubaApproximationWarning, MitsubaExportError
+from ._mitsuba_xml import to_mitsuba_file
 from .gltf import GLTF_SUPPORTED_EXTENSIONS, GltfMaterial, GltfWarning, from_gltf, read_gltf_materials
-from .mitsuba import MIRROR_ETA, MITSUBA_IOR, from_mitsuba
+from .mitsuba import MIRROR_ETA, MITSUBA_IOR, MitsubaSkipWarning, from_mitsuba
 from .pbrt import (PBRT_GLASS_ETA, PbrtColorSpaceWarning, PbrtMaterial, PbrtMissingIncludeWarning, PbrtParam,
                    PbrtSkipWarning, from_pbrt, parse_pbrt_materials)
 from .spectra import spectrum_to_rgb
 
-__all__ = ["from_mitsuba", "from_pbrt", "from_gltf", "read_gltf_materials", "GltfMaterial", "GltfWarning",
-           "GLTF_SUPPORTED_EXTENSIONS", "parse_pbrt_materials", "PbrtMaterial", "PbrtParam",
-           "spectrum_to_rgb", "MITSUBA_IOR", "PBRT_GLASS_ETA", "MIRROR_ETA", "MitsubaExportError",
+__all__ = ["from_mitsuba", "to_mitsuba_file", "MitsubaSkipWarning", "from_pbrt", "from_gltf", "read_gltf_materials",
+           "GltfMaterial", "GltfWarning", "GLTF_SUPPORTED_EXTENSIONS", "parse_pbrt_materials", "PbrtMaterial",
+           "PbrtParam", "spectrum_to_rgb", "MITSUBA_IOR", "PBRT_GLASS_ETA", "MIRROR_ETA", "MitsubaExportError",
            "MitsubaApproximationWarning", "PbrtSkipWarning", "PbrtMissingIncludeWarning", "PbrtColorSpaceWarning"]

@@ -20,7 +20,7 @@ def _nested(d, where, fail, keys=()):
     still say alphanumeric order), refusing other keys than ``keys``."""
     nested, bad = [], []
     for key, v in d.items():
-        if key in ("type", "id") or key in keys:
+        if key in ("type", "id", "__line__") or key in keys:
             continue
         if isinstance(v, dict) and "type" in v:
             nested.append((key, v))
@@ -32,13 +32,25 @@ def _nested(d, where, fail, keys=()):
     return nested
 
 
+def _shown(key):
+    """A nested plugin's key in messages: an unnamed XML child ('_arg_<i>') as '[i]'."""
+    return f"[{key[5:]}]" if key.startswith("_arg_") else key
+
+
 def _constant(v, where, param, fail, to_float):
     if isinstance(v, dict) and not isinstance(v.get("type"), str):
-        fail(where, f"parameter {param!r}: the value dict's 'type' must be a string, got {type(v.get('type')).__name__}")
-    if isinstance(v, dict) and v.get("type") not in ("rgb", "spectrum", "uniform", "srgb"):
-        fail(where, f"parameter {param!r} is a texture ({v.get('type')!r}); only a constant is supported (a "
-             "per-element array is a bsdfkit parameter: build the model directly)")
+        fail(where, f"parameter {param!r}: the value dict's 'type' must be a string, got "
+             f"{type(v.get('type')).__name__}")
+    if isinstance(v, dict) and v.get("type") not in ("rgb", "spectrum", "uniform", "srgb", "bitmap"):
+        fail(where, f"parameter {param!r} is a texture ({v.get('type')!r}); only a constant or a bitmap is supported "
+             "(a per-element array is a bsdfkit parameter: build the model directly)")
     return to_float(v, where, param)
+
+
+def _clip01(w):
+    """Mitsuba clips blendbsdf's weight and mask's opacity to [0, 1] (a texture too: Clip01)."""
+    from ._mitsuba_texture import clip01
+    return clip01(w)
 
 
 def mi_twosided(d, where, build, fail):
@@ -48,7 +60,7 @@ def mi_twosided(d, where, build, fail):
     if len(nested) > 2:
         fail(where, f"at most two nested BSDFs, got {len(nested)}")
     kinds = [sub.get("type") for _, sub in nested]
-    models = [build(sub, f"{where}.{key}") for key, sub in nested]
+    models = [build(sub, f"{where}.{_shown(key)}") for key, sub in nested]
     for (key, sub), m in zip(nested, models):
         if m.flags & BxDFFlags.Transmission:
             fail(where, f"nested plugin {sub.get('type')!r} ({key}) transmits: Mitsuba's twosided refuses "
@@ -66,8 +78,8 @@ def mi_blend(d, where, build, fail, to_float):
     if len(nested) != 2:
         fail(where, f"blendbsdf takes two nested BSDFs, got {len(nested)}")
     w = _constant(d.get("weight", 0.5), where, "weight", fail, to_float)
-    a, b = (build(sub, f"{where}.{key}") for key, sub in nested)
-    return Mix(a, b, float(np.clip(w, 0.0, 1.0)))   # Mitsuba clips the weight to [0, 1]
+    a, b = (build(sub, f"{where}.{_shown(key)}") for key, sub in nested)
+    return Mix(a, b, _clip01(w))
 
 
 def mi_mask(d, where, build, fail, to_float):
@@ -76,7 +88,7 @@ def mi_mask(d, where, build, fail, to_float):
         fail(where, f"mask takes one nested BSDF, got {len(nested)}")
     o = _constant(d.get("opacity", 0.5), where, "opacity", fail, to_float)
     key, sub = nested[0]
-    return Mask(build(sub, f"{where}.{key}"), float(np.clip(o, 0.0, 1.0)))
+    return Mask(build(sub, f"{where}.{_shown(key)}"), _clip01(o))
 
 
 def mi_normalmap(d, where, build, fail, to_color):
@@ -89,6 +101,14 @@ def mi_normalmap(d, where, build, fail, to_color):
     if isinstance(v, dict) and not isinstance(v.get("type"), str):
         fail(where, f"parameter 'normalmap': the value dict's 'type' must be a string, got "
              f"{type(v.get('type')).__name__}")
+    if isinstance(v, dict) and v["type"] in ("bitmap", "checkerboard"):   # n = normalize(2 rgb - 1), as Mitsuba
+        from ..textures import Normals
+        from .mitsuba import _mi_texture
+        tex = _mi_texture(v, where, "normalmap", 3)
+        if tex.channels < 3:
+            fail(where, "parameter 'normalmap': a one-channel bitmap holds no normals (give an RGB image)")
+        key, sub = nested[0]
+        return NormalMap(build(sub, f"{where}.{_shown(key)}"), Normals(tex), **_flags(d, where, fail))
     if isinstance(v, dict) and v.get("type") not in ("rgb", "srgb", "uniform"):
         fail(where, f"parameter 'normalmap' is a texture ({v.get('type')!r}); only a constant rgb normal is supported "
              "(per-element normals: bk.NormalMap(model, normals=array))")
@@ -101,7 +121,7 @@ def mi_normalmap(d, where, build, fail, to_color):
     if not norm > 0:
         fail(where, f"parameter 'normalmap': the decoded normal {n.tolist()} is zero")
     key, sub = nested[0]
-    return NormalMap(build(sub, f"{where}.{key}"), n / norm, **_flags(d, where, fail))
+    return NormalMap(build(sub, f"{where}.{_shown(key)}"), n / norm, **_flags(d, where, fail))
 
 
 #: Mitsuba 3 texture plugins (a bumpmap's nested objects are one texture and one BSDF).
@@ -120,11 +140,12 @@ def _flags(d, where, fail):
 
 
 def mi_bumpmap(d, where, build, fail, to_float):
-    """``bumpmap`` of a height texture whose uv gradient is zero everywhere -> ``BumpMap(model, 0, 0,
-    scale)``: an in-memory ``bitmap`` (``bitmap=mi.Bitmap`` or ``data=`` tensor) of constant
-    texels or with ``filter_type="nearest"`` (Mitsuba's gradient is 0 then). Other heights are
-    refused: a bitmap file (bsdfkit reads no images), a varying bitmap (its gradient depends on
-    each point's uv, which a BSDF has not), other textures (Mitsuba has no gradient of them)."""
+    """``bumpmap`` of a ``bitmap`` height -> ``BumpMap(model, dh_du, dh_dv, scale)`` with the
+    gradient textures of the height image (``_mitsuba_texture.HeightGradient``: Mitsuba's bilinear
+    ``eval_1_grad`` at each uv; a nearest bitmap's gradient is 0). Other height textures are
+    refused: Mitsuba differentiates bitmaps only."""
+    from . import _mitsuba_texture as mt
+    from .mitsuba import _BASE_DIR
     nested = _nested(d, where, fail, keys=("scale", "flip_invalid_normals", "use_shadowing_function"))
     tex = [(k, v) for k, v in nested if v.get("type") in _TEXTURES]
     bsdfs = [(k, v) for k, v in nested if v.get("type") not in _TEXTURES]
@@ -134,24 +155,11 @@ def mi_bumpmap(d, where, build, fail, to_float):
         fail(where, f"bumpmap takes one nested height texture, got {len(tex)}")
     name, t = tex[0]
     kind = t.get("type")
-    per_element = ("build bk.BumpMap(model, dh_du, dh_dv) with the gradient at each element's uv "
-                   "(bk.models.bump_map.height_gradient(height, uv) computes Mitsuba's)")
     if kind != "bitmap":
         fail(where, f"height texture {name!r} is a {kind!r} texture: Mitsuba's bumpmap differentiates bitmap textures "
-             f"only (eval_1_grad); {per_element}")
-    if "filename" in t:
-        fail(where, f"height texture {name!r} is a bitmap file ({t['filename']!r}): reading image files is not "
-             f"supported here; {per_element}")
-    data = t.get("bitmap", t.get("data"))
-    if data is None:
-        fail(where, f"height texture {name!r}: a bitmap with neither 'filename', 'bitmap' nor 'data'")
-    try:
-        h = np.asarray(data, dtype=np.float64)
-    except Exception as e:
-        fail(where, f"height texture {name!r}: cannot read its texels ({e})")
-    if t.get("filter_type", "bilinear") != "nearest" and not (h.size and np.all(h == h.reshape(-1)[0])):
-        fail(where, f"height texture {name!r}: a varying bitmap's gradient depends on each point's uv (a BSDF has no "
-             f"uv); {per_element}")
+             "only (eval_1_grad); build bk.BumpMap(model, dh_du, dh_dv) with the gradient at each element's uv")
+    bm = mt.parse_bitmap(t, f"{where}: height texture {name!r}", _BASE_DIR.get(), fail)
+    du, dv = mt.height_gradients(bm, fail)
     scale = to_float(d.get("scale", 1.0), where, "scale")
     key, sub = bsdfs[0]
-    return BumpMap(build(sub, f"{where}.{key}"), 0.0, 0.0, scale=scale, **_flags(d, where, fail))
+    return BumpMap(build(sub, f"{where}.{_shown(key)}"), du, dv, scale=scale, **_flags(d, where, fail))

@@ -1,15 +1,30 @@
 """Mitsuba 3 BSDF dictionaries -> bsdfkit models (:func:`from_mitsuba`)."""
 from __future__ import annotations
 
+import contextvars
 import math
 import numbers
+import os
 
 import numpy as np
 
-from ..models import BxDF, Conductor, Dielectric, Diffuse, METALS, Plastic, ThinDielectric
+from ..models import Conductor, Dielectric, Diffuse, METALS, Plastic, ThinDielectric
 from .spectra import spectrum_to_rgb
 
-__all__ = ["MITSUBA_IOR", "MIRROR_ETA", "MI_MAX_DEPTH", "MI_MAX_PLUGINS", "from_mitsuba"]
+__all__ = ["MITSUBA_IOR", "MIRROR_ETA", "MI_MAX_DEPTH", "MI_MAX_PLUGINS", "from_mitsuba", "MitsubaSkipWarning"]
+
+
+class MitsubaSkipWarning(UserWarning):
+    """``from_mitsuba(scene_file)`` skipped a BSDF it cannot convert (attributes, as
+    ``PbrtSkipWarning``'s: ``material``, ``line``, ``file``, ``reason``); ``strict=True`` raises
+    instead."""
+
+
+#: Folder that relative ``bitmap`` filenames are resolved against (the scene file's, or
+#: ``from_mitsuba(..., base_dir=)``); None: the working directory.
+_BASE_DIR = contextvars.ContextVar("bsdfkit_mitsuba_base_dir", default=None)
+#: The XML line of a dict read from a scene file (``_mitsuba_xml.LINE_KEY``).
+_LINE = "__line__"
 
 
 #: Mitsuba 3's named indices of refraction (``include/mitsuba/render/ior.h``; values from Hecht,
@@ -140,6 +155,34 @@ def _mi_float(v, where, param):
     _mi_fail(where, f"parameter {param!r}: expected a float, got {v!r}")
 
 
+def _is_texture_dict(v) -> bool:
+    return isinstance(v, dict) and isinstance(v.get("type"), str) and v["type"] in ("bitmap", "checkerboard")
+
+
+def _mi_texture(v, where, param, channels):
+    """A Mitsuba ``bitmap`` (``checkerboard``) value -> ``bk.Texture`` (``tx.Checkerboard``);
+    ``interop/_mitsuba_texture.py``."""
+    from . import _mitsuba_texture as mt
+    if v["type"] == "checkerboard":
+        return mt.checkerboard_texture(v, f"{where}: parameter {param!r}", channels, _mi_fail, _mi_color)
+    bm = mt.parse_bitmap(v, f"{where}: parameter {param!r}", _BASE_DIR.get(), _mi_fail)
+    return mt.bitmap_texture(bm, channels, _mi_fail)
+
+
+def _mi_color_tex(v, where, param, *, bounded):
+    """A colour parameter that may be a ``bitmap`` texture: the texture, else the RGB constant."""
+    if _is_texture_dict(v):
+        return _mi_texture(v, where, param, 3)
+    return _mi_color(v, where, param, bounded=bounded)
+
+
+def _mi_float_tex(v, where, param):
+    """A float parameter that may be a ``bitmap`` texture (an RGB bitmap gives its luminance)."""
+    if _is_texture_dict(v):
+        return _mi_texture(v, where, param, 1)
+    return _mi_float(v, where, param)
+
+
 def _mi_ior(d, where, param, default):
     v = d.get(param, default)
     if isinstance(v, str):
@@ -179,13 +222,20 @@ def _mi_alphas(d, where):
             _mi_fail(where, "both 'alpha_u' and 'alpha_v' must be given (as Mitsuba requires)")
         if "alpha" in d:
             _mi_fail(where, "give either 'alpha' or 'alpha_u'/'alpha_v', not both")
-        ax, ay = _mi_float(d["alpha_u"], where, "alpha_u"), _mi_float(d["alpha_v"], where, "alpha_v")
+        ax, ay = _mi_float_tex(d["alpha_u"], where, "alpha_u"), _mi_float_tex(d["alpha_v"], where, "alpha_v")
     else:
-        ax = ay = _mi_float(d.get("alpha", 0.1), where, "alpha")
+        ax = ay = _mi_float_tex(d.get("alpha", 0.1), where, "alpha")
     for a, n in ((ax, "alpha_u"), (ay, "alpha_v")):
-        if not (math.isfinite(a) and a >= 0):
+        if isinstance(a, float) and not (math.isfinite(a) and a >= 0):
             _mi_fail(where, f"parameter {n!r}: must be finite and >= 0, got {a}")
     return ax, ay
+
+
+def _alpha_kw(ax, ay):
+    """Constructor keywords of the alphas: one texture for both (Mitsuba's ``alpha``) as ``alpha=``."""
+    if ax is ay and not isinstance(ax, float):
+        return {"alpha": ax}
+    return {"alpha_x": ax, "alpha_y": ay}
 
 
 def _mi_build(where, fn):
@@ -205,10 +255,11 @@ def _mi_conductor(d, where, rough):
     if "eta" in d or material == "none":
         if material != "none":
             _mi_fail(where, "give either (eta, k) or 'material', not both (as Mitsuba requires)")
-        eta = _mi_color(d.get("eta", 0.0), where, "eta", bounded=False)
-        k = _mi_color(d.get("k", 1.0), where, "k", bounded=False)
+        eta = _mi_color_tex(d.get("eta", 0.0), where, "eta", bounded=False)
+        k = _mi_color_tex(d.get("k", 1.0), where, "k", bounded=False)
         # Mitsuba's default (material="none", eta = 0, k = 1) is a perfect mirror.
-        eta = np.where(eta == 0.0, MIRROR_ETA, eta)
+        if isinstance(eta, np.ndarray):
+            eta = np.where(eta == 0.0, MIRROR_ETA, eta)
     else:
         if "k" in d:
             _mi_fail(where, f"'k' given together with material={material!r}; give either (eta, k) or 'material'")
@@ -219,7 +270,7 @@ def _mi_conductor(d, where, rough):
     _mi_unit(d, where, "specular_reflectance")
     if rough:
         ax, ay = _mi_alphas(d, where)
-        return _mi_build(where, lambda: Conductor(eta, k, alpha_x=ax, alpha_y=ay, masking="separable"))
+        return _mi_build(where, lambda: Conductor(eta, k, **_alpha_kw(ax, ay), masking="separable"))
     return _mi_build(where, lambda: Conductor(eta, k))
 
 
@@ -267,7 +318,8 @@ def _mi_plugin(d, where, ctx):
     kind = d.get("type")
     if not isinstance(kind, str):
         raise _MiError(f"from_mitsuba: {where or 'd'}: 'type': expected a plugin name (str), got {kind!r}"[:400])
-    label = f"{where} ({kind!r})" if where else f"plugin {kind!r}"
+    line = f", line {d[_LINE]}" if isinstance(d.get(_LINE), int) else ""
+    label = f"{where} ({kind!r}{line})" if where else f"plugin {kind!r}" + (f" ({line[2:]})" if line else "")
     if kind not in _MI_SUPPORTED:
         _mi_fail(label, "unsupported plugin; supported: " + ", ".join(_MI_SUPPORTED))
     if kind in ("twosided", "blendbsdf", "mask", "normalmap", "bumpmap"):   # composites: interop/_mitsuba_composite.py
@@ -278,18 +330,18 @@ def _mi_plugin(d, where, ctx):
         if kind == "twosided":
             return mc.mi_twosided(d, label, build, _mi_fail)
         if kind == "blendbsdf":
-            return _mi_build(label, lambda: mc.mi_blend(d, label, build, _mi_fail, _mi_float))
+            return _mi_build(label, lambda: mc.mi_blend(d, label, build, _mi_fail, _mi_float_tex))
         if kind == "mask":
-            return _mi_build(label, lambda: mc.mi_mask(d, label, build, _mi_fail, _mi_float))
+            return _mi_build(label, lambda: mc.mi_mask(d, label, build, _mi_fail, _mi_float_tex))
         if kind == "bumpmap":
             return _mi_build(label, lambda: mc.mi_bumpmap(d, label, build, _mi_fail, _mi_float))
         return _mi_build(label, lambda: mc.mi_normalmap(d, label, build, _mi_fail, _mi_color))
-    unknown = [k for k in d if k not in ("type", "id") + _MI_PARAMS[kind]]
+    unknown = [k for k in d if k not in ("type", "id", _LINE) + _MI_PARAMS[kind]]
     if unknown:
         _mi_fail(label, f"unsupported parameters {unknown}; {kind} takes: "
                  + (", ".join(_MI_PARAMS[kind]) or "nothing"))
     if kind == "diffuse":
-        r = _mi_color(d.get("reflectance", 0.5), label, "reflectance", bounded=True)
+        r = _mi_color_tex(d.get("reflectance", 0.5), label, "reflectance", bounded=True)
         return _mi_build(label, lambda: Diffuse(r))
     if kind in ("conductor", "roughconductor"):
         return _mi_conductor(d, label, kind == "roughconductor")
@@ -310,13 +362,13 @@ def _mi_plugin(d, where, ctx):
         return _mi_build(label, lambda: Dielectric(eta))
     if kind == "roughdielectric":
         ax, ay = _mi_alphas(d, label)
-        return _mi_build(label, lambda: Dielectric(eta, alpha_x=ax, alpha_y=ay, masking="separable"))
+        return _mi_build(label, lambda: Dielectric(eta, **_alpha_kw(ax, ay), masking="separable"))
     return _mi_build(label, lambda: ThinDielectric(eta))
 
 
 def _mi_plastic(d, where, rough):
-    r = _mi_color(d.get("diffuse_reflectance", 0.5), where, "diffuse_reflectance", bounded=True)
-    ks = _mi_color(d.get("specular_reflectance", 1.0), where, "specular_reflectance", bounded=False)
+    r = _mi_color_tex(d.get("diffuse_reflectance", 0.5), where, "diffuse_reflectance", bounded=True)
+    ks = _mi_color_tex(d.get("specular_reflectance", 1.0), where, "specular_reflectance", bounded=False)
     nl = d.get("nonlinear", False)
     if not isinstance(nl, (bool, np.bool_)):
         _mi_fail(where, f"parameter 'nonlinear': expected True or False, got {nl!r}")
@@ -326,6 +378,9 @@ def _mi_plastic(d, where, rough):
         _mi_fail(where, "parameter 'ext_ior': must be > 0")
     alpha = 0.0
     if rough:
+        if _is_texture_dict(d.get("alpha")):
+            _mi_fail(where, "parameter 'alpha' is a texture: Mitsuba's roughplastic takes a float alpha only "
+                     "(it refuses a texture; bsdfkit's Plastic would take one)")
         ax, ay = _mi_alphas(d, where)
         if ax != ay:
             _mi_fail(where, "roughplastic is isotropic (Mitsuba refuses alpha_u != alpha_v)")
@@ -362,12 +417,29 @@ def _mi_hair(d, where):
     return _mi_build(where, lambda: Hair(sigma_a=sigma_a, eta=eta, beta_m=bm, beta_n=bn, alpha=alpha, h=0.0))
 
 
-def from_mitsuba(d) -> BxDF:
+def from_mitsuba(d, *, base_dir=None, params=None, strict=False):
     """The bsdfkit model of a Mitsuba 3 BSDF plugin dictionary (the inverse of
     :func:`bsdfkit.testing.mitsuba.to_mitsuba`), or of a loaded ``mi.BSDF`` (``mi.load_dict``,
     a scene's BSDF): its plugin class and ``mi.traverse`` parameters are read back into such a
     dictionary. A loaded BSDF stores float32 values (and eta = int_ior / ext_ior), so its model
-    equals the dictionary's to float32 precision.
+    equals the dictionary's to float32 precision (loaded BSDFs with textures are not read back).
+
+    Given the path of a Mitsuba scene file (``.xml``), returns ``{name: model}`` for its BSDFs
+    (named by ``id``; an unnamed one inline in a shape by the shape's id or position):
+    ``bitmap`` filenames are relative to the file's folder, ``$name`` values come from its
+    ``<default>`` elements or ``params``. A BSDF that cannot be converted is skipped with a
+    :class:`MitsubaSkipWarning` naming it, its line and the reason (``strict=True`` raises).
+
+    ``bitmap`` textures (``filename`` relative to ``base_dir``, default the working directory;
+    or an in-memory ``data`` tensor / ``bitmap``), with ``filter_type`` "nearest" / "bilinear",
+    ``wrap_mode`` "repeat" / "mirror" / "clamp", ``raw`` (false: sRGB-decoded as Mitsuba does
+    for PNG / JPEG, EXR linear) and ``to_uv``, become ``bk.Texture`` values (see
+    ``bsdfkit.interop._mitsuba_texture``) on ``reflectance``, ``eta``, ``k``, the alphas
+    (not roughplastic's: Mitsuba takes a float), ``diffuse_reflectance`` /
+    ``specular_reflectance`` of (rough)plastic, blendbsdf's ``weight``, mask's ``opacity``,
+    normalmap's ``normalmap`` and bumpmap's height; evaluate the model with ``uv=``. A float
+    parameter given an RGB bitmap takes its luminance (Mitsuba's ``eval_1``): supported for
+    in-memory images, refused for RGB image files.
 
     Plugins and parameters (Mitsuba 3.9 names and defaults):
 
@@ -392,18 +464,20 @@ def from_mitsuba(d) -> BxDF:
                          -> ``Plastic(..., alpha=alpha, masking="separable")``
     ``twosided``         one nested diffuse/conductor/roughconductor/(rough)plastic (or two
                          identical ones): unwrapped, bsdfkit's Diffuse, Conductor and Plastic are
-                         two-sided; any other reflection-only nested BSDF, or two different ones
-                         -> ``TwoSided(front, back)``; a transmitting one is refused (as Mitsuba)
-    ``blendbsdf``        ``weight`` (0.5, a constant), two nested BSDFs in the dictionary's order
-                         (Mitsuba 3.9's) -> ``Mix(a, b, weight)``
-    ``mask``             ``opacity`` (0.5, a constant), one nested BSDF -> ``Mask(model, opacity)``
-    ``normalmap``        ``normalmap`` (a constant ``rgb`` (n + 1) / 2, decoded and normalized),
-                         ``flip_invalid_normals`` / ``use_shadowing_function`` (true) -> ``NormalMap``
-    ``bumpmap``          a height ``bitmap`` of zero gradient (in memory: constant texels, or
-                         ``filter_type="nearest"``), ``scale`` (1), the two flags (true)
-                         -> ``BumpMap(model, 0, 0, scale)``; a bitmap file or a varying bitmap is
-                         refused (no image reading; the gradient depends on uv: build
-                         ``BumpMap`` from ``height_gradient`` per element)
+                         two-sided; any other reflection-only nested BSDF (any model, composites
+                         too), or two different ones (two-faced) -> ``TwoSided(front, back)``; a
+                         transmitting one is refused (as Mitsuba)
+    ``blendbsdf``        ``weight`` (0.5, a constant or a bitmap), two nested BSDFs in the
+                         dictionary's order (Mitsuba 3.9's) -> ``Mix(a, b, weight)``
+    ``mask``             ``opacity`` (0.5, a constant or a bitmap), one nested BSDF
+                         -> ``Mask(model, opacity)``
+    ``normalmap``        ``normalmap`` (a constant ``rgb`` or a ``bitmap``: n = 2 rgb - 1,
+                         normalized), ``flip_invalid_normals`` / ``use_shadowing_function``
+                         (true) -> ``NormalMap``
+    ``bumpmap``          a height ``bitmap`` (bilinear: its gradient at each uv, as Mitsuba's
+                         ``eval_1_grad``; nearest: zero), ``scale`` (1), the two flags (true)
+                         -> ``BumpMap``; other height textures are refused (Mitsuba
+                         differentiates bitmaps only)
     ``measured``         ``filename`` (an RGL tensor file) -> ``Measured(filename)``
     ``null``             -> ``Dielectric(1.0)`` (pbrt's straight pass-through; ``to_mitsuba``
                          writes eta = 1 dielectrics and thin dielectrics as ``null``)
@@ -439,13 +513,19 @@ def from_mitsuba(d) -> BxDF:
 
     Parameters
     ----------
-    d : dict or mitsuba.BSDF
-        A plugin dictionary (as ``mi.load_dict`` takes) or a loaded Mitsuba BSDF.
+    d : dict, mitsuba.BSDF or path
+        A plugin dictionary (as ``mi.load_dict`` takes), a loaded Mitsuba BSDF, or a scene file.
+    base_dir : str or Path, optional
+        Folder of relative ``bitmap`` filenames in a dictionary (a scene file's are relative to it).
+    params : dict, optional
+        Scene files: values of ``$name`` references (override the file's ``<default>``).
+    strict : bool, default False
+        Scene files: raise instead of skipping a BSDF with a warning.
 
     Returns
     -------
-    BxDF
-        The equivalent bsdfkit model.
+    BxDF or dict
+        The equivalent bsdfkit model; for a scene file ``{name: model}``.
 
     Raises
     ------
@@ -461,9 +541,16 @@ def from_mitsuba(d) -> BxDF:
     >>> bk.from_mitsuba({"type": "roughconductor", "material": "Au", "distribution": "ggx", "alpha": 0.2})
     Conductor(eta=[0.143036, 0.375307, 1.442045], k=[3.982997, 2.385556, 1.603359], alpha_x=0.2, alpha_y=0.2, masking='separable', fresnel='exact')
     """
+    if isinstance(d, os.PathLike) or (isinstance(d, str) and (d.lower().endswith(".xml") or os.path.isfile(d))):
+        from ._mitsuba_xml import from_mitsuba_file
+        return from_mitsuba_file(d, params=params, strict=strict)
     if not isinstance(d, dict) and type(d).__module__.startswith("mitsuba") and hasattr(d, "class_name"):
         d = _loaded_to_dict(d)
-    return _mi_bsdf(d, "")
+    token = _BASE_DIR.set(None if base_dir is None else os.fspath(base_dir))
+    try:
+        return _mi_bsdf(d, "")
+    finally:
+        _BASE_DIR.reset(token)
 
 
 # Mitsuba class names of loaded BSDFs -> plugin names
@@ -492,6 +579,11 @@ def _loaded_to_dict(bsdf) -> dict:
         raise ValueError(f"from_mitsuba: cannot read the parameters of the loaded Mitsuba BSDF {name!r} "
                          f"(mi.traverse: {e})") from None
     text = str(bsdf)
+    tex = sorted({k.rsplit(".", 1)[0] for k in vals if k.endswith((".data", ".to_uv"))})
+    if tex or "BitmapTexture[" in text:
+        raise ValueError(f"from_mitsuba: the loaded Mitsuba BSDF {name!r} has bitmap textures ({', '.join(tex)}): a "
+                         "loaded bitmap keeps neither its file name nor its filter and wrap modes; pass the plugin "
+                         "dict (mi.load_dict's argument) or the scene file instead")
     if name.startswith("TwoSided"):
         kids = re.findall(r"brdf\[(\d)\] = (\w+)\[", text)
         cls = dict(kids).get("0")

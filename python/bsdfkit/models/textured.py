@@ -246,9 +246,13 @@ class Textured(BxDF, register=False):
     def cost_family(self) -> str:
         return self._probe.cost_family()
 
-    def to_mitsuba(self, approximate: bool = False) -> dict:
-        raise NotImplementedError(f"{self.model_class.__name__}: export of textured parameters "
-                                  f"({', '.join(self.textures)}) to Mitsuba is not supported yet")
+    def to_mitsuba(self, approximate: bool = False, texture_dir=None) -> dict:
+        """The Mitsuba 3 plugin dictionary, textures as ``bitmap`` dicts (image files by path;
+        arrays written as EXR files into ``texture_dir``, else in-memory ``data`` tensors); what
+        a bitmap cannot express raises NotImplementedError naming it
+        (``bsdfkit.interop._mitsuba_textured_export``)."""
+        from ..interop._mitsuba_textured_export import textured_to_mitsuba
+        return textured_to_mitsuba(self, approximate, texture_dir)
 
 
 def _construct(cls, args, kwargs):
