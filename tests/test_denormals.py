@@ -1,4 +1,4 @@
-"""Models that declare FlushDenormals (Hair; core/simd.h DenormalsFlushed) run their batch kernels with
+"""Models whose batch_policy.h line says flush_denormals (Hair; core/simd.h DenormalsFlushed) run their batch kernels with
 the CPU's flush-to-zero / denormals-are-zero modes set per chunk, and must restore them: a leak would
 silently flush every later float computation on that thread (numpy's, other models' kernels) to 0
 below 1.2e-38."""

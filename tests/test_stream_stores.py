@@ -1,5 +1,5 @@
-"""Streaming (non-temporal) stores of a large call's outputs (batch.h, kStreamMinBytes; the models that
-declare StreamOutputs: Diffuse, DiffuseTransmission, and Conductor, Dielectric and ThinDielectric when
+"""Streaming (non-temporal) stores of a large call's outputs (batch.h, kStreamMinBytes; the models whose
+batch_policy.h line says stream_outputs: Diffuse, DiffuseTransmission, and Conductor, Dielectric and ThinDielectric when
 smooth). A call of at least 16 MiB of traffic writes whole lines with streaming stores: eval / pdf from
 the first element whose output row starts on a 64-byte line (the rows before it, fewer than a packet,
 plainly: numpy's arrays start 16 bytes past a line), the sampler where its output starts on one. Only

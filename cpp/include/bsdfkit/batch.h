@@ -566,17 +566,10 @@ template <int S, typename F> inline void prefetch_dirs(const Dirs<F> &d, int64_t
 // packet's rows on whole lines, as chunks start at multiples of kChunk. Values are unchanged:
 // only how they are stored. AVX-512 and AVX2 float32 with GCC's vector extensions (the register
 // groups above); elsewhere plain stores.
-// Only models that declare `static constexpr bool StreamOutputs = true` stream: the kernels
-// limited by memory traffic. Measured on Zen 4 (tools/perf/loop_ab.py, N = 1e6, outputs on lines,
-// session 21): Diffuse eval 1.21-1.33x, sample 1.16-1.31x (1 / 2 threads); the delta lobes'
-// eval (smooth Conductor and Dielectric, ThinDielectric; session 22, the installed library)
-// 1.23-1.50x, their pdf 0.96-1.09x, their samplers not (below). With every model
-// streaming (a test build; the library's own out= on a line against off a line, in one process)
-// the delta lobes' eval (zeros) and the smooth samplers at 2 threads gained (1.03-1.48x) but
-// NormalizedFresnel eval ran 0.59-0.64x, rough Plastic eval 0.75-0.90x, Hair sample 0.93x: the
+// Only models whose line in the policy table (batch_policy.h, with the measurements) says
+// stream_outputs stream: the kernels limited by memory traffic. Streaming is not the default: the
 // second instantiation of a heavy loop compiles or places differently (Hair eval's plain loop
-// itself runs at 364 or 406 cycles per packet depending on the program around it), so
-// streaming is not the default. Realigning unaligned outputs in registers (one permutation per
+// itself runs at 364 or 406 cycles per packet depending on the program around it). Realigning unaligned outputs in registers (one permutation per
 // line, the previous packet's last group carried in a register across the loop) gained as much
 // on Diffuse eval but cost its sampler 7 % (four carries spilled), so unaligned outputs are
 // stored plainly; since session 28 an eval / pdf output off a line has its first rows (up to
@@ -598,25 +591,8 @@ template <typename F> inline constexpr bool kStreamSamples = kStreams<F>;
 #else
 template <typename F> inline constexpr bool kStreamSamples = false;
 #endif
-template <typename M, typename = void> struct streams_outputs : std::false_type {};
-template <typename M> struct streams_outputs<M, std::enable_if_t<M::StreamOutputs>> : std::true_type {};
-// A model with the trait may also say per instance whether its outputs stream (`bool
-// stream_outputs() const`; Conductor and Dielectric: only when smooth, as their rough lobes are
-// limited by arithmetic); without that member every instance streams.
-template <typename M, typename = void> struct has_stream_outputs_member : std::false_type {};
-template <typename M>
-struct has_stream_outputs_member<M, std::void_t<decltype(std::declval<const M &>().stream_outputs())>>
-    : std::true_type {};
-template <typename M> inline bool instance_streams(const M &m) {
-    if constexpr (has_stream_outputs_member<M>::value) return m.stream_outputs();
-    else return true;
-}
-// A model with the trait whose sampler gains nothing from streaming declares `static constexpr bool
-// StreamSamples = false`: its sample kernel is then compiled once, plainly. The smooth Conductor,
-// Dielectric and ThinDielectric samplers (Zen 4, N = 1e6, the installed library, session 22) ran
-// 0.91-0.95x streamed at 1 thread, 1.00-1.06x at 2, against plain stores to the same lines.
-template <typename M, typename = void> struct streams_samples : streams_outputs<M> {};
-template <typename M> struct streams_samples<M, std::enable_if_t<!M::StreamSamples>> : std::false_type {};
+// streams_outputs<M>, streams_samples<M> and instance_streams(m): the policy table
+// (batch_policy.h, included through core/simd.h).
 inline bool on_line(const void *p) { return (reinterpret_cast<uintptr_t>(p) & 63) == 0; }
 // The elements before rows of C values of F from p on start on a 64-byte line: the smallest h in
 // [0, kW) with p + C h on a line, or -1 if none (p not aligned to F). Every multiple of sizeof(F)

@@ -116,11 +116,6 @@ struct ConductorBxDF {
     // The model runs on packets in the batch kernels (batch.h): every method is written once on
     // the evaluation type V (F, or a packet of F; core/simd.h).
     static constexpr bool Vectorized = true;
-    // Smooth, its eval / pdf are limited by memory traffic: a large call streams their outputs
-    // (batch.h); the rough lobe (arithmetic) and the sampler (0.91-0.95x streamed) store plainly.
-    static constexpr bool StreamOutputs = true;
-    static constexpr bool StreamSamples = false;
-    bool stream_outputs() const { return is_smooth(); }
 
     // The Fresnel reflectance at |wo.wm| = cos_i, per channel (the FR knob).
     template <typename V> Spectrum<V, NC> fresnel(V cos_i) const {

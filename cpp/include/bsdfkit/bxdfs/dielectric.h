@@ -57,11 +57,6 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
     // Runs on packets in the batch kernels (batch.h): every method is written once on the
     // evaluation type V (F, or a packet of F; core/simd.h).
     static constexpr bool Vectorized = true;
-    // Smooth, its eval / pdf are limited by memory traffic: a large call streams their outputs
-    // (batch.h); the rough lobes (arithmetic) and the sampler (0.91-0.95x streamed) store plainly.
-    static constexpr bool StreamOutputs = true;
-    static constexpr bool StreamSamples = false;
-    bool stream_outputs() const { return is_smooth(); }
 
     // Lobe probabilities restricted by sample_flags.
     template <typename V> static void lobe_probs(V R, V T, uint8_t sample_flags, V *pr, V *pt) {

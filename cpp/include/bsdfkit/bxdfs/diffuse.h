@@ -37,8 +37,6 @@ template <typename F, int NC = 3, typename C = F> struct DiffuseBxDF {
     // Runs on packets in the batch kernels (batch.h; core/simd.h). No divisions or square
     // roots in f and pdf; sample: 1 division (the concentric map's ratio) and 1 square root.
     static constexpr bool Vectorized = true;
-    // Its batch kernels are limited by memory traffic: a large call streams its outputs (batch.h).
-    static constexpr bool StreamOutputs = true;
 
     template <typename V> Spectrum<V, NC> R_over_pi() const {
         Spectrum<V, NC> r;

@@ -48,8 +48,6 @@ template <typename F, int NC = 3, typename C = F> struct DiffuseTransmissionBxDF
     // (LobeWeights); per element: f and pdf no division, sample 1 division (the concentric
     // map's ratio) and 1 square root.
     static constexpr bool Vectorized = true;
-    // Its batch kernels are limited by memory traffic: a large call streams its outputs (batch.h).
-    static constexpr bool StreamOutputs = true;
 
     template <typename V> Spectrum<V, NC> over_pi(const Spectrum<C, NC> &a) const {
         Spectrum<V, NC> r;

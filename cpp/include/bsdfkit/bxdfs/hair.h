@@ -262,9 +262,8 @@ template <typename F, int NC = 3> struct HairBxDF {
     // the evaluation type V (F, or a packet of F; core/simd.h). The offset h and its angles are
     // passed as an Offset<V>, so that the far-field fibre can give every lane its own node.
     static constexpr bool Vectorized = true;
-    // Mp's narrow tails times Np reach the denormals on ordinary pairs; the batch kernels run
-    // with FTZ | DAZ (core/simd.h, DenormalsFlushed). Every division is by a floored or masked value.
-    static constexpr bool FlushDenormals = true;
+    // Every division is by a floored or masked value: the kernels may run with denormals flushed
+    // (batch_policy.h).
 
     template <typename V> struct Offset {
         V h, gamma_o, cos_gamma_o;
@@ -493,7 +492,6 @@ template <typename F, int NC = 3> struct HairFarFieldBxDF {
 
     // On packets too (batch.h): the node loop is uniform; sampling gives each lane its own node.
     static constexpr bool Vectorized = true;
-    static constexpr bool FlushDenormals = true; // as HairBxDF
 
     template <typename V> typename Base::template Offset<V> node(int k) const {
         return {V(node_h[k]), V(node_gamma[k]), V(node_cos_gamma[k])};

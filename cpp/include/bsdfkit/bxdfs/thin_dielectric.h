@@ -31,10 +31,6 @@ template <typename F, typename Eta = F> struct ThinDielectricBxDF {
     // Runs on packets in the batch kernels (batch.h; core/simd.h): every method is a template
     // on the evaluation type V (F, or a packet of F). sample: 2 divisions, 1 square root.
     static constexpr bool Vectorized = true;
-    // Its eval / pdf (zeros) are limited by memory traffic: a large call streams their outputs
-    // (batch.h); the sampler (0.91-0.95x streamed) stores plainly.
-    static constexpr bool StreamOutputs = true;
-    static constexpr bool StreamSamples = false;
 
     // Delta lobes only: f and pdf are 0 for every given pair (pbrt-v4).
     template <typename V> Spectrum<V> f(const Vec3<V> &, const Vec3<V> &, TransportMode) const {

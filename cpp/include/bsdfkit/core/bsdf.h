@@ -58,7 +58,7 @@ template <typename F, int N> inline Mask<F> sample_accepted(const BSDFSample<F, 
         // non-negative values is > 0 iff one of them is; an overflow to +inf is > 0 as well;
         // -0 + -0 is -0; under DAZ a denormal channel is 0 to both forms). The class tests ignore
         // DAZ, the compares do not: they differ only on a denormal pdf under FTZ | DAZ (a
-        // FlushDenormals model, core/simd.h), where FTZ flushes every computed value.
+        // flush_denormals model, batch_policy.h), where FTZ flushes every computed value.
         Mask<F> bad = not_finite_positive(s.pdf);
         F sum = s.f[0];
         for (int c = 0; c < N; ++c) bad = bad | not_finite_nonneg(s.f[c]);

@@ -18,6 +18,8 @@
 #endif
 
 #include <drjit/math.h>
+
+#include "../batch_policy.h"  // flushes_denormals<M>: the batch layer's policy table
 #include <drjit/packet.h>
 
 namespace bsdfkit {
@@ -209,17 +211,11 @@ template <typename V> inline V exp_finite(const V &x) {
     }
 }
 
-// Models that declare `static constexpr bool FlushDenormals = true` run their batch kernels (and
-// the preview renderer's shading of them) with the CPU's flush-to-zero and denormals-are-zero modes
-// (x86 MXCSR FTZ | DAZ), set per chunk on the thread that runs it and restored after: a denormal
-// intermediate then costs nothing instead of a microcode assist (~100+ cycles each on Intel). Only
-// values below the smallest normal number (1.2e-38 in float) change, to 0. Hair declares it: its
-// lobes' exponentials reach the denormals on ordinary pairs (narrow Mp tails times Np), and FTZ |
-// DAZ made its eval kernel 14-21 % faster with identical outputs on tools/perf/throughput.py's inputs. A
-// model that declares it must tolerate a denormal operand read as 0 (no division by a value that
-// can be denormal without a mask).
-template <typename M, typename = void> struct flushes_denormals : std::false_type {};
-template <typename M> struct flushes_denormals<M, std::enable_if_t<M::FlushDenormals>> : std::true_type {};
+// Models whose line in the batch layer's policy table (batch_policy.h) says flush_denormals run
+// their batch kernels (and the preview renderer's shading of them) with the CPU's flush-to-zero and
+// denormals-are-zero modes (x86 MXCSR FTZ | DAZ), set per chunk on the thread that runs it and
+// restored after: a denormal intermediate then costs nothing instead of a microcode assist (~100+
+// cycles each on Intel). Only values below the smallest normal number (1.2e-38 in float) change, to 0.
 
 // Off: nothing to do. The empty constructor makes the guard a non-trivial type, so a guard that is
 // only declared (`const DenormalsFlushedFor<M> ftz;`) is not an unused variable to -Wall.
@@ -235,7 +231,7 @@ template <> struct DenormalsFlushed<true> {
     DenormalsFlushed &operator=(const DenormalsFlushed &) = delete;
 };
 #endif
-template <typename M> using DenormalsFlushedFor = DenormalsFlushed<flushes_denormals<M>::value>;
+template <typename M> using DenormalsFlushedFor = DenormalsFlushed<flushes_denormals<M>::value>;  // batch_policy.h
 
 // Packet load / store of W consecutive scalars (unaligned).
 template <typename V> inline V load_packet(const scalar_t<V> *p) { return drjit::load<V>(p); }

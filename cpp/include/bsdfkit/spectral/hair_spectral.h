@@ -23,7 +23,6 @@ namespace bsdfkit {
 // channels) by that average, and depends on the wavelengths.
 template <typename F> struct HairSpectral : PerElementModel<HairSpectral<F>, F> {
     using Model = HairBxDF<F, kSpectralN>;
-    static constexpr bool FlushDenormals = true; // as HairBxDF (core/simd.h, DenormalsFlushed)
     static constexpr SpectralField kFields[] = {{"sigma_a", "unbounded"}};
     SpectralParam sigma_a;
     Model proto;
@@ -48,7 +47,6 @@ template <typename F> struct HairSpectral : PerElementModel<HairSpectral<F>, F> 
 // 5 x 64 values, costs little next to the 64 fibre evaluations it serves).
 template <typename F> struct HairFarFieldSpectral : PerElementModel<HairFarFieldSpectral<F>, F> {
     using Model = HairFarFieldBxDF<F, kSpectralN>;
-    static constexpr bool FlushDenormals = true; // as HairBxDF (core/simd.h, DenormalsFlushed)
     static constexpr SpectralField kFields[] = {{"sigma_a", "unbounded"}};
     SpectralParam sigma_a;
     Model proto;
