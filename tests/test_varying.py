@@ -388,6 +388,11 @@ def test_composites_over_per_element_children():
         _eq(f[i], ref.eval(wo[i:i + 1], wi[i:i + 1])[0], f"NormalMap element {i}")
     with pytest.raises(NotImplementedError, match="inside a composite.*albedo"):
         nm.albedo(wo, n_samples=8)
-    grid = bk.NormalMap(bk.Diffuse(rng.uniform(0, 1, (4, 5, 3))), normals=(0.0, 0.0, 1.0))
-    with pytest.raises(NotImplementedError, match=r"reflectance has shape \(4, 5\)"):
-        grid.eval(bk.direction(0.3, 0.0), bk.direction(0.4, 1.0))
+    # a (4, 5) map broadcasts with the composite's call: element (i, j) is the composite of (i, j)'s model
+    R = rng.uniform(0, 1, (4, 5, 3))
+    grid = bk.NormalMap(bk.Diffuse(R), normals=(0.1, 0.0, np.sqrt(1 - 0.01)))
+    g = grid.eval(bk.direction(0.3, 0.0), bk.direction(0.4, 1.0))
+    assert g.shape == (4, 5, 3)
+    for i, j in ((0, 0), (2, 3), (3, 4)):
+        ref = bk.NormalMap(bk.Diffuse(R[i, j]), normals=(0.1, 0.0, np.sqrt(1 - 0.01)))
+        _eq(g[i, j], ref.eval(bk.direction(0.3, 0.0), bk.direction(0.4, 1.0)), f"NormalMap grid element {(i, j)}")
