@@ -61,3 +61,34 @@ def test_textured_conductor_fresnel_follows_the_worst_texel():
     assert pick["Cu"] != pick["Cr"]                    # the metals alone choose differently
     assert rep.config["fresnel"] == pick["Cr"] and out.fresnel == pick["Cr"]
     assert _fresh_error(m, out, rep.dtype) <= 0.1
+
+
+def _cli(*args):
+    import subprocess
+    import sys
+    return subprocess.run([sys.executable, "-m", "bsdfkit", "simplify", *map(str, args)], capture_output=True,
+                          text=True, timeout=600)
+
+
+def test_scene_cli_reads_mitsuba_and_gltf_files_with_textures(tmp_path):
+    """The scene simplify CLI on a Mitsuba 3 scene file and a glTF file (by extension), textured
+    materials measured per texel; a glTF part a BSDF leaves out is listed; an unknown format fails."""
+    import json
+    alpha = bk.Texture(np.array([[0.1, 0.4], [0.3, 0.2]]), filter="nearest")
+    xml = bk.interop.to_mitsuba_file({"gold": bk.Conductor.from_metal("Au", alpha=alpha, masking="separable")},
+                                     tmp_path / "materials.xml")
+    r = _cli(xml, "--tol", "0.02", "-n", "256")
+    assert r.returncode == 0, r.stderr
+    assert "gold" in r.stdout and "Conductor (alpha textured)" in r.stdout and "all 1 material(s) meet tol" in r.stdout
+    bk.io.write_image(tmp_path / "rough.png", np.array([[0.2, 0.8], [0.8, 0.2]]))
+    doc = {"asset": {"version": "2.0"},
+           "materials": [{"name": "paint", "occlusionTexture": {"index": 0},
+                          "pbrMetallicRoughness": {"metallicFactor": 0.5, "metallicRoughnessTexture": {"index": 0}}}],
+           "textures": [{"source": 0}], "images": [{"uri": "rough.png"}]}
+    (tmp_path / "paint.gltf").write_text(json.dumps(doc))
+    r = _cli(tmp_path / "paint.gltf", "--tol", "0.02", "-n", "256")
+    assert r.returncode == 0, r.stderr
+    assert "occlusionTexture" in r.stdout and "FilamentStandard (metallic, roughness textured)" in r.stdout
+    (tmp_path / "scene.obj").write_text("")
+    r = _cli(tmp_path / "scene.obj")
+    assert r.returncode == 2 and "unknown scene format" in r.stderr
