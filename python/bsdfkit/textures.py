@@ -60,6 +60,18 @@ def check_uv(uv, name: str = "uv") -> np.ndarray:
     return a
 
 
+def check_lookup(uv, duvdx, duvdy):
+    """(uv, duvdx, duvdy) of a lookup, checked: uv as :func:`check_uv`, the derivatives both or
+    neither, each broadcast to uv's shape."""
+    uv = check_uv(uv)
+    if (duvdx is None) != (duvdy is None):
+        raise ValueError("duvdx, duvdy: give both or neither")
+    if duvdx is None:
+        return uv, None, None
+    return (uv, np.broadcast_to(check_uv(duvdx, "duvdx"), uv.shape),
+            np.broadcast_to(check_uv(duvdy, "duvdy"), uv.shape))
+
+
 class TextureBase:
     """A texture: ``lookup(uv, duvdx, duvdy)`` returns float64 values of shape (..., channels).
 
@@ -72,12 +84,7 @@ class TextureBase:
         """Values at ``uv`` (..., 2): float64 (..., channels). ``duvdx``, ``duvdy`` (..., 2): the
         screen-space derivatives of uv, for filtered (MIP-mapped) lookups and filtered
         procedural textures; without them, point lookups."""
-        uv = check_uv(uv)
-        dx = None if duvdx is None else np.broadcast_to(check_uv(duvdx, "duvdx"), uv.shape)
-        dy = None if duvdy is None else np.broadcast_to(check_uv(duvdy, "duvdy"), uv.shape)
-        if (dx is None) != (dy is None):
-            raise ValueError("duvdx, duvdy: give both or neither")
-        return self._lookup(uv, dx, dy)
+        return self._lookup(*check_lookup(uv, duvdx, duvdy))
 
     def _lookup(self, uv, dx, dy) -> np.ndarray:
         raise NotImplementedError
@@ -126,6 +133,12 @@ def _channels_of(*texs) -> int:
     if len(c) > 1:
         raise ValueError(f"textures of {sorted(c)} channels cannot be combined")
     return c.pop() if c else 1
+
+
+def _blend(w, t1, t2):
+    """(1 - w) t1 + w t2, a texture whose weight is exactly 0 left out (pbrt-v4 MixTexture and
+    Checkerboard evaluate only the textures with a weight: an Inf there stays out)."""
+    return np.where(w != 1, (1 - w) * t1, 0.0) + np.where(w != 0, w * t2, 0.0)
 
 
 def _match(v: np.ndarray, channels: int) -> np.ndarray:
@@ -192,8 +205,7 @@ class Mix(TextureBase):
         a = self.amount._lookup(uv, dx, dy)
         t1 = _match(self.tex1._lookup(uv, dx, dy), self.channels)
         t2 = _match(self.tex2._lookup(uv, dx, dy), self.channels)
-        # pbrt-v4 MixTexture: a texture whose weight is 0 is not evaluated (an Inf there stays out)
-        return np.where(a != 1, (1 - a) * t1, 0.0) + np.where(a != 0, a * t2, 0.0)
+        return _blend(a, t1, t2)
 
 
 class Checkerboard(TextureBase):
@@ -236,7 +248,7 @@ class Checkerboard(TextureBase):
         w = self._weight(uv, dx, dy)[..., None]
         t1 = _match(self.tex1._lookup(uv, dx, dy), self.channels)
         t2 = _match(self.tex2._lookup(uv, dx, dy), self.channels)
-        return np.where(w != 1, (1 - w) * t1, 0.0) + np.where(w != 0, w * t2, 0.0)
+        return _blend(w, t1, t2)
 
 
 class Normals(TextureBase):
@@ -380,6 +392,7 @@ class Texture(TextureBase):
             raise TypeError(f"invert: expected a bool, got {invert!r}")
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731
         render = _render_ext.load()
+        top = None   # a file's largest stored integer (8 or 16 bits), from its header
         if isinstance(source, (str, os.PathLike)):
             path = os.fspath(source)
             if not os.path.isfile(path):
@@ -387,6 +400,7 @@ class Texture(TextureBase):
             width, height, nch, fmt = render.image_info(path)
             set_("source", path)
             integer = fmt in ("uint8", "uint16", "int8", "int16")
+            top = 255 if fmt in ("uint8", "int8") else 65535
         else:
             a = np.asarray(source)
             if a.dtype.kind not in "fui" or a.dtype == np.bool_:
@@ -433,9 +447,9 @@ class Texture(TextureBase):
         decode = {"auto": "sRGB" if integer else "linear"}.get(encoding, encoding)
         set_("_decode", decode)
         set_("_wraps", tuple(_WRAPS[w] for w in wraps))
-        set_("_file", self._prepare(render, integer))
+        set_("_file", self._prepare(render, integer, top))
 
-    def _prepare(self, render, integer: bool) -> str:
+    def _prepare(self, render, integer: bool, top) -> str:
         """The file the TextureSystem reads: the source file itself when its values need no
         decoding, else a tiled, MIP-mapped float texture of the decoded pixels (in this process's
         temporary directory, named by content)."""
@@ -448,7 +462,6 @@ class Texture(TextureBase):
             except RuntimeError as e:
                 raise OSError(f"source: cannot read image {e}") from None
             if integer:   # OpenImageIO gives k / max exactly: back to the stored integers
-                top = 255 if render.image_info(src)[3] in ("uint8", "int8") else 65535
                 src = np.rint(px * top).astype(np.uint8 if top == 255 else np.uint16)
         if isinstance(src, np.ndarray) and integer:
             # a table of the decoded value of every stored integer (the same values as decoding

@@ -15,7 +15,7 @@ import inspect
 import numpy as np
 
 from .._values import fmt_param, key_value
-from ..textures import TextureBase, check_uv
+from ..textures import TextureBase, check_lookup
 from .base import BxDF
 
 __all__ = ["Textured", "has_texture"]
@@ -38,13 +38,14 @@ def has_texture(args, kwargs) -> bool:
 
 def _bind(cls, args, kwargs) -> dict:
     """The arguments by parameter name, as the constructor would see them (no defaults)."""
+    sig = inspect.signature(cls)
     try:
-        bound = inspect.signature(cls).bind(*args, **kwargs)
+        bound = sig.bind(*args, **kwargs)
     except TypeError as e:
         raise TypeError(f"{cls.__name__}: {e}") from None
     out = {}
     for name, v in bound.arguments.items():
-        kind = inspect.signature(cls).parameters[name].kind
+        kind = sig.parameters[name].kind
         if kind is inspect.Parameter.VAR_KEYWORD:
             out.update(v)
         elif kind is inspect.Parameter.VAR_POSITIONAL:
@@ -154,12 +155,7 @@ class Textured(BxDF, register=False):
     def at(self, uv, duvdx=None, duvdy=None) -> BxDF:
         """The model with every texture looked up at ``uv`` (..., 2): per-element parameters of
         shape uv.shape[:-1] (``(...)`` for a real, ``(..., 3)`` for an RGB)."""
-        uv = check_uv(uv)
-        if (duvdx is None) != (duvdy is None):
-            raise ValueError("duvdx, duvdy: give both or neither")
-        if duvdx is not None:
-            duvdx = np.broadcast_to(check_uv(duvdx, "duvdx"), uv.shape)
-            duvdy = np.broadcast_to(check_uv(duvdy, "duvdy"), uv.shape)
+        uv, duvdx, duvdy = check_lookup(uv, duvdx, duvdy)
         kinds = _kinds(self.model_class)
 
         def value(v, name):
