@@ -134,8 +134,6 @@ void bind_texture(py::module_ &m) {
     m.def("make_texture", &make_texture, py::arg("path"), py::arg("pixels"));
     m.def("texture_lookup", &lookup, py::arg("path"), py::arg("uv"), py::arg("derivs"), py::arg("interp"),
           py::arg("mip"), py::arg("wrap_s"), py::arg("wrap_t"), py::arg("firstchannel"), py::arg("nchannels"));
-    m.def("texture_invalidate", [](const std::string &path) { texsys()->invalidate(OIIO::ustring(path), true); },
-          py::arg("path"));
 }
 
 } // namespace bsdfkit::py_bind

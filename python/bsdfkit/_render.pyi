@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['RenderScene', 'embree_version', 'image_info', 'load_mesh', 'make_texture', 'openimageio_version', 'read_image', 'texture_invalidate', 'texture_lookup', 'write_image']
+__all__: list[str] = ['RenderScene', 'embree_version', 'image_info', 'load_mesh', 'make_texture', 'openimageio_version', 'read_image', 'texture_lookup', 'write_image']
 class RenderScene:
     def __init__(self) -> None:
         ...
@@ -56,8 +56,6 @@ def make_texture(path: str, pixels: typing.Annotated[numpy.typing.ArrayLike, num
 def openimageio_version() -> str:
     ...
 def read_image(arg0: str) -> numpy.typing.NDArray[numpy.float32]:
-    ...
-def texture_invalidate(path: str) -> None:
     ...
 def texture_lookup(path: str, uv: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], derivs: typing.Any, interp: typing.SupportsInt | typing.SupportsIndex, mip: typing.SupportsInt | typing.SupportsIndex, wrap_s: typing.SupportsInt | typing.SupportsIndex, wrap_t: typing.SupportsInt | typing.SupportsIndex, firstchannel: typing.SupportsInt | typing.SupportsIndex, nchannels: typing.SupportsInt | typing.SupportsIndex) -> numpy.typing.NDArray[numpy.float32]:
     ...
