@@ -7,7 +7,7 @@ import warnings
 
 import numpy as np
 
-from ...models import (BxDF, CoatedConductor, CoatedDiffuse, Conductor, Dielectric, Diffuse, DiffuseTransmission,
+from ...models import (CoatedConductor, CoatedDiffuse, Conductor, Dielectric, Diffuse, DiffuseTransmission,
                        ThinDielectric, roughness_to_alpha)
 from ...textures import Scale
 from .parser import _PBRT_SHADING, PbrtSkipWarning, _context, _PbrtError, _scene_source, parse_pbrt_materials
@@ -15,7 +15,7 @@ from .mix import resolve_mixes
 from .shading import shading
 from .textures import float_value, is_texture, lookup_op, spectrum_value
 from .values import (_bool_param, _check_texture, _eta_param, _float_param, _int_param, _pfail, _pfail_param,
-                     _spectrum_param)
+                     _spectrum_param, scene_file)
 
 _PBRT_SUPPORTED = ("diffuse", "diffusetransmission", "conductor", "dielectric", "thindielectric",
                    "coateddiffuse", "coatedconductor", "hair", "measured", "mix")
@@ -208,11 +208,7 @@ def _measured(rec, ctx):
     p = rec.params.get("filename")
     if p is None or p.type != "string" or len(p.values) != 1 or not isinstance(p.values[0], str) or not p.values[0]:
         _pfail(rec, "needs a \"string filename\" naming an RGL tensor file (.bsdf)")
-    base = ctx.get("base") or os.getcwd()
-    name = p.values[0]
-    full = os.path.normpath(name if os.path.isabs(name) else os.path.join(base, name))
-    if not os.path.isfile(full):
-        _pfail_param(rec, p, f"no measured BSDF file {full!r}")
+    full = scene_file(rec, p, p.values[0], ctx, lambda f: f"no measured BSDF file {f!r}")
     try:
         return Measured(full)
     except (OSError, ValueError) as e:

@@ -19,7 +19,8 @@ import numpy as np
 
 from ...textures import Checkerboard, Constant, Mix, Scale, Texture, TextureBase
 from .parser import _PbrtError
-from .values import _bool_param, _check_texture, _float_param, _int_param, _pfail, _pfail_param, _spectrum_param
+from .values import (_bool_param, _check_texture, _float_param, _int_param, _pfail, _pfail_param, _spectrum_param,
+                     scene_file)
 
 __all__ = ["PbrtLookup", "PBRT_TEXTURE_CLASSES"]
 
@@ -250,11 +251,7 @@ def _uv_mapping(trec):
 def image_path(rec, p, name, ctx):
     """The image file ``name`` of parameter ``p``, relative to the scene file's directory (pbrt-v4's
     search directory; the working directory for text); a missing file names the path and the line."""
-    base = ctx.get("base") or os.getcwd()
-    full = os.path.normpath(name if os.path.isabs(name) else os.path.join(base, name))
-    if not os.path.isfile(full):
-        _pfail_param(rec, p, f"no image file {full!r}")
-    return full
+    return scene_file(rec, p, name, ctx, lambda f: f"no image file {f!r}")
 
 
 def _imagemap(trec, ctx):

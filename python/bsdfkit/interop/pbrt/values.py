@@ -95,16 +95,24 @@ def _read_spd(rec, p, full):
     return lam, val
 
 
+def scene_file(rec, p, name, ctx, missing) -> str:
+    """The file ``name`` of parameter ``p``, relative to the scene file's directory (pbrt-v4's
+    search directory; the working directory for text), normalised; a missing file fails with
+    ``missing(path)`` and the line."""
+    base = ctx.get("base") or os.getcwd()
+    full = os.path.normpath(name if os.path.isabs(name) else os.path.join(base, name))
+    if not os.path.isfile(full):
+        _pfail_param(rec, p, missing(full))
+    return full
+
+
 def _spectrum_file(rec, p, name, ctx, *, albedo):
     """A spectrum given by file name (pbrt-v4: a string that is not a named spectrum), relative to
     the scene file's directory (pbrt-v4's search directory; the working directory for text)."""
     from ...spectral.spectrum import Spectrum
 
-    base = ctx.get("base") or os.getcwd()
-    full = os.path.normpath(name if os.path.isabs(name) else os.path.join(base, name))
-    if not os.path.isfile(full):
-        _pfail_param(rec, p, f"{name!r} is neither a named spectrum (bsdfkit.Spectrum.names()) nor a spectrum "
-                     f"file (no file {full!r})")
+    full = scene_file(rec, p, name, ctx, lambda f: f"{name!r} is neither a named spectrum "
+                      f"(bsdfkit.Spectrum.names()) nor a spectrum file (no file {f!r})")
     lam, val = _read_spd(rec, p, full)
     if ctx.get("spectral") and not albedo:
         return Spectrum(lam, val)
@@ -184,11 +192,8 @@ def _eta_param(rec, default=1.5, param="eta", ctx=None):
             _pfail_param(rec, p, f"named spectrum {name!r} is not a glass; dielectric eta accepts "
                          f"{', '.join(PBRT_GLASS_ETA)} (evaluated at 550 nm), a float, pairs or a spectrum file")
         else:
-            base = ctx.get("base") or os.getcwd()
-            full = os.path.normpath(name if os.path.isabs(name) else os.path.join(base, name))
-            if not os.path.isfile(full):
-                _pfail_param(rec, p, f"{name!r} is neither a named glass ({', '.join(PBRT_GLASS_ETA)}) nor a "
-                             f"spectrum file (no file {full!r})")
+            full = scene_file(rec, p, name, ctx, lambda f: f"{name!r} is neither a named glass "
+                              f"({', '.join(PBRT_GLASS_ETA)}) nor a spectrum file (no file {f!r})")
             lam, val = _read_spd(rec, p, full)
     elif p.type == "spectrum":
         v = _numbers(rec, p)
