@@ -13,7 +13,7 @@ Subpackages, by concern:
 ``plot``      matplotlib views (polar, hemisphere, half/diff, albedo, samples, gallery, pareto, ...)
 ``tuning``    speed versus accuracy: knobs, errors, costs, ``tradeoff`` and ``simplify``
 ``fitting``   parameter gradients (``eval_grad``), least-squares fits (``fit``; ``fit_many`` on Dask; ``fit_texels`` per texel)
-``interop``   scene materials in: Mitsuba 3 dictionaries, pbrt-v4 scene text, glTF 2.0 files
+``interop``   scene materials in: Mitsuba 3 dictionaries, pbrt-v4 scene text, glTF 2.0 and MaterialX files
 ``render``    the path-traced preview renderer
 ``spectral``  spectra as values: named, sampled, RGB uplift; wavelength sampling, colour estimates
 ``measured``  writers and tabulation of measured materials (MERL tables, RGL tensor files)
@@ -39,7 +39,8 @@ from .threads import get_num_threads, release_memory, set_num_threads
 # Imported on first access (PEP 562): subpackages, and names re-exported from them.
 _LAZY_MODULES = ("filament", "fitting", "interop", "io", "measured", "plot", "render", "textures", "tuning", "testing")
 _LAZY_NAMES = {
-    "from_mitsuba": "interop", "from_pbrt": "interop", "from_gltf": "interop", "parse_pbrt_materials": "interop",
+    "from_mitsuba": "interop", "from_pbrt": "interop", "from_gltf": "interop", "from_materialx": "interop",
+    "parse_pbrt_materials": "interop",
     "Table": "tuning", "knobs": "tuning", "simplify": "tuning", "tradeoff": "tuning",
     "FitReport": "fitting", "fit": "fitting", "fit_many": "fitting", "fit_texels": "fitting",
     "Texture": "textures", "Textured": "models.textured",
@@ -64,6 +65,6 @@ def __dir__():
 __all__ = models.__all__ + [
     "BxDFFlags", "ReflTrans", "TransportMode", "direction", "get_num_threads", "hemisphere_grid", "release_memory", "set_num_threads",
     "Custom", "filament", "models", "plot", "tuning", "render", "io", "tradeoff", "simplify", "knobs", "Table", "from_mitsuba",
-    "from_pbrt", "from_gltf", "parse_pbrt_materials", "interop", "spectral", "Spectrum", "sample_wavelengths", "spectrum_to_rgb",
+    "from_pbrt", "from_gltf", "from_materialx", "parse_pbrt_materials", "interop", "spectral", "Spectrum", "sample_wavelengths", "spectrum_to_rgb",
     "__version__", "measured", "fitting", "fit", "fit_many", "fit_texels", "FitReport",
     "textures", "Texture", "Textured"]

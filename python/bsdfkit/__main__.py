@@ -117,16 +117,16 @@ def _run_lobes_command(args) -> int:
 
 def _add_simplify_command(sub) -> None:
     si = sub.add_parser(
-        "simplify", help="cheapest knob configuration of every material of a scene (pbrt-v4, Mitsuba 3, glTF) within a "
+        "simplify", help="cheapest knob configuration of every material of a scene (pbrt-v4, Mitsuba 3, glTF, MaterialX) within a "
                          "tolerance",
         description="Read the materials of a scene file (.pbrt: bsdfkit.from_pbrt; .xml: bsdfkit.from_mitsuba; .gltf / "
-                    ".glb: bsdfkit.from_gltf; textured materials are measured texel by texel) and print, per material, the "
+                    ".glb: bsdfkit.from_gltf; .mtlx: bsdfkit.from_materialx; textured materials are measured texel by texel) and print, per material, the "
                     "configuration bsdfkit.simplify chooses (knob settings and the precision to call it with), its "
                     "error against the material as given (the same figure as bsdfkit.simplify's report), whether "
                     "it meets the tolerance, and the speedup the cost table expects. A material whose tolerance "
                     "is not met gets a 'TOLERANCE NOT MET' line; with --strict the exit status is then 1. "
                     "Ctrl-C stops after the current material.")
-    si.add_argument("scene", metavar="SCENE", help="scene file: .pbrt (pbrt-v4), .xml (Mitsuba 3), .gltf / .glb (glTF 2.0)")
+    si.add_argument("scene", metavar="SCENE", help="scene file: .pbrt (pbrt-v4), .xml (Mitsuba 3), .gltf / .glb (glTF 2.0), .mtlx (MaterialX)")
     si.add_argument("--tol", type=float, default=1e-3, help="error tolerance (default 1e-3)")
     si.add_argument("--metric", default=None, choices=("p99", "max", "albedo", "rms"),
                     help="error metric (default, as bsdfkit.simplify: p99, the 99th percentile of the relative error "
@@ -162,42 +162,45 @@ def _run_simplify_command(args) -> int:
 
     if not os.path.isfile(args.scene):
         return fail(f"{args.scene}: no such file")
-    from .interop import GltfWarning, MitsubaSkipWarning, from_gltf, from_mitsuba, from_pbrt
+    from .interop import GltfWarning, MaterialXWarning, MitsubaSkipWarning, from_gltf, from_materialx, from_mitsuba, from_pbrt
     from .interop.pbrt import PbrtMissingIncludeWarning, PbrtSkipWarning
     from .models.describe import describe
     from .tuning import simplify
 
     ext = os.path.splitext(args.scene)[1].lower()
-    if ext not in (".pbrt", ".xml", ".gltf", ".glb", ".gz"):
+    if ext not in (".pbrt", ".xml", ".gltf", ".glb", ".gz", ".mtlx"):
         return fail(f"{args.scene}: unknown scene format {ext!r}: expected .pbrt (pbrt-v4), .xml (Mitsuba 3), "
-                    ".gltf or .glb (glTF 2.0)")
+                    ".gltf or .glb (glTF 2.0), .mtlx (MaterialX)")
     scene = os.path.abspath(args.scene)
     try:
         with warnings.catch_warnings(record=True) as caught:
-            for w in (PbrtSkipWarning, PbrtMissingIncludeWarning, MitsubaSkipWarning, GltfWarning):
+            for w in (PbrtSkipWarning, PbrtMissingIncludeWarning, MitsubaSkipWarning, GltfWarning, MaterialXWarning):
                 warnings.simplefilter("always", w)
             if ext == ".xml":
                 materials = from_mitsuba(scene, strict=not args.skip_unsupported)
             elif ext in (".gltf", ".glb"):
                 materials = from_gltf(scene)
+            elif ext == ".mtlx":
+                materials = from_materialx(scene)
             else:
                 materials = from_pbrt(scene, skip_unsupported=args.skip_unsupported,
                                       skip_missing_includes=args.skip_missing_includes)
     except OSError as e:
         msg = str(e).replace("from_pbrt(..., skip_missing_includes=True)", "--skip-missing-includes")
         return fail(msg)
-    except (ValueError, NotImplementedError) as e:
+    except (ValueError, NotImplementedError, ImportError) as e:
         return fail(f"{args.scene}: {e}")
     skipped = [w.message for w in caught if isinstance(w.message, (PbrtSkipWarning, MitsubaSkipWarning))]
     missing = [w.message for w in caught if isinstance(w.message, PbrtMissingIncludeWarning)]
-    left_out = [w.message for w in caught if isinstance(w.message, GltfWarning)]
+    left_out = [w.message for w in caught if isinstance(w.message, (GltfWarning, MaterialXWarning))]
     for w in caught:
-        if not isinstance(w.message, (PbrtSkipWarning, PbrtMissingIncludeWarning, MitsubaSkipWarning, GltfWarning)):
+        if not isinstance(w.message, (PbrtSkipWarning, PbrtMissingIncludeWarning, MitsubaSkipWarning, GltfWarning,
+                                      MaterialXWarning)):
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     if left_out:
         print(f"{args.scene}: left out of {len(left_out)} material(s) (a BSDF has no such part):")
         for w in left_out:
-            print(f"  - {w.name!r}: {'; '.join(w.left_out)}")
+            print(f"  - {getattr(w, 'name', getattr(w, 'material', None))!r}: {'; '.join(w.left_out)}")
     if missing:
         print(f"{args.scene}: skipped {len(missing)} missing include(s):")
         for w in missing:

@@ -1,4 +1,4 @@
-"""Scene materials in (one module per source: ``mitsuba``, ``pbrt``, ``gltf``; ``spectra`` for spectral data): Mitsuba 3 plugin dictionaries, pbrt-v4 scene text and glTF 2.0 materials as bsdfkit models.
+"""Scene materials in (one module per source: ``mitsuba``, ``pbrt``, ``gltf``, ``materialx``; ``spectra`` for spectral data): Mitsuba 3 plugin dictionaries, pbrt-v4 scene text, glTF 2.0 and MaterialX materials as bsdfkit models.
 
 * :func:`from_mitsuba` turns a Mitsuba 3 BSDF dictionary (what ``mi.load_dict`` takes) into a
   model, ``bitmap`` textures into ``bk.Texture`` values; it inverts
@@ -10,6 +10,9 @@
 * :func:`from_gltf` reads the materials of a glTF 2.0 file (``.gltf`` or ``.glb``) as
   ``FilamentStandard`` models (with ``NormalMap`` / ``Mask`` / ``TwoSided`` where asked for);
   :func:`read_gltf_materials` also gives what each leaves out (occlusion, emission, ...).
+* :func:`from_materialx` reads the ``gltf_pbr`` and ``UsdPreviewSurface`` materials of a MaterialX
+  document (``.mtlx`` or text) as ``FilamentStandard`` models, with ``image`` / ``tiledimage``
+  nodes as textures; it needs the optional ``materialx`` package.
 * ``model.to_mitsuba()`` is the other direction: it exports only a model Mitsuba has exactly and
   otherwise raises :class:`MitsubaExportError` naming the reason (e.g. height-correlated masking)
   and the measured difference; ``to_mitsuba(approximate=True)`` exports the nearest Mitsuba
@@ -26,12 +29,14 @@ what is supported.
 from ..models._mitsuba_export import MitsubaApproximationWarning, MitsubaExportError
 from ._mitsuba_xml import to_mitsuba_file
 from .gltf import GLTF_SUPPORTED_EXTENSIONS, GltfMaterial, GltfWarning, from_gltf, read_gltf_materials
+from .materialx import MATERIALX_SHADING_MODELS, MaterialXWarning, from_materialx
 from .mitsuba import MIRROR_ETA, MITSUBA_IOR, MitsubaSkipWarning, from_mitsuba
 from .pbrt import (PBRT_GLASS_ETA, PbrtColorSpaceWarning, PbrtMaterial, PbrtMissingIncludeWarning, PbrtParam,
                    PbrtSkipWarning, from_pbrt, parse_pbrt_materials)
 from .spectra import spectrum_to_rgb
 
 __all__ = ["from_mitsuba", "to_mitsuba_file", "MitsubaSkipWarning", "from_pbrt", "from_gltf", "read_gltf_materials",
-           "GltfMaterial", "GltfWarning", "GLTF_SUPPORTED_EXTENSIONS", "parse_pbrt_materials", "PbrtMaterial",
+           "GltfMaterial", "GltfWarning", "GLTF_SUPPORTED_EXTENSIONS", "from_materialx", "MaterialXWarning",
+           "MATERIALX_SHADING_MODELS", "parse_pbrt_materials", "PbrtMaterial",
            "PbrtParam", "spectrum_to_rgb", "MITSUBA_IOR", "PBRT_GLASS_ETA", "MIRROR_ETA", "MitsubaExportError",
            "MitsubaApproximationWarning", "PbrtSkipWarning", "PbrtMissingIncludeWarning", "PbrtColorSpaceWarning"]

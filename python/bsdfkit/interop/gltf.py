@@ -214,10 +214,13 @@ def _f0_to_reflectance(f0):
 
 # ---------------------------------------------------------------- materials
 
-def _material(doc, i, mat, options):
-    """(model, notes) of materials[i]."""
+def _material(doc, i, mat, options, *, texture_ref=_texture_ref, where=None):
+    """(model, notes) of materials[i]. Shared with ``interop.materialx`` (its ``gltf_pbr`` node is
+    this material): ``texture_ref(doc, obj, key, where, notes)`` resolves a textureInfo (an object
+    whose ``make(channel, encoding)`` gives the bk texture of a channel, or None) and ``where``
+    prefixes error messages."""
     from ..models import FilamentStandard, Mask, NormalMap, TwoSided
-    where = f"materials[{i}]"
+    where = f"materials[{i}]" if where is None else where
     notes = []
     pbr = _obj(mat, "pbrMetallicRoughness", where)
     wp = f"{where}.pbrMetallicRoughness"
@@ -232,10 +235,10 @@ def _material(doc, i, mat, options):
     # core metallic-roughness (glTF 2.0 spec, "Metallic-Roughness Material"): factor x texture,
     # base colour sRGB-decoded, metalness = B and roughness = G of metallicRoughnessTexture, linear
     bcf = _vec(pbr, "baseColorFactor", [1.0, 1.0, 1.0, 1.0], 4, wp)
-    bct = _texture_ref(doc, pbr, "baseColorTexture", wp, notes)
+    bct = texture_ref(doc, pbr, "baseColorTexture", wp, notes)
     metal = _num(pbr, "metallicFactor", 1.0, wp, 0.0, 1.0)
     rough = _num(pbr, "roughnessFactor", 1.0, wp, 0.0, 1.0)
-    mrt = _texture_ref(doc, pbr, "metallicRoughnessTexture", wp, notes)
+    mrt = texture_ref(doc, pbr, "metallicRoughnessTexture", wp, notes)
     p = {"base_color": _product(bcf[:3], bct, "rgb", "sRGB"),
          "metallic": _product(metal, mrt, 2, "linear")}
     # glTF roughness is perceptual: alpha = roughness^2 (glTF 2.0 spec, Appendix B "Microfacet
@@ -255,8 +258,8 @@ def _material(doc, i, mat, options):
         e, w = exts["KHR_materials_specular"], f"{where}.extensions.KHR_materials_specular"
         spec = _num(e, "specularFactor", 1.0, w, 0.0, 1.0)
         col = _vec(e, "specularColorFactor", [1.0, 1.0, 1.0], 3, w, 0.0, 1e30)
-        spec_tex = _texture_ref(doc, e, "specularTexture", w, notes)
-        spec_col_tex = _texture_ref(doc, e, "specularColorTexture", w, notes)
+        spec_tex = texture_ref(doc, e, "specularTexture", w, notes)
+        spec_col_tex = texture_ref(doc, e, "specularColorTexture", w, notes)
         if np.ptp(col) > 0 or spec_col_tex is not None:
             notes.append("KHR_materials_specular specularColor tint (FilamentStandard's reflectance is one "
                          "number: the largest channel is used)")
@@ -281,9 +284,9 @@ def _material(doc, i, mat, options):
         e, w = exts["KHR_materials_clearcoat"], f"{where}.extensions.KHR_materials_clearcoat"
         cc = _num(e, "clearcoatFactor", 0.0, w, 0.0, 1.0)
         if cc > 0:
-            p["clear_coat"] = _product(cc, _texture_ref(doc, e, "clearcoatTexture", w, notes), 0, "linear")
+            p["clear_coat"] = _product(cc, texture_ref(doc, e, "clearcoatTexture", w, notes), 0, "linear")
             p["clear_coat_roughness"] = _product(_num(e, "clearcoatRoughnessFactor", 0.0, w, 0.0, 1.0),
-                                                 _texture_ref(doc, e, "clearcoatRoughnessTexture", w, notes),
+                                                 texture_ref(doc, e, "clearcoatRoughnessTexture", w, notes),
                                                  1, "linear")
             if "clearcoatNormalTexture" in e:
                 notes.append("KHR_materials_clearcoat clearcoatNormalTexture (FilamentStandard's coat shares "
@@ -295,9 +298,9 @@ def _material(doc, i, mat, options):
         e, w = exts["KHR_materials_sheen"], f"{where}.extensions.KHR_materials_sheen"
         col = _vec(e, "sheenColorFactor", [0.0, 0.0, 0.0], 3, w)
         if np.any(col > 0):
-            p["sheen_color"] = _product(col, _texture_ref(doc, e, "sheenColorTexture", w, notes), "rgb", "sRGB")
+            p["sheen_color"] = _product(col, texture_ref(doc, e, "sheenColorTexture", w, notes), "rgb", "sRGB")
             p["sheen_roughness"] = _product(_num(e, "sheenRoughnessFactor", 0.0, w, 0.0, 1.0),
-                                            _texture_ref(doc, e, "sheenRoughnessTexture", w, notes), 3, "linear")
+                                            texture_ref(doc, e, "sheenRoughnessTexture", w, notes), 3, "linear")
 
     # KHR_materials_anisotropy: alpha_t = mix(alpha, 1, strength^2) along the tangent, alpha_b = alpha.
     # FilamentStandard: alpha_t = a (1 + k), alpha_b = a (1 - k) with a = roughness^2, so
@@ -333,7 +336,7 @@ def _material(doc, i, mat, options):
         raise _GltfError(f"{where}: {e}") from None
 
     # normalTexture: n = normalize((2 rgb - 1) (scale, scale, 1)) (glTF 2.0 spec, "Additional Textures")
-    nt = _texture_ref(doc, mat, "normalTexture", where, notes)
+    nt = texture_ref(doc, mat, "normalTexture", where, notes)
     if nt is not None:
         scale = _num(mat["normalTexture"], "scale", 1.0, f"{where}.normalTexture")
         model = NormalMap(model, _normal_texture(nt, scale))
