@@ -28,7 +28,8 @@ need = {"scikit-build-core": None, "pybind11": None, "numpy": None, "matplotlib"
         "pytest-xdist": None, "hypothesis": None, "mitsuba": "3.9.1", "drjit": None, "scipy": None,
         "nbclient": None, "nbmake": None, "ipykernel": None, "nbformat": None, "ipywidgets": None,
         "colour-science": "0.4.4", "pillow": None, "pybind11-stubgen": None, "dask": None, "distributed": None, "threadpoolctl": None,
-        "sphinx": None, "myst-parser": None, "furo": None}  # docs: scripts/docs, tests/test_docs.py
+        "sphinx": None, "myst-parser": None, "furo": None,  # docs: scripts/docs, tests/test_docs.py
+        "materialx": "1.39"}  # bk.from_materialx (optional at run time; tests/test_materialx.py needs it)
 for name, least in need.items():
     v = md.version(name)
     if least and tuple(int(x) for x in v.split(".")[:3]) < tuple(int(x) for x in least.split(".")):
@@ -38,7 +39,8 @@ then
   echo "[setup] pip install build and test dependencies"
   $PY -m pip install -q --disable-pip-version-check "scikit-build-core>=0.10" "pybind11>=2.12" numpy matplotlib \
       pytest pytest-xdist hypothesis "mitsuba>=3.9.1" drjit scipy nbclient nbmake ipykernel nbformat ipywidgets \
-      "colour-science>=0.4.4" pillow pybind11-stubgen "dask[distributed]" threadpoolctl sphinx myst-parser furo
+      "colour-science>=0.4.4" pillow pybind11-stubgen "dask[distributed]" threadpoolctl sphinx myst-parser furo \
+      "materialx>=1.39"
 fi
 
 # Rebuild only when a source file changed since the last install.
