@@ -375,3 +375,84 @@ def test_cli_simplify_reads_mtlx(tmp_path):
                         "-n", "256"], capture_output=True, text=True, env=env, timeout=600)
     assert r.returncode == 0, r.stderr
     assert "1 material(s)" in r.stdout and "red" in r.stdout
+
+
+def test_image_node_options_and_refusals(images):
+    d, px = images
+
+    def doc(extra, image_type="color3", target=("diffuseColor", "color3")):
+        return mtlx(f'  <image name="img" type="{image_type}">\n'
+                    '    <input name="file" type="filename" value="tex/colour.png" />\n' + extra + '  </image>\n'
+                    + usd("m", [(target[0], target[1], 'nodename="img"')]))
+
+    def write(text):
+        (d / "i.mtlx").write_text(text)
+        return d / "i.mtlx"
+
+    t = load(write(doc('    <input name="uaddressmode" type="string" value="clamp" />\n'
+                       '    <input name="vaddressmode" type="string" value="mirror" />\n'
+                       '    <input name="filtertype" type="string" value="cubic" />\n')))["m"].textures["base_color"]
+    assert (t.wrap, t.filter, t.encoding) == (("clamp", "mirror"), "bicubic", "linear")   # no colorspace: linear
+    t = load(write(doc('    <input name="uaddressmode" type="string" value="constant" />\n')))["m"].textures["base_color"]
+    assert t.wrap == ("black", "periodic")
+    with pytest.raises(ValueError, match=r"node 'img' \(image, line 3\): uaddressmode constant with a non-zero default"):
+        bk.from_materialx(write(doc('    <input name="uaddressmode" type="string" value="constant" />\n'
+                                    '    <input name="default" type="color3" value="1, 0, 0" />\n')))
+    tc = mtlx('  <texcoord name="tc" type="vector2">\n    <input name="index" type="integer" value="1" />\n'
+              '  </texcoord>\n  <image name="img" type="color3">\n'
+              '    <input name="file" type="filename" value="tex/colour.png" />\n'
+              '    <input name="texcoord" type="vector2" nodename="tc" />\n  </image>\n'
+              + usd("m", [("diffuseColor", "color3", 'nodename="img"')]))
+    with pytest.raises(ValueError, match=r"node 'img' \(image, line 6\): texcoord: only the default uv set"):
+        bk.from_materialx(write(tc))
+    assert load(write(tc.replace('value="1"', 'value="0"')))["m"].textures["base_color"].filter == "bilinear"
+    with pytest.raises(ValueError, match=r"node 'img' \(image, line 3\): colorspace 'acescg' of its file"):
+        bk.from_materialx(write(doc("").replace('value="tex/colour.png"', 'value="tex/colour.png" colorspace="acescg"')))
+    with pytest.raises(ValueError, match=r"input 'diffuseColor' .*connected to node 'img' \(image, line 3\) of type "
+                                         r"float, the input is color3"):
+        bk.from_materialx(write(doc("", image_type="float")))
+
+
+def test_nodegraph_interface_and_constant_nodes(images):
+    d, px = images
+    text = mtlx('''  <nodegraph name="NG">
+    <input name="tint" type="color3" value="0.25, 0.5, 0.75" />
+    <constant name="c" type="color3">
+      <input name="value" type="color3" interfacename="tint" />
+    </constant>
+    <output name="out" type="color3" nodename="c" />
+  </nodegraph>
+''' + usd("m", [("diffuseColor", "color3", 'nodegraph="NG" output="out"')]))
+    assert list(load(text)["m"].base_color) == [0.25, 0.5, 0.75]
+
+
+def test_gltf_pbr_textured_metallic_roughness(images):
+    """gltf_pbr's metallic and roughness from two float images: each its own texture, channel 0."""
+    d, px = images
+    text = mtlx('''  <image name="met" type="float">
+    <input name="file" type="filename" value="tex/data.png" />
+    <input name="filtertype" type="string" value="closest" />
+  </image>
+  <image name="rgh" type="float">
+    <input name="file" type="filename" value="tex/colour.png" />
+    <input name="filtertype" type="string" value="closest" />
+  </image>
+''' + usd("g", [("metallic", "float", 'nodename="met"'), ("roughness", "float", 'nodename="rgh"'),
+                ("base_color", "color3", 'value="0.8, 0.7, 0.6"')], shader="gltf_pbr"))
+    (d / "g.mtlx").write_text(text)
+    m = load(d / "g.mtlx")["g"]
+    uv = (np.random.default_rng(2).integers(0, 8, (16, 2)) + 0.5) / 8
+    at = m.at(uv)
+    np.testing.assert_allclose(at.metallic, texel(px["data"], uv)[:, 0] / 255.0, rtol=1e-6, atol=1e-7)
+    np.testing.assert_allclose(at.roughness, texel(px["colour"], uv)[:, 0] / 255.0, rtol=1e-6, atol=1e-7)
+    wo, wi = directions(len(uv))
+    np.testing.assert_array_equal(m.eval(wo, wi, uv=uv), at.eval(wo, wi))
+
+
+def test_dot_cycle_is_refused():
+    text = mtlx('  <dot name="a" type="float">\n    <input name="in" type="float" nodename="b" />\n  </dot>\n'
+                '  <dot name="b" type="float">\n    <input name="in" type="float" nodename="a" />\n  </dot>\n'
+                + usd("m", [("roughness", "float", 'nodename="a"')]))
+    with pytest.raises(ValueError, match=r"node '[ab]' \(dot, line [36]\): a chain of more than 64 dot / constant "
+                                         r"nodes \(or a cycle\)"):
+        bk.from_materialx(text)

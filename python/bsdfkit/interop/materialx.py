@@ -130,7 +130,7 @@ def _source(source):
 class _Reader:
     def __init__(self, mx, doc, lines, label, base):
         self.mx, self.doc, self.lines, self.label, self.base = mx, doc, lines, label, base
-        self._textures = {}
+        self._textures, self._depth = {}, 0
 
     # -- where
     def line(self, elem):
@@ -248,7 +248,13 @@ class _Reader:
             self.fail(node, f"connected to {self.node_label(up)} of type {up.getType()}, the input is {typ}", inp)
         if cat in ("constant", "dot"):
             self.require_def(up)
-            return self.value(up, "value" if cat == "constant" else "in")
+            self._depth += 1
+            if self._depth > 64:
+                self.fail(up, "a chain of more than 64 dot / constant nodes (or a cycle)")
+            try:
+                return self.value(up, "value" if cat == "constant" else "in")
+            finally:
+                self._depth -= 1
         if cat in ("image", "tiledimage"):
             return ("tex", self.texture(up), up)
         if cat == "normalmap":
@@ -290,10 +296,12 @@ class _Reader:
         for n in ("layer", "framerange"):
             if node.getNodeDef().getActiveInput(n) is not None and get(n)[1]:
                 self.fail(node, f"{n} {get(n)[1]!r}: layers and frame ranges are not read")
-        tc = get("texcoord")
-        if tc[0] != "const":
-            up = tc[2] if len(tc) > 2 else None
-            idx = self.value(up, "index")[1] if up is not None and up.getCategory() == "texcoord" else None
+        tci = node.getInput("texcoord")
+        while tci is not None and tci.hasInterfaceName():
+            tci = tci.getInterfaceInput()
+        up = self._upstream(node, tci) if tci is not None else None
+        if up is not None:
+            idx = self.value(up, "index")[1] if up.getCategory() == "texcoord" else None
             if idx != 0:
                 self.fail(node, "texcoord: only the default uv set (a texcoord node with index 0) is read")
         filt = _FILTER.get(get("filtertype")[1])
