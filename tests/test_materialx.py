@@ -301,7 +301,7 @@ def test_unknown_node_names_node_and_line():
     with pytest.raises(ValueError, match=rf"node 'mul' \(multiply, line {n}\): 'multiply' nodes are not read"):
         bk.from_materialx(text)
     text = mtlx('  <wobble name="w" type="float" />\n' + usd("m", [("roughness", "float", 'nodename="w"')]))
-    with pytest.raises(ValueError, match=rf"node 'w' \(wobble, line 3\): unknown node 'wobble'"):
+    with pytest.raises(ValueError, match=r"node 'w' \(wobble, line 3\): unknown node 'wobble'"):
         bk.from_materialx(text)
     text = mtlx(usd("m", [], shader="fancy_surface"))
     with pytest.raises(ValueError, match=r"node 'm_sh' \(fancy_surface, line 3\): unknown node"):
@@ -456,3 +456,10 @@ def test_dot_cycle_is_refused():
     with pytest.raises(ValueError, match=r"node '[ab]' \(dot, line [36]\): a chain of more than 64 dot / constant "
                                          r"nodes \(or a cycle\)"):
         bk.from_materialx(text)
+
+
+def test_every_truncation_is_a_value_error():
+    text = mtlx(TEX_DOC + usd("m", [("diffuseColor", "color3", 'nodegraph="NG" output="col_out"')]))
+    for n in range(0, len(text) - 1, 37):
+        with pytest.raises(ValueError, match=r"not a well-formed MaterialX document|not a MaterialX document"):
+            bk.from_materialx(text[:n] + "<")
