@@ -104,15 +104,19 @@ def test_usd_diffuse_only_is_lambert():
     np.testing.assert_allclose(m.eval(wo, wi), np.broadcast_to(c / np.pi, (len(wo), 3)), rtol=1e-12, atol=0)
 
 
-def test_usd_metal_at_retroreflection_is_ggx_times_albedo():
-    """metallic 1: the spec's F0 = F90 = diffuseColor; at wi = wo (v.h = 1) Schlick is F0 whatever F90,
-    so FilamentStandard (single scattering) is the spec's GGX lobe there exactly."""
-    c, r = np.array([0.95, 0.64, 0.54]), 0.4
-    m = load(mtlx(usd("m", [("metallic", "float", 'value="1"'), ("roughness", "float", f'value="{r}"'),
+@pytest.mark.parametrize("metallic", [1.0, 0.4])
+def test_usd_metal_at_retroreflection_is_the_spec(metallic):
+    """Metalness workflow: F0 = mix(F0(ior), diffuseColor, metallic) ("in between, we interpolate"),
+    diffuse diffuseColor (1 - metallic) (MaterialX's graph weights the diffuse so). At wi = wo
+    (v.h = 1) Schlick is F0 whatever F90, so FilamentStandard (single scattering) is the spec there."""
+    c, r, ior = np.array([0.95, 0.64, 0.54]), 0.4, 1.6
+    m = load(mtlx(usd("m", [("metallic", "float", f'value="{metallic}"'), ("roughness", "float", f'value="{r}"'),
+                             ("ior", "float", f'value="{ior}"'),
                              ("diffuseColor", "color3", 'value="0.95, 0.64, 0.54"')])),
              options={"energy_compensation": False})["m"]
     wo, _ = directions()
-    ref = ggx_schlick(wo, wo.copy(), r * r, c, f90=c)   # spec: alpha = roughness^2
+    f0 = (1 - metallic) * f0_from_ior(ior) + metallic * c
+    ref = ggx_schlick(wo, wo.copy(), r * r, f0, f90=f0) + (1 - metallic) * c / np.pi   # spec: alpha = roughness^2
     np.testing.assert_allclose(m.eval(wo, wo), ref, rtol=1e-9)
 
 
