@@ -37,13 +37,14 @@ from .spectral import Spectrum, sample_wavelengths, spectrum_to_rgb
 from .threads import get_num_threads, release_memory, set_num_threads
 
 # Imported on first access (PEP 562): subpackages, and names re-exported from them.
-_LAZY_MODULES = ("filament", "fitting", "interop", "io", "measured", "plot", "render", "textures", "tuning", "testing")
+_LAZY_MODULES = ("compensation", "filament", "fitting", "interop", "io", "measured", "plot", "render", "textures", "tuning", "testing")
 _LAZY_NAMES = {
     "from_mitsuba": "interop", "from_pbrt": "interop", "from_gltf": "interop", "from_materialx": "interop",
     "parse_pbrt_materials": "interop",
     "Table": "tuning", "knobs": "tuning", "simplify": "tuning", "tradeoff": "tuning",
     "FitReport": "fitting", "fit": "fitting", "fit_many": "fitting", "fit_texels": "fitting",
     "Texture": "textures", "Textured": "models.textured",
+    "albedo_table": "compensation", "AlbedoTable": "compensation",
     "__version__": "_version",
 }
 
@@ -67,4 +68,4 @@ __all__ = models.__all__ + [
     "Custom", "filament", "models", "plot", "tuning", "render", "io", "tradeoff", "simplify", "knobs", "Table", "from_mitsuba",
     "from_pbrt", "from_gltf", "from_materialx", "parse_pbrt_materials", "interop", "spectral", "Spectrum", "sample_wavelengths", "spectrum_to_rgb",
     "__version__", "measured", "fitting", "fit", "fit_many", "fit_texels", "FitReport",
-    "textures", "Texture", "Textured"]
+    "textures", "Texture", "Textured", "compensation", "albedo_table", "AlbedoTable"]
