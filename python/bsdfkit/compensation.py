@@ -387,7 +387,7 @@ def albedo_table(model, grid=None, *, params=None, n_samples: int = 1 << 16, tol
     >>> t = bk.albedo_table(white, grid={"alpha": 4, "mu": 8}, n_samples=4096, channel="mean", cache=False)
     >>> t.E.shape, t.E_avg.shape, t.axes            # E[alpha, mu]: mu is the fast (texture x) axis
     ((4, 8), (4,), ('alpha', 'mu'))
-    >>> bool(t.E_avg[0] > t.E_avg[-1] > 0.5)         # rougher: more energy lost to multiple scattering
+    >>> bool(t.E_avg[0] > t.E_avg[-1] > 0.4)         # rougher: more energy left to multiple scattering
     True
     """
     n_samples = _check_int(n_samples, "n_samples", 2)
