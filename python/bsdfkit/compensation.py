@@ -45,6 +45,8 @@ FORMAT_VERSION = 1
 _CALL_SAMPLES = 1 << 22
 #: Samples per direction of the direct E_avg estimate (cosine-weighted wo).
 _AVG_PER_DIR = 16
+#: The direct E_avg estimate's first round: this many times an entry's samples.
+_AVG_BUDGET = 4
 _TEXEL_AXES = ("mu", "alpha", "roughness")
 
 
@@ -261,7 +263,7 @@ class AlbedoTable:
             "grid": {k: v.tolist() for k, v in self.grid.items()},
             "entry": ("E = directional albedo, integral of f(wo, wi) |cos theta_i| dwi, at wo = (sqrt(1 - mu^2), 0, mu) "
                       "(local frame, z the normal); mu = cos theta_o; other axes are the model's parameters"),
-            "npy": "E only, C order, axes as listed",
+            "npy": "<stem>.npy: E, C order, axes as listed; <stem>_avg.npy: E_avg, axes as E_avg_axes",
             "E_avg": "2 * integral_0^1 E(mu) mu dmu: axes as E without 'mu' (direct Monte Carlo estimate)",
             "E_avg_axes": [a for i, a in enumerate(self.axes) if i != mu_axis],
             "E_avg_values": self.E_avg.tolist(), "E_avg_err": self.E_avg_err.tolist(),
@@ -270,25 +272,27 @@ class AlbedoTable:
         }
 
     def save(self, path, dtype=np.float32) -> tuple:
-        """Writes ``<stem>.npy`` (E in ``dtype``, default float32, for engines), ``<stem>.npz`` (every
-        array in float64 and the grids as ``grid_<name>``) and ``<stem>.json`` (:meth:`layout`).
-        ``path``: the stem, with or without ``.npy``. Returns the three paths."""
+        """Writes ``<stem>.npy`` (E in ``dtype``, default float32, for engines), ``<stem>_avg.npy``
+        (E_avg likewise), ``<stem>.npz`` (every array in float64 and the grids as ``grid_<name>``)
+        and ``<stem>.json`` (:meth:`layout`). ``path``: the stem, with or without ``.npy``.
+        Returns the four paths."""
         stem = os.fspath(path)
         if stem.endswith(".npy"):
             stem = stem[:-4]
-        paths = (stem + ".npy", stem + ".npz", stem + ".json")
+        paths = (stem + ".npy", stem + "_avg.npy", stem + ".npz", stem + ".json")
         np.save(paths[0], self.E.astype(dtype))
-        np.savez(paths[1], **{k: getattr(self, k) for k in self._ARRAYS},
+        np.save(paths[1], self.E_avg.astype(dtype))
+        np.savez(paths[2], **{k: getattr(self, k) for k in self._ARRAYS},
                  **{f"grid_{k}": v for k, v in self.grid.items()})
-        with open(paths[2], "w") as fh:
+        with open(paths[3], "w") as fh:
             json.dump(self.layout(), fh, indent=1)
         return paths
 
     @classmethod
     def load(cls, path) -> "AlbedoTable":
-        """A table written by :meth:`save` (``path``: the stem, or any of its three files)."""
+        """A table written by :meth:`save` (``path``: the stem, or any of its files)."""
         stem = os.fspath(path)
-        for ext in (".npy", ".npz", ".json"):
+        for ext in ("_avg.npy", ".npy", ".npz", ".json"):
             if stem.endswith(ext):
                 stem = stem[:-len(ext)]
         with open(stem + ".json") as fh:
@@ -336,7 +340,8 @@ def albedo_table(model, grid=None, *, params=None, n_samples: int = 1 << 16, tol
     params : dict, optional
         With a model class: its fixed keyword arguments.
     n_samples : int, optional
-        Importance samples per entry in the first round (default 65536), split into ``replicas``.
+        Importance samples per entry in the first round (default 65536), split into ``replicas``;
+        the direct ``E_avg`` estimate takes four times as many per model.
     tol : float, optional
         Target of every error bound ``E_err`` and ``E_avg_err``: entries above it get more samples
         (estimated from their variance) up to ``max_samples`` each; if not reached, a RuntimeWarning
@@ -430,7 +435,7 @@ def albedo_table(model, grid=None, *, params=None, n_samples: int = 1 << 16, tol
     nm, nmu, k = len(models), mu.size, replicas
     per_rep0 = max(1, -(-n_samples // k))
     pool, pavg = _Pool((nm, nmu)), _Pool((nm,))
-    prog = Progress(progress, nm * (nmu + 1) * per_rep0 * k, "samples", "albedo_table")
+    prog = Progress(progress, nm * (nmu + _AVG_BUDGET) * per_rep0 * k, "samples", "albedo_table")
     done = [0]
     models_done = 0
 
@@ -449,10 +454,11 @@ def albedo_table(model, grid=None, *, params=None, n_samples: int = 1 << 16, tol
             prog(min(done[0], prog.total))
 
     def run_avg(i, per_rep, rnd):
-        """Direct E_avg: k replicas of per_rep // 16 cosine-weighted directions x 16 samples."""
+        """Direct E_avg: k replicas of per_rep // 16 cosine-weighted directions x 16 samples, each
+        replica's directions stratified in mu^2 (jittered: unbiased, and the replicas independent)."""
         dirs = max(1, per_rep // _AVG_PER_DIR)
         rng = np.random.default_rng(_seed(seed, i, rnd, "avg"))
-        m = np.sqrt(rng.random((k, dirs)))          # density 2 mu on (0, 1]: cosine-weighted wo
+        m = np.sqrt((np.arange(dirs) + rng.random((k, dirs))) / dirs)   # density 2 mu: cosine-weighted wo
         w = np.stack([np.sqrt(np.maximum(0.0, 1 - m * m)), np.zeros_like(m), m], -1).reshape(-1, 3)
         a = _albedo(models[i], w, _AVG_PER_DIR, _seed(seed, i, rnd, "avg"), mode).reshape(k, dirs, 3)
         pavg.add(i, a.mean(1), dirs * _AVG_PER_DIR)
@@ -468,7 +474,7 @@ def albedo_table(model, grid=None, *, params=None, n_samples: int = 1 << 16, tol
     try:
         for i in range(nm):
             run(i, np.ones(nmu, bool), per_rep0, 0)
-            run_avg(i, per_rep0, 0)
+            run_avg(i, _AVG_BUDGET * per_rep0, 0)
             rnd = 1
             while tol is not None:
                 e, se, err, ea, sea, erra = (x[i] for x in bounds())
@@ -561,7 +567,7 @@ def _store(table, cdir, key):
         os.makedirs(cdir, exist_ok=True)
         with tempfile.TemporaryDirectory(dir=cdir) as tmp:
             paths = table.save(os.path.join(tmp, "t"), dtype=np.float64)
-            for p in (paths[0], paths[1], paths[2]):
-                os.replace(p, os.path.join(cdir, f"albedo-table-{key}" + os.path.splitext(p)[1]))
+            for p in paths:                                       # the JSON last: load reads it first
+                os.replace(p, os.path.join(cdir, f"albedo-table-{key}" + os.path.basename(p)[1:]))
     except OSError:
         pass
