@@ -125,6 +125,14 @@ def test_tol_reached_and_not_reached():
     assert u.n_samples.max() <= 1 << 13
 
 
+def test_cached_table_warns_again(tmp_path):
+    kw = dict(grid={"mu": 4}, n_samples=1 << 10, tol=1e-5, max_samples=1 << 12, cache=tmp_path)
+    with pytest.warns(RuntimeWarning, match="not reached"):
+        bk.albedo_table(white(0.5), **kw)
+    with pytest.warns(RuntimeWarning, match="cached.*not reached"):
+        bk.albedo_table(white(0.5), **kw)
+
+
 def test_cache_hit_without_recomputation(tmp_path, monkeypatch):
     calls = []
     real = compensation._albedo

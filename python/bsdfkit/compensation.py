@@ -426,9 +426,14 @@ def albedo_table(model, grid=None, *, params=None, n_samples: int = 1 << 16, tol
     cdir = _cache_dir(cache)
     if cdir is not None:
         try:
-            return AlbedoTable.load(os.path.join(cdir, f"albedo-table-{key}"))
+            table = AlbedoTable.load(os.path.join(cdir, f"albedo-table-{key}"))
         except Exception:   # missing or damaged: computed again
-            pass
+            table = None
+        if table is not None:
+            if not table.converged:
+                warnings.warn(f"albedo_table (cached): tol={tol:g} not reached within max_samples={max_samples}:\n"
+                              f"{table.report()}", RuntimeWarning, stacklevel=2)
+            return table
 
     t0 = time.perf_counter()
     wo = np.stack([np.sqrt(np.maximum(0.0, 1 - mu * mu)), np.zeros_like(mu), mu], -1)
