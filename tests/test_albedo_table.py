@@ -1,7 +1,6 @@
 """bk.albedo_table (issue 49 item 5): E(mu) / E_avg tables with their own error bounds, against an
 independent float64 integration written here from the papers (not from bsdfkit's C++)."""
 import json
-import warnings
 
 import numpy as np
 import pytest

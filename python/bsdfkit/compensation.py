@@ -261,8 +261,9 @@ class AlbedoTable:
             "format": FORMAT, "format_version": FORMAT_VERSION,
             "axes": list(self.axes), "shape": list(self.E.shape),
             "grid": {k: v.tolist() for k, v in self.grid.items()},
-            "entry": ("E = directional albedo, integral of f(wo, wi) |cos theta_i| dwi, at wo = (sqrt(1 - mu^2), 0, mu) "
-                      "(local frame, z the normal); mu = cos theta_o; other axes are the model's parameters"),
+            "entry": ("E = directional albedo, integral of f(wo, wi) |cos theta_i| dwi, at "
+                      "wo = (sqrt(1 - mu^2), 0, mu) (local frame, z the normal); mu = cos theta_o; "
+                      "other axes are the model's parameters"),
             "npy": "<stem>.npy: E, C order, axes as listed; <stem>_avg.npy: E_avg, axes as E_avg_axes",
             "E_avg": "2 * integral_0^1 E(mu) mu dmu: axes as E without 'mu' (direct Monte Carlo estimate)",
             "E_avg_axes": [a for i, a in enumerate(self.axes) if i != mu_axis],
