@@ -207,9 +207,9 @@ def test_mitsuba_spectrum_dict_loads_same_rgb():
 
 @pytest.mark.parametrize("d, words", [
     ({"type": "pplastic"}, ["'pplastic'", "unsupported plugin", "diffuse", "roughconductor", "thindielectric"]),
-    ({"type": "roughconductor", "alpha": 0.2}, ["roughconductor", "beckmann", "ggx"]),
-    ({"type": "roughconductor", "distribution": "beckmann"}, ["beckmann", "'ggx'"]),
-    ({"type": "roughdielectric", "distribution": "beckmann", "alpha": 0.1}, ["roughdielectric", "beckmann"]),
+    ({"type": "roughconductor", "distribution": "phong", "alpha": 0.2}, ["roughconductor", "'phong'", "beckmann", "ggx"]),
+    ({"type": "roughplastic", "alpha": 0.2}, ["roughplastic", "no 'distribution'", "beckmann", "Plastic", "'ggx'"]),
+    ({"type": "roughplastic", "distribution": "beckmann", "alpha": 0.1}, ["roughplastic", "beckmann", "Plastic"]),
     ({"type": "diffuse", "reflectance": {"type": "mesh_attribute", "name": "vertex_color"}},
      ["diffuse", "'reflectance'", "texture", "'mesh_attribute'"]),
     ({"type": "roughconductor", "distribution": "ggx", "alpha": {"type": "mesh_attribute", "name": "r"}},
@@ -225,8 +225,8 @@ def test_mitsuba_spectrum_dict_loads_same_rgb():
     ({"type": "twosided", "bsdf": {"type": "dielectric"}}, ["twosided", "'dielectric'"]),
     ({"type": "twosided", "a": {"type": "diffuse"}, "b": {"type": "diffuse"}, "c": {"type": "diffuse"}},
      ["at most two"]),
-    ({"type": "twosided", "bsdf": {"type": "roughconductor", "distribution": "beckmann"}},
-     ["twosided", "roughconductor", "beckmann"]),
+    ({"type": "twosided", "bsdf": {"type": "roughplastic", "distribution": "beckmann"}},
+     ["twosided", "roughplastic", "beckmann"]),
     ({"type": "diffuse", "reflectance": [0.5, 1.5, 0.2]}, ["diffuse", "reflectance", "<= 1"]),
     ({"type": "diffuse", "reflectance": {"type": "spectrum", "filename": "r.spd"}}, ["spectrum files"]),
 ])

@@ -124,8 +124,11 @@ def test_from_mitsuba_loaded_bsdf(d):
             np.testing.assert_allclose(g, v, rtol=1e-5, atol=1e-7, err_msg=k)  # METALS: 6 digits
 
 
-def test_from_mitsuba_loaded_refuses_beckmann():
+def test_from_mitsuba_loaded_beckmann():
+    """A loaded plugin's distribution and sample_visible come from its to_string."""
     from bsdfkit.testing import mitsuba as ref
     mi = ref._mi()[0]
-    with pytest.raises(ValueError, match="beckmann"):
-        bk.from_mitsuba(mi.load_dict({"type": "roughconductor", "alpha": 0.2}))
+    m = bk.from_mitsuba(mi.load_dict({"type": "roughconductor", "alpha": 0.2, "sample_visible": False}))
+    assert (m.distribution, m.sample_visible, m.masking) == ("beckmann", False, "separable")
+    with pytest.raises(ValueError, match="RoughPlastic"):  # no loaded plastics (their tables are Mitsuba's)
+        bk.from_mitsuba(mi.load_dict({"type": "roughplastic", "alpha": 0.2}))

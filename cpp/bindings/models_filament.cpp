@@ -38,7 +38,7 @@ py::array term_t(const std::string &name, const std::vector<py::array> &args) {
     if (name == "D_GGX") {  // (alpha_t, alpha_b, hx, hy, hz)
         need(5);
         for (int64_t i = 0; i < n; ++i) {
-            TrowbridgeReitz<F> d;
+            Microfacet<F> d;
             d.alpha_x = a(0, i);
             d.alpha_y = a(1, i);
             o[i] = D_GGX(d, Vec3<F>(a(2, i), a(3, i), a(4, i)));

@@ -3,7 +3,7 @@
 // ((k + 1/2) / n, frac((k + 1/2) / golden ratio)) (a golden-ratio Kronecker lattice) for every
 // texel, so the table is a deterministic function of (size, samples) and of nothing else.
 //
-// x, y: visible-normal sampling of the GGX lobe (Heitz 2018, TrowbridgeReitz::Sample_wm of
+// x, y: visible-normal sampling of the GGX lobe (Heitz 2018, Microfacet::Sample_wm of
 // core/microfacet.h). With pdf(l) = G1(v) D / (4 NoV), the per-sample weight of the F = 1 lobe
 // D V <NoL> is 4 NoV NoL V / G1(v) = G2 / G1(v) in [0, 1]. The first coordinate is warped by
 // u = 1 - (1 - t)^2 (weight 2 (1 - t)): the rim of the visible-normal disk, where l crosses the
@@ -45,7 +45,7 @@ void dfg_texel(int size, int samples, int i, int j, double *out) {
     }
     const Vec3<double> v(std::sqrt(1 - NoV * NoV), 0, NoV);
     // The raw distribution (no pbrt floors: a may be below 1e-4 here).
-    TrowbridgeReitz<double> ggx;
+    Microfacet<double> ggx;
     ggx.alpha_x = ggx.alpha_y = a;
     const double G1v = ggx.G1(v);
     double x = 0, y = 0;

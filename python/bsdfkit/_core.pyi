@@ -166,9 +166,9 @@ class DiffuseTransmissionSpectral:
         ...
 class Conductor:
     """
-    bsdfkit model Conductor (bxdfs/all.h); keyword arguments: eta, k, alpha_x, alpha_y, masking (a missing one keeps its C++ Params default).
+    bsdfkit model Conductor (bxdfs/all.h); keyword arguments: eta, k, alpha_x, alpha_y, masking, distribution, sample_visible (a missing one keeps its C++ Params default).
     """
-    fields: typing.ClassVar[tuple] = ('eta', 'k', 'alpha_x', 'alpha_y', 'masking')
+    fields: typing.ClassVar[tuple] = ('eta', 'k', 'alpha_x', 'alpha_y', 'masking', 'distribution', 'sample_visible')
     grad_fields: typing.ClassVar[tuple] = (('eta', 3), ('k', 3), ('alpha_x', 1), ('alpha_y', 1))
     grad_max_columns: typing.ClassVar[int] = 8
     def __init__(self, *args, **kwargs) -> None:
@@ -214,9 +214,9 @@ class ConductorSpectral:
         ...
 class ConductorSchlick:
     """
-    bsdfkit model ConductorSchlick (bxdfs/all.h); keyword arguments: eta, k, alpha_x, alpha_y, masking (a missing one keeps its C++ Params default).
+    bsdfkit model ConductorSchlick (bxdfs/all.h); keyword arguments: eta, k, alpha_x, alpha_y, masking, distribution, sample_visible (a missing one keeps its C++ Params default).
     """
-    fields: typing.ClassVar[tuple] = ('eta', 'k', 'alpha_x', 'alpha_y', 'masking')
+    fields: typing.ClassVar[tuple] = ('eta', 'k', 'alpha_x', 'alpha_y', 'masking', 'distribution', 'sample_visible')
     grad_fields: typing.ClassVar[tuple] = (('eta', 3), ('k', 3), ('alpha_x', 1), ('alpha_y', 1))
     grad_max_columns: typing.ClassVar[int] = 8
     def __init__(self, *args, **kwargs) -> None:
@@ -262,9 +262,9 @@ class ConductorSchlickSpectral:
         ...
 class ConductorF82:
     """
-    bsdfkit model ConductorF82 (bxdfs/all.h); keyword arguments: eta, k, alpha_x, alpha_y, masking (a missing one keeps its C++ Params default).
+    bsdfkit model ConductorF82 (bxdfs/all.h); keyword arguments: eta, k, alpha_x, alpha_y, masking, distribution, sample_visible (a missing one keeps its C++ Params default).
     """
-    fields: typing.ClassVar[tuple] = ('eta', 'k', 'alpha_x', 'alpha_y', 'masking')
+    fields: typing.ClassVar[tuple] = ('eta', 'k', 'alpha_x', 'alpha_y', 'masking', 'distribution', 'sample_visible')
     grad_fields: typing.ClassVar[tuple] = (('eta', 3), ('k', 3), ('alpha_x', 1), ('alpha_y', 1))
     grad_max_columns: typing.ClassVar[int] = 8
     def __init__(self, *args, **kwargs) -> None:
@@ -310,9 +310,9 @@ class ConductorF82Spectral:
         ...
 class Dielectric:
     """
-    bsdfkit model Dielectric (bxdfs/all.h); keyword arguments: eta, alpha_x, alpha_y, masking (a missing one keeps its C++ Params default).
+    bsdfkit model Dielectric (bxdfs/all.h); keyword arguments: eta, alpha_x, alpha_y, masking, distribution, sample_visible (a missing one keeps its C++ Params default).
     """
-    fields: typing.ClassVar[tuple] = ('eta', 'alpha_x', 'alpha_y', 'masking')
+    fields: typing.ClassVar[tuple] = ('eta', 'alpha_x', 'alpha_y', 'masking', 'distribution', 'sample_visible')
     grad_fields: typing.ClassVar[tuple] = (('eta', 1), ('alpha_x', 1), ('alpha_y', 1))
     grad_max_columns: typing.ClassVar[int] = 4
     def __init__(self, *args, **kwargs) -> None:

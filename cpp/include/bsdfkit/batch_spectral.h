@@ -176,12 +176,12 @@ struct ConductorSpectralT : PerElementModel<ConductorSpectralT<F, FR>, F> {
     static constexpr bool kPackets = true;
     static constexpr SpectralField kFields[] = {{"eta", "unbounded"}, {"k", "unbounded"}};
     SpectralParam eta, k;
-    TrowbridgeReitz<F> mfd;
+    Microfacet<F> mfd;
     template <class A> static ConductorSpectralT make(const ConductorParams &p, const A &a) {
         ConductorSpectralT s;
         s.eta = a.param("eta");
         s.k = a.param("k");
-        s.mfd = TrowbridgeReitz<F>(F(p.alpha_x), F(p.alpha_y), p.masking);
+        s.mfd = p.template microfacet<F>();
         return s;
     }
     ConductorBxDF<F, FR, 4> at(const double *lam) const { return ConductorBxDF<F, FR, 4>(mfd, eta.at<F>(lam), k.at<F>(lam)); }
@@ -255,13 +255,13 @@ template <typename F> struct DielectricSpectral {
     static constexpr bool kPackets = true;
     static constexpr SpectralField kFields[] = {{"eta", "unbounded"}};
     SpectralParam eta;
-    TrowbridgeReitz<F> mfd;
+    Microfacet<F> mfd;
     bool disp = false;
     // a.flag("dispersive"): eta is a non-constant spectrum (Python's rule, models/_spectral.py)
     template <class A> static DielectricSpectral make(const DielectricParams &p, const A &a) {
         DielectricSpectral s;
         s.eta = a.param("eta");
-        s.mfd = TrowbridgeReitz<F>(F(p.alpha_x), F(p.alpha_y), p.masking);
+        s.mfd = p.template microfacet<F>();
         s.disp = a.flag("dispersive");
         return s;
     }

@@ -206,13 +206,11 @@ def _mi_unit(d, where, param):
 
 
 def _mi_alphas(d, where):
-    dist = d.get("distribution")
-    if dist is None:
-        _mi_fail(where, "no 'distribution' given: Mitsuba's default is 'beckmann', which bsdfkit "
-                 "does not have; only distribution='ggx' (Trowbridge-Reitz) is supported")
-    if not isinstance(dist, str) or dist.lower() != "ggx":
-        _mi_fail(where, f"distribution {dist!r} is not supported; only 'ggx' (Trowbridge-Reitz) is "
-                 "('beckmann' has no bsdfkit counterpart)")
+    """(alpha_x, alpha_y, microfacet keywords) of a rough plugin; ``distribution`` defaults to
+    Mitsuba's "beckmann"."""
+    dist = d.get("distribution", "beckmann")
+    if not isinstance(dist, str) or dist.lower() not in ("ggx", "beckmann"):
+        _mi_fail(where, f"distribution {dist!r} is not supported; Mitsuba has 'beckmann' (its default) and 'ggx'")
     sv = d.get("sample_visible", True)
     if not isinstance(sv, (bool, np.bool_)):
         _mi_fail(where, f"parameter 'sample_visible': expected True or False, got {sv!r}")
@@ -228,7 +226,7 @@ def _mi_alphas(d, where):
     for a, n in ((ax, "alpha_u"), (ay, "alpha_v")):
         if isinstance(a, float) and not (math.isfinite(a) and a >= 0):
             _mi_fail(where, f"parameter {n!r}: must be finite and >= 0, got {a}")
-    return ax, ay
+    return ax, ay, {"distribution": dist.lower(), "sample_visible": bool(sv)}
 
 
 def _alpha_kw(ax, ay):
@@ -269,8 +267,8 @@ def _mi_conductor(d, where, rough):
         eta, k = METALS[material]
     _mi_unit(d, where, "specular_reflectance")
     if rough:
-        ax, ay = _mi_alphas(d, where)
-        return _mi_build(where, lambda: Conductor(eta, k, **_alpha_kw(ax, ay), masking="separable"))
+        ax, ay, mf = _mi_alphas(d, where)
+        return _mi_build(where, lambda: Conductor(eta, k, **_alpha_kw(ax, ay), masking="separable", **mf))
     return _mi_build(where, lambda: Conductor(eta, k))
 
 
@@ -361,8 +359,8 @@ def _mi_plugin(d, where, ctx):
     if kind == "dielectric":
         return _mi_build(label, lambda: Dielectric(eta))
     if kind == "roughdielectric":
-        ax, ay = _mi_alphas(d, label)
-        return _mi_build(label, lambda: Dielectric(eta, **_alpha_kw(ax, ay), masking="separable"))
+        ax, ay, mf = _mi_alphas(d, label)
+        return _mi_build(label, lambda: Dielectric(eta, **_alpha_kw(ax, ay), masking="separable", **mf))
     return _mi_build(label, lambda: ThinDielectric(eta))
 
 
@@ -381,7 +379,11 @@ def _mi_plastic(d, where, rough):
         if _is_texture_dict(d.get("alpha")):
             _mi_fail(where, "parameter 'alpha' is a texture: Mitsuba's roughplastic takes a float alpha only "
                      "(it refuses a texture; bsdfkit's Plastic would take one)")
-        ax, ay = _mi_alphas(d, where)
+        ax, ay, mf = _mi_alphas(d, where)
+        if mf["distribution"] != "ggx":
+            why = "no 'distribution' given: Mitsuba's default is" if "distribution" not in d else "distribution"
+            _mi_fail(where, f"{why} 'beckmann', which bsdfkit's Plastic does not have yet (its rough-interface "
+                     "tables are GGX's); only distribution='ggx' is supported for roughplastic")
         if ax != ay:
             _mi_fail(where, "roughplastic is isotropic (Mitsuba refuses alpha_u != alpha_v)")
         alpha = ax
@@ -448,10 +450,10 @@ def from_mitsuba(d, *, base_dir=None, params=None, strict=False):
     ``conductor``        ``eta``/``k`` or ``material`` (a preset in ``bsdfkit.METALS``: Cu, Au,
                          Ag, Al, Cr; default ``"none"``: eta = 0, k = 1, the perfect mirror,
                          given as eta = ``MIRROR_ETA``) -> smooth ``Conductor``
-    ``roughconductor``   as conductor, plus ``distribution`` (must be ``"ggx"``; Mitsuba's
-                         default is ``"beckmann"``, refused), ``alpha`` (0.1) or ``alpha_u``
-                         (local x) / ``alpha_v`` (local y), ``sample_visible``
-                         -> ``Conductor(..., masking="separable")``
+    ``roughconductor``   as conductor, plus ``distribution`` (``"beckmann"``, Mitsuba's default,
+                         or ``"ggx"``), ``alpha`` (0.1) or ``alpha_u`` (local x) / ``alpha_v``
+                         (local y), ``sample_visible`` (true)
+                         -> ``Conductor(..., masking="separable", distribution=...)``
     ``dielectric``       ``int_ior`` ("bk7"), ``ext_ior`` ("air"): floats or Mitsuba's IOR
                          names (``MITSUBA_IOR``); eta = int_ior / ext_ior -> smooth ``Dielectric``
     ``roughdielectric``  as dielectric, plus distribution/alpha as roughconductor
@@ -460,7 +462,8 @@ def from_mitsuba(d, *, base_dir=None, params=None, strict=False):
     ``plastic``          ``diffuse_reflectance`` (0.5), ``specular_reflectance`` (1),
                          ``nonlinear`` (false), ``int_ior`` ("polypropylene"), ``ext_ior``
                          ("air") -> ``Plastic(..., masking="separable")``
-    ``roughplastic``     as plastic, plus ``distribution`` ("ggx" only), ``alpha`` (0.1)
+    ``roughplastic``     as plastic, plus ``distribution`` ("ggx" only so far; Mitsuba's
+                         default "beckmann" is refused), ``alpha`` (0.1)
                          -> ``Plastic(..., alpha=alpha, masking="separable")``
     ``twosided``         one nested diffuse/conductor/roughconductor/(rough)plastic (or two
                          identical ones): unwrapped, bsdfkit's Diffuse, Conductor and Plastic are
@@ -498,8 +501,9 @@ def from_mitsuba(d, *, base_dir=None, params=None, strict=False):
 
     Conventions: Mitsuba's microfacet models use the separable Smith masking ``G1 G1``, so rough
     plugins give ``masking="separable"``; smooth plugins keep the default masking (it has no
-    effect on delta lobes). bsdfkit always samples visible normals, so ``sample_visible=False``
-    changes Mitsuba's sampling and pdf but not the BSDF value returned here. A bare (one-sided)
+    effect on delta lobes). ``sample_visible`` carries over to Conductor and Dielectric; Plastic
+    always samples visible normals, so there ``sample_visible=False`` changes Mitsuba's sampling
+    and pdf but not the BSDF value returned here. A bare (one-sided)
     ``diffuse``/``conductor``/``roughconductor`` is accepted too; bsdfkit's model equals it on
     the front side (wo.z > 0) and mirrors it to the back. bsdfkit turns rough lobes with
     max(alpha) < 1e-3 into deltas (pbrt's rule); Mitsuba keeps them as very sharp lobes.
@@ -539,7 +543,7 @@ def from_mitsuba(d, *, base_dir=None, params=None, strict=False):
     --------
     >>> import bsdfkit as bk
     >>> bk.from_mitsuba({"type": "roughconductor", "material": "Au", "distribution": "ggx", "alpha": 0.2})
-    Conductor(eta=[0.143036, 0.375307, 1.442045], k=[3.982997, 2.385556, 1.603359], alpha_x=0.2, alpha_y=0.2, masking='separable', fresnel='exact')
+    Conductor(eta=[0.143036, 0.375307, 1.442045], k=[3.982997, 2.385556, 1.603359], alpha_x=0.2, alpha_y=0.2, masking='separable', fresnel='exact', distribution='ggx', sample_visible=True)
     """
     if isinstance(d, os.PathLike) or (isinstance(d, str) and (d.lower().endswith(".xml") or os.path.isfile(d))):
         from ._mitsuba_xml import from_mitsuba_file
@@ -622,4 +626,7 @@ def _loaded_params_to_dict(cls: str, vals: dict, text: str) -> dict:
         m = re.search(r"distribution = (\w+)", text)
         if m:
             d["distribution"] = m.group(1)
+        m = re.search(r"sample_visible = (\w+)", text)
+        if m:
+            d["sample_visible"] = m.group(1) in ("1", "true")
     return d

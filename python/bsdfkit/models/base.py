@@ -55,6 +55,34 @@ def _masking(m) -> str:
     return m
 
 
+#: The microfacet distributions (core/microfacet.h ``Distribution``).
+DISTRIBUTIONS = ("ggx", "beckmann")
+
+
+def _distribution(d) -> str:
+    if not isinstance(d, str) or d not in DISTRIBUTIONS:
+        raise ValueError(f"distribution: must be one of {list(DISTRIBUTIONS)}, got {d!r}")
+    return d
+
+
+def _sample_visible(v) -> bool:
+    if not isinstance(v, (bool, np.bool_)):
+        raise TypeError(f"sample_visible: expected True or False, got {v!r}")
+    return bool(v)
+
+
+def distribution_knob(moot):
+    return _registry.KnobDecl("distribution", DISTRIBUTIONS, "modelling",
+                              "microfacet distribution: Trowbridge-Reitz / GGX (pbrt-v4) or Beckmann "
+                              "(Mitsuba 3's default)", moot=moot)
+
+
+def microfacet_kw(p) -> dict:
+    """The microfacet keywords of a parameter dict for its ``_core`` model."""
+    return {"masking": _MASKING[p["masking"]], "distribution": p["distribution"],
+            "sample_visible": p["sample_visible"]}
+
+
 def is_smooth(p) -> bool:
     """pbrt-v4's ``EffectivelySmooth`` on a parameter dict with alpha_x / alpha_y (per-element
     alphas: whether every element is smooth)."""
@@ -80,9 +108,10 @@ def alpha_text(p) -> str:
         return ", α per element"
     if max(ax, ay) < 1e-3:
         return ", smooth"
+    dist = ", Beckmann" if p.get("distribution") == "beckmann" else ""
     if ax == ay:
-        return f", α={ax:.3g}"
-    return f", αx={ax:.3g}, αy={ay:.3g}"
+        return f", α={ax:.3g}{dist}"
+    return f", αx={ax:.3g}, αy={ay:.3g}{dist}"
 
 
 def rgb_dict(v) -> dict:

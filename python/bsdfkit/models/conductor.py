@@ -5,8 +5,8 @@ import numpy as np
 
 from .. import _core
 from . import _spectral as _sp
-from .base import (MIN_ALPHA, BxDF, _MASKING, _alphas, _masking, _pick_alpha, _rgb, alpha_text, core_value,
-                   fmt_value, is_smooth, masking_knob, rgb_dict)
+from .base import (MIN_ALPHA, BxDF, _alphas, _distribution, _masking, _pick_alpha, _rgb, _sample_visible, alpha_text,
+                   core_value, distribution_knob, fmt_value, is_smooth, masking_knob, microfacet_kw, rgb_dict)
 from . import _mitsuba_export as _me
 from .registry import KnobDecl
 
@@ -41,8 +41,8 @@ METALS = {
 
 
 class Conductor(BxDF):
-    """Metal: perfect mirror or anisotropic Trowbridge-Reitz (GGX) microfacet reflection with a
-    conductor Fresnel term (pbrt-v4 ``ConductorBxDF``; the complex Fresnel term by default).
+    """Metal: perfect mirror or anisotropic Trowbridge-Reitz (GGX) or Beckmann microfacet reflection
+    with a conductor Fresnel term (pbrt-v4 ``ConductorBxDF``; the complex Fresnel term by default).
 
     Spectral mode (``wavelengths=``): RGB eta / k are uplifted as unbounded spectra (pbrt-v4
     ``RGBUnboundedSpectrum``); RGB mode: spectra are projected without an illuminant, as Mitsuba 3
@@ -85,6 +85,14 @@ class Conductor(BxDF):
         Height-correlated Smith (pbrt-v4; default) or G1 G1 (Mitsuba 3).
     fresnel : {"exact", "schlick", "f82"}, optional
         The Fresnel term (above); default "exact".
+    distribution : {"ggx", "beckmann"}, optional
+        The microfacet distribution: Trowbridge-Reitz / GGX (pbrt-v4; default) or Beckmann
+        (Mitsuba 3's default; its Smith Lambda by Walter et al. 2007's rational fit, as Mitsuba
+        and pbrt-v3). A modelling choice: the two are different materials at the same alpha.
+    sample_visible : bool, optional
+        Sample visible normals (default; Heitz & d'Eon 2014, and Jakob 2014 for Beckmann) or
+        D(wm) cos(wm) (Mitsuba 3's ``sample_visible=False``). f is the same either way; the pdf
+        and the samples differ.
 
     Raises
     ------
@@ -115,6 +123,9 @@ class Conductor(BxDF):
         "chromium, Schlick": "conductor metal=Cr alpha=0.3 fresnel=schlick",
         "gold, F82, rough": "conductor metal=Au alpha=0.3 fresnel=f82",
         "aluminium, F82, separable": "conductor metal=Al alpha=0.5 masking=separable fresnel=f82",
+        "gold, Beckmann": "conductor metal=Au alpha=0.3 distribution=beckmann",
+        "aluminium, anisotropic Beckmann, separable": "conductor metal=Al alpha_x=0.5 alpha_y=0.15 "
+                                                        "distribution=beckmann masking=separable",
     }
     energy_conserving, exact_eval, two_sided, transmission, delta_only = True, True, True, False, False
     reciprocal = True
@@ -126,29 +137,35 @@ class Conductor(BxDF):
         KnobDecl("fresnel", ("exact", "f82", "schlick"), "approximation",
                  "conductor Fresnel: complex (exact), F82-tint, Schlick"),
         masking_knob(lambda q: "smooth conductor (max alpha < 1e-3): a mirror has no masking" if is_smooth(q) else None),
+        distribution_knob(lambda q: "smooth conductor (max alpha < 1e-3): a mirror has no microfacets"
+                          if is_smooth(q) else None),
     )
 
-    def __init__(self, eta, k, alpha=None, alpha_x=None, alpha_y=None, masking="correlated", fresnel="exact"):
+    def __init__(self, eta, k, alpha=None, alpha_x=None, alpha_y=None, masking="correlated", fresnel="exact",
+                 distribution="ggx", sample_visible=True):
         """A Conductor: the parameters are described in the class docstring (``help(bsdfkit.Conductor)``);
         a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
         ax, ay = _alphas(alpha, alpha_x, alpha_y, varying=True)
         super().__init__(eta=_sp.spectrum_or_rgb(eta, "eta", lo=0.0, lo_open=True, varying=True),
                          k=_sp.spectrum_or_rgb(k, "k", lo=0.0, varying=True),
-                         alpha_x=ax, alpha_y=ay, masking=_masking(masking), fresnel=_fresnel(fresnel))
+                         alpha_x=ax, alpha_y=ay, masking=_masking(masking), fresnel=_fresnel(fresnel),
+                         distribution=_distribution(distribution), sample_visible=_sample_visible(sample_visible))
 
     @classmethod
     def _from_params(cls, p):
         return cls(p["eta"], p["k"], alpha_x=p["alpha_x"], alpha_y=p["alpha_y"], masking=p["masking"],
-                   fresnel=p.get("fresnel", "exact"))
+                   fresnel=p.get("fresnel", "exact"), distribution=p.get("distribution", "ggx"),
+                   sample_visible=p.get("sample_visible", True))
 
     @classmethod
     def from_metal(cls, name: str, roughness=None, *, alpha=None, alpha_x=None, alpha_y=None,
-                   masking="correlated", fresnel="exact", spectral: bool = False) -> "Conductor":
+                   masking="correlated", fresnel="exact", distribution="ggx", sample_visible=True,
+                   spectral: bool = False) -> "Conductor":
         """A measured metal by name: ``bsdfkit.METALS`` (Cu, Au, Ag, Al, Cr) or any name of
         ``spectral_metals()`` (also Be, CuZn, Fe, Ir, MgO, Mo, Ni_palik, Rh, Ta, Ti, TiN, TiO2, W).
 
         Roughness as pbrt-v4's ``roughness`` (alpha = sqrt(roughness)) or directly as ``alpha``.
-        ``fresnel`` as in ``Conductor``. ``spectral=True``: eta and k are the measured spectra
+        ``fresnel``, ``distribution`` and ``sample_visible`` as in ``Conductor``. ``spectral=True``: eta and k are the measured spectra
         (``bsdfkit.Spectrum``): Mitsuba 3's IOR data (``mitsuba-<name>-eta/k``, the data ``METALS``
         projects) where Mitsuba has the metal, else pbrt-v4's (``metal-<name>-eta/k``: CuZn, MgO,
         TiO2), else Johnson & Christy 1974's (``jc-<name>-eta/k``: Fe, Ti). Its RGB mode equals
@@ -162,7 +179,8 @@ class Conductor(BxDF):
                 raise ValueError(f"name: unknown metal {name!r} for spectral=True; known: {', '.join(names)}")
             eta, k = _metal_spectra(name)
             return cls(eta, k, alpha=_pick_alpha(roughness, alpha), alpha_x=alpha_x, alpha_y=alpha_y,
-                       masking=masking, fresnel=fresnel)
+                       masking=masking, fresnel=fresnel, distribution=distribution,
+                   sample_visible=sample_visible)
         if name in METALS:
             eta, k = METALS[name]
         elif isinstance(name, str) and name in spectral_metals():
@@ -171,14 +189,17 @@ class Conductor(BxDF):
             known = sorted(set(METALS) | set(spectral_metals()))
             raise ValueError(f"name: unknown metal {name!r}; known metals: {', '.join(known)}")
         return cls(eta, k, alpha=_pick_alpha(roughness, alpha), alpha_x=alpha_x, alpha_y=alpha_y, masking=masking,
-                   fresnel=fresnel)
+                   fresnel=fresnel, distribution=distribution,
+                   sample_visible=sample_visible)
 
     @classmethod
     def from_reflectance(cls, reflectance, roughness=None, *, alpha=None, alpha_x=None, alpha_y=None,
-                         masking="correlated", fresnel="exact", spectral: bool = False) -> "Conductor":
+                         masking="correlated", fresnel="exact", distribution="ggx", sample_visible=True,
+                   spectral: bool = False) -> "Conductor":
         """pbrt-v4's artist form: eta = 1 and k = 2 sqrt(r) / sqrt(1 - r), so that the Fresnel
         reflectance at normal incidence equals r. r in [0, 1], clamped to 0.9999 (pbrt-v4 does
-        the same: r = 1 would need k = inf). ``fresnel`` as in ``Conductor``.
+        the same: r = 1 would need k = inf). ``fresnel``, ``distribution`` and ``sample_visible``
+        as in ``Conductor``.
 
         Per wavelength, as pbrt-v4 (``spectral=True``, or ``reflectance`` a ``bsdfkit.Spectrum``):
         r(lambda) is the spectrum (an RGB r uplifted as a bounded reflectance) and k(lambda) =
@@ -191,17 +212,19 @@ class Conductor(BxDF):
             r = np.minimum(rs(_sp.DENSE_WAVELENGTHS), 0.9999)
             k = Spectrum(_sp.DENSE_WAVELENGTHS, 2 * np.sqrt(r) / np.sqrt(1 - r))
             return cls(Spectrum.constant(1.0), k, alpha=_pick_alpha(roughness, alpha), alpha_x=alpha_x,
-                       alpha_y=alpha_y, masking=masking, fresnel=fresnel)
+                       alpha_y=alpha_y, masking=masking, fresnel=fresnel, distribution=distribution,
+                   sample_visible=sample_visible)
         r = np.minimum(_rgb(reflectance, "reflectance", lo=0.0, hi=1.0), 0.9999)
         k = 2 * np.sqrt(r) / np.sqrt(1 - r)
         return cls(1.0, k, alpha=_pick_alpha(roughness, alpha), alpha_x=alpha_x, alpha_y=alpha_y, masking=masking,
-                   fresnel=fresnel)
+                   fresnel=fresnel, distribution=distribution,
+                   sample_visible=sample_visible)
 
     def _make_core(self):
         p = self._params
         core_cls = getattr(_core, _FRESNEL[p["fresnel"]][0])
         return core_cls(eta=core_value(_sp.rgb_of(p["eta"], "unbounded")), k=core_value(_sp.rgb_of(p["k"], "unbounded")),
-                        alpha_x=p["alpha_x"], alpha_y=p["alpha_y"], masking=_MASKING[p["masking"]])
+                        alpha_x=p["alpha_x"], alpha_y=p["alpha_y"], **microfacet_kw(p))
 
     def cost_family(self) -> str:
         return "Conductor" + ("/smooth" if is_smooth(self._params) else "/rough")
@@ -223,7 +246,8 @@ class Conductor(BxDF):
 
     def to_mitsuba(self, approximate: bool = False) -> dict:
         """The Mitsuba 3 plugin dictionary of this material: ``twosided{conductor}`` if smooth, else
-        ``twosided{roughconductor}`` (ggx, alpha_u = alpha_x on local x, visible-normal sampling).
+        ``twosided{roughconductor}`` (the distribution and ``sample_visible`` as the model's,
+        alpha_u = alpha_x on local x).
 
         Exported only when it is the same material. Mitsuba's ``roughconductor`` has the separable
         Smith masking G1(wo) G1(wi) and only the exact Fresnel term, so a rough model with
@@ -243,8 +267,9 @@ class Conductor(BxDF):
         if is_smooth(p):
             inner = {"type": "conductor", "eta": rgb_dict(eta), "k": rgb_dict(k)}
         else:
-            inner = {"type": "roughconductor", "distribution": "ggx", "alpha_u": max(p["alpha_x"], MIN_ALPHA),
-                     "alpha_v": max(p["alpha_y"], MIN_ALPHA), "sample_visible": True,
+            inner = {"type": "roughconductor", "distribution": p["distribution"],
+                     "alpha_u": max(p["alpha_x"], MIN_ALPHA), "alpha_v": max(p["alpha_y"], MIN_ALPHA),
+                     "sample_visible": p["sample_visible"],
                      "eta": rgb_dict(eta), "k": rgb_dict(k)}
             if p["masking"] != "separable":
                 reasons.append(_me.MASKING_REASON.format(plugin="roughconductor"))

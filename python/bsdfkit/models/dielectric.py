@@ -6,22 +6,25 @@ import numpy as np
 from .. import _core
 from . import _mitsuba_export as _me
 from . import _spectral as _sp
-from .base import MIN_ALPHA, BxDF, _MASKING, _alphas, _masking, alpha_text, is_smooth, masking_knob
+from .base import (MIN_ALPHA, BxDF, _alphas, _distribution, _masking, _sample_visible, alpha_text, distribution_knob,
+                   is_smooth, masking_knob, microfacet_kw)
 
 __all__ = ["Dielectric", "ThinDielectric"]
 
 
-def _dielectric_masking_moot(q):
-    if is_smooth(q):
-        return "smooth dielectric (max alpha < 1e-3): delta lobes have no masking"
-    if q["eta"] == 1.0:
-        return "eta = 1: light passes straight through, no microfacets involved"
-    return None
+def _dielectric_moot(what):
+    def moot(q):
+        if is_smooth(q):
+            return f"smooth dielectric (max alpha < 1e-3): delta lobes have no {what}"
+        if q["eta"] == 1.0:
+            return "eta = 1: light passes straight through, no microfacets involved"
+        return None
+    return moot
 
 
 class Dielectric(BxDF):
     """Glass-like interface: Fresnel-weighted reflection and refraction, smooth (delta) or
-    anisotropic Trowbridge-Reitz rough (pbrt-v4 ``DielectricBxDF``).
+    anisotropic Trowbridge-Reitz (GGX) or Beckmann rough (pbrt-v4 ``DielectricBxDF``).
 
     wo may be on either side. In Radiance mode transmitted values are divided by eta'^2.
 
@@ -40,6 +43,10 @@ class Dielectric(BxDF):
         GGX alpha, isotropic or per tangent axis, as in ``Conductor``; none: a smooth interface.
     masking : {"correlated", "separable"}, optional
         Masking-shadowing, as in ``Conductor``.
+    distribution : {"ggx", "beckmann"}, optional
+        The microfacet distribution, as in ``Conductor``; default "ggx".
+    sample_visible : bool, optional
+        Visible-normal sampling (default) or D(wm) cos(wm), as in ``Conductor``.
 
     Raises
     ------
@@ -62,6 +69,7 @@ class Dielectric(BxDF):
                 "rough glass 0.3": "dielectric 1.5 alpha=0.3",
                 "inside water, anisotropic": "dielectric 0.75188 alpha_x=0.5 alpha_y=0.1",
                 "separable masking": "dielectric 1.33 alpha=0.4 masking=separable",
+                "Beckmann, separable": "dielectric 1.5 alpha=0.3 distribution=beckmann masking=separable",
                 "index matched": "dielectric 1"}
     energy_conserving, exact_eval, two_sided, transmission, delta_only = True, True, True, True, False
     reciprocal = True
@@ -69,24 +77,26 @@ class Dielectric(BxDF):
     # fitting bounds (bk.fit): alphas kept in the rough regime (>= 1e-3)
     param_ranges = {"eta": (1.001, 4.0), "alpha_x": (1e-3, 2.0), "alpha_y": (1e-3, 2.0)}
     varying_params = {"eta": 1, "alpha_x": 1, "alpha_y": 1}
-    knobs = (masking_knob(_dielectric_masking_moot),)
+    knobs = (masking_knob(_dielectric_moot("masking")), distribution_knob(_dielectric_moot("microfacets")))
 
-    def __init__(self, eta=1.5, alpha=None, alpha_x=None, alpha_y=None, masking="correlated"):
+    def __init__(self, eta=1.5, alpha=None, alpha_x=None, alpha_y=None, masking="correlated", distribution="ggx",
+                 sample_visible=True):
         """A Dielectric: the parameters are described in the class docstring (``help(bsdfkit.Dielectric)``);
         a bad value raises ValueError (TypeError for a wrong type) naming the parameter."""
         ax, ay = _alphas(alpha, alpha_x, alpha_y, varying=True)
         super().__init__(eta=_sp.spectrum_or_scalar(eta, "eta", lo=0.0, lo_open=True, varying=True),
-                         alpha_x=ax, alpha_y=ay,
-                         masking=_masking(masking))
+                         alpha_x=ax, alpha_y=ay, masking=_masking(masking),
+                         distribution=_distribution(distribution), sample_visible=_sample_visible(sample_visible))
 
     @classmethod
     def _from_params(cls, p):
-        return cls(p["eta"], alpha_x=p["alpha_x"], alpha_y=p["alpha_y"], masking=p["masking"])
+        return cls(p["eta"], alpha_x=p["alpha_x"], alpha_y=p["alpha_y"], masking=p["masking"],
+                   distribution=p.get("distribution", "ggx"), sample_visible=p.get("sample_visible", True))
 
     def _make_core(self):
         p = self._params
         return _core.Dielectric(eta=_sp.scalar_of(p["eta"]), alpha_x=p["alpha_x"], alpha_y=p["alpha_y"],
-                                masking=_MASKING[p["masking"]])
+                                **microfacet_kw(p))
 
     def _spectral_inputs(self) -> dict:
         return {"dispersive": _sp.is_dispersive(self._params["eta"])}  # DielectricSpectral: hero wavelength
@@ -100,7 +110,7 @@ class Dielectric(BxDF):
 
     def to_mitsuba(self, approximate: bool = False) -> dict:
         """The Mitsuba 3 plugin dictionary of this material: ``dielectric`` / ``roughdielectric``
-        (ggx) with int_ior = eta, ext_ior = 1 (eta < 1 is passed as is: Mitsuba accepts int_ior <
+        (the model's distribution and ``sample_visible``) with int_ior = eta, ext_ior = 1 (eta < 1 is passed as is: Mitsuba accepts int_ior <
         ext_ior); eta == 1 -> ``null`` (pbrt's pass-through). A spectral eta is written as its
         value at 550 nm (what RGB mode uses).
 
@@ -119,8 +129,9 @@ class Dielectric(BxDF):
             return {"type": "null"}
         if is_smooth(p):
             return {"type": "dielectric", "int_ior": eta, "ext_ior": 1.0}
-        d = {"type": "roughdielectric", "distribution": "ggx", "alpha_u": max(p["alpha_x"], MIN_ALPHA),
-             "alpha_v": max(p["alpha_y"], MIN_ALPHA), "sample_visible": True, "int_ior": eta, "ext_ior": 1.0}
+        d = {"type": "roughdielectric", "distribution": p["distribution"], "alpha_u": max(p["alpha_x"], MIN_ALPHA),
+             "alpha_v": max(p["alpha_y"], MIN_ALPHA), "sample_visible": p["sample_visible"], "int_ior": eta,
+             "ext_ior": 1.0}
         if p["masking"] != "separable":
             from ..interop.mitsuba import from_mitsuba
             _me.refuse_or_warn(self, from_mitsuba(d), [_me.MASKING_REASON.format(plugin="roughdielectric")],

@@ -64,7 +64,7 @@ class KnobDecl:
     --------
     >>> import bsdfkit as bk
     >>> [k.name for k in bk.Conductor.knobs]
-    ['fresnel', 'masking']
+    ['fresnel', 'masking', 'distribution']
     """
 
     name: str

@@ -350,9 +350,10 @@ def sample(model, wo, uc, u, mode="radiance") -> dict:
 # Microfacet components
 # ---------------------------------------------------------------------------------------------
 
-def _microfacet_call(alpha_x, alpha_y, vecs, fn):
+def _microfacet_call(alpha_x, alpha_y, vecs, fn, kind="ggx"):
     """Broadcast alphas (scalars or arrays) against direction arrays and call
-    ``fn(distribution, *mi_vectors)`` vectorized; returns float64 numpy of the batch shape."""
+    ``fn(distribution, *mi_vectors)`` vectorized (``kind``: "ggx" or "beckmann"); returns
+    float64 numpy of the batch shape."""
     mi, dr = _mi()
     vecs = [_dirs(v, "direction") for v in vecs]
     ax = np.asarray(alpha_x, dtype=np.float64)
@@ -363,7 +364,7 @@ def _microfacet_call(alpha_x, alpha_y, vecs, fn):
     n = int(np.prod(batch, dtype=np.int64))
     if n == 0:
         return np.zeros(batch)
-    GGX = mi.MicrofacetType.GGX
+    GGX = {"ggx": mi.MicrofacetType.GGX, "beckmann": mi.MicrofacetType.Beckmann}[kind]
     if _is_jit():
         if ax.ndim == 0 and ay.ndim == 0:
             dist = mi.MicrofacetDistribution(GGX, float(ax), float(ay), sample_visible=True)
@@ -396,6 +397,17 @@ def ggx_D(alpha_x, alpha_y, m):
 def ggx_G1(alpha_x, alpha_y, v, m):
     """Mitsuba's Smith G1(v, m) for GGX (0 when ``dot(v, m) * v.z <= 0``)."""
     return _microfacet_call(alpha_x, alpha_y, [v, m], lambda d, v_, m_: d.smith_g1(v_, m_))
+
+
+def microfacet_G1(kind, alpha_x, alpha_y, v, m):
+    """Mitsuba's Smith G1(v, m) of the ``kind`` ("ggx" or "beckmann": Walter 2007's rational
+    fit) distribution (0 when ``dot(v, m) * v.z <= 0``)."""
+    return _microfacet_call(alpha_x, alpha_y, [v, m], lambda d, v_, m_: d.smith_g1(v_, m_), kind)
+
+
+def microfacet_D(kind, alpha_x, alpha_y, m):
+    """Mitsuba's normal distribution D(m) of the ``kind`` ("ggx" or "beckmann") distribution."""
+    return _microfacet_call(alpha_x, alpha_y, [m], lambda d, m_: d.eval(m_), kind)
 
 
 def ggx_vndf_pdf(alpha_x, alpha_y, w, m):

@@ -278,7 +278,7 @@ def configurations(model, allow="all") -> list:
     >>> import bsdfkit as bk
     >>> cs = bk.tuning.configurations(bk.Conductor.from_metal("Cu", alpha=0.3))
     >>> cs[0].labels
-    {'fresnel': 'exact', 'masking': 'correlated', 'precision': 'float64'}
+    {'fresnel': 'exact', 'masking': 'correlated', 'distribution': 'ggx', 'precision': 'float64'}
     """
     _check_model(model)
     specs = _specs(model, allow)
@@ -335,7 +335,7 @@ def knobs(model) -> tuple:
     --------
     >>> import bsdfkit as bk
     >>> [(k.name, k.reachable) for k in bk.knobs(bk.Conductor.from_metal("Cu"))]
-    [('fresnel', True), ('masking', False), ('precision', True)]
+    [('fresnel', True), ('masking', False), ('distribution', False), ('precision', True)]
     """
     _check_model(model)
     return _knobs_from(model, configurations(model))

@@ -2,7 +2,9 @@
 // term (pbrt-v4 ConductorBxDF; Torrance & Sparrow 1967, Walter et al. 2007).
 // Parameters (ConductorParams; Python: bsdfkit.Conductor)
 //   eta, k     real and imaginary index of refraction per channel (eta > 0, k >= 0); default Cu
-//   alpha_x, alpha_y, masking   anisotropic GGX; max(alpha) < 1e-3 makes the lobe a delta
+//   alpha_x, alpha_y, masking, distribution   anisotropic GGX or Beckmann; max(alpha) < 1e-3
+//              makes the lobe a delta
+//   sample_visible   sample visible normals (default) or D(wm) cos(wm) (Mitsuba 3's knob)
 //   FR         the Fresnel term, a compile-time knob (one loop per variant):
 //              Exact    complex Fresnel of eta + i k (FrComplex)
 //              Schlick  Schlick 1994 with the exact normal-incidence reflectance F0
@@ -27,12 +29,20 @@ template <typename S = double> struct ConductorParamsT {
     std::array<S, 3> eta{0.201006, 0.923749, 1.102215}, k{3.913262, 2.453045, 2.142090};  // Cu (bk.METALS)
     S alpha_x = 0, alpha_y = 0;
     Masking masking = Masking::Correlated;
+    Distribution distribution = Distribution::GGX;
+    bool sample_visible = true;
     template <class V> void fields(V &&v) {
         v("eta", eta);
         v("k", k);
         v("alpha_x", alpha_x);
         v("alpha_y", alpha_y);
         v("masking", masking);
+        v("distribution", distribution);
+        v("sample_visible", sample_visible);
+    }
+    // the microfacet distribution these fields describe
+    template <typename F> Microfacet<F> microfacet() const {
+        return Microfacet<F>(F(alpha_x), F(alpha_y), masking, distribution, sample_visible);
     }
 };
 using ConductorParams = ConductorParamsT<>;
@@ -50,14 +60,14 @@ struct ConductorBxDF {
                                                                         : "Conductor";
     using Spectral = ConductorSpectralT<F, FR>;  // its spectral form (core/bxdf.h)
     static constexpr int GradColumns = 8;  // eval_grad columns at most
-    TrowbridgeReitz<A> mfd;
+    Microfacet<A> mfd;
     Spectrum<C, NC> eta, k;
     // Per-channel Schlick F0 and F82-tint a, computed in double at construction (unused by Exact);
     // for a Dual model in the Dual (param_t), so their derivatives reach eta and k.
     Spectrum<C, NC> f0{C(0)}, f82_a{C(0)};
 
     ConductorBxDF() = default;
-    ConductorBxDF(const TrowbridgeReitz<F> &mfd_, const Spectrum<F, NC> &eta_, const Spectrum<F, NC> &k_)
+    ConductorBxDF(const Microfacet<F> &mfd_, const Spectrum<F, NC> &eta_, const Spectrum<F, NC> &k_)
         : mfd(mfd_), eta(eta_), k(k_) {
         // Only the approximations read them (spectral mode builds a model per element: skip the
         // exact term's unused complex Fresnel at 1/7).
@@ -69,7 +79,7 @@ struct ConductorBxDF {
     }
 
     static ConductorBxDF make(const Params &p) {
-        return ConductorBxDF(TrowbridgeReitz<F>(F(p.alpha_x), F(p.alpha_y), p.masking), to_spectrum<F>(p.eta),
+        return ConductorBxDF(p.template microfacet<F>(), to_spectrum<F>(p.eta),
                              to_spectrum<F>(p.k));
     }
 
@@ -82,8 +92,8 @@ struct ConductorBxDF {
     }
 
     // The model of kPacketWidth elements, lane l built from p[l] as make(p[l]) builds it (the same
-    // operations per lane: bit-identical values). The knob (masking) is lane 0's: every lane's is
-    // the same (per-element parameters vary only real and RGB fields).
+    // operations per lane: bit-identical values). The knobs (masking, distribution, sampling) are
+    // lane 0's: every lane's are the same (per-element parameters vary only real and RGB fields).
     using Lanes = ConductorBxDF<F, FR, 3, Packet<F>, Packet<F>>;
     static Lanes make_lanes(const Params *p) {
         using P = Packet<F>;
@@ -103,7 +113,8 @@ struct ConductorBxDF {
             }
         }
         Lanes m;
-        m.mfd = TrowbridgeReitz<P>(drjit::load_aligned<P>(ax), drjit::load_aligned<P>(ay), p[0].masking);
+        m.mfd = Microfacet<P>(drjit::load_aligned<P>(ax), drjit::load_aligned<P>(ay), p[0].masking, p[0].distribution,
+                              p[0].sample_visible);
         for (int c = 0; c < 3; ++c) {
             m.eta[c] = drjit::load_aligned<P>(e[c]);
             m.k[c] = drjit::load_aligned<P>(kk[c]);
@@ -212,7 +223,7 @@ struct ConductorBxDF {
         Mask<V> active = Mask<V>((sample_flags & RT_Reflection) != 0) & SameHemisphere(wo, wi);
         V dd = mfd.D_denom(m, active, len2); // D = 0 there: f = pdf = 0, an invalid sample
         V root_o = mfd.smith_root(wo);
-        s.pdf = select(active, sqr(len2) / (dd * mfd.reflection_pdf_denom(cos_o, root_o)), V(0));
+        s.pdf = select(active, sqr(len2) / (dd * mfd.pdf_denom(wo, m, cos_o, root_o)), V(0));
         s.f = fresnel_over_scaled(abs(wo_m), len2, dd * mfd.G_denom(cos_o, cos_i, root_o, mfd.smith_root(wi)));
         s.wi = wi;
         s.flags = GlossyReflection;
@@ -233,7 +244,7 @@ struct ConductorBxDF {
         V len2;
         Vec3<V> h = reflection_half_vector_h(wo, wi, active, &len2);
         V dd = mfd.D_denom(h, active, len2);
-        V p = sqr(len2) / (dd * mfd.reflection_pdf_denom(AbsCosTheta(wo), mfd.smith_root(wo)));
+        V p = sqr(len2) / (dd * mfd.pdf_denom(wo, h, AbsCosTheta(wo), mfd.smith_root(wo)));
         return select(active, p, V(0));
     }
 

@@ -2,7 +2,9 @@
 // (pbrt-v4 DielectricBxDF; Walter et al. 2007 "Microfacet models for refraction").
 // Parameters (DielectricParams; Python: bsdfkit.Dielectric)
 //   eta                  relative IOR inside / outside (> 0; < 1 means the outside is denser)
-//   alpha_x, alpha_y, masking   anisotropic GGX; max(alpha) < 1e-3 (or eta == 1) makes both lobes deltas
+//   alpha_x, alpha_y, masking, distribution   anisotropic GGX or Beckmann; max(alpha) < 1e-3 (or
+//                        eta == 1) makes both lobes deltas
+//   sample_visible       sample visible normals (default) or D(wm) cos(wm) (Mitsuba 3's knob)
 // wo may lie on either side. In Radiance mode transmitted radiance is scaled by 1/etap^2,
 // in Importance mode it is not (Veach 1997 ch. 5), so f is not symmetric for transmission.
 #pragma once
@@ -19,11 +21,19 @@ template <typename F> struct DielectricSpectral;  // its spectral form (batch_sp
 template <typename S = double> struct DielectricParamsT {
     S eta = 1.5, alpha_x = 0, alpha_y = 0;
     Masking masking = Masking::Correlated;
+    Distribution distribution = Distribution::GGX;
+    bool sample_visible = true;
     template <class V> void fields(V &&v) {
         v("eta", eta);
         v("alpha_x", alpha_x);
         v("alpha_y", alpha_y);
         v("masking", masking);
+        v("distribution", distribution);
+        v("sample_visible", sample_visible);
+    }
+    // the microfacet distribution these fields describe
+    template <typename F> Microfacet<F> microfacet() const {
+        return Microfacet<F>(F(alpha_x), F(alpha_y), masking, distribution, sample_visible);
     }
 };
 using DielectricParams = DielectricParamsT<>;
@@ -36,10 +46,10 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
     using Spectral = DielectricSpectral<F>;  // its spectral form (core/bxdf.h)
     static constexpr int GradColumns = 4;  // eval_grad columns at most
     Eta eta;
-    TrowbridgeReitz<F> mfd;
+    Microfacet<F> mfd;
 
     static DielectricBxDF make(const Params &p) {
-        return {F(p.eta), TrowbridgeReitz<F>(F(p.alpha_x), F(p.alpha_y), p.masking)};
+        return {F(p.eta), p.template microfacet<F>()};
     }
 
     // Bitwise | (not ||): a short-circuit here becomes control flow in every batch loop.
@@ -57,6 +67,14 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
     // Runs on packets in the batch kernels (batch.h): every method is written once on the
     // evaluation type V (F, or a packet of F; core/simd.h).
     static constexpr bool Vectorized = true;
+
+    // The distribution D(wm) cos(wm) sampling draws from (the `visible = false` knob): the model's,
+    // widened by 1.2 - 0.2 sqrt|cos_o| (Walter et al. 2007 sec. 5.3, as Mitsuba 3's
+    // roughdielectric), which lowers the sampling weights of grazing wo. Per lane: a packet of alphas.
+    template <typename V> Microfacet<V> widened(V cos_o) const {
+        V s = V(1.2) - V(0.2) * sqrt(abs(cos_o));
+        return Microfacet<V>(V(mfd.alpha_x) * s, V(mfd.alpha_y) * s, mfd.masking, mfd.distribution, false);
+    }
 
     // Lobe probabilities restricted by sample_flags.
     template <typename V> static void lobe_probs(V R, V T, uint8_t sample_flags, V *pr, V *pt) {
@@ -165,7 +183,7 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
     BSDFSample<V> sample_rough(const Vec3<V> &wo, V uc, Point2<V> u, TransportMode mode, uint8_t sample_flags) const {
         BSDFSample<V> s;
         V len2;
-        Vec3<V> m = mfd.Sample_wm_h(wo, u, &len2);
+        Vec3<V> m = mfd.visible ? mfd.Sample_wm_h(wo, u, &len2) : widened(CosTheta(wo)).Sample_wm_h(wo, u, &len2);
         V wo_m = dot(wo, m);
         V r, t, den, pr, pt, cos_t;
         FrDielectricRatioScaled(wo_m, len2, eta, &r, &t, &den, &cos_t); // R = r / den, T = t / den
@@ -181,17 +199,23 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
         // wt.z == 0 is left to the BSDF-level check on wi.z (bsdf_sample).
         Mask<V> ok = (reflect & SameHemisphere(wo, wr)) | ((!reflect) & ok_t & (!SameHemisphere(wo, wt)));
         ok &= ((pr + pt) > V(0)) & (cos_o != V(0));
+        if (!mfd.visible) ok &= wo_m * cos_o > V(0);  // a normal facing away from wo (D cos sampling)
         Vec3<V> wi = select(reflect, wr, wt);
 
         V abs_o = abs(cos_o), root_o = mfd.smith_root(wo), l4 = sqr(len2);
         V dd = mfd.D_denom(m, ok, len2); // D_denom(wm) |m|^4
+        V dd_pdf = dd;  // the sampled distribution's (widened without visible normals)
+        if (!mfd.visible) {
+            Mask<V> ok_w = ok;
+            dd_pdf = widened(cos_o).D_denom(m, ok_w, len2);
+        }
         // Transmission: 4 |wo.m| |wi.m| / (wi.m + wo.m / etap)^2; reflection: 1.
         V wi_m = dot(wi, m);
         V jac_num = select(reflect, V(1), V(4) * abs(wo_m * wi_m));
         V jac_den = select(reflect, V(1), sqr(wi_m + wo_m * inv_etap));
         V ft = mode == TransportMode::Radiance ? t * sqr(inv_etap) : t;
         s.pdf = select(ok, select(reflect, pr, pt) * jac_num * l4 /
-                               (dd * mfd.reflection_pdf_denom(abs_o, root_o) * jac_den * (pr + pt)), V(0));
+                               (dd_pdf * mfd.pdf_denom(wo, m, abs_o, root_o) * jac_den * (pr + pt)), V(0));
         V gd = mfd.G_denom(abs_o, AbsCosTheta(wi), root_o, mfd.smith_root(wi));
         s.f = Spectrum<V>(select(reflect, r, ft) * jac_num * l4 / (den * dd * gd * jac_den));
         s.wi = wi;
@@ -217,9 +241,9 @@ template <typename F, typename Eta = F> struct DielectricBxDF {
         V wo_h = dot(wo, h);
         FrDielectricRatioScaled(wo_h, len2, eta, &r, &t, &den); // R : T = r : t
         lobe_probs(r, t, sample_flags, &pr, &pt);
-        V dd = mfd.D_denom(h, ok, len2);
+        V dd = mfd.visible ? mfd.D_denom(h, ok, len2) : widened(CosTheta(wo)).D_denom(h, ok, len2);
         V num = select(reflect, pr * sqr(len2), V(4) * abs(wo_h * dot(wi, h)) * sqr(etap) * pt);
-        V dn = dd * mfd.reflection_pdf_denom(AbsCosTheta(wo), mfd.smith_root(wo)) * (pr + pt);
+        V dn = dd * mfd.pdf_denom(wo, h, AbsCosTheta(wo), mfd.smith_root(wo)) * (pr + pt);
         ok &= ((pr + pt) > V(0)); // len2 > 0 is in half_vector's ok
         return zero_unless(ok, num / dn);
     }

@@ -85,7 +85,7 @@ template <typename F> inline F saturate(F x) { return clamp(x, F(0), F(1)); }
 
 // D_GGX and D_GGX_Anisotropic (Walter 2007; Burley 2012): with (t, b, n) = (x, y, z) both are
 // the Trowbridge-Reitz D(h) of core/microfacet.h.
-template <typename F> inline F D_GGX(const TrowbridgeReitz<F> &mfd, const Vec3<F> &h) { return mfd.D(h); }
+template <typename F> inline F D_GGX(const Microfacet<F> &mfd, const Vec3<F> &h) { return mfd.D(h); }
 
 // D_Charlie (Estevez & Kulla 2017, brdf.fs): (2 + 1/a) sin^(1/a)(theta_h) / (2 pi), sin^2 >= 2^-7.
 template <typename F> inline F D_Charlie_sin2(F alpha, F sin2h) {
@@ -251,8 +251,8 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardKernel {
     Spectrum<F> diffuse_color{F(0)}, f0{F(0)}, sheen_color{F(0)};
     F f90 = 1;
     F alpha = 0;              // base GGX alpha after the clear-coat raise and the clamp
-    TrowbridgeReitz<F> spec;  // (alpha_t, alpha_b) on (x, y)
-    TrowbridgeReitz<F> coat;  // isotropic clear-coat alpha
+    Microfacet<F> spec;  // (alpha_t, alpha_b) on (x, y)
+    Microfacet<F> coat;  // isotropic clear-coat alpha
     F clear_coat = 0, sheen_alpha = 1, sheen_max = 0, diffuse_max = 0;
     // knobs as 0/1 factors
     F anisotropic = 0, fast_v = 0, burley = 0, energy_compensation = 1, doc_layering = 0;
@@ -388,7 +388,7 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardKernel {
         Mask<V> pick_ggx = (!pick_cos) & (uc < c_ggx);
         Mask<V> pick_coat = Mask<V>(Coat) & !pick_cos & !pick_ggx & (uc < c_coat) & (l.coat > V(0));
         // One visible-normal sample for whichever GGX lobe was picked
-        TrowbridgeReitz<V> d;
+        Microfacet<V> d;
         d.alpha_x = select(pick_coat, V(coat.alpha_x), V(spec.alpha_x));
         d.alpha_y = select(pick_coat, V(coat.alpha_y), V(spec.alpha_y));
         Vec3<V> wi = Reflect(wo, d.Sample_wm(wo, u));
@@ -487,8 +487,8 @@ template <typename F, bool Coat, bool Sheen> struct FilamentStandardT : Filament
         at = at > S(min_alpha) ? at : S(min_alpha);
         ab = ab > S(min_alpha) ? ab : S(min_alpha);
         m.alpha = F(a);
-        m.spec = TrowbridgeReitz<F>(F(at), F(ab), Masking::Correlated);
-        m.coat = TrowbridgeReitz<F>(F(cc_pr * cc_pr), F(cc_pr * cc_pr), Masking::Correlated);
+        m.spec = Microfacet<F>(F(at), F(ab), Masking::Correlated);
+        m.coat = Microfacet<F>(F(cc_pr * cc_pr), F(cc_pr * cc_pr), Masking::Correlated);
         m.clear_coat = Coat ? F(cc) : F(0);
         S s_pr = clamp(p.sheen_roughness, S(min_pr), S(1));  // getSheenPixelParams
         m.sheen_alpha = F(s_pr * s_pr);

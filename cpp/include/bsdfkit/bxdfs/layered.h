@@ -498,7 +498,7 @@ template <typename F> struct CoatedDiffuseBxDF : LayeredBxDF<F, DiffuseBxDF<F>> 
     static CoatedDiffuseBxDF make(const Params &p) {
         CoatedDiffuseBxDF m;
         m.top.eta = F(p.eta);
-        m.top.mfd = TrowbridgeReitz<F>(F(p.alpha_x), F(p.alpha_y), p.masking);
+        m.top.mfd = Microfacet<F>(F(p.alpha_x), F(p.alpha_y), p.masking);
         for (int c = 0; c < 3; ++c) m.bottom.R[c] = F(p.reflectance[c]);
         m.set_layer(p.layer);
         return m;
@@ -513,7 +513,7 @@ template <typename F> struct CoatedConductorBxDF : LayeredBxDF<F, ConductorBxDF<
     static CoatedConductorBxDF make(const Params &p) {
         CoatedConductorBxDF m;
         m.top.eta = F(p.interface_eta);
-        m.top.mfd = TrowbridgeReitz<F>(F(p.interface_alpha_x), F(p.interface_alpha_y), p.masking);
+        m.top.mfd = Microfacet<F>(F(p.interface_alpha_x), F(p.interface_alpha_y), p.masking);
         // The metal sits in the coating, so its IOR relative to the coating is eta / interface_eta
         // (pbrt-v4 CoatedConductorMaterial since PR #343, issue #342).
         Spectrum<F> ce, ck;
@@ -521,7 +521,7 @@ template <typename F> struct CoatedConductorBxDF : LayeredBxDF<F, ConductorBxDF<
             ce[c] = F(p.conductor_eta[c] / p.interface_eta);
             ck[c] = F(p.conductor_k[c] / p.interface_eta);
         }
-        m.bottom = ConductorBxDF<F>(TrowbridgeReitz<F>(F(p.conductor_alpha_x), F(p.conductor_alpha_y), p.masking), ce, ck);
+        m.bottom = ConductorBxDF<F>(Microfacet<F>(F(p.conductor_alpha_x), F(p.conductor_alpha_y), p.masking), ce, ck);
         m.set_layer(p.layer);
         return m;
     }

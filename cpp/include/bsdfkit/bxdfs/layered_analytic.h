@@ -287,7 +287,7 @@ template <typename F> struct CoatedDiffuseAnalyticBxDF : AnalyticLayeredBxDF<F, 
         using S = param_t<F>;
         CoatedDiffuseAnalyticBxDF m;
         m.top.eta = F(p.eta);
-        m.top.mfd = TrowbridgeReitz<F>(F(p.alpha_x), F(p.alpha_y), p.masking);
+        m.top.mfd = Microfacet<F>(F(p.alpha_x), F(p.alpha_y), p.masking);
         Spectrum<S> rho;
         for (int c = 0; c < 3; ++c) {
             m.bottom.R[c] = F(p.reflectance[c]);
@@ -310,7 +310,7 @@ template <typename F> struct CoatedConductorAnalyticBxDF : AnalyticLayeredBxDF<F
         using S = param_t<F>;
         CoatedConductorAnalyticBxDF m;
         m.top.eta = F(p.interface_eta);
-        m.top.mfd = TrowbridgeReitz<F>(F(p.interface_alpha_x), F(p.interface_alpha_y), p.masking);
+        m.top.mfd = Microfacet<F>(F(p.interface_alpha_x), F(p.interface_alpha_y), p.masking);
         // the metal relative to the coating, as the stochastic model (pbrt-v4 PR #343)
         Spectrum<F> ce, ck;
         Spectrum<S> rho;
@@ -321,7 +321,7 @@ template <typename F> struct CoatedConductorAnalyticBxDF : AnalyticLayeredBxDF<F
             // the smooth metal's hemispherical albedo (roughness neglected)
             rho[c] = CosineWeightedMean<S>([e, k](S mu) { return FrComplex(mu, e, k); });
         }
-        m.bottom = ConductorBxDF<F>(TrowbridgeReitz<F>(F(p.conductor_alpha_x), F(p.conductor_alpha_y), p.masking), ce, ck);
+        m.bottom = ConductorBxDF<F>(Microfacet<F>(F(p.conductor_alpha_x), F(p.conductor_alpha_y), p.masking), ce, ck);
         m.base_diffuse = false;
         m.base_smooth = m.bottom.is_smooth();
         m.set_layer(p.layer, rho);

@@ -300,7 +300,7 @@ template <typename F> struct PlasticBxDF {
     F inv_eta2 = F(1) / (F(1.49) * F(1.49));  // 1 / eta^2 as FrDielectricRatioScaledAbove rounds it
     bool dense = true;          // eta > 1: no total internal reflection for light from outside
     F spec_weight = 0.5;        // w = mean(Ks) / (mean(R) + mean(Ks))
-    TrowbridgeReitz<F> mfd;
+    Microfacet<F> mfd;
     bool smooth = true;
     bool has_diffuse = true;
     F table[kPlasticTableRes] = {};  // rough: T(cos) at cos = i / 63 (cos floored at 1e-6)
@@ -323,7 +323,7 @@ template <typename F> struct PlasticBxDF {
         m.dense = m.eta > F(1);
         m.smooth = !is_rough(p);
         S a = coat_alpha(p);
-        m.mfd = TrowbridgeReitz<F>(F(a), F(a), p.masking);
+        m.mfd = Microfacet<F>(F(a), F(a), p.masking);
         for (int i = 0; i < kPlasticTableRes; ++i) m.table[i] = F(tab.T[i]);
         for (int i = 0; i + 1 < kPlasticTableRes; ++i) m.slope[i] = m.table[i + 1] - m.table[i];
         m.slope[kPlasticTableRes - 1] = F(0);

@@ -56,7 +56,7 @@ template <typename F> struct CoatedConductorSpectral : PerElementModel<CoatedCon
         s.proto.top = CoatedConductorBxDF<F>::make(p).top;
         s.proto.set_layer(p.layer);
         s.proto.has_albedo = a.flag("has_albedo");
-        s.proto.bottom.mfd = TrowbridgeReitz<F>(F(p.conductor_alpha_x), F(p.conductor_alpha_y), p.masking);
+        s.proto.bottom.mfd = Microfacet<F>(F(p.conductor_alpha_x), F(p.conductor_alpha_y), p.masking);
         s.eta = a.param("conductor_eta");
         s.k = a.param("conductor_k");
         s.albedo = a.param("albedo");
