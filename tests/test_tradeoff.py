@@ -72,10 +72,12 @@ def user_pairs(n, seed, sphere=False):
 
 def test_knobs_of_each_family_and_what_is_moot():
     names = lambda m: {k.name: k.reachable for k in bk.knobs(m)}  # noqa: E731
-    assert names(bk.Conductor.from_metal("Cu", alpha=0.3)) == {"fresnel": True, "masking": True, "precision": True}
-    assert names(bk.Conductor.from_metal("Au")) == {"fresnel": True, "masking": False, "precision": True}
-    assert names(bk.Dielectric(1.5)) == {"masking": False, "precision": True}
-    assert names(bk.Dielectric(1.5, alpha=0.2)) == {"masking": True, "precision": True}
+    assert names(bk.Conductor.from_metal("Cu", alpha=0.3)) == {"fresnel": True, "masking": True, "distribution": True,
+                                                                "precision": True}
+    assert names(bk.Conductor.from_metal("Au")) == {"fresnel": True, "masking": False, "distribution": False,
+                                                    "precision": True}
+    assert names(bk.Dielectric(1.5)) == {"masking": False, "distribution": False, "precision": True}
+    assert names(bk.Dielectric(1.5, alpha=0.2)) == {"masking": True, "distribution": True, "precision": True}
     for m in (bk.Diffuse(0.5), bk.DiffuseTransmission(0.3, 0.4), bk.ThinDielectric(1.5)):
         assert names(m) == {"precision": True}
     plastic = names(bk.FilamentStandard([0.8, 0.5, 0.3]))        # reflectance 0.5: the f90 rule saturates
@@ -172,7 +174,7 @@ def test_albedo_error_matches_quadrature():
             diffs.append(np.abs((d * dw).sum(axis=0)).max())
         assert row["albedo_err"] == pytest.approx(max(diffs), rel=0.05, abs=2e-5)
         checked += 1
-    assert checked == 6
+    assert checked == 12  # float64: fresnel x masking x distribution
 
 
 def test_delta_models_are_measured_by_sampling_not_reported_as_zero():
@@ -256,7 +258,8 @@ def _synthetic_costs(model, cheapest_key):
 def test_huge_tol_gives_the_cheapest_configuration():
     model = bk.Conductor.from_metal("Cu", alpha=0.3)
     cfgs = configurations(model)
-    target = next(c for c in cfgs if c.labels == {"fresnel": "f82", "masking": "separable", "precision": "float32"})
+    target = next(c for c in cfgs if c.labels == {"fresnel": "f82", "masking": "separable", "distribution": "ggx",
+                                                  "precision": "float32"})
     # masking is a modelling choice: reachable only when allowed
     m, rep = bk.simplify(model, 1e9, n=512, n_albedo=512, costs=_synthetic_costs(model, target.key),
                          allow=("masking",))
@@ -270,7 +273,7 @@ def test_huge_tol_gives_the_cheapest_configuration():
     assert rep.expected_speedup is None and rep.ranked_by.startswith("registry order")
     # with the shipped table (whatever it holds): within COST_RESOLUTION of the cheapest listed cost
     for mod in (model, bk.FilamentStandard([0.8, 0.5, 0.3], reflectance=0.1, sheen_color=0.3, sheen_roughness=0.5)):
-        cfgs = configurations(mod)
+        cfgs = configurations(mod, allow=())  # what simplify may reach: modelling knobs kept
         table = knob_costs().get("families", {}).get(family(mod), {}).get("costs", {})
         m, rep = bk.simplify(mod, math.inf, n=512, n_albedo=512)
         chosen = next(c for c in cfgs if c.model == m and c.dtype is rep.dtype)
@@ -387,22 +390,22 @@ def test_bad_input_raises_naming_the_parameter():
 
 def test_table_renderers_and_conversions():
     t = bk.tradeoff(bk.Conductor.from_metal("Cu", alpha=0.3), n=512, n_albedo=512, n_timing=2048, repeats=1)
-    assert isinstance(t, Table) and len(t) == 12 and t.measured
+    assert isinstance(t, Table) and len(t) == 24 and t.measured
     recs = t.to_records()
     assert recs[0]["config"] == "most accurate" and recs[0]["speedup"] == 1.0
     assert all(r["evals_per_s"] > 0 and r["speedup"] > 0 for r in recs)
     assert recs[0]["pareto"]                                  # error 0: always on the front
     d = t.to_dict()
-    assert list(d) == t.columns and all(len(v) == 12 for v in d.values())
+    assert list(d) == t.columns and all(len(v) == 24 for v in d.values())
     assert {"config", "fresnel", "masking", "dtype", "evals_per_s", "speedup", "expected_speedup", "max_err",
             "p99_err", "albedo_err", "pareto"} <= set(t.columns)
     text = str(t)
     assert all(r["config"] in text for r in recs) and "p99_err" in text.splitlines()[1]
     md = t._repr_markdown_()
     lines = md.splitlines()
-    assert lines[2].startswith("| config |") and lines[3].startswith("|---") and len(lines) == 4 + 12
+    assert lines[2].startswith("| config |") and lines[3].startswith("|---") and len(lines) == 4 + 24
     html = t._repr_html_()
-    assert html.count("<tr") == 1 + 12 and "<table>" in html and "Pareto" in html
+    assert html.count("<tr") == 1 + 24 and "<table>" in html and "Pareto" in html
     assert t["p99_err"] == d["p99_err"] and t[3] == recs[3]
     with pytest.raises(KeyError):
         t["nope"]
@@ -411,7 +414,7 @@ def test_table_renderers_and_conversions():
             t.to_pandas()
     else:
         df = t.to_pandas()
-        assert list(df.columns) == t.columns and len(df) == 12
+        assert list(df.columns) == t.columns and len(df) == 24
     # a table without timing renders too
     u = bk.tradeoff(bk.Diffuse(0.5), n=64, n_albedo=64, measure=False)
     assert u["speedup"] == [None, None] and "—" in str(u) and "—" in u._repr_html_()
@@ -540,7 +543,7 @@ def test_simplify_keeps_modelling_choices_unless_allowed():
     assert rep.allow == ("diffuse",) and "diffuse" not in {k for k, _ in rep.fixed}
     with pytest.raises(ValueError, match="allow: 'fresnel' is not a modelling knob"):
         bk.simplify(sep, 1e-3, allow=("fresnel",))
-    with pytest.raises(ValueError, match="modelling knobs: masking"):
+    with pytest.raises(ValueError, match="modelling knobs: distribution, masking"):
         bk.simplify(sep, 1e-3, allow="diffuse")
 
 
