@@ -207,8 +207,7 @@ template <typename F> struct Microfacet {
     // density D(wm) cos(wm): GGX |slope|^2 = u / (1 - u), Beckmann -log(1 - u) (Walter 2007 eqs.
     // 28, 35). Beckmann's visible normals: in the configuration stretched and rotated so that w
     // lies at (theta, phi = 0), x from Jakob 2014's inversion (BeckmannVisibleSlope11), y Gaussian.
-    // Out of line: the GGX visible-normal path (Sample_wm_h) stays as small as it was.
-    template <typename V> [[gnu::noinline]] Vec3<V> Sample_wm_slopes(const Vec3<V> &w, Point2<V> u, V *len2) const {
+    template <typename V> Vec3<V> Sample_wm_slopes(const Vec3<V> &w, Point2<V> u, V *len2) const {
         using S = scalar_t<V>;
         V x, y;
         if (!visible) {
