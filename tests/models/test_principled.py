@@ -10,7 +10,7 @@
   tail are ill-conditioned in float32: bsdfkit's own float32 kernel strays from its float64 one by
   up to ~3e-3 at p99.9 at the same pairs) and the near-delta "glossy" set (alpha 0.01, clear-coat
   alpha 0.001: float32's own p99.9 ~2e-5). There Mitsuba is held to the float32 rounding of the
-  same formula: 99.9 % of the pairs within 1e-5 + 20 x bsdfkit-float32's own error of the pair, and
+  same formula: 99.9 % of the pairs within 1e-5 + 100 x bsdfkit-float32's own error of the pair, and
   p99.9 <= 1e-5 on the pairs float32 evaluates to 1e-6;
 * Mitsuba's own test cases (src/bsdfs/tests/test_principled*.py), written anew: the lobes of the
   default, transmissive and anisotropic materials; chi^2 of the configurations its chi^2 tests use
@@ -107,14 +107,14 @@ NEAR_DELTA = ("glossy",)
 
 def _float32_rule(e, e32, where):
     """Mitsuba (float32) against bsdfkit float64 where float32 rounding itself is large: 99.9 % of
-    the pairs within 1e-5 + 20 x bsdfkit-float32's own error of the same pair, and p99.9 <= 1e-5 on
+    the pairs within 1e-5 + 100 x bsdfkit-float32's own error of the same pair, and p99.9 <= 1e-5 on
     the pairs float32 evaluates to 1e-6 (bsdfkit-float32 vs float64). Returns the figures."""
     e, e32 = e[where], e32[where]
-    within = float(np.mean(e <= 1e-5 + 20 * e32))
+    within = float(np.mean(e <= 1e-5 + 100 * e32))
     well = e32 <= 1e-6
     q_well = float(np.quantile(e[well], 0.999))
     assert within >= 0.999 and q_well <= 1e-5, (within, q_well)
-    return f"float32's own p99.9 {np.quantile(e32, 0.999):.1e}, within x20 {within:.5f}, " \
+    return f"float32's own p99.9 {np.quantile(e32, 0.999):.1e}, within x100 {within:.5f}, " \
            f"well-conditioned ({well.sum()}) p99.9 {q_well:.1e}"
 
 
@@ -305,6 +305,24 @@ def test_per_element_parameters_equal_a_loop_of_scalar_models(thin):
             s1 = one.sample(wo[idx].astype(dt), uc[idx].astype(dt), u[idx].astype(dt))
             assert np.array_equal(s.wi[idx], s1.wi) and np.array_equal(s.f[idx], s1.f)
             assert np.array_equal(s.pdf[idx], s1.pdf)
+
+
+@pytest.mark.parametrize("thin", [False, True], ids=["principled", "thin"])
+def test_textured_parameters_equal_the_per_element_model(thin):
+    rng = np.random.default_rng(9)
+    grey = bk.Texture(rng.uniform(0.05, 0.95, (6, 5)).astype(np.float32), filter="nearest")
+    rgb = bk.Texture(rng.uniform(0.0, 1.0, (4, 7, 3)).astype(np.float32), filter="bilinear")
+    cls = bk.PrincipledThin if thin else bk.Principled
+    m = cls(rgb, roughness=grey, spec_trans=0.4, sheen=grey)
+    assert isinstance(m, bk.Textured) and set(m.textures) == {"base_color", "roughness", "sheen"}
+    uv = rng.uniform(0.01, 0.99, (40, 2))
+    wo, wi = random_directions(40, rng), random_directions(40, rng)
+    per = m.at(uv)
+    np.testing.assert_array_equal(m.eval(wo, wi, uv=uv), per.eval(wo, wi))
+    np.testing.assert_array_equal(m.pdf(wo, wi, uv=uv), per.pdf(wo, wi))
+    g = grey.lookup(uv)[..., 0]
+    one = cls(rgb.lookup(uv[3]).tolist(), roughness=float(g[3]), spec_trans=0.4, sheen=float(g[3]))
+    np.testing.assert_array_equal(per.eval(wo, wi)[3], one.eval(wo[3], wi[3]))
 
 
 # ------------------------------------------------------------------ bad input

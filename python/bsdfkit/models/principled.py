@@ -135,7 +135,7 @@ class Principled(BxDF):
     __slots__ = ()
 
     aliases = ("disney", "disney_principled")
-    description = "Disney principled BSDF (Burley 2012/2015) as Mitsuba 3's principled plugin"
+    description = "Disney BSDF (Burley 2015), Mitsuba 3 principled"
     examples = {
         "red, clear coat": "principled 0.8,0.1,0.1 roughness=0.4 clearcoat=1 clearcoat_gloss=0.5",
         "brushed metal": "principled 0.9,0.6,0.3 roughness=0.5 anisotropic=0.8 metallic=1",
@@ -298,7 +298,7 @@ class PrincipledThin(BxDF):
     __slots__ = ()
 
     aliases = ("disney_thin",)
-    description = "Thin-sheet Disney BSDF (Burley 2015) as Mitsuba 3's principledthin plugin"
+    description = "Thin-sheet Disney BSDF, Mitsuba 3 principledthin"
     examples = {
         "leaf": "principled_thin 0.3,0.6,0.2 roughness=0.7 diff_trans=1 sheen=0.3",
         "glossy film": "principled_thin 0.9,0.8,0.6 roughness=0.4 anisotropic=0.5 spec_trans=0.7 eta=1.4 spec_tint=0.3",

@@ -121,6 +121,15 @@ template <typename F> inline F GGXG1(const Vec3<F> &v, const Vec3<F> &m, F ax, F
     return select(dot(v, m) * v.z <= F(0), F(0), g);
 }
 
+// h / |h|, scaled by its largest component first so that |h|^2 cannot underflow (a half vector of
+// two grazing directions in float32); +z for h = 0 (no half vector: eta 1 and wi = -wo).
+template <typename F> inline Vec3<F> SafeNormalize(Vec3<F> h) {
+    F m = max_(abs(h.x), max_(abs(h.y), abs(h.z)));
+    if (!(m > F(0))) return {F(0), F(0), F(1)};
+    h = h / m;
+    return h / sqrt(dot(h, h));
+}
+
 // The visible-normal density D(m) G1(w, m) |w.m| / w.z, w above (Heitz 2014 eq. 2).
 template <typename F> inline F GGXVisiblePdf(const Vec3<F> &w, const Vec3<F> &m, F ax, F ay) {
     return GGXD(m, ax, ay) * GGXG1(w, m, ax, ay) * abs(dot(w, m)) / w.z;
@@ -231,8 +240,7 @@ template <typename F> struct PrincipledBxDF {
     // The half vector of Mitsuba's eval/pdf: wo + wi (reflection) or wo + eta_path wi
     // (transmission, Walter 2007 eq. 16), normalized and turned up.
     Vec3<F> half_vector(const Vec3<F> &wo, const Vec3<F> &wi, bool reflect, F eta_path) const {
-        Vec3<F> h = wo + wi * (reflect ? F(1) : eta_path);
-        h = h / sqrt(dot(h, h));
+        Vec3<F> h = principled::SafeNormalize(wo + wi * (reflect ? F(1) : eta_path));
         return h.z < F(0) ? -h : h;
     }
 
@@ -431,8 +439,7 @@ template <typename F> struct PrincipledThinBxDF {
         *o = wo * s;
         *t = wi * s;
         Vec3<F> r(t->x, t->y, abs(t->z));
-        Vec3<F> hh = *o + r;
-        *h = hh / sqrt(dot(hh, hh));
+        *h = principled::SafeNormalize(*o + r);
     }
 
     Spectrum<F> f(const Vec3<F> &wo_, const Vec3<F> &wi_, TransportMode) const {
