@@ -262,16 +262,25 @@ def test_specular_sets_eta_as_mitsuba_does():
     assert bk.Principled().eta == specular_to_eta(0.5)
     with pytest.raises(ValueError, match="eta, specular"):
         bk.Principled(eta=1.5, specular=0.5)
-    # against Mitsuba's own conversion (a float32 one: rtol 1e-5) and its transmission special cases
+    # against Mitsuba's own conversion and its transmission special cases: from above (the Fresnel
+    # term among the other lobes) p99.9 <= 1e-5; from below, where the (1 - metallic) spec_trans
+    # weighted Fresnel reflection is alone, Mitsuba's float32 Fresnel amplitudes (cos_i - eta cos_t)
+    # cancel as eta -> 1: relative error ~ eps32 / |eta - 1| (measured 2-10x that: 1.4e-4 at eta
+    # 1.001, 3e-5 at 1.018), bounded by 1e-5 + 20 x 6e-8 / |eta - 1|
     wo, wi = _pairs(11)
-    for params, z_ok in ((dict(specular=0.3, metallic=0.2), wo[:, 2] > 0),
-                         (dict(specular=0.0, spec_trans=0.6, roughness=0.4), slice(None)),
-                         (dict(eta=1.0, spec_trans=0.6, roughness=0.4), slice(None))):
+    for params in (dict(specular=0.3, metallic=0.2), dict(specular=0.0, spec_trans=0.6, roughness=0.4),
+                   dict(eta=1.0, spec_trans=0.6, roughness=0.4)):
         m = bk.Principled(**params)
         mf, mp = mi_ref.eval_pdf(params, wo, wi)
-        refl = (wo[:, 2] * wi[:, 2] > 0)[z_ok]
-        assert np.quantile(_rel(m.eval(wo, wi)[z_ok][refl], mf[z_ok][refl]), 0.999) <= 1e-5, params
-        assert np.quantile(_rel(m.pdf(wo, wi)[z_ok][refl], mp[z_ok][refl]), 0.999) <= 1e-5, params
+        above = (wo[:, 2] > 0) & (wi[:, 2] > 0)
+        below = (wo[:, 2] < 0) & (wi[:, 2] < 0) & mi_ref.comparable(params, wo)
+        for e in (_rel(m.eval(wo, wi), mf), _rel(m.pdf(wo, wi), mp)):
+            assert np.quantile(e[above], 0.999) <= 1e-5, params
+            if below.any():
+                bound = 1e-5 + 20 * 6e-8 / abs(m.eta - 1)
+                print(params, f"eta {m.eta}: below p99.9 {np.quantile(e[below], 0.999):.2e} max "
+                      f"{e[below].max():.2e} (bound {bound:.1e})")
+                assert e[below].max() <= bound, params
     assert bk.Principled(specular=0.0, spec_trans=0.6).eta == specular_to_eta(1e-3)
     assert bk.Principled(eta=1.0, spec_trans=0.6).eta == 1.001
     assert bk.Principled(eta=1.0).eta == 1.0   # no transmission: kept
@@ -393,8 +402,10 @@ def test_mitsuba_round_trip(m):
     wo, wi = _pairs(13)
     ok = mi_ref.comparable(m._params, wo, isinstance(m, bk.PrincipledThin)) & (wo[:, 2] * wi[:, 2] > 0)
     mf, mp = mref.eval_pdf(d, wo, wi)                      # mi.load_dict of the export
-    assert np.quantile(_rel(m.eval(wo, wi)[ok], mf[ok]), 0.999) <= 1e-5
-    assert np.quantile(_rel(m.pdf(wo, wi)[ok], mp[ok]), 0.999) <= 1e-5
+    # the same material (a wrong parameter moves values by far more; the accuracy itself is
+    # test_principled_matches_mitsuba's, with the float32 rules it needs)
+    assert np.quantile(_rel(m.eval(wo, wi)[ok], mf[ok]), 0.999) <= 1e-4
+    assert np.quantile(_rel(m.pdf(wo, wi)[ok], mp[ok]), 0.999) <= 1e-4
 
 
 def test_mitsuba_xml_import(tmp_path):

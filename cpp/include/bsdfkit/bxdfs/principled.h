@@ -358,7 +358,8 @@ template <typename F> struct PrincipledBxDF {
             wi = SampleCosineHemisphere(u);
             flag = DiffuseReflection;
         } else if (uc < p_d + p_cc) {
-            wi = Reflect(wo, SampleGTR1(u, cc_a2));
+            m = SampleGTR1(u, cc_a2);
+            wi = Reflect(wo, m);
             flag = GlossyReflection;
         } else if (uc < p_d + p_cc + p_t) {
             F etap;
@@ -373,6 +374,9 @@ template <typename F> struct PrincipledBxDF {
         }
         bool reflect = wi.z * cos_o > F(0);
         if (reflect != bool(flag & Reflection)) return s;   // the sampled direction left its side
+        // a microfacet lobe's sample where its normal does not face both directions is no sample
+        // of that lobe (its density is 0 there; Mitsuba's sampler drops it the same way)
+        if (flag != DiffuseReflection && !compatible(m, wo, wi, cos_o, reflect)) return s;
         s.wi = wi;
         s.flags = flag;
         s.pdf = pdf(wo, wi, mode, sample_flags);
@@ -522,11 +526,14 @@ template <typename F> struct PrincipledThinBxDF {
         F p_sr, p_st, p_dr, p_dt;
         lobe_probabilities(sample_flags, &p_sr, &p_st, &p_dr, &p_dt);
         uint8_t flag;
+        Vec3<F> m(F(0), F(0), F(1));
         if (uc < p_sr) {
-            wi = Reflect(wo, TrowbridgeReitz<F>(ax, ay, Masking::Separable).Sample_wm(wo, u));
+            m = TrowbridgeReitz<F>(ax, ay, Masking::Separable).Sample_wm(wo, u);
+            wi = Reflect(wo, m);
             flag = GlossyReflection;
         } else if (uc < p_sr + p_st) {
-            wi = Reflect(wo, TrowbridgeReitz<F>(tax, tay, Masking::Separable).Sample_wm(wo, u));
+            m = TrowbridgeReitz<F>(tax, tay, Masking::Separable).Sample_wm(wo, u);
+            wi = Reflect(wo, m);
             wi.z = -wi.z;
             flag = GlossyTransmission;
         } else if (uc < p_sr + p_st + p_dr) {
@@ -539,6 +546,10 @@ template <typename F> struct PrincipledThinBxDF {
             return s;
         }
         if ((wi.z > F(0)) != bool(flag & Reflection)) return s;  // the sampled direction left its side
+        // a specular sample whose normal faces away from wo or wi belongs to no lobe (its density
+        // is 0 there; Mitsuba's sampler drops it the same way)
+        bool glossy = flag & Glossy;
+        if (glossy && !(dot(wo, m) > F(0) && (flag & Reflection ? dot(wi, m) > F(0) : dot(wi, m) < F(0)))) return s;
         s.wi = wi * sign;
         s.flags = flag;
         s.pdf = pdf(wo_, s.wi, mode, sample_flags);
