@@ -301,7 +301,7 @@ class PrincipledThin(BxDF):
     description = "Thin-sheet Disney BSDF, Mitsuba 3 principledthin"
     examples = {
         "leaf": "principled_thin 0.3,0.6,0.2 roughness=0.7 diff_trans=1 sheen=0.3",
-        "glossy film": "principled_thin 0.9,0.8,0.6 roughness=0.4 anisotropic=0.5 spec_trans=0.7 eta=1.4 spec_tint=0.3",
+        "glossy film": "principled_thin 0.9,0.8,0.6 roughness=0.6 anisotropic=0.3 spec_trans=0.7 eta=1.4 spec_tint=0.3",
         "paper": "principled_thin 0.9 roughness=0.9 diff_trans=0.6 flatness=0.8",
     }
     energy_conserving, exact_eval, two_sided, transmission, delta_only = False, True, True, True, False
