@@ -18,6 +18,7 @@ void bind_family_filament(py::module_ &m, std::vector<std::string> &names);
 void bind_family_measured(py::module_ &m, std::vector<std::string> &names);
 void bind_family_layered(py::module_ &m, std::vector<std::string> &names);
 void bind_family_hair(py::module_ &m, std::vector<std::string> &names);
+void bind_family_production(py::module_ &m, std::vector<std::string> &names);
 
 namespace {
 struct NameCollector {
@@ -33,6 +34,7 @@ void bind_all(py::module_ &m) {
     bind_family_measured(m, names);
     bind_family_layered(m, names);
     bind_family_hair(m, names);
+    bind_family_production(m, names);
     // The families concatenated are AllModels (all.h asserts it at compile time); check the order
     // that model_names reports as well.
     std::vector<std::string> expected;

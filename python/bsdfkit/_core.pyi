@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['CoatedConductor', 'CoatedConductorAnalytic', 'CoatedConductorAnalyticSpectral', 'CoatedConductorSpectral', 'CoatedDiffuse', 'CoatedDiffuseAnalytic', 'CoatedDiffuseAnalyticSpectral', 'CoatedDiffuseSpectral', 'Conductor', 'ConductorF82', 'ConductorF82Spectral', 'ConductorSchlick', 'ConductorSchlickSpectral', 'ConductorSpectral', 'Dielectric', 'DielectricSpectral', 'Diffuse', 'DiffuseSpectral', 'DiffuseTransmission', 'DiffuseTransmissionSpectral', 'EON', 'EONSpectral', 'FilamentCloth', 'FilamentClothSpectral', 'FilamentDFG', 'FilamentStandard', 'FilamentStandardCoat', 'FilamentStandardCoatSheen', 'FilamentStandardCoatSheenSpectral', 'FilamentStandardCoatSpectral', 'FilamentStandardSheen', 'FilamentStandardSheenSpectral', 'FilamentStandardSpectral', 'Hair', 'HairFarField', 'HairFarFieldSpectral', 'HairSpectral', 'MERLLinear', 'MERLLinearSpectral', 'MERLNearest', 'MERLNearestSpectral', 'MERLSpectralTable', 'MERLTable', 'Measured', 'MeasuredSpectraTable', 'MeasuredSpectral', 'MeasuredTable', 'NormalizedFresnel', 'NormalizedFresnelSpectral', 'Plastic', 'PlasticSpectral', 'SpectralParam', 'ThinDielectric', 'ThinDielectricSpectral', 'Warp2D', 'cached_bytes', 'conductor_fresnel', 'filament_dfg_rows', 'filament_term', 'fresnel_diffuse_reflectance', 'fresnel_moment1', 'get_num_threads', 'hardware_concurrency', 'model_names', 'release_memory', 'set_num_threads']
+__all__: list[str] = ['CoatedConductor', 'CoatedConductorAnalytic', 'CoatedConductorAnalyticSpectral', 'CoatedConductorSpectral', 'CoatedDiffuse', 'CoatedDiffuseAnalytic', 'CoatedDiffuseAnalyticSpectral', 'CoatedDiffuseSpectral', 'Conductor', 'ConductorF82', 'ConductorF82Spectral', 'ConductorSchlick', 'ConductorSchlickSpectral', 'ConductorSpectral', 'Dielectric', 'DielectricSpectral', 'Diffuse', 'DiffuseSpectral', 'DiffuseTransmission', 'DiffuseTransmissionSpectral', 'EON', 'EONSpectral', 'FilamentCloth', 'FilamentClothSpectral', 'FilamentDFG', 'FilamentStandard', 'FilamentStandardCoat', 'FilamentStandardCoatSheen', 'FilamentStandardCoatSheenSpectral', 'FilamentStandardCoatSpectral', 'FilamentStandardSheen', 'FilamentStandardSheenSpectral', 'FilamentStandardSpectral', 'Hair', 'HairFarField', 'HairFarFieldSpectral', 'HairSpectral', 'MERLLinear', 'MERLLinearSpectral', 'MERLNearest', 'MERLNearestSpectral', 'MERLSpectralTable', 'MERLTable', 'Measured', 'MeasuredSpectraTable', 'MeasuredSpectral', 'MeasuredTable', 'NormalizedFresnel', 'NormalizedFresnelSpectral', 'Plastic', 'PlasticSpectral', 'Principled', 'PrincipledThin', 'SpectralParam', 'ThinDielectric', 'ThinDielectricSpectral', 'Warp2D', 'cached_bytes', 'conductor_fresnel', 'filament_dfg_rows', 'filament_term', 'fresnel_diffuse_reflectance', 'fresnel_moment1', 'get_num_threads', 'hardware_concurrency', 'model_names', 'release_memory', 'set_num_threads']
 class FilamentDFG:
     def __eq__(self, arg0: typing.Any) -> bool:
         ...
@@ -1186,6 +1186,60 @@ class HairFarFieldSpectral:
         ...
     @property
     def dispersive(self) -> bool:
+        ...
+class Principled:
+    """
+    bsdfkit model Principled (bxdfs/all.h); keyword arguments: base_color, roughness, anisotropic, metallic, spec_trans, eta, spec_tint, sheen, sheen_tint, flatness, clearcoat, clearcoat_gloss, main_specular_sampling_rate, clearcoat_sampling_rate, diffuse_reflectance_sampling_rate (a missing one keeps its C++ Params default).
+    """
+    fields: typing.ClassVar[tuple] = ('base_color', 'roughness', 'anisotropic', 'metallic', 'spec_trans', 'eta', 'spec_tint', 'sheen', 'sheen_tint', 'flatness', 'clearcoat', 'clearcoat_gloss', 'main_specular_sampling_rate', 'clearcoat_sampling_rate', 'diffuse_reflectance_sampling_rate')
+    def __init__(self, *args, **kwargs) -> None:
+        ...
+    def albedo(self, wo: typing.Any, n_samples: typing.Any = 65536, seed: typing.Any = 0, mode: typing.Any = 0) -> typing.Any:
+        ...
+    def eval(self, wo: typing.Any, wi: typing.Any, mode: typing.Any = 0, out: typing.Any = None) -> typing.Any:
+        ...
+    def pdf(self, wo: typing.Any, wi: typing.Any, mode: typing.Any = 0, sflags: typing.Any = 3, out: typing.Any = None) -> typing.Any:
+        ...
+    def sample(self, wo: typing.Any, uc: typing.Any = None, u: typing.Any = None, mode: typing.Any = 0, sflags: typing.Any = 3, out: typing.Any = None, n: typing.Any = None, seed: typing.Any = None) -> typing.Any:
+        ...
+    @property
+    def flags(self) -> int:
+        ...
+    @property
+    def params(self) -> dict:
+        ...
+    @property
+    def varying(self) -> tuple:
+        ...
+    @property
+    def varying_shapes(self) -> tuple:
+        ...
+class PrincipledThin:
+    """
+    bsdfkit model PrincipledThin (bxdfs/all.h); keyword arguments: base_color, roughness, anisotropic, spec_trans, eta, spec_tint, sheen, sheen_tint, flatness, diff_trans, specular_reflectance_sampling_rate, specular_transmittance_sampling_rate, diffuse_reflectance_sampling_rate, diffuse_transmittance_sampling_rate (a missing one keeps its C++ Params default).
+    """
+    fields: typing.ClassVar[tuple] = ('base_color', 'roughness', 'anisotropic', 'spec_trans', 'eta', 'spec_tint', 'sheen', 'sheen_tint', 'flatness', 'diff_trans', 'specular_reflectance_sampling_rate', 'specular_transmittance_sampling_rate', 'diffuse_reflectance_sampling_rate', 'diffuse_transmittance_sampling_rate')
+    def __init__(self, *args, **kwargs) -> None:
+        ...
+    def albedo(self, wo: typing.Any, n_samples: typing.Any = 65536, seed: typing.Any = 0, mode: typing.Any = 0) -> typing.Any:
+        ...
+    def eval(self, wo: typing.Any, wi: typing.Any, mode: typing.Any = 0, out: typing.Any = None) -> typing.Any:
+        ...
+    def pdf(self, wo: typing.Any, wi: typing.Any, mode: typing.Any = 0, sflags: typing.Any = 3, out: typing.Any = None) -> typing.Any:
+        ...
+    def sample(self, wo: typing.Any, uc: typing.Any = None, u: typing.Any = None, mode: typing.Any = 0, sflags: typing.Any = 3, out: typing.Any = None, n: typing.Any = None, seed: typing.Any = None) -> typing.Any:
+        ...
+    @property
+    def flags(self) -> int:
+        ...
+    @property
+    def params(self) -> dict:
+        ...
+    @property
+    def varying(self) -> tuple:
+        ...
+    @property
+    def varying_shapes(self) -> tuple:
         ...
 class SpectralParam:
     """

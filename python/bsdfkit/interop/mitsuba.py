@@ -47,7 +47,7 @@ MIRROR_ETA = 1e-6
 
 _MI_SUPPORTED = ("diffuse", "conductor", "roughconductor", "dielectric", "roughdielectric",
                  "thindielectric", "measured", "plastic", "roughplastic", "twosided", "null", "hair",
-                 "blendbsdf", "mask", "normalmap", "bumpmap")
+                 "blendbsdf", "mask", "normalmap", "bumpmap", "principled", "principledthin")
 
 
 _MI_CONSTANT_TEXTURES = ("rgb", "spectrum", "uniform", "srgb")
@@ -67,6 +67,13 @@ _MI_PARAMS = {
                      "distribution", "alpha", "sample_visible"),
     "null": (),
     "measured": ("filename",),
+    "principled": ("base_color", "roughness", "anisotropic", "metallic", "spec_trans", "eta", "specular",
+                   "spec_tint", "sheen", "sheen_tint", "flatness", "clearcoat", "clearcoat_gloss",
+                   "main_specular_sampling_rate", "clearcoat_sampling_rate", "diffuse_reflectance_sampling_rate"),
+    "principledthin": ("base_color", "roughness", "anisotropic", "spec_trans", "eta", "spec_tint", "sheen",
+                       "sheen_tint", "flatness", "diff_trans", "specular_reflectance_sampling_rate",
+                       "specular_transmittance_sampling_rate", "diffuse_reflectance_sampling_rate",
+                       "diffuse_transmittance_sampling_rate"),
     "hair": ("eumelanin", "pheomelanin", "sigma_a", "scale", "int_ior", "ext_ior", "longitudinal_roughness",
              "azimuthal_roughness", "scale_tilt"),
 }
@@ -355,6 +362,8 @@ def _mi_plugin(d, where, ctx):
         return _mi_plastic(d, label, kind == "roughplastic")
     if kind == "hair":
         return _mi_hair(d, label)
+    if kind in ("principled", "principledthin"):
+        return _mi_principled(d, label, kind == "principledthin")
     eta = _mi_eta(d, label)
     if kind == "dielectric":
         return _mi_build(label, lambda: Dielectric(eta))
@@ -389,6 +398,24 @@ def _mi_plastic(d, where, rough):
         alpha = ax
     return _mi_build(where, lambda: Plastic(r, eta_int / eta_ext, alpha=alpha, nonlinear=bool(nl),
                                             masking="separable", specular_reflectance=ks))
+def _mi_principled(d, where, thin):
+    """Mitsuba 3 ``principled`` / ``principledthin`` -> ``Principled`` / ``PrincipledThin`` (the same
+    parameters; a weight or the base colour may be a bitmap texture, and principledthin's ``eta``;
+    principled's ``eta`` / ``specular`` and the sampling rates are floats)."""
+    from ..models import principled as pm
+
+    if thin:
+        cls, weights, floats = pm.PrincipledThin, pm._THIN_WEIGHTS + ("diff_trans", "eta"), pm._THIN_RATES
+    else:
+        if "eta" in d and "specular" in d:
+            _mi_fail(where, "give either 'eta' or 'specular', not both (Mitsuba refuses it)")
+        cls, weights, floats = pm.Principled, pm._WEIGHTS, ("eta", "specular") + pm._RATES
+    kw = {"base_color": _mi_color_tex(d.get("base_color", 0.5), where, "base_color", bounded=True)}
+    kw.update({k: _mi_float_tex(d[k], where, k) for k in weights if k in d})
+    kw.update({k: _mi_float(d[k], where, k) for k in floats if k in d})
+    return _mi_build(where, lambda: cls(**kw))
+
+
 def _mi_hair(d, where):
     """Mitsuba 3 ``hair`` -> ``Hair`` (h = 0: Mitsuba derives h from the direction, see
     ``bsdfkit.testing.hair_ref.wo_for_h``)."""
@@ -490,6 +517,15 @@ def from_mitsuba(d, *, base_dir=None, params=None, strict=False):
                          ``scale_tilt`` (2 degrees) -> ``Hair(..., h=0)``: Mitsuba has no h, it
                          derives it from the direction (``bsdfkit.testing.hair_ref``); its fibre
                          axis is local y where bsdfkit's (pbrt's) is x
+    ``principled``       ``base_color`` (0.5), ``roughness`` (0.5), ``anisotropic``,
+                         ``metallic``, ``spec_trans``, ``spec_tint``, ``sheen``, ``sheen_tint``,
+                         ``flatness``, ``clearcoat``, ``clearcoat_gloss`` (0; each a constant or
+                         a bitmap), ``eta`` or ``specular`` (0.5), the three sampling rates (1)
+                         -> ``Principled`` (the same parameters)
+    ``principledthin``   ``base_color``, ``roughness``, ``anisotropic``, ``spec_trans``, ``eta``
+                         (1.5), ``spec_tint``, ``sheen``, ``sheen_tint``, ``flatness``,
+                         ``diff_trans`` (each a constant or a bitmap), the four sampling rates
+                         -> ``PrincipledThin``
     =================== ======================================================================
 
     Colours (reflectance, eta, k) may be a float, 3 numbers (a list, numpy array or
@@ -560,7 +596,8 @@ def from_mitsuba(d, *, base_dir=None, params=None, strict=False):
 # Mitsuba class names of loaded BSDFs -> plugin names
 _MI_CLASSES = {"SmoothDiffuse": "diffuse", "SmoothConductor": "conductor", "RoughConductor": "roughconductor",
                "SmoothDielectric": "dielectric", "RoughDielectric": "roughdielectric",
-               "ThinDielectric": "thindielectric", "Null": "null"}
+               "ThinDielectric": "thindielectric", "Null": "null", "Principled": "principled",
+               "PrincipledThin": "principledthin"}
 
 
 def _unsupported_loaded(cls):

@@ -17,6 +17,7 @@
 #include "layered.h"
 #include "layered_analytic.h"
 #include "plastic.h"
+#include "principled.h"
 #include "hair.h"
 #include "normalized_fresnel.h"
 #include "thin_dielectric.h"
@@ -49,8 +50,11 @@ using LayeredModels = ModelList<PlasticBxDF,
 using HairModels = ModelList<NormalizedFresnelBxDF,
                              HairBxDF,
                              HairFarFieldBxDF>;         // Hair with h=None: Gauss-Legendre over h (nodes: a knob)
+using ProductionModels = ModelList<PrincipledBxDF,      // Mitsuba 3 principled (Disney 2015)
+                                   PrincipledThinBxDF>; // Mitsuba 3 principledthin
 
-using AllModels = ModelListCat<PbrtModels, FilamentModels, MeasuredModels, LayeredModels, HairModels>::type;
+using AllModels =
+    ModelListCat<PbrtModels, FilamentModels, MeasuredModels, LayeredModels, HairModels, ProductionModels>::type;
 
 static_assert(AllModels::check(), "a model of AllModels does not follow core/bxdf.h");
 static_assert(AllModels::names_unique(), "two models of AllModels have the same Name");
