@@ -39,6 +39,13 @@ def _nonzero(v) -> bool:
     return isinstance(v, np.ndarray) and v.ndim > 0 or float(v) != 0.0
 
 
+
+def _no_spectral_reason(self) -> str:
+    """Why Principled / PrincipledThin have no spectral mode (their _no_spectral_reason)."""
+    return (f"wavelengths: {type(self).__name__} has no spectral mode: its spec_tint and sheen_tint divide "
+            "base_color by the colour's luminance (Mitsuba's rule), which has no per-wavelength meaning; "
+            "call without wavelengths= for RGB")
+
 class Principled(BxDF):
     """The Disney principled BSDF as Mitsuba 3 implements it (plugin ``principled``).
 
@@ -186,10 +193,7 @@ class Principled(BxDF):
     def _make_core(self):
         return _core.Principled(**{k: core_value(v) for k, v in self._params.items()})
 
-    def _no_spectral_reason(self) -> str:
-        return (f"wavelengths: {type(self).__name__} has no spectral mode: its spec_tint and sheen_tint divide "
-                "base_color by the colour's luminance (Mitsuba's rule), which has no per-wavelength meaning; "
-                "call without wavelengths= for RGB")
+    _no_spectral_reason = _no_spectral_reason
 
     def describe(self) -> str:
         p = self._params
@@ -333,10 +337,7 @@ class PrincipledThin(BxDF):
     def _make_core(self):
         return _core.PrincipledThin(**{k: core_value(v) for k, v in self._params.items()})
 
-    def _no_spectral_reason(self) -> str:
-        return (f"wavelengths: {type(self).__name__} has no spectral mode: its spec_tint and sheen_tint divide "
-                "base_color by the colour's luminance (Mitsuba's rule), which has no per-wavelength meaning; "
-                "call without wavelengths= for RGB")
+    _no_spectral_reason = _no_spectral_reason
 
     def describe(self) -> str:
         p = self._params
