@@ -98,6 +98,15 @@ template <typename F, typename T> inline T Schlick(const T &R0, F cos_i, F eta) 
 // R0 of an interface of relative IOR eta, ((eta - 1) / (eta + 1))^2 (Schlick 1994).
 template <typename F> inline F SchlickR0(F eta) { return sqr((eta - F(1)) / (eta + F(1))); }
 
+// The tint colour base / luminance (1 for a black base), luminance by Rec. 709 (Mitsuba
+// core/spectrum.h luminance), computed in double.
+template <typename F> inline Spectrum<F> Tint(const std::array<double, 3> &base) {
+    double lum = 0.212671 * base[0] + 0.715160 * base[1] + 0.072169 * base[2];
+    Spectrum<F> t;
+    for (int c = 0; c < 3; ++c) t[c] = F(lum > 0 ? base[size_t(c)] / lum : 1.0);
+    return t;
+}
+
 // GGX alphas from roughness and anisotropy: r^2 / aspect, r^2 aspect, aspect = sqrt(1 - 0.9 an),
 // floored at 0.001 (Burley 2012 addenda; Mitsuba calc_dist_params).
 template <typename F> inline void DistParams(F roughness, F anisotropic, F *ax, F *ay) {
@@ -202,9 +211,7 @@ template <typename F> struct PrincipledBxDF {
         PrincipledBxDF m;
         m.base = to_spectrum<F>(p.base_color);
         for (int c = 0; c < 3; ++c) m.sqrt_base[c] = F(std::sqrt(p.base_color[size_t(c)]));
-        // Rec. 709 luminance (Mitsuba core/spectrum.h luminance)
-        double lum = 0.212671 * p.base_color[0] + 0.715160 * p.base_color[1] + 0.072169 * p.base_color[2];
-        for (int c = 0; c < 3; ++c) m.tint[c] = F(lum > 0 ? p.base_color[size_t(c)] / lum : 1.0);
+        m.tint = principled::Tint<F>(p.base_color);
         principled::DistParams(F(p.roughness), F(p.anisotropic), &m.ax, &m.ay);
         m.roughness = F(p.roughness);
         m.metallic = F(p.metallic);
@@ -409,8 +416,7 @@ template <typename F> struct PrincipledThinBxDF {
     static PrincipledThinBxDF make(const Params &p) {
         PrincipledThinBxDF m;
         m.base = to_spectrum<F>(p.base_color);
-        double lum = 0.212671 * p.base_color[0] + 0.715160 * p.base_color[1] + 0.072169 * p.base_color[2];
-        for (int c = 0; c < 3; ++c) m.tint[c] = F(lum > 0 ? p.base_color[size_t(c)] / lum : 1.0);
+        m.tint = principled::Tint<F>(p.base_color);
         principled::DistParams(F(p.roughness), F(p.anisotropic), &m.ax, &m.ay);
         // the transmission lobe's roughness (0.65 eta - 0.35) r (Burley 2015 fig. 15)
         principled::DistParams(F((0.65 * p.eta - 0.35) * p.roughness), F(p.anisotropic), &m.tax, &m.tay);

@@ -72,6 +72,7 @@ template <typename T, typename V> inline V gather_index(const T *t, const V &x) 
 template <typename Float> inline constexpr Float Pi = Float(3.14159265358979323846);
 template <typename Float> inline constexpr Float InvPi = Float(0.31830988618379067154);
 template <typename Float> inline constexpr Float Inv2Pi = Float(0.15915494309189533577);
+template <typename Float> inline constexpr Float InvSqrtPi = Float(0.56418958354775628695);
 template <typename Float> inline constexpr Float PiOver2 = Float(1.57079632679489661923);
 template <typename Float> inline constexpr Float PiOver4 = Float(0.78539816339744830962);
 

@@ -147,7 +147,7 @@ template <typename F> struct Microfacet {
         V s = sqrt(mul_add(ax, ax, ay * ay)), c = AbsCosTheta(w);
         Mask<V> normal = s <= V(0);
         V a = c / select(normal, V(1), s);
-        V r = mul_add(c, erf(a), s * exp(-sqr(a)) * V(S(0.56418958354775628695)));
+        V r = mul_add(c, erf(a), s * exp(-sqr(a)) * V(InvSqrtPi<S>));
         return select(normal, c, r);
     }
     // G(wo, wi) / (4 cos_o cos_i) = 1 / G_denom: height-correlated 2 (cos_i R_o + cos_o R_i),
@@ -242,7 +242,7 @@ template <typename F> struct Microfacet {
     // MicrofacetDistribution::sample_visible_11). y = erfinv(2 u.y - 1) is independent.
     template <typename V> static void BeckmannVisibleSlope11(V z, V r, Point2<V> u, V *x, V *y) {
         using S = scalar_t<V>;
-        const V inv_sqrt_pi = V(S(0.56418958354775628695));
+        const V inv_sqrt_pi = V(InvSqrtPi<S>);
         V ux = max_(u.x, V(1e-6)), uy = max_(u.y, V(1e-6));
         Mask<V> pole = r <= V(0);
         V tan_t = select(pole, V(0), r / z), cot_t = select(pole, V(0), z / r);  // pole: tan 0, cot inf
