@@ -40,13 +40,48 @@ def _nonzero(v) -> bool:
 
 
 
-def _no_spectral_reason(self) -> str:
-    """Why Principled / PrincipledThin have no spectral mode (their _no_spectral_reason)."""
-    return (f"wavelengths: {type(self).__name__} has no spectral mode: its spec_tint and sheen_tint divide "
-            "base_color by the colour's luminance (Mitsuba's rule), which has no per-wavelength meaning; "
-            "call without wavelengths= for RGB")
+class _PrincipledFamily:
+    """What Principled and PrincipledThin share: construction from their parameters, the _core
+    class of the same name, no spectral mode, ``describe`` and the Mitsuba dictionary. A class
+    names its ``_core_name``, its ``_weights`` (roughness first: shown and exported when nonzero)
+    and its sampling ``_rates`` (exported when not 1)."""
 
-class Principled(BxDF):
+    __slots__ = ()
+
+    @classmethod
+    def _from_params(cls, p):
+        return cls(**p)
+
+    def _make_core(self):
+        return getattr(_core, self._core_name)(**{k: core_value(v) for k, v in self._params.items()})
+
+    def _no_spectral_reason(self) -> str:
+        return (f"wavelengths: {type(self).__name__} has no spectral mode: its spec_tint and sheen_tint divide "
+                "base_color by the colour's luminance (Mitsuba's rule), which has no per-wavelength meaning; "
+                "call without wavelengths= for RGB")
+
+    def describe(self) -> str:
+        p = self._params
+        if self.varying:
+            return super().describe()
+        parts = [f"base={fmt_param(p['base_color'])}", f"r={fmt_param(p['roughness'])}"]
+        parts += [f"{k}={fmt_param(p[k])}" for k in self._weights[1:] if float(p[k]) != 0.0]
+        return f"{self._core_name} " + ", ".join(parts)
+
+    def _mitsuba_dict(self, approximate) -> dict:
+        _check_approximate(approximate)
+        self._refuse_varying("to_mitsuba")
+        p = self._params
+        d = {"type": self.mitsuba, "base_color": rgb_dict(p["base_color"]), "eta": float(p["eta"])}
+        for k in self._weights:
+            if float(p[k]) != 0.0 or k == "roughness":
+                d[k] = float(p[k])
+        for k in self._rates:
+            if float(p[k]) != 1.0:
+                d[k] = float(p[k])
+        return d
+
+class Principled(_PrincipledFamily, BxDF):
     """The Disney principled BSDF as Mitsuba 3 implements it (plugin ``principled``).
 
     One artist-friendly material over a diffuse base, a sheen, an anisotropic GGX specular lobe
@@ -155,6 +190,7 @@ class Principled(BxDF):
     energy_conserving, exact_eval, two_sided, transmission, delta_only = False, True, True, True, False
     reciprocal = False
     mitsuba = "principled"
+    _core_name, _weights, _rates = "Principled", _WEIGHTS, _RATES
     varying_params = {"base_color": 3, **{k: 1 for k in _WEIGHTS}}
 
     def __init__(self, base_color=0.5, roughness=0.5, anisotropic=0.0, metallic=0.0, spec_trans=0.0, eta=None,
@@ -186,39 +222,11 @@ class Principled(BxDF):
                          roughness=w["roughness"], anisotropic=w["anisotropic"], metallic=w["metallic"],
                          spec_trans=w["spec_trans"], eta=e, **{k: w[k] for k in _WEIGHTS[4:]}, **rates)
 
-    @classmethod
-    def _from_params(cls, p):
-        return cls(**p)
-
-    def _make_core(self):
-        return _core.Principled(**{k: core_value(v) for k, v in self._params.items()})
-
-    _no_spectral_reason = _no_spectral_reason
-
-    def describe(self) -> str:
-        p = self._params
-        if self.varying:
-            return super().describe()
-        parts = [f"base={fmt_param(p['base_color'])}", f"r={fmt_param(p['roughness'])}"]
-        parts += [f"{k}={fmt_param(p[k])}" for k in _WEIGHTS[1:] if float(p[k]) != 0.0]
-        return "Principled " + ", ".join(parts)
-
     def to_mitsuba(self, approximate: bool = False) -> dict:
         """Mitsuba 3's ``principled`` dictionary of this material (exact: the same plugin).
         ``eta`` is written (Mitsuba's ``specular`` is converted on construction); raises
         NotImplementedError for per-element parameters."""
-        _check_approximate(approximate)
-        self._refuse_varying("to_mitsuba")
-        p = self._params
-        d = {"type": "principled", "base_color": rgb_dict(p["base_color"])}
-        for k in _WEIGHTS:
-            if float(p[k]) != 0.0 or k == "roughness":
-                d[k] = float(p[k])
-        d["eta"] = float(p["eta"])
-        for k in _RATES:
-            if float(p[k]) != 1.0:
-                d[k] = float(p[k])
-        return d
+        return self._mitsuba_dict(approximate)
 
 
 #: PrincipledThin's weights in [0, 1] (diff_trans, in [0, 2], apart).
@@ -227,7 +235,7 @@ _THIN_RATES = ("specular_reflectance_sampling_rate", "specular_transmittance_sam
                "diffuse_reflectance_sampling_rate", "diffuse_transmittance_sampling_rate")
 
 
-class PrincipledThin(BxDF):
+class PrincipledThin(_PrincipledFamily, BxDF):
     """The thin-surface Disney BSDF as Mitsuba 3 implements it (plugin ``principledthin``).
 
     A two-sided sheet (leaves, paper, thin plastic; Burley 2015 sec. 5) with Mitsuba 3.9's formulas
@@ -310,6 +318,7 @@ class PrincipledThin(BxDF):
     energy_conserving, exact_eval, two_sided, transmission, delta_only = False, True, True, True, False
     reciprocal = False
     mitsuba = "principledthin"
+    _core_name, _weights, _rates = "PrincipledThin", _THIN_WEIGHTS + ("diff_trans",), _THIN_RATES
     varying_params = {"base_color": 3, "eta": 1, "diff_trans": 1, **{k: 1 for k in _THIN_WEIGHTS}}
 
     def __init__(self, base_color=0.5, roughness=0.5, anisotropic=0.0, spec_trans=0.0, eta=1.5, spec_tint=0.0,
@@ -330,34 +339,7 @@ class PrincipledThin(BxDF):
                          diff_trans=_scalar(diff_trans, "diff_trans", lo=0.0, hi=2.0, varying=True),
                          **{k: _scalar(v, k, lo=0.0) for k, v in rates.items()})
 
-    @classmethod
-    def _from_params(cls, p):
-        return cls(**p)
-
-    def _make_core(self):
-        return _core.PrincipledThin(**{k: core_value(v) for k, v in self._params.items()})
-
-    _no_spectral_reason = _no_spectral_reason
-
-    def describe(self) -> str:
-        p = self._params
-        if self.varying:
-            return super().describe()
-        parts = [f"base={fmt_param(p['base_color'])}", f"r={fmt_param(p['roughness'])}"]
-        parts += [f"{k}={fmt_param(p[k])}" for k in _THIN_WEIGHTS[1:] + ("diff_trans",) if float(p[k]) != 0.0]
-        return "PrincipledThin " + ", ".join(parts)
-
     def to_mitsuba(self, approximate: bool = False) -> dict:
         """Mitsuba 3's ``principledthin`` dictionary of this material (exact: the same plugin);
         raises NotImplementedError for per-element parameters."""
-        _check_approximate(approximate)
-        self._refuse_varying("to_mitsuba")
-        p = self._params
-        d = {"type": "principledthin", "base_color": rgb_dict(p["base_color"]), "eta": float(p["eta"])}
-        for k in _THIN_WEIGHTS + ("diff_trans",):
-            if float(p[k]) != 0.0 or k == "roughness":
-                d[k] = float(p[k])
-        for k in _THIN_RATES:
-            if float(p[k]) != 1.0:
-                d[k] = float(p[k])
-        return d
+        return self._mitsuba_dict(approximate)
