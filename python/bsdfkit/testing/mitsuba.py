@@ -364,14 +364,14 @@ def _microfacet_call(alpha_x, alpha_y, vecs, fn, kind="ggx"):
     n = int(np.prod(batch, dtype=np.int64))
     if n == 0:
         return np.zeros(batch)
-    GGX = {"ggx": mi.MicrofacetType.GGX, "beckmann": mi.MicrofacetType.Beckmann}[kind]
+    mtype = {"ggx": mi.MicrofacetType.GGX, "beckmann": mi.MicrofacetType.Beckmann}[kind]
     if _is_jit():
         if ax.ndim == 0 and ay.ndim == 0:
-            dist = mi.MicrofacetDistribution(GGX, float(ax), float(ay), sample_visible=True)
+            dist = mi.MicrofacetDistribution(mtype, float(ax), float(ay), sample_visible=True)
         else:
             fa = lambda a: mi.Float(np.ascontiguousarray(
                 np.broadcast_to(a, batch).reshape(-1), np.float32))
-            dist = mi.MicrofacetDistribution(GGX, fa(ax), fa(ay), sample_visible=True)
+            dist = mi.MicrofacetDistribution(mtype, fa(ax), fa(ay), sample_visible=True)
         r = fn(dist, *(_v3(v) for v in v32))
         dr.eval(r)
         return _np(r, n).reshape(batch)
@@ -379,7 +379,7 @@ def _microfacet_call(alpha_x, alpha_y, vecs, fn, kind="ggx"):
     ayb = np.broadcast_to(ay, batch).reshape(-1)
     out = np.zeros(n)
     for i in range(n):
-        dist = mi.MicrofacetDistribution(GGX, float(axb[i]), float(ayb[i]), sample_visible=True)
+        dist = mi.MicrofacetDistribution(mtype, float(axb[i]), float(ayb[i]), sample_visible=True)
         out[i] = float(fn(dist, *(mi.Vector3f(*(float(c) for c in v[i])) for v in v32)))
     return out.reshape(batch)
 
