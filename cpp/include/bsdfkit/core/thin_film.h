@@ -24,9 +24,10 @@
 //    (mx_eval_sensitivity). The amplitudes are normalized per channel so that S(0, 0) = 1 exactly
 //    (the paper divides all three by the y integral 1.0685e-7: x and z then sum to 1.0005 and
 //    1.0011), so that a flat spectrum maps to XYZ = (1, 1, 1) and thickness 0 gives the base Fresnel.
-//  - The m-series is summed explicitly for m = 1..kAiryTerms and its tail in closed form with the
-//    Gaussian envelope frozen at m = kAiryTerms + 1 (the tail of a geometric series): exact at
-//    OPD = 0 (the whole series, Re z/(1-z)), negligible once the envelope has decayed.
+//  - The m-series is summed explicitly for m = 1..kAiryTerms and its tail m > M = kAiryTerms in
+//    closed form, the envelope exp(-var m^2 p^2) taken with m^2 replaced by its tangent at M + 1
+//    (a geometric series): exact at OPD = 0 (the whole series, Re z/(1-z)) and where the
+//    envelope has decayed; the tail matters near grazing incidence only, where rho -> 1.
 //  - XYZ (illuminant E) -> linear Rec. 709 RGB with D65 white, Bradford-adapted from E to D65, so
 //    XYZ = (1, 1, 1) maps to RGB = (1, 1, 1) (MaterialX uses CIE 1931 RGB instead). Result clamped
 //    to [0, 1] per channel.
@@ -54,7 +55,7 @@ namespace bsdfkit {
 namespace thin_film_detail {
 
 // Explicit terms of the Airy series before its closed-form tail.
-inline constexpr int kAiryTerms = 8;
+inline constexpr int kAiryTerms = 12;
 
 // Belcour & Barla 2017 Gaussian fit of the CIE 1931 x, y, z over wavenumber (val, pos [1/m],
 // var [m^2]; MaterialX mx_eval_sensitivity): x has two lobes, y and z one.
@@ -163,10 +164,12 @@ template <typename F> inline F airy_channel(int ch, F R12, F e21, F R23, Cplx<F>
             step = step * g2;
             acc = mul_add(zm.re, env, acc);
         }
-        // tail: env_{M+1} Re(z^{M+1} / (1 - z))
+        // tail m > M: m^2 replaced by its tangent at M + 1, g^{m^2} ~ g^{(M+1)^2} h^{m-M-1} with
+        // h = g^{2(M+1)}: env_{M+1} Re(z^{M+1} / (1 - h z)), a geometric series (h = 1 at p = 0)
         zm = cmul(zm, z);
         env = env * step;
-        Cplx<F> omz{F(1) - z.re, -z.im};
+        F h = step * g;
+        Cplx<F> omz{neg_mul_add(h, z.re, F(1)), -h * z.im};
         F d = cnorm(omz);
         Mask<F> dok = d > F(0);
         F tail = (zm.re * omz.re + zm.im * omz.im) / select(dok, d, F(1));
