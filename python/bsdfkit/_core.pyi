@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['CoatedConductor', 'CoatedConductorAnalytic', 'CoatedConductorAnalyticSpectral', 'CoatedConductorSpectral', 'CoatedDiffuse', 'CoatedDiffuseAnalytic', 'CoatedDiffuseAnalyticSpectral', 'CoatedDiffuseSpectral', 'Conductor', 'ConductorF82', 'ConductorF82Spectral', 'ConductorSchlick', 'ConductorSchlickSpectral', 'ConductorSpectral', 'Dielectric', 'DielectricSpectral', 'Diffuse', 'DiffuseSpectral', 'DiffuseTransmission', 'DiffuseTransmissionSpectral', 'EON', 'EONSpectral', 'FilamentCloth', 'FilamentClothSpectral', 'FilamentDFG', 'FilamentStandard', 'FilamentStandardCoat', 'FilamentStandardCoatSheen', 'FilamentStandardCoatSheenSpectral', 'FilamentStandardCoatSpectral', 'FilamentStandardSheen', 'FilamentStandardSheenSpectral', 'FilamentStandardSpectral', 'Hair', 'HairFarField', 'HairFarFieldSpectral', 'HairSpectral', 'MERLLinear', 'MERLLinearSpectral', 'MERLNearest', 'MERLNearestSpectral', 'MERLSpectralTable', 'MERLTable', 'Measured', 'MeasuredSpectraTable', 'MeasuredSpectral', 'MeasuredTable', 'NormalizedFresnel', 'NormalizedFresnelSpectral', 'Plastic', 'PlasticSpectral', 'Principled', 'PrincipledThin', 'SpectralParam', 'ThinDielectric', 'ThinDielectricSpectral', 'Warp2D', 'cached_bytes', 'conductor_fresnel', 'filament_dfg_rows', 'filament_term', 'fresnel_diffuse_reflectance', 'fresnel_moment1', 'get_num_threads', 'hardware_concurrency', 'model_names', 'release_memory', 'set_num_threads']
+__all__: list[str] = ['CoatedConductor', 'CoatedConductorAnalytic', 'CoatedConductorAnalyticSpectral', 'CoatedConductorSpectral', 'CoatedDiffuse', 'CoatedDiffuseAnalytic', 'CoatedDiffuseAnalyticSpectral', 'CoatedDiffuseSpectral', 'Conductor', 'ConductorF82', 'ConductorF82Spectral', 'ConductorSchlick', 'ConductorSchlickSpectral', 'ConductorSpectral', 'Dielectric', 'DielectricSpectral', 'Diffuse', 'DiffuseSpectral', 'DiffuseTransmission', 'DiffuseTransmissionSpectral', 'EON', 'EONSpectral', 'FilamentCloth', 'FilamentClothSpectral', 'FilamentDFG', 'FilamentStandard', 'FilamentStandardCoat', 'FilamentStandardCoatSheen', 'FilamentStandardCoatSheenSpectral', 'FilamentStandardCoatSpectral', 'FilamentStandardSheen', 'FilamentStandardSheenSpectral', 'FilamentStandardSpectral', 'Hair', 'HairFarField', 'HairFarFieldSpectral', 'HairSpectral', 'MERLLinear', 'MERLLinearSpectral', 'MERLNearest', 'MERLNearestSpectral', 'MERLSpectralTable', 'MERLTable', 'Measured', 'MeasuredSpectraTable', 'MeasuredSpectral', 'MeasuredTable', 'NormalizedFresnel', 'NormalizedFresnelSpectral', 'OpenPBR', 'Plastic', 'PlasticSpectral', 'Principled', 'PrincipledThin', 'SpectralParam', 'ThinDielectric', 'ThinDielectricSpectral', 'Warp2D', 'cached_bytes', 'conductor_fresnel', 'filament_dfg_rows', 'filament_term', 'fresnel_diffuse_reflectance', 'fresnel_moment1', 'get_num_threads', 'hardware_concurrency', 'model_names', 'release_memory', 'set_num_threads']
 class FilamentDFG:
     def __eq__(self, arg0: typing.Any) -> bool:
         ...
@@ -1219,6 +1219,33 @@ class PrincipledThin:
     bsdfkit model PrincipledThin (bxdfs/all.h); keyword arguments: base_color, roughness, anisotropic, spec_trans, eta, spec_tint, sheen, sheen_tint, flatness, diff_trans, specular_reflectance_sampling_rate, specular_transmittance_sampling_rate, diffuse_reflectance_sampling_rate, diffuse_transmittance_sampling_rate (a missing one keeps its C++ Params default).
     """
     fields: typing.ClassVar[tuple] = ('base_color', 'roughness', 'anisotropic', 'spec_trans', 'eta', 'spec_tint', 'sheen', 'sheen_tint', 'flatness', 'diff_trans', 'specular_reflectance_sampling_rate', 'specular_transmittance_sampling_rate', 'diffuse_reflectance_sampling_rate', 'diffuse_transmittance_sampling_rate')
+    def __init__(self, *args, **kwargs) -> None:
+        ...
+    def albedo(self, wo: typing.Any, n_samples: typing.Any = 65536, seed: typing.Any = 0, mode: typing.Any = 0) -> typing.Any:
+        ...
+    def eval(self, wo: typing.Any, wi: typing.Any, mode: typing.Any = 0, out: typing.Any = None) -> typing.Any:
+        ...
+    def pdf(self, wo: typing.Any, wi: typing.Any, mode: typing.Any = 0, sflags: typing.Any = 3, out: typing.Any = None) -> typing.Any:
+        ...
+    def sample(self, wo: typing.Any, uc: typing.Any = None, u: typing.Any = None, mode: typing.Any = 0, sflags: typing.Any = 3, out: typing.Any = None, n: typing.Any = None, seed: typing.Any = None) -> typing.Any:
+        ...
+    @property
+    def flags(self) -> int:
+        ...
+    @property
+    def params(self) -> dict:
+        ...
+    @property
+    def varying(self) -> tuple:
+        ...
+    @property
+    def varying_shapes(self) -> tuple:
+        ...
+class OpenPBR:
+    """
+    bsdfkit model OpenPBR (bxdfs/all.h); keyword arguments: base_weight, base_color, base_metalness, base_diffuse_roughness, specular_weight, specular_color, specular_roughness, specular_roughness_anisotropy, specular_ior, transmission_weight, transmission_color, subsurface_weight, subsurface_color, subsurface_scatter_anisotropy, coat_weight, coat_color, coat_roughness, coat_roughness_anisotropy, coat_ior, coat_darkening, fuzz_weight, fuzz_color, fuzz_roughness, thin_film_weight, thin_film_thickness, thin_film_ior, geometry_thin_walled, compensation, layering (a missing one keeps its C++ Params default).
+    """
+    fields: typing.ClassVar[tuple] = ('base_weight', 'base_color', 'base_metalness', 'base_diffuse_roughness', 'specular_weight', 'specular_color', 'specular_roughness', 'specular_roughness_anisotropy', 'specular_ior', 'transmission_weight', 'transmission_color', 'subsurface_weight', 'subsurface_color', 'subsurface_scatter_anisotropy', 'coat_weight', 'coat_color', 'coat_roughness', 'coat_roughness_anisotropy', 'coat_ior', 'coat_darkening', 'fuzz_weight', 'fuzz_color', 'fuzz_roughness', 'thin_film_weight', 'thin_film_thickness', 'thin_film_ior', 'geometry_thin_walled', 'compensation', 'layering')
     def __init__(self, *args, **kwargs) -> None:
         ...
     def albedo(self, wo: typing.Any, n_samples: typing.Any = 65536, seed: typing.Any = 0, mode: typing.Any = 0) -> typing.Any:

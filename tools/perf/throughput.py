@@ -129,6 +129,14 @@ CONFIGS = [
     ("principledthin", "PrincipledThin (spec_trans, diff_trans)", True,
      {"type": "principledthin", "base_color": {"type": "rgb", "value": [0.3, 0.6, 0.2]}, "roughness": 0.5,
       "spec_trans": 0.4, "diff_trans": 0.8, "eta": 1.4}),
+    # OpenPBR (no Mitsuba plugin: compare against the principled row of the same run): the full
+    # material, then the rungs of its simplify ladder (fuzz, film, coat dropped; no compensation)
+    ("openpbr_full", "OpenPBR (coat, fuzz, film, transmission 0.3, metal 0.2)", True, None),
+    ("openpbr_nofuzz", "OpenPBR rung: no fuzz", True, None),
+    ("openpbr_nofilm", "OpenPBR rung: no fuzz, no film", True, None),
+    ("openpbr_nocoat", "OpenPBR rung: no fuzz, film, coat", True, None),
+    ("openpbr_single", "OpenPBR rung: no fuzz, film, coat; no compensation", True, None),
+    ("openpbr_default", "OpenPBR defaults", False, None),
     ("filament", "FilamentStandard (plastic defaults)", False, None),
     ("filament_coat", "FilamentStandard clear coat", False, None),
     ("nfresnel", "NormalizedFresnel", False, None),
@@ -160,6 +168,13 @@ def bk_model(key):
                                             clearcoat=0.5, sheen=0.3, eta=1.5),
         "principledthin": lambda: bk.PrincipledThin((0.3, 0.6, 0.2), roughness=0.5, spec_trans=0.4, diff_trans=0.8,
                                                     eta=1.4),
+        "openpbr_full": lambda: _openpbr(),
+        "openpbr_nofuzz": lambda: _openpbr(fuzz_weight=0.0),
+        "openpbr_nofilm": lambda: _openpbr(fuzz_weight=0.0, thin_film_weight=0.0),
+        "openpbr_nocoat": lambda: _openpbr(fuzz_weight=0.0, thin_film_weight=0.0, coat_weight=0.0),
+        "openpbr_single": lambda: _openpbr(fuzz_weight=0.0, thin_film_weight=0.0, coat_weight=0.0,
+                                           compensation="none"),
+        "openpbr_default": lambda: bk.OpenPBR(),
         "filament": lambda: bk.FilamentStandard((0.8, 0.5, 0.3)),
         "filament_coat": lambda: bk.FilamentStandard((0.05, 0.2, 0.7), metallic=0.7, roughness=0.5, clear_coat=1,
                                                      clear_coat_roughness=0.1),
@@ -170,6 +185,14 @@ def bk_model(key):
                                                                       albedo=(0.5, 0.1, 0.1), thickness=0.1,
                                                                       method="analytic"),
     }[key]()
+
+
+def _openpbr(**over):
+    import bsdfkit as bk
+    p = dict(base_color=(0.8, 0.5, 0.3), base_metalness=0.2, specular_roughness=0.4, transmission_weight=0.3,
+             coat_weight=0.5, coat_roughness=0.1, fuzz_weight=0.3, thin_film_weight=0.5, thin_film_thickness=0.4)
+    p.update(over)
+    return bk.OpenPBR(**p)
 
 
 # ------------------------------------------------------------------------------------ inputs

@@ -5,7 +5,7 @@
 ``dielectric`` (Dielectric, ThinDielectric), ``filament`` (FilamentStandard, FilamentCloth, the
 DFG table), ``measured`` (MERL, Measured: measured tables and tensor files), ``plastic`` (Plastic),
 ``layered`` (CoatedDiffuse, CoatedConductor), ``normalized_fresnel`` (NormalizedFresnel, fresnel_moment1),
-``hair`` (Hair and its sigma_a helpers), ``principled`` (Principled, PrincipledThin: Mitsuba 3's Disney BSDFs), ``composite`` (Mix, TwoSided, Mask), ``normal_map``
+``hair`` (Hair and its sigma_a helpers), ``principled`` (Principled, PrincipledThin: Mitsuba 3's Disney BSDFs), ``openpbr`` (OpenPBR Surface), ``composite`` (Mix, TwoSided, Mask), ``normal_map``
 (NormalMap) and ``bump_map`` (BumpMap, height_gradient): models built from other models, in Python. A new family is a new module here whose classes subclass :class:`BxDF`.
 """
 from . import registry
@@ -22,6 +22,7 @@ from .layered import CoatedConductor, CoatedDiffuse
 from .normalized_fresnel import NormalizedFresnel
 from .hair import Hair
 from .principled import Principled, PrincipledThin
+from .openpbr import OpenPBR
 from .composite import Mask, Mix, TwoSided
 from .normal_map import NormalMap
 from .bump_map import BumpMap
@@ -29,4 +30,4 @@ from .registry import MODELS, KnobDecl
 
 __all__ = ["BxDF", "SampleResult", "roughness_to_alpha", "METALS", "Conductor", "conductor_fresnel", "Dielectric",
            "ThinDielectric", "Diffuse", "DiffuseTransmission", "EON", "FilamentStandard", "FilamentCloth", "MERL", "Measured",
-           "Plastic", "CoatedDiffuse", "CoatedConductor", "NormalizedFresnel", "Hair", "Principled", "PrincipledThin", "Mix", "TwoSided", "Mask", "NormalMap", "BumpMap", "MODELS", "KnobDecl"]
+           "Plastic", "CoatedDiffuse", "CoatedConductor", "NormalizedFresnel", "Hair", "Principled", "PrincipledThin", "OpenPBR", "Mix", "TwoSided", "Mask", "NormalMap", "BumpMap", "MODELS", "KnobDecl"]

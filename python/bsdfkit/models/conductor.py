@@ -112,7 +112,7 @@ class Conductor(BxDF):
     __slots__ = ()
 
     aliases = ("metal",)
-    description = "Metal: mirror or GGX microfacet reflection with a conductor Fresnel term (pbrt-v4 ConductorBxDF)"
+    description = "Metal: mirror, GGX or Beckmann microfacet reflection (pbrt-v4 ConductorBxDF)"
     examples = {
         "copper, alpha 0.2": "conductor metal=Cu alpha=0.2",
         "gold mirror": "conductor metal=Au",

@@ -64,7 +64,7 @@ class Dielectric(BxDF):
     __slots__ = ()
 
     aliases = ("glass",)
-    description = "Glass-like interface, smooth or GGX rough, reflection and refraction (pbrt-v4 DielectricBxDF)"
+    description = "Glass-like interface, smooth or rough, reflection and refraction (pbrt-v4 DielectricBxDF)"
     examples = {"glass, alpha 0.2": "dielectric 1.5 alpha=0.2", "smooth glass": "dielectric 1.5",
                 "rough glass 0.3": "dielectric 1.5 alpha=0.3",
                 "inside water, anisotropic": "dielectric 0.75188 alpha_x=0.5 alpha_y=0.1",

@@ -18,6 +18,7 @@
 #include "layered_analytic.h"
 #include "plastic.h"
 #include "principled.h"
+#include "openpbr.h"
 #include "hair.h"
 #include "normalized_fresnel.h"
 #include "thin_dielectric.h"
@@ -51,7 +52,8 @@ using HairModels = ModelList<NormalizedFresnelBxDF,
                              HairBxDF,
                              HairFarFieldBxDF>;         // Hair with h=None: Gauss-Legendre over h (nodes: a knob)
 using ProductionModels = ModelList<PrincipledBxDF,      // Mitsuba 3 principled (Disney 2015)
-                                   PrincipledThinBxDF>; // Mitsuba 3 principledthin
+                                   PrincipledThinBxDF,  // Mitsuba 3 principledthin
+                                   OpenPBRBxDF>;        // OpenPBR Surface 1.1 (ASWF)
 
 using AllModels =
     ModelListCat<PbrtModels, FilamentModels, MeasuredModels, LayeredModels, HairModels, ProductionModels>::type;
