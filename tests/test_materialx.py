@@ -1,5 +1,6 @@
 """bk.from_materialx: MaterialX documents (gltf_pbr, UsdPreviewSurface, image / tiledimage /
-normalmap nodes) as FilamentStandard models. References: the UsdPreviewSurface spec's and the
+normalmap nodes) as FilamentStandard models (open_pbr_surface / standard_surface:
+test_materialx_openpbr.py). References: the UsdPreviewSurface spec's and the
 glTF 2.0 spec's formulas written here (F0 from ior, alpha = roughness^2, GGX with
 height-correlated Smith masking, Schlick Fresnel), Lambert, and texel values decoded here from the
 8-bit PNGs the tests write; the documents are this file's own."""
@@ -332,14 +333,6 @@ def test_wrong_type_and_values():
         bk.from_materialx(mtlx(usd("m", [("metallic", "float", 'value="1.5"')])))
     with pytest.raises(ValueError, match=r"unknown input 'shininess'"):
         bk.from_materialx(mtlx(usd("m", [("shininess", "float", 'value="1"')])))
-
-
-@pytest.mark.parametrize("shader, why", [("standard_surface", "OpenPBR is pending"),
-                                         ("open_pbr_surface", "no OpenPBR Surface model yet")])
-def test_standard_surface_and_openpbr_refused(shader, why):
-    text = mtlx(usd("m", [("base_color", "color3", 'value="0.8, 0.8, 0.8"')], shader=shader))
-    with pytest.raises(ValueError, match=rf"node 'm_sh' \({shader}, line 3\): {shader} is not read: .*{why}"):
-        bk.from_materialx(text)
 
 
 def test_unrepresentable_usd_inputs_refused():

@@ -11,8 +11,9 @@
   ``FilamentStandard`` models (with ``NormalMap`` / ``Mask`` / ``TwoSided`` where asked for);
   :func:`read_gltf_materials` also gives what each leaves out (occlusion, emission, ...).
 * :func:`from_materialx` reads the ``gltf_pbr`` and ``UsdPreviewSurface`` materials of a MaterialX
-  document (``.mtlx`` or text) as ``FilamentStandard`` models, with ``image`` / ``tiledimage``
-  nodes as textures; it needs the optional ``materialx`` package.
+  document (``.mtlx`` or text) as ``FilamentStandard`` models, ``open_pbr_surface`` and
+  ``standard_surface`` (through MaterialX's translation graph) as ``OpenPBR``, with ``image`` /
+  ``tiledimage`` nodes as textures; it needs the optional ``materialx`` package.
 * ``model.to_mitsuba()`` is the other direction: it exports only a model Mitsuba has exactly and
   otherwise raises :class:`MitsubaExportError` naming the reason (e.g. height-correlated masking)
   and the measured difference; ``to_mitsuba(approximate=True)`` exports the nearest Mitsuba

@@ -1,6 +1,9 @@
 """MaterialX documents -> bsdfkit models (:func:`from_materialx`): the ``gltf_pbr`` and
-``UsdPreviewSurface`` shading models as :class:`bsdfkit.FilamentStandard`, with ``image`` /
-``tiledimage`` nodes as ``bk.Texture`` values and ``normalmap`` nodes as ``bk.NormalMap``.
+``UsdPreviewSurface`` shading models as :class:`bsdfkit.FilamentStandard`, ``open_pbr_surface``
+as :class:`bsdfkit.OpenPBR` and ``standard_surface`` as OpenPBR through MaterialX's own translation
+graph (``libraries/bxdf/translation/standard_surface_to_open_pbr.mtlx``, evaluated here on the
+material's values), with ``image`` / ``tiledimage`` nodes as ``bk.Texture`` values and
+``normalmap`` nodes as ``bk.NormalMap``.
 
 The document is read, upgraded and traversed with MaterialX's own Python package (``materialx``
 on PyPI, an optional dependency: ``pip install materialx``); the node definitions (input types
@@ -11,6 +14,7 @@ material: it goes through :mod:`bsdfkit.interop.gltf`'s one mapping (``_material
 """
 from __future__ import annotations
 
+import inspect
 import math
 import os
 import warnings
@@ -20,14 +24,8 @@ import numpy as np
 
 __all__ = ["MaterialXWarning", "from_materialx", "MATERIALX_SHADING_MODELS"]
 
-#: Surface shader nodes read, and the ones refused with the reason.
-MATERIALX_SHADING_MODELS = ("gltf_pbr", "UsdPreviewSurface")
-_PENDING = {
-    "standard_surface": "Autodesk Standard Surface layers specular over diffuse by albedo scaling and "
-                        "uses Oren-Nayar diffuse and an F82-tint metal: no subset of its inputs is "
-                        "FilamentStandard exactly; its successor OpenPBR is pending in bsdfkit",
-    "open_pbr_surface": "bsdfkit has no OpenPBR Surface model yet (pending)",
-}
+#: Surface shader nodes read.
+MATERIALX_SHADING_MODELS = ("gltf_pbr", "UsdPreviewSurface", "open_pbr_surface", "standard_surface")
 
 #: MaterialX colour spaces (MaterialX spec, "Color Spaces") -> bk.Texture encoding.
 _ENCODING = {"srgb_texture": "sRGB", "lin_rec709": "linear", "raw": "linear", "g22_rec709": "gamma 2.2",
@@ -41,7 +39,8 @@ _FLOAT_TYPES = {"float": 1, "integer": 1, "color3": 3, "vector3": 3, "vector2": 
 class MaterialXWarning(UserWarning):
     """Something of a MaterialX material that the bsdfkit model leaves out or approximates
     (emission, occlusion, displacement, glTF extensions without a FilamentStandard parameter,
-    UsdPreviewSurface's tinted metal F90, ...): one warning per material, attributes ``file``,
+    UsdPreviewSurface's tinted metal F90, OpenPBR inputs dropped by ``approximate=True``, ...): one
+    warning per material, attributes ``file``,
     ``material`` and ``left_out`` (a tuple of one sentence per item). Turn it into an error with
     ``warnings.simplefilter("error", MaterialXWarning)``."""
 
@@ -601,6 +600,352 @@ def _gltf_pbr(r, node, options):
     return model, notes + [f"{n} [glTF mapping of gltf_pbr]" for n in gnotes]
 
 
+# ---------------------------------------------------------------- OpenPBR Surface
+
+#: open_pbr_surface inputs bk.OpenPBR models: its keyword parameters, the same names and defaults
+#: (bk.OpenPBR checks their values; its errors are given the input's line here).
+_OPBR_MODELLED = (
+    "base_weight", "base_color", "base_metalness", "base_diffuse_roughness", "specular_weight", "specular_color",
+    "specular_roughness", "specular_roughness_anisotropy", "specular_ior", "transmission_weight",
+    "transmission_color", "subsurface_weight", "subsurface_color", "subsurface_scatter_anisotropy", "coat_weight",
+    "coat_color", "coat_roughness", "coat_roughness_anisotropy", "coat_ior", "coat_darkening", "fuzz_weight",
+    "fuzz_color", "fuzz_roughness", "thin_film_weight", "thin_film_thickness", "thin_film_ior",
+    "geometry_thin_walled")
+#: open_pbr_surface inputs bk.OpenPBR does not model: refused unless at their default (None: unset,
+#: a geometric property), dropped with ``approximate=True``; why.
+_OPBR_NOT_MODELLED = {
+    "transmission_depth": (0.0, "no interior medium (volume absorption and scattering) behind the transmission"),
+    "transmission_scatter": (0.0, "no interior medium (volume absorption and scattering) behind the transmission"),
+    "transmission_scatter_anisotropy": (0.0, "no interior medium (volume absorption and scattering) behind the "
+                                             "transmission"),
+    "transmission_dispersion_scale": (0.0, "no dispersion: one IOR for every wavelength"),
+    "emission_luminance": (0.0, "emission: bsdfkit models only scatter"),
+    "geometry_coat_normal": (None, "the coat's shading frame is the call's normal= / tangent="),
+    "geometry_tangent": (None, "the tangent is the shading frame's x axis (the call's tangent=)"),
+    "geometry_coat_tangent": (None, "the coat's shading frame is the call's normal= / tangent="),
+}
+#: inputs that only act when another one is not at its default: Abbe number at dispersion scale 0,
+#: emission colour at luminance 0 (OpenPBR spec); dropped (with a note) along with it.
+_OPBR_DEPENDS = {"transmission_dispersion_abbe_number": ("transmission_dispersion_scale", 20.0),
+                 "emission_color": ("emission_luminance", 1.0)}
+#: accepted and ignored by bk.OpenPBR v1 (its subsurface is a diffuse lobe, without a mean free path).
+_OPBR_IGNORED = ("subsurface_radius", "subsurface_radius_scale")
+_OPBR_READ = set(_OPBR_MODELLED) | set(_OPBR_NOT_MODELLED) | set(_OPBR_DEPENDS) | set(_OPBR_IGNORED) | \
+    {"geometry_opacity", "geometry_normal"}
+
+
+def _openpbr_class(r, node):
+    try:
+        from ..models import OpenPBR
+    except ImportError:
+        try:
+            from ..models.openpbr import OpenPBR
+        except ImportError:
+            r.fail(node, "this bsdfkit has no OpenPBR model (bk.OpenPBR)")
+    return OpenPBR
+
+
+class _Opbr:
+    """An open_pbr_surface input's value for :func:`_openpbr`: ``v`` a constant (float, bool or a
+    float64 RGB), a bsdfkit texture, or ("normalmap", node); errors name ``inp`` (the input's
+    element) or, when ``note`` is given, the standard_surface inputs it comes from."""
+
+    def __init__(self, v, inp=None, note=None):
+        self.v, self.inp, self.note = v, inp, note
+
+
+def _openpbr_inputs(r, node):
+    """{open_pbr_surface input: _Opbr} of an open_pbr_surface node: every input of its node definition."""
+    _check_inputs(r, node)
+    out = {}
+    for dinp in node.getNodeDef().getActiveInputs():
+        name = dinp.getName()
+        v = r.value(node, name)
+        x = v[1] if v[0] in ("const", "tex") else ("normalmap", v[1])
+        out[name] = _Opbr(x, node.getInput(name) or dinp)
+    return out
+
+
+def _is_default(v, default):
+    if isinstance(v, tuple) or _is_tex(v):
+        return False
+    if default is None or v is None:
+        return v is None
+    return bool(np.all(np.asarray(v, dtype=np.float64) == default))
+
+
+def _openpbr(r, node, values, approximate):
+    """(model, notes) of OpenPBR Surface inputs ``values`` ({name: _Opbr}) of ``node``: bk.OpenPBR,
+    in bk.Mask for a geometry_opacity < 1, in bk.NormalMap for a geometry_normal from a normalmap node."""
+    from ..models import Mask, NormalMap
+    from .gltf import GltfValue
+
+    OpenPBR = _openpbr_class(r, node)
+
+    def fail(name, msg):
+        o = values[name]
+        if o.note:
+            r.fail(node, f"{o.note}: {msg}")
+        r.fail(node, msg, o.inp)
+
+    def shown(v):
+        if _is_tex(v):
+            return "a texture"
+        if isinstance(v, tuple):
+            return f"a normalmap node ({v[1].getName()!r})"
+        return f"{v:g}" if isinstance(v, float) else str(list(np.asarray(v).tolist()) if np.ndim(v) else v)
+
+    notes, dropped = [], []
+    for name in sorted(set(values) - _OPBR_READ):   # a newer node definition's input
+        if values[name].v is not None:
+            fail(name, f"input {name!r} of open_pbr_surface is not one bk.OpenPBR reads")
+    for name, (default, why) in _OPBR_NOT_MODELLED.items():
+        o = values.get(name)
+        if o is None or _is_default(o.v, default):
+            continue
+        if not approximate:
+            fail(name, f"{name} = {shown(o.v)} is not modelled by bk.OpenPBR ({why}); from_materialx(..., "
+                 "approximate=True) drops it with a warning")
+        dropped.append(f"{name} = {shown(o.v)} ({why})")
+        for dep, (master, dep_default) in _OPBR_DEPENDS.items():
+            if master == name and dep in values and not _is_default(values[dep].v, dep_default):
+                dropped.append(f"{dep} = {shown(values[dep].v)} (with {name})")
+    kw = {}
+    varying = getattr(OpenPBR, "varying_params", {}) or {}
+    for name in _OPBR_MODELLED:
+        o = values.get(name)
+        if o is None or o.v is None:
+            continue
+        if isinstance(o.v, tuple):
+            fail(name, "a normalmap node only feeds geometry_normal")
+        if _is_tex(o.v) and name not in varying:
+            fail(name, f"a texture for {name}: bk.OpenPBR takes no textures (no per-element parameters); "
+                 "bake the material to constants or give one model per texel")
+        kw[name] = o.v
+    params = inspect.signature(OpenPBR).parameters
+    for name in _OPBR_IGNORED:   # accepted and ignored by bk.OpenPBR: passed on when it takes them
+        o = values.get(name)
+        if o is not None and o.v is not None and not _is_tex(o.v) and name in params:
+            kw[name] = o.v
+    try:
+        model = OpenPBR(**kw)
+    except (ValueError, TypeError) as e:   # named by its parameter: the input (the longest name it contains)
+        named = sorted((k for k in kw if k in str(e)), key=len, reverse=True)
+        if named:
+            fail(named[0], f"bk.OpenPBR: {e}")
+        r.fail(node, f"bk.OpenPBR: {e}")
+    # geometry_normal (OpenPBR spec, "Normal maps"): a normalmap node -> bk.NormalMap, n = normalize((2 in - 1)
+    # (scale, scale, 1)) (MaterialX stdlib normalmap), as gltf_pbr's normal
+    o = values.get("geometry_normal")
+    if o is not None and o.v is not None:
+        if isinstance(o.v, tuple):
+            tex, scale = r.normals(node, o.v[1])
+            model = NormalMap(model, GltfValue("normal", tex, params=np.array([float(scale)])))
+        elif not approximate:
+            fail("geometry_normal", "the normal must come from a normalmap node (else the shading frame is the "
+                 "call's normal=); from_materialx(..., approximate=True) drops it with a warning")
+        else:
+            dropped.append("geometry_normal (not from a normalmap node)")
+    # geometry_opacity (OpenPBR spec, "Opacity / Transparency": mix(ambient medium, surface, geometry_opacity),
+    # a presence weight) -> bk.Mask, whose rest passes straight through
+    o = values.get("geometry_opacity")
+    if o is not None and o.v is not None and (_is_tex(o.v) or isinstance(o.v, tuple) or o.v != 1.0):
+        if isinstance(o.v, tuple):
+            fail("geometry_opacity", "a normalmap node only feeds geometry_normal")
+        if not _is_tex(o.v) and not 0.0 <= o.v <= 1.0:
+            fail("geometry_opacity", f"{shown(o.v)} is outside [0, 1]")
+        model = Mask(model, o.v)
+    if dropped:
+        notes.append("not modelled by bk.OpenPBR (approximate=True): " + "; ".join(dropped))
+    return model, notes
+
+
+# ---------------------------------------------------------------- standard_surface -> OpenPBR
+
+#: standard_surface inputs MaterialX's translation graph (libraries/bxdf/translation/
+#: standard_surface_to_open_pbr.mtlx) has no input for: refused unless at their default, dropped
+#: with approximate=True; ``normal`` from a normalmap node is read as OpenPBR's geometry_normal.
+_SS_UNTRANSLATED = {
+    "specular_rotation": (0.0, "the anisotropy's rotation (rotate the call's tangent= instead)"),
+    "coat_rotation": (0.0, "the coat anisotropy's rotation"),
+    "transmission_extra_roughness": (0.0, "OpenPBR has no extra transmission roughness"),
+    "coat_affect_color": (0.0, "Standard Surface's coat saturation of the base; OpenPBR has none"),
+    "coat_normal": (None, "the coat's shading frame is the call's normal= / tangent="),
+    "tangent": (None, "the tangent is the shading frame's x axis (the call's tangent=)"),
+}
+_TRANSLATION = "standard_surface_to_open_pbr_surface"
+_TRANSLATION_FILE = "MaterialX's libraries/bxdf/translation/standard_surface_to_open_pbr.mtlx"
+
+
+def _graph_value(r, node, ng, out, ss, cache, note):
+    """The value of translation graph output ``out`` for standard_surface values ``ss`` (per
+    interface input: a constant or a texture): the graph's stdlib nodes evaluated on constants
+    (MaterialX stdlib semantics, libraries/stdlib/stdlib_defs.mtlx); a texture passes through
+    dot / convert nodes, a multiplication by a constant, a conditional whose test is constant and
+    a channel extraction (an image texture's channel)."""
+    from .. import textures as tx
+    from .gltf import GltfValue
+
+    def typed(inp):
+        s = inp.getValueString()
+        return r._parse(node, inp, inp.getType(), s)
+
+    def input_value(n, name):
+        i = n.getInput(name)
+        if i is None:
+            i = n.getNodeDef().getActiveInput(name) if n.getNodeDef() is not None else None
+            if i is None:
+                r.fail(node, f"{_TRANSLATION_FILE}: node {n.getName()!r} ({n.getCategory()}) has no input {name!r}")
+            return typed(i)
+        if i.hasInterfaceName():
+            return ss[i.getInterfaceName()]
+        if i.getNodeName():
+            return node_value(ng.getNode(i.getNodeName()))
+        return typed(i)
+
+    def tex_fail(n, name):
+        r.fail(node, f"{note}: a texture reaches the {n.getCategory()} node {n.getName()!r} of {_TRANSLATION_FILE} "
+               f"(input {name!r}); bsdfkit carries textures through its dot / convert / extract nodes, a product "
+               "with a constant and a conditional on constants only")
+
+    def node_value(n):
+        key = n.getName()
+        if key in cache:
+            return cache[key]
+        cat = n.getCategory()
+        get = lambda k: input_value(n, k)   # noqa: E731
+        if cat in ("dot", "convert"):
+            v = get("in")
+        elif cat == "multiply":
+            a, b = get("in1"), get("in2")
+            if _is_tex(a) and _is_tex(b):
+                tex_fail(n, "in1")
+            if _is_tex(b):
+                a, b = b, a
+            if _is_tex(a):
+                f = np.asarray(b, dtype=np.float64)
+                v = a if np.all(f == 1.0) else tx.Scale(a, float(f.reshape(-1)[0])) if np.ptp(f) == 0 else \
+                    GltfValue("product", a, params=f)
+            else:
+                v = a * b
+        elif cat == "mix":   # mix(bg, fg, mix) = bg (1 - mix) + fg mix
+            fg, bg, m = get("fg"), get("bg"), get("mix")
+            if _is_tex(m):
+                tex_fail(n, "mix")
+            if m in (0.0, 1.0):
+                v = fg if m == 1.0 else bg
+            elif _is_tex(fg) or _is_tex(bg):
+                tex_fail(n, "fg" if _is_tex(fg) else "bg")
+            else:
+                v = bg * (1.0 - m) + fg * m
+        elif cat in ("ifgreater", "ifequal"):   # in1 if value1 > (==) value2 else in2
+            a, b = get("value1"), get("value2")
+            if _is_tex(a) or _is_tex(b):
+                tex_fail(n, "value1" if _is_tex(a) else "value2")
+            v = get("in1") if (a > b if cat == "ifgreater" else a == b) else get("in2")
+        elif cat == "dotproduct":
+            a, b = get("in1"), get("in2")
+            if _is_tex(a) or _is_tex(b):
+                tex_fail(n, "in1" if _is_tex(a) else "in2")
+            v = float(np.dot(a, b))
+        elif cat == "power":
+            a, b = get("in1"), get("in2")
+            if _is_tex(a) or _is_tex(b):
+                tex_fail(n, "in1" if _is_tex(a) else "in2")
+            with np.errstate(invalid="ignore"):   # a negative base: nan, refused by bk.OpenPBR naming the input
+                v = float(np.power(float(a), float(b)))
+        elif cat == "extract":   # in[index]; of an image texture: its channel index
+            a, k = get("in"), int(get("index"))
+            if isinstance(a, tx.Texture) and a.channel is None:
+                args = a._args()
+                v = tx.Texture(args.pop("source"), **{**args, "channel": k})
+            elif _is_tex(a):
+                tex_fail(n, "in")
+            else:
+                v = float(np.asarray(a)[k])
+        else:
+            r.fail(node, f"{_TRANSLATION_FILE}: its {cat} node {n.getName()!r} is not one bsdfkit evaluates "
+                   "(dot, convert, multiply, mix, ifgreater, ifequal, dotproduct, power, extract)")
+        if isinstance(v, np.ndarray):
+            v = v.astype(np.float64)
+        cache[key] = v
+        return v
+
+    o = ng.getOutput(out)
+    return node_value(ng.getNode(o.getNodeName()))
+
+
+def _graph_sources(ng, out):
+    """The interface (standard_surface) inputs upstream of translation graph output ``out``."""
+    seen, names, todo = set(), set(), [ng.getNode(ng.getOutput(out).getNodeName())]
+    while todo:
+        n = todo.pop()
+        if n is None or n.getName() in seen:
+            continue
+        seen.add(n.getName())
+        for i in n.getInputs():
+            if i.hasInterfaceName():
+                names.add(i.getInterfaceName())
+            elif i.getNodeName():
+                todo.append(ng.getNode(i.getNodeName()))
+    return sorted(names)
+
+
+def _standard_surface(r, node, approximate):
+    """(model, notes) of a standard_surface node: its inputs through MaterialX's own translation
+    graph to OpenPBR Surface (the graph MaterialX's ShaderTranslator inserts), then :func:`_openpbr`."""
+    _check_inputs(r, node)
+    lib = r.doc.getDataLibrary() or r.doc
+    defs = lib.getMatchingNodeDefs(_TRANSLATION)
+    ng = defs[0].getImplementation() if defs else None
+    if ng is None or not ng.isA(r.mx.NodeGraph):
+        r.fail(node, f"the MaterialX package has no {_TRANSLATION} translation graph ({_TRANSLATION_FILE})")
+    nd, snd = defs[0], node.getNodeDef()
+    dropped = []
+    for name, (default, why) in _SS_UNTRANSLATED.items():
+        if snd.getActiveInput(name) is None:
+            continue
+        v = r.value(node, name)
+        if _is_default(v[1] if v[0] in ("const", "tex") else ("normalmap", v[1]), default):
+            continue
+        if not approximate:
+            r.fail(node, f"{name} is not carried to OpenPBR by {_TRANSLATION_FILE} ({why}); from_materialx(..., "
+                   "approximate=True) drops it with a warning", node.getInput(name))
+        dropped.append(f"{name} ({why})")
+    # every translation input: the standard_surface's value (its own default when unset: MaterialX's
+    # ShaderTranslator would leave an unset input to the translation node's default, which differs for
+    # base 0.8 / base_color 1 against standard_surface's 1 / 0.8, the same product)
+    ss = {}
+    for dinp in nd.getActiveInputs():
+        name = dinp.getName()
+        if snd.getActiveInput(name) is None:   # not an input of this standard_surface version
+            ss[name] = r._parse(node, dinp, dinp.getType(), dinp.getValueString())
+            continue
+        v = r.value(node, name)
+        if v[0] == "normalmap":
+            r.fail(node, "a normalmap node only feeds a normal input", node.getInput(name))
+        ss[name] = v[1]
+    cache, values = {}, {}
+    for o in nd.getActiveOutputs():
+        out = o.getName()
+        name = out[:-4] if out.endswith("_out") else out
+        src = ", ".join(f"{s!r}" + (f" ({r.line(node.getInput(s))})" if node.getInput(s) is not None else "")
+                        for s in _graph_sources(ng, out))
+        note = f"input(s) {src} -> OpenPBR {name} (through {_TRANSLATION_FILE})"
+        values[name] = _Opbr(_graph_value(r, node, ng, out, ss, cache, note), None, note)
+    # Standard Surface's normal (not in the translation graph) is OpenPBR's geometry_normal
+    if snd.getActiveInput("normal") is not None:
+        v = r.value(node, "normal")
+        if v[0] == "normalmap" or v[1] is not None:
+            values["geometry_normal"] = _Opbr(("normalmap", v[1]) if v[0] == "normalmap" else v[1],
+                                              node.getInput("normal"))
+    model, notes = _openpbr(r, node, values, approximate)
+    if dropped:
+        notes.append("not carried by MaterialX's standard_surface -> OpenPBR translation (approximate=True): "
+                     + "; ".join(dropped))
+    return model, notes
+
+
 # ---------------------------------------------------------------- public
 
 def _shader_nodes(r, mat):
@@ -614,10 +959,11 @@ def _shader_nodes(r, mat):
     return up
 
 
-def from_materialx(source, *, options=None) -> dict:
+def from_materialx(source, *, options=None, approximate=False) -> dict:
     """bsdfkit models for the materials of a MaterialX document: ``{name: model}`` in document
-    order, each a :class:`~bsdfkit.FilamentStandard` (wrapped in ``bk.NormalMap`` / ``bk.Mask``
-    where the material asks for them).
+    order, each a :class:`~bsdfkit.FilamentStandard` (``gltf_pbr``, ``UsdPreviewSurface``) or a
+    :class:`~bsdfkit.OpenPBR` (``open_pbr_surface``, ``standard_surface``), wrapped in
+    ``bk.NormalMap`` / ``bk.Mask`` where the material asks for them.
 
     Needs the MaterialX Python package (``pip install materialx``), which reads, upgrades (older
     versions) and traverses the document; its standard libraries give each node's inputs, types
@@ -633,6 +979,12 @@ def from_materialx(source, *, options=None) -> dict:
         FilamentStandard's keyword-only knobs for every material, as :func:`bsdfkit.from_gltf`'s
         (default Filament's desktop shading). ``{"f90": "one"}`` gives the specifications' Schlick
         Fresnel to a white F90; ``{"energy_compensation": False}`` their single-scattering lobe.
+        OpenPBR materials take bk.OpenPBR's defaults.
+    approximate : bool, default False
+        For ``open_pbr_surface`` / ``standard_surface``: inputs bk.OpenPBR does not model, at
+        values other than their defaults, are refused (ValueError naming the input, the node and
+        their lines); with True they are left out, listed in one :class:`MaterialXWarning` per
+        material.
 
     Returns
     -------
@@ -664,9 +1016,30 @@ def from_materialx(source, *, options=None) -> dict:
     transmission and is refused. A normal other than (0, 0, 1) is refused. emissiveColor,
     occlusion and displacement are left out with a note.
 
-    ``standard_surface`` and ``open_pbr_surface`` are refused (no subset of Standard Surface's
-    inputs is FilamentStandard exactly: it layers specular over diffuse by albedo scaling; OpenPBR
-    is pending in bsdfkit).
+    ``open_pbr_surface`` (OpenPBR Surface v1.1; MaterialX's node definition) is ``bk.OpenPBR``
+    with the inputs as its keyword parameters (the same names and defaults; bk.OpenPBR checks the
+    values). ``geometry_opacity`` < 1 is ``bk.Mask`` (the spec's presence mix with the ambient
+    medium); ``geometry_normal`` from a ``normalmap`` node is ``bk.NormalMap``. Not modelled by
+    bk.OpenPBR: transmission_depth, transmission_scatter, transmission_scatter_anisotropy (no
+    interior medium), transmission_dispersion_scale (no dispersion), emission_luminance,
+    geometry_tangent, geometry_coat_normal, geometry_coat_tangent and a geometry_normal not from a
+    normalmap node: refused unless at their defaults, or dropped with ``approximate=True``
+    (emission_color and transmission_dispersion_abbe_number act only with emission /
+    dispersion, as the spec says, and go with them). subsurface_radius / subsurface_radius_scale
+    are ignored (bk.OpenPBR's subsurface is a diffuse lobe). A texture on an input is refused
+    naming it unless bk.OpenPBR takes that parameter per element (``varying_params``).
+
+    ``standard_surface`` (Autodesk Standard Surface) goes through the translation graph MaterialX
+    ships for it (``libraries/bxdf/translation/standard_surface_to_open_pbr.mtlx``, the one its
+    ShaderTranslator inserts): its nodes (dot, mix, multiply, ifgreater, ifequal, dotproduct,
+    power, extract, convert) are evaluated on the material's values, unset inputs at
+    standard_surface's own defaults; the resulting OpenPBR inputs are read as above, errors naming
+    the standard_surface inputs they come from. A texture passes through the graph's dot nodes, a
+    product with a constant and a conditional on constants, and is refused elsewhere (e.g.
+    sheen_roughness, raised to the power 0.4). Standard Surface inputs the graph has no input for
+    (specular_rotation, coat_rotation, transmission_extra_roughness, coat_affect_color,
+    coat_normal, tangent) are refused unless at their defaults (dropped with ``approximate=True``);
+    ``normal`` from a ``normalmap`` node is OpenPBR's geometry_normal.
 
     Inputs are constants (``colorspace`` srgb_texture / g22_rec709 colours converted to linear),
     ``constant`` / ``dot`` nodes, or ``image`` / ``tiledimage`` nodes (directly or as a node
@@ -747,13 +1120,15 @@ def from_materialx(source, *, options=None) -> dict:
         out, notes_all = {}, {}
         for name, mat, sh in pairs:
             cat = sh.getCategory()
-            if cat in _PENDING:
-                r.fail(sh, f"{cat} is not read: {_PENDING[cat]}")
             r.require_def(sh)
             if cat == "UsdPreviewSurface":
                 model, notes = _usd_preview_surface(r, sh, options)
             elif cat == "gltf_pbr":
                 model, notes = _gltf_pbr(r, sh, options)
+            elif cat == "open_pbr_surface":
+                model, notes = _openpbr(r, sh, _openpbr_inputs(r, sh), approximate)
+            elif cat == "standard_surface":
+                model, notes = _standard_surface(r, sh, approximate)
             else:
                 r.fail(sh, f"shading model {cat!r} is not read: bsdfkit reads {', '.join(MATERIALX_SHADING_MODELS)}")
             out[name], notes_all[name] = model, notes
