@@ -389,3 +389,23 @@ def test_openpbr_examples(name):
     modelled = {k: v for k, v in ex.items() if k in SPEC_DEFAULTS}
     assert_params(m, {**SPEC_DEFAULTS, **modelled})
     assert m == bk.OpenPBR(**modelled)
+
+
+def test_standard_surface_textured_opacity_is_a_mask_of_channel_0(tmp_path):
+    """opacity (color3) from an image: the translation's geometryOpacity = extract(opacity, 0) is the
+    image's first channel, read as bk.Mask's opacity per texel."""
+    from PIL import Image
+    px = np.random.default_rng(5).integers(0, 256, (2, 2, 3), dtype=np.uint8)
+    Image.fromarray(px).save(tmp_path / "o.png")
+    img = ('  <image name="img" type="color3">\n    <input name="file" type="filename" value="o.png" />\n'
+           '    <input name="filtertype" type="string" value="closest" />\n  </image>\n')
+    text = shader("standard_surface", [("opacity", "color3", 'nodename="img"'), ("metalness", "float", 'value="1"')],
+                  extra=img)
+    (tmp_path / "o.mtlx").write_text(text)
+    m = load(tmp_path / "o.mtlx")["m"]
+    assert isinstance(m, bk.Textured) and m.model_class is bk.Mask
+    uv = np.array([[0.25, 0.75], [0.75, 0.75], [0.25, 0.25], [0.75, 0.25]])   # MaterialX uv: v up
+    rows, cols = np.floor((1 - uv[:, 1]) * 2).astype(int), np.floor(uv[:, 0] * 2).astype(int)
+    at = m.at(uv)
+    np.testing.assert_allclose(at.opacity, px[rows, cols, 0] / 255.0, rtol=1e-6, atol=1e-7)   # no colorspace: linear
+    assert_params(at.model, {**SS_COMMON, "base_metalness": 1.0})

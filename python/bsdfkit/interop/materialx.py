@@ -650,8 +650,8 @@ class _Opbr:
     float64 RGB), a bsdfkit texture, or ("normalmap", node); errors name ``inp`` (the input's
     element) or, when ``note`` is given, the standard_surface inputs it comes from."""
 
-    def __init__(self, v, inp=None, note=None):
-        self.v, self.inp, self.note = v, inp, note
+    def __init__(self, v, inp=None, note=None, authored=True):
+        self.v, self.inp, self.note, self.authored = v, inp, note, authored
 
 
 def _openpbr_inputs(r, node):
@@ -662,7 +662,7 @@ def _openpbr_inputs(r, node):
         name = dinp.getName()
         v = r.value(node, name)
         x = v[1] if v[0] in ("const", "tex") else ("normalmap", v[1])
-        out[name] = _Opbr(x, node.getInput(name) or dinp)
+        out[name] = _Opbr(x, node.getInput(name) or dinp, authored=node.getInput(name) is not None)
     return out
 
 
@@ -696,8 +696,8 @@ def _openpbr(r, node, values, approximate):
         return f"{v:g}" if isinstance(v, float) else str(list(np.asarray(v).tolist()) if np.ndim(v) else v)
 
     notes, dropped = [], []
-    for name in sorted(set(values) - _OPBR_READ):   # a newer node definition's input
-        if values[name].v is not None:
+    for name in sorted(set(values) - _OPBR_READ):   # a newer node definition's input, given
+        if values[name].authored and values[name].v is not None:
             fail(name, f"input {name!r} of open_pbr_surface is not one bk.OpenPBR reads")
     for name, (default, why) in _OPBR_NOT_MODELLED.items():
         o = values.get(name)
