@@ -143,6 +143,11 @@ def test_approximate_lists_every_dropped_input_in_one_warning():
     assert_params(m, {**SPEC_DEFAULTS, "transmission_weight": 1.0})
 
 
+def test_approximate_must_be_a_bool():
+    with pytest.raises(TypeError, match="approximate: expected True or False, got 'yes'"):
+        bk.from_materialx(shader("open_pbr_surface", {}), approximate="yes")
+
+
 def test_inputs_that_only_act_with_another_are_ignored_at_its_default():
     """emission_color at emission_luminance 0, the Abbe number at dispersion scale 0 (spec): no error, no warning."""
     m = load(shader("open_pbr_surface", {"emission_color": (1.0, 0.0, 0.0),

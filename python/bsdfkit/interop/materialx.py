@@ -1082,6 +1082,8 @@ def from_materialx(source, *, options=None, approximate=False) -> dict:
     mx = _import_materialx()
     from .gltf import _OPTIONS
 
+    if not isinstance(approximate, (bool, np.bool_)):
+        raise TypeError(f"approximate: expected True or False, got {approximate!r}")
     options = {} if options is None else dict(options)
     for k in options:
         if k not in _OPTIONS:
