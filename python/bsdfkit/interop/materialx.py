@@ -14,7 +14,6 @@ material: it goes through :mod:`bsdfkit.interop.gltf`'s one mapping (``_material
 """
 from __future__ import annotations
 
-import inspect
 import math
 import os
 import warnings
@@ -40,8 +39,8 @@ class MaterialXWarning(UserWarning):
     """Something of a MaterialX material that the bsdfkit model leaves out or approximates
     (emission, occlusion, displacement, glTF extensions without a FilamentStandard parameter,
     UsdPreviewSurface's tinted metal F90, OpenPBR inputs dropped by ``approximate=True``, ...): one
-    warning per material, attributes ``file``,
-    ``material`` and ``left_out`` (a tuple of one sentence per item). Turn it into an error with
+    warning per material, attributes ``file``, ``material`` and ``left_out`` (a tuple of one
+    sentence per item). Turn it into an error with
     ``warnings.simplefilter("error", MaterialXWarning)``."""
 
 
@@ -628,21 +627,10 @@ _OPBR_NOT_MODELLED = {
 #: emission colour at luminance 0 (OpenPBR spec); dropped (with a note) along with it.
 _OPBR_DEPENDS = {"transmission_dispersion_abbe_number": ("transmission_dispersion_scale", 20.0),
                  "emission_color": ("emission_luminance", 1.0)}
-#: accepted and ignored by bk.OpenPBR v1 (its subsurface is a diffuse lobe, without a mean free path).
+#: ignored, as bk.OpenPBR v1 ignores them (its subsurface is a diffuse lobe, without a mean free path).
 _OPBR_IGNORED = ("subsurface_radius", "subsurface_radius_scale")
 _OPBR_READ = set(_OPBR_MODELLED) | set(_OPBR_NOT_MODELLED) | set(_OPBR_DEPENDS) | set(_OPBR_IGNORED) | \
     {"geometry_opacity", "geometry_normal"}
-
-
-def _openpbr_class(r, node):
-    try:
-        from ..models import OpenPBR
-    except ImportError:
-        try:
-            from ..models.openpbr import OpenPBR
-        except ImportError:
-            r.fail(node, "this bsdfkit has no OpenPBR model (bk.OpenPBR)")
-    return OpenPBR
 
 
 class _Opbr:
@@ -677,10 +665,8 @@ def _is_default(v, default):
 def _openpbr(r, node, values, approximate):
     """(model, notes) of OpenPBR Surface inputs ``values`` ({name: _Opbr}) of ``node``: bk.OpenPBR,
     in bk.Mask for a geometry_opacity < 1, in bk.NormalMap for a geometry_normal from a normalmap node."""
-    from ..models import Mask, NormalMap
+    from ..models import Mask, NormalMap, OpenPBR
     from .gltf import GltfValue
-
-    OpenPBR = _openpbr_class(r, node)
 
     def fail(name, msg):
         o = values[name]
@@ -722,11 +708,6 @@ def _openpbr(r, node, values, approximate):
             fail(name, f"a texture for {name}: bk.OpenPBR takes no textures (no per-element parameters); "
                  "bake the material to constants or give one model per texel")
         kw[name] = o.v
-    params = inspect.signature(OpenPBR).parameters
-    for name in _OPBR_IGNORED:   # accepted and ignored by bk.OpenPBR: passed on when it takes them
-        o = values.get(name)
-        if o is not None and o.v is not None and not _is_tex(o.v) and name in params:
-            kw[name] = o.v
     try:
         model = OpenPBR(**kw)
     except (ValueError, TypeError) as e:   # named by its parameter: the input (the longest name it contains)
@@ -1035,7 +1016,8 @@ def from_materialx(source, *, options=None, approximate=False) -> dict:
     power, extract, convert) are evaluated on the material's values, unset inputs at
     standard_surface's own defaults; the resulting OpenPBR inputs are read as above, errors naming
     the standard_surface inputs they come from. A texture passes through the graph's dot nodes, a
-    product with a constant and a conditional on constants, and is refused elsewhere (e.g.
+    product with a constant, a conditional on constants and a channel extraction (a textured
+    ``opacity``: bk.Mask of the image's first channel), and is refused elsewhere (e.g.
     sheen_roughness, raised to the power 0.4). Standard Surface inputs the graph has no input for
     (specular_rotation, coat_rotation, transmission_extra_roughness, coat_affect_color,
     coat_normal, tangent) are refused unless at their defaults (dropped with ``approximate=True``);
