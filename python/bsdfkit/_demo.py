@@ -138,13 +138,16 @@ def _views_figure(configs, path, theta_o=VIEWS_THETA):
     from matplotlib.figure import Figure
 
     cols = ("lobe3d", "hemisphere", "halfdiff", "samples")
-    nrow = len(configs)
-    w, h = 22.0, 4.3 * nrow + 1.5
+    # at most 22 rows per group of columns (the image stays under 6000 px tall), groups side by side
+    groups = -(-len(configs) // 22)
+    nrow = -(-len(configs) // groups)
+    w, h = 22.0 * groups, 4.3 * nrow + 1.5
     fig = Figure(figsize=(w, h))   # fixed margins: constrained layout triples the drawing time here
     fig.subplots_adjust(left=0.5 / w, right=1 - 0.3 / w, top=1 - 1.5 / h, bottom=0.4 / h, wspace=0.45, hspace=0.45)
     for i, (name, m) in enumerate(configs):
+        g, r = divmod(i, nrow)
         for j, view in enumerate(cols):
-            ax = fig.add_subplot(nrow, len(cols), i * len(cols) + j + 1,
+            ax = fig.add_subplot(nrow, len(cols) * groups, r * len(cols) * groups + g * len(cols) + j + 1,
                                  projection="3d" if view == "lobe3d" else None)
             if view == "lobe3d":
                 _plot.lobe3d(m, theta_o=theta_o, ax=ax, n_theta=25, n_phi=49, legend=False,
