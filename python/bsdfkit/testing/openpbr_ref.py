@@ -446,6 +446,8 @@ def ggx_albedo(mu_o, alpha, fresnel, n_phi=96, n_u=24):
     for lo, hi in zip(edges[:-1], edges[1:]):
         lo_ = np.minimum(lo, v_max)
         hi_ = np.minimum(hi, v_max)
+        if not np.any(hi_ > lo_):
+            continue
         vv = lo_[..., None] + (hi_ - lo_)[..., None] * x01
         vs.append(vv)
         ws.append((hi_ - lo_)[..., None] * w01 * 2.0 * vv)
@@ -527,9 +529,11 @@ class Reference:
             self._metal_nk = (n_m, k_m)
         # albedo tables (isotropic alpha of the lobe, the contract)
         self.E_R = _Table(lambda mu: ggx_albedo(mu, d["alpha_base_iso"], self.fresnel_R))
-        self.E_coat = _Table(lambda mu: ggx_albedo(mu, d["alpha_coat_iso"], self.fresnel_coat)[:, 0])
-        self.E_R1 = ggx_albedo(1.0, d["alpha_base_iso"], self.fresnel_R)[0]
-        self.E_metal1 = ggx_albedo(1.0, d["alpha_base_iso"], self.fresnel_metal)[0]
+        self.E_coat = _Table(lambda mu: ggx_albedo(mu, d["alpha_coat_iso"], self.fresnel_coat)[:, 0]) \
+            if p["coat_weight"] > 0 else None
+        self.E_R1 = self.E_R(np.array([1.0]))[0]
+        self.E_metal1 = ggx_albedo(1.0, d["alpha_base_iso"], self.fresnel_metal)[0] \
+            if p["base_metalness"] > 0 else np.zeros(3)
         n_c = p["coat_ior"]
         self.E_F = hemispherical_fresnel(n_c)
         # darkening constants (OpenPBR "Coat darkening"; the contract's formulas)
@@ -691,11 +695,11 @@ class Reference:
                     ths.append(x)
                     wts.append(w)
             th, wt = np.concatenate(ths), np.concatenate(wts)
-            pc = [0.0, 0.03, 0.1, 0.3, 1.0, np.pi]
+            pc = [0.0, 0.03, 0.1, 0.3, 1.0, 0.5 * np.pi, 2.2, np.pi]   # pi/2: EON's kink (sign of wo.wi)
             pcs = sorted({*pc, *[-v for v in pc]})
             phs, wps = [], []
             for lo, hi in zip(pcs[:-1], pcs[1:]):
-                x, w = _gl(n_phi // 6, lo, hi)
+                x, w = _gl(max(4, n_phi // 8), lo, hi)
                 phs.append(x)
                 wps.append(w)
             ph, wp = np.concatenate(phs), np.concatenate(wps)
