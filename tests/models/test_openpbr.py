@@ -233,6 +233,34 @@ def test_reference_albedo_scaling_closes(r, extra):
         np.testing.assert_allclose(ref.albedo(p, _dir(z)), 1.0, rtol=0, atol=2e-4)
 
 
+@pytest.mark.parametrize("p", [dict(base_metalness=1.0, base_color=(1, 1, 1), specular_roughness=1.0),
+                               dict(base_metalness=1.0, base_color=(1, 1, 1), specular_roughness=0.4,
+                                    coat_weight=1.0, coat_roughness=0.7),
+                               dict(base_metalness=0.5, base_color=(1, 1, 1), subsurface_weight=0.5,
+                                    subsurface_color=(1, 1, 1), fuzz_weight=1.0, coat_weight=0.5, coat_roughness=0.5,
+                                    specular_roughness=0.8)],
+                         ids=["metal", "coated_metal", "mix_coat_fuzz"])
+def test_reference_turquin_furnace(p):
+    """The reference's own Turquin compensation closes the white furnace (isotropic, no thin film, no
+    transmission): measured |albedo - 1| < 1e-5."""
+    for z in (0.2, 0.6, 0.95):
+        np.testing.assert_allclose(ref.albedo(p, _dir(z), compensation="turquin", n_theta=192, n_phi=192),
+                                   1.0, rtol=0, atol=1e-4)
+
+
+def test_reference_turquin_furnace_anisotropic_is_approximate():
+    """The contract computes every albedo with the isotropic alpha = r^2 while the lobe is anisotropic
+    (alpha_t, alpha_b of the spec's formula, RMS r^2): the compensated anisotropic lobe and the layering
+    factors then miss the furnace. Measured on the reference at azimuth 0.7: bare white metal r=0.4,
+    a=0.6: -0.2 .. +0.4 %; coated (coat r 0.7, so the base is roughened to 0.84) up to +4 %."""
+    p = dict(base_metalness=1.0, base_color=(1, 1, 1), specular_roughness=0.4, specular_roughness_anisotropy=0.6)
+    dev = [abs(ref.albedo(p, _dir(z), compensation="turquin")[0] - 1) for z in (0.2, 0.6, 0.95)]
+    assert 1e-3 < max(dev) < 1e-2
+    p.update(coat_weight=1.0, coat_roughness=0.7)
+    dev = [abs(ref.albedo(p, _dir(z), compensation="turquin")[0] - 1) for z in (0.2, 0.6, 0.95)]
+    assert 1e-2 < max(dev) < 5e-2
+
+
 # =============================================================================== (b) white furnace (bk.OpenPBR)
 
 WHITE_BASES = {
@@ -320,6 +348,23 @@ def test_eval_against_reference(name):
     print(f"eval {name}: p99.9 rel {p999:.3g}, max rel {rel.max():.3g}, outside-mask max {absmax:.3g}")
     assert p999 < CROSS_TOL[name]
     assert absmax < 1e-3
+
+
+TURQUIN_SETS = ["default", "rough_diffuse", "metal", "coat", "fuzz", "thin_film", "anisotropic"]
+
+
+@pytest.mark.parametrize("name", TURQUIN_SETS)
+def test_eval_turquin_against_reference(name):
+    """compensation="turquin" on the sets without transmission (the reference leaves the
+    transmission lobe uncompensated; the contract leaves that choice to the implementation)."""
+    p = CROSS[name]
+    wo, wi = _pairs(14, 4000)
+    g = ref.eval(p, wo, wi, compensation="turquin")
+    f = bk.OpenPBR(**p, compensation="turquin").eval(wo, wi)
+    rel, absmax = _rel_err(f, g)
+    p999 = np.quantile(rel, 0.999)
+    print(f"eval turquin {name}: p99.9 rel {p999:.3g}, outside-mask {absmax:.3g}")
+    assert p999 < CROSS_TOL[name] and absmax < 1e-3
 
 
 @pytest.mark.parametrize("name", ["default", "coat", "thin_walled"])

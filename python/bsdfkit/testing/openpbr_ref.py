@@ -28,7 +28,13 @@ Contract choices that the spec leaves open, as read here (see the OPENPBR.md con
   base roughness, no thin film, no specular_color, weight (1 - M) T.
 * "reciprocal" layering: every (1 - X(mu_o)) layering factor (X = E_R, E_coat, F_w E_fuzz)
   becomes sqrt((1 - X(mu_o)) (1 - X(|mu_i|))).
-* compensation="turquin" is not implemented here (the tests check "turquin" by white furnace).
+* compensation="turquin" (Turquin 2019): each GGX reflection lobe (f_R, f_metal, f_coat) times
+  1 + F0 (1 - E1(mu_o)) / E1(mu_o), E1 the F = 1 albedo of the lobe's isotropic alpha, F0 the lobe's
+  Fresnel factor at c = 1 (RGB; specular_color and the thin film included); the layering albedos
+  (E_R, E_coat, and E_b's E_R(1), E_metal(1)) are those of the compensated lobes, so that albedo
+  scaling stays energy-conserving. The transmission lobe is left uncompensated here (the contract
+  leaves it to the implementation): reference "turquin" values are meant for sets without
+  transmission.
 """
 from __future__ import annotations
 
@@ -513,8 +519,9 @@ class Reference:
     """The contract's model for one parameter set (tables built once)."""
 
     def __init__(self, params: dict, compensation="none", layering="albedo-scaling"):
-        if compensation != "none":
-            raise NotImplementedError("the reference implements compensation='none' only")
+        if compensation not in ("none", "turquin"):
+            raise ValueError(compensation)
+        self.compensation = compensation
         if layering not in ("albedo-scaling", "reciprocal"):
             raise ValueError(layering)
         self.layering = layering
@@ -528,11 +535,24 @@ class Reference:
             n_m, k_m = gulbrandsen_nk(rho, p["specular_color"])
             self._metal_nk = (n_m, k_m)
         # albedo tables (isotropic alpha of the lobe, the contract)
-        self.E_R = _Table(lambda mu: ggx_albedo(mu, d["alpha_base_iso"], self.fresnel_R))
-        self.E_coat = _Table(lambda mu: ggx_albedo(mu, d["alpha_coat_iso"], self.fresnel_coat)[:, 0]) \
+        turq = compensation == "turquin"
+        one = lambda c: np.ones(np.shape(c) + (3,))
+        if turq:
+            E1b = _Table(lambda mu: ggx_albedo(mu, d["alpha_base_iso"], one)[:, 0])
+            E1c = _Table(lambda mu: ggx_albedo(mu, d["alpha_coat_iso"], one)[:, 0])
+            # Turquin 2019: multiple-scattering factor 1 + F0 (1 - E1) / E1 of each reflection lobe
+            self.ms_R = lambda mu, F0=self.fresnel_R(np.ones(1))[0]: 1.0 + F0 * ((1.0 - E1b(mu)) / E1b(mu))[..., None]
+            self.ms_metal = lambda mu, F0=self.fresnel_metal(np.ones(1))[0]: \
+                1.0 + F0 * ((1.0 - E1b(mu)) / E1b(mu))[..., None]
+            self.ms_coat = lambda mu, F0=self.fresnel_coat(np.ones(1))[0]: \
+                1.0 + F0 * ((1.0 - E1c(mu)) / E1c(mu))[..., None]
+        else:
+            self.ms_R = self.ms_metal = self.ms_coat = lambda mu: np.ones(np.shape(mu) + (3,))
+        self.E_R = _Table(lambda mu: ggx_albedo(mu, d["alpha_base_iso"], self.fresnel_R) * self.ms_R(mu))
+        self.E_coat = _Table(lambda mu: (ggx_albedo(mu, d["alpha_coat_iso"], self.fresnel_coat) * self.ms_coat(mu))[:, 0]) \
             if p["coat_weight"] > 0 else None
         self.E_R1 = self.E_R(np.array([1.0]))[0]
-        self.E_metal1 = ggx_albedo(1.0, d["alpha_base_iso"], self.fresnel_metal)[0] \
+        self.E_metal1 = (ggx_albedo(1.0, d["alpha_base_iso"], self.fresnel_metal) * self.ms_metal(np.ones(1)))[0] \
             if p["base_metalness"] > 0 else np.zeros(3)
         n_c = p["coat_ior"]
         self.E_F = hemispherical_fresnel(n_c)
@@ -615,7 +635,7 @@ class Reference:
         T, S, M = p["transmission_weight"], p["subsurface_weight"], p["base_metalness"]
         C, Fw = p["coat_weight"], p["fuzz_weight"]
         # lobes
-        f_R = microfacet_brdf(wo, wi, ax, ay, self.fresnel_R)
+        f_R = microfacet_brdf(wo, wi, ax, ay, self.fresnel_R) * self.ms_R(mu_o)
         one_m_ER = self._one_minus(self.E_R, mu_o, mu_i)
         f_diff = eon_ref.eval(wo, wi, self.rho, p["base_diffuse_roughness"]) if (1 - T) * (1 - S) > 0 else 0.0
         if thin:
@@ -637,13 +657,13 @@ class Reference:
         f_opaque = _lerp(f_diff, f_sss, S)
         f_diel = f_R + (1.0 - T) * one_m_ER * f_opaque + T * f_T
         if M > 0:
-            f_metal = microfacet_brdf(wo, wi, ax, ay, self.fresnel_metal)
+            f_metal = microfacet_brdf(wo, wi, ax, ay, self.fresnel_metal) * self.ms_metal(mu_o)
             f_base = _lerp(f_diel, f_metal, M)
         else:
             f_base = f_diel
         # coat
         if C > 0:
-            f_coat = microfacet_brdf(wo, wi, cx, cy, self.fresnel_coat)
+            f_coat = microfacet_brdf(wo, wi, cx, cy, self.fresnel_coat) * self.ms_coat(mu_o)
             n_c = p["coat_ior"]
             # OpenPBR "View-dependent absorption": coat_color^((1/mu_t(mu_o) + 1/mu_t(mu_i)) / 2)
             mut = lambda mu: np.sqrt(1.0 - (1.0 - mu * mu) / (n_c * n_c))
