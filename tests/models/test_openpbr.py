@@ -115,24 +115,24 @@ def _airy_spectral(c1, d_um, n2, n3, lam, cmf):
 
 def test_airy_against_spectral_thin_film():
     """Belcour & Barla's Fourier-space RGB Airy term against the spectral thin-film reflectance
-    integrated with Mitsuba's CIE 1931 tables: measured <= 0.012 (dielectric substrate) and
-    <= 0.031 (conductor) at cos >= 0.4; the 2-order truncation and the Gaussian CMF fits are the
-    difference (up to 0.08 at cos 0.15, not asserted)."""
+    integrated with Mitsuba's CIE 1931 tables. Measured (films 0.05-1 um): <= 0.013 (dielectric
+    substrates) and <= 0.030 (conductors) at cos >= 0.4, <= 0.052 / 0.017 at cos 0.15 and 0.05 (the
+    Gaussian fits of the CMFs' spectra are the difference). The series summed to convergence matters
+    there: truncated at MaterialX's 2 orders the soap film (1.33 on 1) is off by up to 0.2."""
     from bsdfkit.testing import mitsuba as mref
     mref.variant()
     import mitsuba as mi
     lam = np.arange(360.0, 831.0, 1.0)
     cmf = np.array([np.ravel(np.array(mi.cie1931_xyz(float(x)), dtype=np.float64)) for x in lam]).reshape(-1, 3)
-    for d in (0.1, 0.3, 0.5, 1.0):
-        for c in (1.0, 0.7, 0.4):
-            for n2, n3 in ((1.4, 1.5), (2.0, 1.5), (1.33, 1.0001)):
+    for d in (0.05, 0.1, 0.3, 0.5, 1.0):
+        for c in (1.0, 0.7, 0.4, 0.15, 0.05):
+            tol_d, tol_m = (0.015, 0.032) if c >= 0.4 else (0.055, 0.02)
+            for n2, n3 in ((1.33, 1.0001), (2.0, 1.5), (1.4, 1.5)):
                 a = ref.fresnel_airy(np.array([c]), d, n2, n3)[0]
-                assert np.abs(a - _airy_spectral(c, d, n2, n3, lam, cmf)).max() < 0.015, (d, c, n2, n3)
+                assert np.abs(a - _airy_spectral(c, d, n2, n3, lam, cmf)).max() < tol_d, (d, c, n2, n3)
             for n2, n, k in ((1.4, 0.2, 3.0), (1.5, 1.5, 2.0), (2.0, 2.5, 3.5)):
-                if d == 1.0:
-                    continue
                 a = ref.fresnel_airy(np.array([c]), d, n2, np.full(3, n), np.full(3, k))[0]
-                assert np.abs(a - _airy_spectral(c, d, n2, n + 1j * k, lam, cmf)).max() < 0.035, (d, c, n2, n, k)
+                assert np.abs(a - _airy_spectral(c, d, n2, n + 1j * k, lam, cmf)).max() < tol_m, (d, c, n2, n, k)
 
 
 @pytest.mark.parametrize("r", [0.01, 0.2, 0.5, 1.0])
