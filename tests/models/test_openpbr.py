@@ -133,6 +133,13 @@ def test_airy_against_spectral_thin_film():
             for n2, n, k in ((1.4, 0.2, 3.0), (1.5, 1.5, 2.0), (2.0, 2.5, 3.5)):
                 a = ref.fresnel_airy(np.array([c]), d, n2, np.full(3, n), np.full(3, k))[0]
                 assert np.abs(a - _airy_spectral(c, d, n2, n + 1j * k, lam, cmf)).max() < tol_m, (d, c, n2, n, k)
+    # a coloured (Gulbrandsen) metal: channel j against the spectral RGB of the grey metal n_j + i k_j,
+    # component j (measured <= 0.012; MaterialX's channel-mixing vec3 form reaches 1.0 vs 0.92 here)
+    n, k = ref.gulbrandsen_nk(np.array([0.9, 0.6, 0.3]), np.array([1.0, 0.9, 0.8]))
+    for c in (1.0, 0.7, 0.3):
+        a = ref.fresnel_airy(np.array([c]), 0.3, 1.5, n, k)[0]
+        s = [_airy_spectral(c, 0.3, 1.5, n[j] + 1j * k[j], lam, cmf)[j] for j in range(3)]
+        assert np.abs(a - s).max() < 0.015, (c, a, s)
 
 
 @pytest.mark.parametrize("r", [0.01, 0.2, 0.5, 1.0])

@@ -25,6 +25,11 @@ Contract choices that the spec leaves open, as read here (see the OPENPBR.md con
   truncates at 2 orders), outside IOR 1, film IOR max(1, n_tf);
   dielectric substrate IOR eta' (real), metal substrate the Gulbrandsen 2014 (n, k) of
   (r = F0, g = specular_color); the metal's film Fresnel times specular_weight.
+* Coat darkening's base albedo E_b = lerp(E_R(1) + (1 - E_R(1)) lerp(lerp(rho, subsurface_color, S),
+  transmission_color, T), E_metal(1), M): the translucent slab counts with transmission_color (its
+  normal-incidence R + T albedo), where the contract's text writes "+ T*0"; with 0 a white coat over
+  white glass darkens the transmission by 1 - K ~ 0.35, against the spec's white-furnace list
+  ("translucent base ... with a coat"). :data:`TRANSLUCENT_EB` = "zero" restores the text.
 * Inside the (non-thin-walled) dielectric (wo.z < 0): the bare interface at 1/eta' with the
   base roughness, no thin film, no specular_color, weight (1 - M) T.
 * "reciprocal" layering: every (1 - X(mu_o)) layering factor (X = E_R, E_coat, F_w E_fuzz)
@@ -75,6 +80,8 @@ NOT_MODELLED = dict(
 IGNORED = ("subsurface_radius", "subsurface_radius_scale", "transmission_dispersion_abbe_number", "emission_color")
 COLOURS = tuple(k for k, v in DEFAULTS.items() if isinstance(v, tuple))
 
+#: E_b's translucent term: "transmission_color" (default) or "zero" (the contract's text, "+ T*0").
+TRANSLUCENT_EB = "transmission_color"
 MU_NODES = 40          # mu_o nodes of the albedo tables
 _MU_B = 1.0 / 7.0      # F82-tint's "82 degree" cosine (Kutz et al. 2021)
 
@@ -289,6 +296,16 @@ def fresnel_airy(cos_theta, thickness_um, film_ior, eta3, kappa3=None):
     Gaussian XYZ sensitivities; as MaterialX mx_fresnel_airy). Outside medium IOR 1; film IOR
     max(1, film_ior); substrate eta3 (3,) (+ i kappa3 (3,) for a conductor, else dielectric).
     ``cos_theta`` (...), returns (..., 3) clamped to [0, 1]."""
+    eta3 = np.broadcast_to(np.asarray(eta3, dtype=np.float64), (3,))
+    kappa3 = np.zeros(3) if kappa3 is None else np.broadcast_to(np.asarray(kappa3, dtype=np.float64), (3,))
+    if np.ptp(eta3) > 0 or np.ptp(kappa3) > 0:
+        # a coloured substrate: each RGB channel from its own grey substrate (the XYZ of channel j's
+        # n_j + i k_j, mapped to RGB, component j). MaterialX / Belcour & Barla's vec3 code instead
+        # multiplies substrate channel j into XYZ component j before the XYZ -> RGB matrix, which mixes
+        # the channels (a red channel above 1 for a gold-like metal); tests/models/test_openpbr.py
+        # checks this choice against the spectral computation.
+        return np.stack([fresnel_airy(cos_theta, thickness_um, film_ior, eta3[j], kappa3[j])[..., j]
+                         for j in range(3)], -1)
     c = np.clip(np.asarray(cos_theta, dtype=np.float64), 0.0, 1.0)[..., None]
     eta1 = 1.0
     eta2 = max(film_ior, eta1)
@@ -592,7 +609,10 @@ class Reference:
         self.r_b = _lerp(r_d, r_s, p["base_metalness"])
         T, S, M = p["transmission_weight"], p["subsurface_weight"], p["base_metalness"]
         opaque1 = _lerp(rho, p["subsurface_color"], S)
-        self.E_b = _lerp(self.E_R1 + (1.0 - T) * (1.0 - self.E_R1) * opaque1, self.E_metal1, M)
+        # the translucent slab's share of E_b: transmission_color (see the module notes; the contract's
+        # text has 0, which darkens a coated white glass by 1 - K ~ 0.35 and breaks the spec's furnace list)
+        tr = p["transmission_color"] if TRANSLUCENT_EB == "transmission_color" else 0.0
+        self.E_b = _lerp(self.E_R1 + (1.0 - self.E_R1) * _lerp(opaque1, tr, T), self.E_metal1, M)
 
     # --- Fresnel factors (c = wo.h >= 0) -> (..., 3)
     def fresnel_d(self, c):
