@@ -298,8 +298,8 @@ def test_white_furnace_turquin(base, layer, mod, r):
     m = bk.OpenPBR(**p, compensation="turquin")
     wo = np.stack([_dir(z) for z in FURNACE_Z])
     mode = "importance" if p.get("transmission_weight", 0) > 0 else "radiance"
-    a = m.albedo(wo, n_samples=1 << 15, seed=1, mode=mode)
-    print(f"furnace {base}-{layer}-{mod}-r{r}: {np.round(a[:, 0], 4)} (z={FURNACE_Z})")
+    a = m.albedo(wo, n_samples=1 << 14, seed=1, mode=mode)
+    print(f"furnace {base}-{layer}-{mod}-r{r}: max|a-1| {np.abs(a - 1).max():.4f} min {a.min():.4f} max {a.max():.4f}")
     np.testing.assert_allclose(a, 1.0, rtol=0, atol=FURNACE_TOL)
 
 
@@ -391,8 +391,8 @@ def test_albedo_against_reference_quadrature(name):
     p = CROSS[name]
     m = bk.OpenPBR(**p, compensation="none")
     for z in (0.9, 0.4):
-        a = m.albedo(_dir(z), n_samples=1 << 17, seed=2)
-        g = ref.albedo(p, _dir(z), n_theta=192, n_phi=192)
+        a = m.albedo(_dir(z), n_samples=1 << 16, seed=2)
+        g = ref.albedo(p, _dir(z))
         assert np.all(np.abs(a - g) < 5e-3), (z, a, g)
 
 
@@ -438,6 +438,11 @@ CHI2_CASES = [(k, z) for k in CHI2_SETS for z in (0.999, 0.7, 0.3, 0.05, -0.6)]
 R = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 
 
+#: the harness integrates the pdf over each bin with ires^2 points: the glass's transmission lobe
+#: (alpha 0.0625) needs 32 (at 8 the bin integrals are off enough to fail at 1M samples, p ~ 0)
+CHI2_IRES = {"glass": 32}
+
+
 @pytest.mark.parametrize("name, z", CHI2_CASES, ids=[f"{k}-z{z}" for k, z in CHI2_CASES])
 def test_chi2_sampling(name, z):
     from bsdfkit.testing import mitsuba as mref
@@ -449,7 +454,7 @@ def test_chi2_sampling(name, z):
         near_horizon = np.abs(s.wi[:, 2]) < 1e-6   # see test_pbrt_chi2: the harness's float32 edge
         return s.wi @ R.T, s.valid & ~near_horizon
 
-    passed, p, msg = mref.chi2_test(sample_fn, lambda v: model.pdf(wo, v @ R), res=101, ires=8,
+    passed, p, msg = mref.chi2_test(sample_fn, lambda v: model.pdf(wo, v @ R), res=101, ires=CHI2_IRES.get(name, 8),
                                     sample_count=300_000, seed=3, significance=0.01, test_count=len(CHI2_CASES))
     print(f"chi2 OpenPBR {name} z={z}: p = {p:.4g}")
     assert passed, msg
