@@ -251,7 +251,7 @@ def test_reference_albedo_scaling_closes(r, extra):
 def test_reference_turquin_furnace(p):
     """The reference's own Turquin compensation closes the white furnace (isotropic, no thin film, no
     transmission): measured |albedo - 1| < 1e-5."""
-    for z in (0.2, 0.6, 0.95):
+    for z in (0.2, 0.95):
         np.testing.assert_allclose(ref.albedo(p, _dir(z), compensation="turquin"), 1.0, rtol=0, atol=1e-4)
 
 
@@ -261,7 +261,7 @@ def test_reference_turquin_furnace_anisotropic_is_approximate():
     factors then miss the furnace. Measured on the reference at azimuth 0.7: bare white metal r=0.4,
     a=0.6: -0.2 .. +0.4 %; coated (coat r 0.7, so the base is roughened to 0.84) up to +4 %."""
     p = dict(base_metalness=1.0, base_color=(1, 1, 1), specular_roughness=0.4, specular_roughness_anisotropy=0.6)
-    dev = [abs(ref.albedo(p, _dir(z), compensation="turquin")[0] - 1) for z in (0.2, 0.6, 0.95)]
+    dev = [abs(ref.albedo(p, _dir(z), compensation="turquin")[0] - 1) for z in (0.2, 0.95)]
     assert 1e-3 < max(dev) < 1e-2
     p.update(coat_weight=1.0, coat_roughness=0.7)
     dev = [abs(ref.albedo(p, _dir(z), compensation="turquin")[0] - 1) for z in (0.2, 0.95)]
@@ -365,7 +365,7 @@ def test_eval_turquin_against_reference(name):
     """compensation="turquin" on the sets without transmission (the reference leaves the
     transmission lobe uncompensated; the contract leaves that choice to the implementation)."""
     p = CROSS[name]
-    wo, wi = _pairs(14, 4000)
+    wo, wi = _pairs(14, 3000)
     g = ref.eval(p, wo, wi, compensation="turquin")
     f = bk.OpenPBR(**p, compensation="turquin").eval(wo, wi)
     rel, absmax = _rel_err(f, g)
@@ -377,7 +377,7 @@ def test_eval_turquin_against_reference(name):
 @pytest.mark.parametrize("name", ["default", "coat", "thin_walled"])
 def test_eval_reciprocal_layering_against_reference(name):
     p = CROSS[name]
-    wo, wi = _pairs(12, 4000)
+    wo, wi = _pairs(12, 3000)
     g = ref.eval(p, wo, wi, layering="reciprocal")
     f = bk.OpenPBR(**p, compensation="none", layering="reciprocal").eval(wo, wi)
     rel, absmax = _rel_err(f, g)
@@ -439,8 +439,8 @@ R = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 
 
 #: the harness integrates the pdf over each bin with ires^2 points: the glass's transmission lobe
-#: (alpha 0.0625) needs 32 (at 8 the bin integrals are off enough to fail at 1M samples, p ~ 0)
-CHI2_IRES = {"glass": 32}
+#: (alpha 0.0625) needs 16 (at 8 the bin integrals are off enough to fail at 1M samples, p ~ 0)
+CHI2_IRES = {"glass": 16}
 
 
 @pytest.mark.parametrize("name, z", CHI2_CASES, ids=[f"{k}-z{z}" for k, z in CHI2_CASES])
