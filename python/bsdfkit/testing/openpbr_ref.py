@@ -56,7 +56,7 @@ __all__ = ["DEFAULTS", "NOT_MODELLED", "COLOURS", "normalize_params", "derived",
            "ggx_d", "ggx_lambda", "smith_g1", "smith_g2", "fresnel_dielectric", "fresnel_dielectric_polarized",
            "fresnel_conductor_polarized", "schlick", "f82_tint", "gulbrandsen_nk", "fresnel_airy",
            "zeltner_sheen_albedo", "zeltner_sheen_ltc", "microfacet_brdf", "walter_btdf", "ggx_albedo",
-           "hemispherical_fresnel", "Reference", "reference", "eval", "albedo"]
+           "hemispherical_fresnel", "sphere_albedo", "Reference", "reference", "eval", "albedo"]
 
 #: The contract's parameters with the MaterialX ``open_pbr_surface`` defaults.
 DEFAULTS = dict(
@@ -741,48 +741,54 @@ class Reference:
 
     # --- full albedo by quadrature
     def albedo(self, wo, n_theta=96, n_phi=96):
-        """int f(wo, wi) |cos theta_i| d wi over the sphere, (3,): product Gauss-Legendre in
-        (theta_i, phi_i - phi_o) with panels graded towards the specular reflection and refraction
-        directions (theta_o, the refracted angle, the azimuth phi_o + pi) and at EON's kink (pi/2).
-        Measured against 512^2 nodes: reflection-only sets ~1e-13 for roughness >= 0.2 and ~1e-4 at
-        0.1 (96^2 nodes), 2e-9 (192^2); with transmission, 4e-5 (r 0.2), 2e-4 (r 0.3), 7e-4 (r 0.5),
-        3e-3 (r 1) at 192^2, because the Walter BTDF jumps along h.z = 0 (D(h) > 0 at the horizon)
-        and the rule does not follow that curve. Near-delta lobes (alpha ~ 1e-3: coat_roughness 0)
-        are not resolved."""
-        wo = np.asarray(wo, dtype=np.float64)
-        phi_o = float(np.arctan2(wo[1], wo[0]))
-        mu_o = float(wo[2])
-        th_o = float(np.arccos(min(1.0, abs(mu_o))))
-        # reflection-side theta panels around th_o; transmission side around the refracted angle
-        eta = self.eta if mu_o > 0 else 1.0 / self.eta
-        st = np.sin(th_o) / eta
-        th_t = float(np.arcsin(min(st, 1.0)))
-        tot = np.zeros(3)
-        for side, th_c in ((1.0, th_o), (-1.0, th_t)):
-            cuts = sorted({0.0, 0.5 * np.pi, *[float(np.clip(th_c + k, 0.0, 0.5 * np.pi))
-                                                 for k in (-0.3, -0.1, -0.03, 0.0, 0.03, 0.1, 0.3)]})
-            ths, wts = [], []
-            for lo, hi in zip(cuts[:-1], cuts[1:]):
-                if hi - lo > 1e-12:
-                    x, w = _gl(n_theta // 4, lo, hi)
-                    ths.append(x)
-                    wts.append(w)
-            th, wt = np.concatenate(ths), np.concatenate(wts)
-            pc = [0.0, 0.03, 0.1, 0.3, 1.0, 0.5 * np.pi, 2.2, np.pi]   # pi/2: EON's kink (sign of wo.wi)
-            pcs = sorted({*pc, *[-v for v in pc]})
-            phs, wps = [], []
-            for lo, hi in zip(pcs[:-1], pcs[1:]):
-                x, w = _gl(max(4, n_phi // 8), lo, hi)
-                phs.append(x)
-                wps.append(w)
-            ph, wp = np.concatenate(phs), np.concatenate(wps)
-            # phi measured from the specular azimuth (phi_o + pi for reflection and transmission)
-            TH, PH = np.meshgrid(th, ph + phi_o + np.pi, indexing="ij")
-            wi = np.stack([np.sin(TH) * np.cos(PH), np.sin(TH) * np.sin(PH), side * np.sign(mu_o or 1.0) * np.cos(TH)], -1)
-            wgt = (wt * np.sin(th) * np.cos(th))[:, None] * wp[None, :]
-            f = self.eval(np.broadcast_to(wo, wi.shape).reshape(-1, 3), wi.reshape(-1, 3)).reshape(wi.shape[:-1] + (3,))
-            tot += np.einsum("ijc,ij->c", f, wgt)
-        return tot
+        """int f(wo, wi) |cos theta_i| d wi over the sphere, (3,), by :func:`sphere_albedo`."""
+        return sphere_albedo(self.eval, wo, self.eta, n_theta, n_phi)
+
+
+def sphere_albedo(eval_fn, wo, eta, n_theta=96, n_phi=96):
+    """int eval_fn(wo, wi) |cos theta_i| d wi over the sphere, (3,) (eta: the relative IOR that
+    places the refraction panels; any callable f(wo (n, 3), wi (n, 3)) -> (n, 3)): product Gauss-Legendre in
+    (theta_i, phi_i - phi_o) with panels graded towards the specular reflection and refraction
+    directions (theta_o, the refracted angle, the azimuth phi_o + pi) and at EON's kink (pi/2).
+    Measured against 512^2 nodes: reflection-only sets ~1e-13 for roughness >= 0.2 and ~1e-4 at
+    0.1 (96^2 nodes), 2e-9 (192^2); with transmission, 4e-5 (r 0.2), 2e-4 (r 0.3), 7e-4 (r 0.5),
+    3e-3 (r 1) at 192^2, because the Walter BTDF jumps along h.z = 0 (D(h) > 0 at the horizon)
+    and the rule does not follow that curve. Near-delta lobes (alpha ~ 1e-3: coat_roughness 0)
+    are not resolved."""
+    wo = np.asarray(wo, dtype=np.float64)
+    phi_o = float(np.arctan2(wo[1], wo[0]))
+    mu_o = float(wo[2])
+    th_o = float(np.arccos(min(1.0, abs(mu_o))))
+    # reflection-side theta panels around th_o; transmission side around the refracted angle
+    eta = eta if mu_o > 0 else 1.0 / eta
+    st = np.sin(th_o) / eta
+    th_t = float(np.arcsin(min(st, 1.0)))
+    tot = np.zeros(3)
+    for side, th_c in ((1.0, th_o), (-1.0, th_t)):
+        cuts = sorted({0.0, 0.5 * np.pi, *[float(np.clip(th_c + k, 0.0, 0.5 * np.pi))
+                                             for k in (-0.3, -0.1, -0.03, 0.0, 0.03, 0.1, 0.3)]})
+        ths, wts = [], []
+        for lo, hi in zip(cuts[:-1], cuts[1:]):
+            if hi - lo > 1e-12:
+                x, w = _gl(n_theta // 4, lo, hi)
+                ths.append(x)
+                wts.append(w)
+        th, wt = np.concatenate(ths), np.concatenate(wts)
+        pc = [0.0, 0.03, 0.1, 0.3, 1.0, 0.5 * np.pi, 2.2, np.pi]   # pi/2: EON's kink (sign of wo.wi)
+        pcs = sorted({*pc, *[-v for v in pc]})
+        phs, wps = [], []
+        for lo, hi in zip(pcs[:-1], pcs[1:]):
+            x, w = _gl(max(4, n_phi // 8), lo, hi)
+            phs.append(x)
+            wps.append(w)
+        ph, wp = np.concatenate(phs), np.concatenate(wps)
+        # phi measured from the specular azimuth (phi_o + pi for reflection and transmission)
+        TH, PH = np.meshgrid(th, ph + phi_o + np.pi, indexing="ij")
+        wi = np.stack([np.sin(TH) * np.cos(PH), np.sin(TH) * np.sin(PH), side * np.sign(mu_o or 1.0) * np.cos(TH)], -1)
+        wgt = (wt * np.sin(th) * np.cos(th))[:, None] * wp[None, :]
+        f = eval_fn(np.broadcast_to(wo, wi.shape).reshape(-1, 3), wi.reshape(-1, 3)).reshape(wi.shape[:-1] + (3,))
+        tot += np.einsum("ijc,ij->c", f, wgt)
+    return tot
 
 
 def _key(params, compensation, layering):
