@@ -261,10 +261,14 @@ def test_reference_turquin_furnace_anisotropic_is_approximate():
     factors then miss the furnace. Measured on the reference at azimuth 0.7: bare white metal r=0.4,
     a=0.6: -0.2 .. +0.4 %; coated (coat r 0.7, so the base is roughened to 0.84) up to +4 %."""
     p = dict(base_metalness=1.0, base_color=(1, 1, 1), specular_roughness=0.4, specular_roughness_anisotropy=0.6)
-    dev = [abs(ref.albedo(p, _dir(z), compensation="turquin")[0] - 1) for z in (0.2, 0.95)]
+    iso = dict(compensation="turquin", aniso_albedo="isotropic")
+    dev = [abs(ref.albedo(p, _dir(z), **iso)[0] - 1) for z in (0.2, 0.95)]
     assert 1e-3 < max(dev) < 1e-2
-    p.update(coat_weight=1.0, coat_roughness=0.7)
+    # the anisotropic lobe's own albedo (the reference's default, bk.OpenPBR's tables) closes it
     dev = [abs(ref.albedo(p, _dir(z), compensation="turquin")[0] - 1) for z in (0.2, 0.95)]
+    assert max(dev) < 1e-4
+    p.update(coat_weight=1.0, coat_roughness=0.7)
+    dev = [abs(ref.albedo(p, _dir(z), **iso)[0] - 1) for z in (0.2, 0.95)]
     assert 1e-2 < max(dev) < 5e-2
 
 
@@ -391,7 +395,8 @@ def test_eval_turquin_against_reference(name):
     """compensation="turquin" on the sets without transmission (the reference leaves the
     transmission lobe uncompensated; the contract leaves that choice to the implementation)."""
     p = CROSS[name]
-    wo, wi = _pairs(14, 3000)
+    # the anisotropic lobe's albedo is a direct quadrature per direction in the reference (~9 ms each)
+    wo, wi = _pairs(14, 400 if p.get("specular_roughness_anisotropy", 0) > 0 else 3000)
     g = ref.eval(p, wo, wi, compensation="turquin")
     f = bk.OpenPBR(**p, compensation="turquin").eval(wo, wi)
     rel, absmax = _rel_err(f, g)

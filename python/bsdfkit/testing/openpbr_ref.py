@@ -32,6 +32,10 @@ Contract choices that the spec leaves open, as read here (see the OPENPBR.md con
   ("translucent base ... with a coat"). :data:`TRANSLUCENT_EB` = "zero" restores the text.
 * Inside the (non-thin-walled) dielectric (wo.z < 0): the bare interface at 1/eta' with the
   base roughness, no thin film, no specular_color, weight (1 - M) T.
+* Albedos of an anisotropic lobe: by default the anisotropic lobe's own directional albedo
+  E(wo) (:func:`ggx_albedo_aniso`, direct quadrature per direction), as bk.OpenPBR tabulates it;
+  ``aniso_albedo="isotropic"`` follows the contract's text (the isotropic alpha = r^2), which misses
+  the white furnace with anisotropy (by up to 17 % at r = 1, a = 0.8 with Turquin).
 * "reciprocal" layering: every (1 - X(mu_o)) layering factor (X = E_R, E_coat, F_w E_fuzz)
   becomes sqrt((1 - X(mu_o)) (1 - X(|mu_i|))).
 * compensation="turquin" (Turquin 2019): each GGX reflection lobe (f_R, f_metal, f_coat) times
@@ -56,7 +60,7 @@ __all__ = ["DEFAULTS", "NOT_MODELLED", "COLOURS", "normalize_params", "derived",
            "ggx_d", "ggx_lambda", "smith_g1", "smith_g2", "fresnel_dielectric", "fresnel_dielectric_polarized",
            "fresnel_conductor_polarized", "schlick", "f82_tint", "gulbrandsen_nk", "fresnel_airy",
            "zeltner_sheen_albedo", "zeltner_sheen_ltc", "microfacet_brdf", "walter_btdf", "ggx_albedo",
-           "hemispherical_fresnel", "sphere_albedo", "Reference", "reference", "eval", "albedo"]
+           "ggx_albedo_aniso", "hemispherical_fresnel", "sphere_albedo", "Reference", "reference", "eval", "albedo"]
 
 #: The contract's parameters with the MaterialX ``open_pbr_surface`` defaults.
 DEFAULTS = dict(
@@ -507,6 +511,66 @@ def ggx_albedo(mu_o, alpha, fresnel, n_phi=64, n_u=24):
     return np.einsum("mpq,mpqc->mc", w * g, F)
 
 
+def ggx_albedo_aniso(wo, ax, ay, fresnel, n_phi=64, n_u=24):
+    """Directional albedo of the anisotropic GGX reflection lobe (ax along x, ay along y) for the
+    directions ``wo`` (M, 3), (M, 3). The anisotropic NDF is the alpha = 1 one with its slopes
+    stretched by (ax, ay), a linear map of the slope plane that keeps D h.z d h = du dphi' / 2 pi
+    (u = t^2 / (1 + t^2), t the unit-alpha slope length, phi' its angle); along each phi' the
+    horizon wi.z = 0 is the positive root t_max of mu_o k t^2 - 2 w t - mu_o = 0 (k = |slope
+    direction|^2, w = its dot with wo's horizontal part). phi' in [0, 2 pi) with panels graded
+    towards the two turnovers (w = 0); the same v = sqrt(u) panels as :func:`ggx_albedo`. At
+    ax = ay it reproduces :func:`ggx_albedo` (tests)."""
+    wo = np.atleast_2d(np.asarray(wo, dtype=np.float64))
+    M = len(wo)
+    chunk = max(1, 1_000_000 // (n_phi * n_u * 9))
+    if M > chunk:
+        return np.concatenate([ggx_albedo_aniso(wo[i:i + chunk], ax, ay, fresnel, n_phi, n_u)
+                               for i in range(0, M, chunk)])
+    mu_o = np.clip(wo[:, 2], 1e-9, 1.0)
+    psi = np.arctan2(wo[:, 1] * ay, wo[:, 0] * ax)          # slope-space azimuth of wo
+    ts = [np.minimum(0.5 * np.pi, mu_o * c) for c in (100.0, 30.0, 10.0, 3.0, 1.0, 0.3)]
+    half = [np.zeros_like(mu_o)] + [0.5 * np.pi - t for t in ts] + [np.full_like(mu_o, 0.5 * np.pi)] \
+        + [0.5 * np.pi + t for t in ts[::-1]] + [np.full_like(mu_o, np.pi)]
+    edges = half + [e + np.pi for e in half[1:]]
+    xp, wp = _gl01(max(4, n_phi // 8))
+    phs, wps = [], []
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        phs.append(lo[:, None] + (hi - lo)[:, None] * xp)
+        wps.append((hi - lo)[:, None] * wp)
+    ph = np.concatenate(phs, -1) + psi[:, None]
+    wph = np.concatenate(wps, -1)                                     # (M, P)
+    a, b = ax * np.cos(ph), ay * np.sin(ph)
+    k = a * a + b * b
+    w = wo[:, 0:1] * a + wo[:, 1:2] * b
+    t_max = (w + np.sqrt(w * w + mu_o[:, None] ** 2 * k)) / (mu_o[:, None] * k)
+    u_max = t_max ** 2 / (1.0 + t_max ** 2)
+    v_max = np.sqrt(u_max)
+    vedges = [0.0] + [np.sqrt(1.0 - 10.0 ** (-j)) for j in range(1, 9)] + [1.0]
+    x01, w01 = _gl01(n_u)
+    vs, ws = [], []
+    for lo, hi in zip(vedges[:-1], vedges[1:]):
+        lo_, hi_ = np.minimum(lo, v_max), np.minimum(hi, v_max)
+        if not np.any(hi_ > lo_):
+            continue
+        vv = lo_[..., None] + (hi_ - lo_)[..., None] * x01
+        vs.append(vv)
+        ws.append((hi_ - lo_)[..., None] * w01 * 2.0 * vv)
+    v = np.concatenate(vs, -1)
+    u = v * v
+    wgt = np.concatenate(ws, -1) * wph[:, :, None] / (2.0 * np.pi)
+    t = np.sqrt(u / np.maximum(1.0 - u, 1e-300))
+    h = np.stack(np.broadcast_arrays(a[..., None] * t, b[..., None] * t, np.ones_like(t)), -1)
+    h = h / np.linalg.norm(h, axis=-1, keepdims=True)
+    wob = wo[:, None, None, :]
+    c = np.sum(h * wob, -1)
+    wi = 2.0 * c[..., None] * h - wob
+    g2 = smith_g2(np.broadcast_to(wob, wi.shape), wi, ax, ay)
+    g = np.where(wi[..., 2] > 0, g2 * c / (mu_o[:, None, None] * h[..., 2]), 0.0)
+    F = fresnel(c)
+    F = F if F.ndim == g.ndim + 1 else F[..., None] * np.ones(3)
+    return np.einsum("mpq,mpqc->mc", wgt * g, F)
+
+
 def hemispherical_fresnel(eta, n=256):
     """E_F = 2 int_0^1 F(mu; eta) mu dmu, Gauss-Legendre (split at the TIR cosine when eta < 1)."""
     if eta < 1:
@@ -552,14 +616,56 @@ class _Table:
         return out
 
 
+class _Table2:
+    """E(wo) of an anisotropic lobe: mu nodes as :class:`_Table` (24 + 8), azimuth nodes folded to
+    [0, pi/2] (E is even in x and in y), Gauss-Legendre (6) plus both ends; cubic splines in mu per
+    azimuth node, then a clamped cubic spline in the azimuth (zero slope at 0 and pi/2)."""
+
+    def __init__(self, fn, n=24, n_low=8, n_az=6):
+        s0 = np.sqrt(_Table.MU_MIN)
+        s, _ = _gl(n, s0, 1.0)
+        s = np.concatenate([[s0], s, [1.0]])
+        lo, hi = np.log(_Table.MU_LOW), np.log(_Table.MU_MIN)
+        t, _ = _gl(n_low, lo, hi)
+        t = np.concatenate([[lo], t, [hi]])
+        az, _ = _gl(n_az, 0.0, 0.5 * np.pi)
+        self.az = np.concatenate([[0.0], az, [0.5 * np.pi]])
+        mu = np.concatenate([s * s, np.exp(t)])
+        MU, AZ = np.meshgrid(mu, self.az, indexing="ij")
+        so = np.sqrt(1.0 - MU * MU)
+        wo = np.stack([so * np.cos(AZ), so * np.sin(AZ), MU], -1).reshape(-1, 3)
+        self.fn = fn
+        vals = fn(wo).reshape(len(mu), len(self.az), -1)
+        self.s, self.t, self.ns = s, t, len(s)
+        self.vals = vals
+
+    def __call__(self, wo):
+        wo = np.asarray(wo, dtype=np.float64)
+        mu = wo[..., 2]
+        az = np.arctan2(np.abs(wo[..., 1]), np.abs(wo[..., 0]))
+        hi = CubicSpline(self.s, self.vals[:self.ns], axis=0)(np.sqrt(np.clip(mu, _Table.MU_MIN, 1.0)))
+        lo = CubicSpline(self.t, self.vals[self.ns:], axis=0)(np.log(np.clip(mu, _Table.MU_LOW, _Table.MU_MIN)))
+        per_az = np.where((mu < _Table.MU_MIN)[:, None, None], lo, hi)           # (N, n_az, C)
+        out = np.empty(per_az.shape[:1] + per_az.shape[2:])
+        for i in range(len(mu)):
+            out[i] = CubicSpline(self.az, per_az[i], axis=0, bc_type="clamped")(az[i])
+        tiny = mu < _Table.MU_LOW
+        if np.any(tiny):
+            out[tiny] = self.fn(wo[tiny])
+        return out
+
+
 # ------------------------------------------------------------------------------------ the model
 
 class Reference:
     """The contract's model for one parameter set (tables built once)."""
 
-    def __init__(self, params: dict, compensation="none", layering="albedo-scaling"):
+    def __init__(self, params: dict, compensation="none", layering="albedo-scaling", aniso_albedo="anisotropic"):
         if compensation not in ("none", "turquin"):
             raise ValueError(compensation)
+        if aniso_albedo not in ("anisotropic", "isotropic"):
+            raise ValueError(aniso_albedo)
+        self.aniso_albedo = aniso_albedo
         self.compensation = compensation
         if layering not in ("albedo-scaling", "reciprocal"):
             raise ValueError(layering)
@@ -576,17 +682,17 @@ class Reference:
         # albedo tables (isotropic alpha of the lobe, the contract)
         turq = compensation == "turquin"
         one = lambda c: np.ones(np.shape(c) + (3,))
+        ones = lambda w: np.ones(np.shape(w)[:-1] + (3,))
         if turq:
-            E1b = _Table(lambda mu: ggx_albedo(mu, d["alpha_base_iso"], one)[:, 0])
-            E1c = _Table(lambda mu: ggx_albedo(mu, d["alpha_coat_iso"], one)[:, 0])
+            E1b = self._albedo_fn(d["alpha_base"], d["alpha_base_iso"], one)
+            E1c = self._albedo_fn(d["alpha_coat"], d["alpha_coat_iso"], one) if p["coat_weight"] > 0 else None
             # Turquin 2019: multiple-scattering factor 1 + F0 (1 - E1) / E1 of each reflection lobe
-            self.ms_R = lambda mu, F0=self.fresnel_R(np.ones(1))[0]: 1.0 + F0 * ((1.0 - E1b(mu)) / E1b(mu))[..., None]
-            self.ms_metal = lambda mu, F0=self.fresnel_metal(np.ones(1))[0]: \
-                1.0 + F0 * ((1.0 - E1b(mu)) / E1b(mu))[..., None]
-            self.ms_coat = lambda mu, F0=self.fresnel_coat(np.ones(1))[0]: \
-                1.0 + F0 * ((1.0 - E1c(mu)) / E1c(mu))[..., None]
+            ms = lambda E1, F0: (lambda w: 1.0 + F0 * ((1.0 - E1(w)[..., 0]) / E1(w)[..., 0])[..., None])
+            self.ms_R = ms(E1b, self.fresnel_R(np.ones(1))[0])
+            self.ms_metal = ms(E1b, self.fresnel_metal(np.ones(1))[0])
+            self.ms_coat = ms(E1c, self.fresnel_coat(np.ones(1))[0]) if E1c is not None else ones
         else:
-            self.ms_R = self.ms_metal = self.ms_coat = lambda mu: np.ones(np.shape(mu) + (3,))
+            self.ms_R = self.ms_metal = self.ms_coat = ones
         fresnel_R_tab = self.fresnel_R
         if self.w_tf > 0:
             # the albedo table's Fresnel through a cubic spline in c (4097 nodes; measured <= 1e-7 off the
@@ -594,12 +700,17 @@ class Reference:
             c = np.linspace(0.0, 1.0, 4097)
             spline = CubicSpline(c, self.fresnel_R(c), axis=0)
             fresnel_R_tab = lambda x: spline(np.clip(x, 0.0, 1.0))
-        self.E_R = _Table(lambda mu: ggx_albedo(mu, d["alpha_base_iso"], fresnel_R_tab) * self.ms_R(mu))
-        self.E_coat = _Table(lambda mu: (ggx_albedo(mu, d["alpha_coat_iso"], self.fresnel_coat) * self.ms_coat(mu))[:, 0]) \
-            if p["coat_weight"] > 0 else None
-        self.E_R1 = self.E_R(np.array([1.0]))[0]
-        self.E_metal1 = (ggx_albedo(1.0, d["alpha_base_iso"], self.fresnel_metal) * self.ms_metal(np.ones(1)))[0] \
-            if p["base_metalness"] > 0 else np.zeros(3)
+        ER = self._albedo_fn(d["alpha_base"], d["alpha_base_iso"], fresnel_R_tab)
+        self.E_R = lambda w: ER(w) * self.ms_R(w)
+        if p["coat_weight"] > 0:
+            Ec = self._albedo_fn(d["alpha_coat"], d["alpha_coat_iso"], self.fresnel_coat)
+            self.E_coat = lambda w: (Ec(w) * self.ms_coat(w))[..., 0]
+        else:
+            self.E_coat = None
+        n1 = np.array([[0.0, 0.0, 1.0]])
+        self.E_R1 = self.E_R(n1)[0]
+        self.E_metal1 = (self._albedo_fn(d["alpha_base"], d["alpha_base_iso"], self.fresnel_metal, table=False)(n1)
+                         * self.ms_metal(n1))[0] if p["base_metalness"] > 0 else np.zeros(3)
         n_c = p["coat_ior"]
         self.E_F = hemispherical_fresnel(n_c)
         # darkening constants (OpenPBR "Coat darkening"; the contract's formulas)
@@ -613,6 +724,21 @@ class Reference:
         # text has 0, which darkens a coated white glass by 1 - K ~ 0.35 and breaks the spec's furnace list)
         tr = p["transmission_color"] if TRANSLUCENT_EB == "transmission_color" else 0.0
         self.E_b = _lerp(self.E_R1 + (1.0 - self.E_R1) * _lerp(opaque1, tr, T), self.E_metal1, M)
+
+    def _albedo_fn(self, alphas, alpha_iso, fresnel, table=True):
+        """E(w) (w (N, 3), w.z >= 0) -> (N, 3) of a GGX reflection lobe: the isotropic alpha's table, or
+        for an anisotropic lobe (aniso_albedo="anisotropic") the anisotropic quadrature, direct."""
+        at, ab = alphas
+        if self.aniso_albedo == "anisotropic" and at != ab:
+            def E(w):
+                flat = np.reshape(w, (-1, 3))
+                uniq, inv = np.unique(flat, axis=0, return_inverse=True)   # one wo repeated (albedo quadrature)
+                return ggx_albedo_aniso(uniq, at, ab, fresnel)[np.ravel(inv)].reshape(np.shape(w)[:-1] + (3,))
+            return E
+        if not table:
+            return lambda w: ggx_albedo(np.ravel(np.asarray(w)[..., 2]), alpha_iso, fresnel).reshape(np.shape(w)[:-1] + (3,))
+        T = _Table(lambda mu: ggx_albedo(mu, alpha_iso, fresnel))
+        return lambda w: T(np.asarray(w)[..., 2])
 
     # --- Fresnel factors (c = wo.h >= 0) -> (..., 3)
     def fresnel_d(self, c):
@@ -639,10 +765,10 @@ class Reference:
         return fresnel_dielectric(c, self.p["coat_ior"])[..., None] * np.ones(3)
 
     # --- layering factor
-    def _one_minus(self, E_fn, mu_o, mu_i, scale=1.0):
-        a = 1.0 - scale * E_fn(mu_o)
+    def _one_minus(self, E_fn, wo, wi_up):
+        a = 1.0 - E_fn(wo)
         if self.layering == "reciprocal":
-            a = np.sqrt(np.maximum(a, 0.0) * np.maximum(1.0 - scale * E_fn(mu_i), 0.0))
+            a = np.sqrt(np.maximum(a, 0.0) * np.maximum(1.0 - E_fn(wi_up), 0.0))
         return a
 
     def eval(self, wo, wi):
@@ -684,8 +810,12 @@ class Reference:
         T, S, M = p["transmission_weight"], p["subsurface_weight"], p["base_metalness"]
         C, Fw = p["coat_weight"], p["fuzz_weight"]
         # lobes
-        f_R = microfacet_brdf(wo, wi, ax, ay, self.fresnel_R) * self.ms_R(mu_o)
-        one_m_ER = self._one_minus(self.E_R, mu_o, mu_i)
+        wi_up = np.concatenate([wi[..., :2], np.abs(wi[..., 2:])], -1)
+        if M < 1:
+            f_R = microfacet_brdf(wo, wi, ax, ay, self.fresnel_R) * self.ms_R(wo)
+            one_m_ER = self._one_minus(self.E_R, wo, wi_up)
+        else:
+            f_R = one_m_ER = 0.0
         f_diff = eon_ref.eval(wo, wi, self.rho, p["base_diffuse_roughness"]) if (1 - T) * (1 - S) > 0 else 0.0
         if thin:
             g = p["subsurface_scatter_anisotropy"]
@@ -706,19 +836,19 @@ class Reference:
         f_opaque = _lerp(f_diff, f_sss, S)
         f_diel = f_R + (1.0 - T) * one_m_ER * f_opaque + T * f_T
         if M > 0:
-            f_metal = microfacet_brdf(wo, wi, ax, ay, self.fresnel_metal) * self.ms_metal(mu_o)
+            f_metal = microfacet_brdf(wo, wi, ax, ay, self.fresnel_metal) * self.ms_metal(wo)
             f_base = _lerp(f_diel, f_metal, M)
         else:
             f_base = f_diel
         # coat
         if C > 0:
-            f_coat = microfacet_brdf(wo, wi, cx, cy, self.fresnel_coat) * self.ms_coat(mu_o)
+            f_coat = microfacet_brdf(wo, wi, cx, cy, self.fresnel_coat) * self.ms_coat(wo)
             n_c = p["coat_ior"]
             # OpenPBR "View-dependent absorption": coat_color^((1/mu_t(mu_o) + 1/mu_t(mu_i)) / 2)
             mut = lambda mu: np.sqrt(1.0 - (1.0 - mu * mu) / (n_c * n_c))
             expo = 0.5 * (1.0 / mut(mu_o) + 1.0 / mut(mu_i))
             Tc = p["coat_color"] ** expo[..., None]
-            one_m_Ec = self._one_minus(self.E_coat, mu_o, mu_i)
+            one_m_Ec = self._one_minus(self.E_coat, wo, wi_up)
             K = _lerp(fresnel_dielectric(mu_o, n_c), self.K_r, self.r_b)[..., None]
             Delta = (1.0 - K) / (1.0 - self.E_b * K)
             Dk = _lerp(1.0, Delta, C * p["coat_darkening"])
@@ -791,30 +921,30 @@ def sphere_albedo(eval_fn, wo, eta, n_theta=96, n_phi=96):
     return tot
 
 
-def _key(params, compensation, layering):
+def _key(params, compensation, layering, aniso_albedo):
     items = []
     for k, v in sorted(params.items()):
         items.append((k, tuple(np.atleast_1d(np.asarray(v, float)).tolist()) if not isinstance(v, bool) else v))
-    return json.dumps([items, compensation, layering])
+    return json.dumps([items, compensation, layering, aniso_albedo])
 
 
 @functools.lru_cache(maxsize=64)
 def _cached(key):
-    items, compensation, layering = json.loads(key)
+    items, compensation, layering, aniso_albedo = json.loads(key)
     params = {k: (v if isinstance(v, bool) else (v[0] if len(v) == 1 else v)) for k, v in items}
-    return Reference(params, compensation, layering)
+    return Reference(params, compensation, layering, aniso_albedo)
 
 
-def reference(params: dict, compensation="none", layering="albedo-scaling") -> Reference:
+def reference(params: dict, compensation="none", layering="albedo-scaling", aniso_albedo="anisotropic") -> Reference:
     """The (cached) :class:`Reference` of a parameter dict."""
-    return _cached(_key(params, compensation, layering))
+    return _cached(_key(params, compensation, layering, aniso_albedo))
 
 
-def eval(params: dict, wo, wi, compensation="none", layering="albedo-scaling"):
+def eval(params: dict, wo, wi, compensation="none", layering="albedo-scaling", aniso_albedo="anisotropic"):
     """f(wo, wi) (cosine excluded) of the contract's OpenPBR, (N, 3), float64."""
-    return reference(params, compensation, layering).eval(wo, wi)
+    return reference(params, compensation, layering, aniso_albedo).eval(wo, wi)
 
 
-def albedo(params: dict, wo, compensation="none", layering="albedo-scaling", **kw):
+def albedo(params: dict, wo, compensation="none", layering="albedo-scaling", aniso_albedo="anisotropic", **kw):
     """Directional albedo int f |cos| d wi of the whole model by quadrature, (3,) for one wo."""
-    return reference(params, compensation, layering).albedo(wo, **kw)
+    return reference(params, compensation, layering, aniso_albedo).albedo(wo, **kw)
