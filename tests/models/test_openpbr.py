@@ -231,7 +231,7 @@ def test_composition_diffuse_is_eon_without_specular():
 
 @pytest.mark.parametrize("extra", [{}, dict(coat_weight=1.0, coat_roughness=0.4, coat_darkening=0.0),
                                    dict(fuzz_weight=1.0, fuzz_roughness=0.4)], ids=["plain", "coat", "fuzz"])
-@pytest.mark.parametrize("r", [0.3, 0.6, 1.0])
+@pytest.mark.parametrize("r", [0.3, 1.0])
 def test_reference_albedo_scaling_closes(r, extra):
     """Albedo scaling over a white Lambertian conserves energy by construction, whatever the
     multiple-scattering loss: E_R(quadrature of the lobe) + (1 - E_R(table)) = 1, likewise for the coat
@@ -290,8 +290,10 @@ FURNACE = [(b, l, m, r) for b in WHITE_BASES for l in WHITE_LAYERS for m in WHIT
 FURNACE_TOL = 1e-2
 FURNACE_Z = (0.85, 0.3)
 #: Monte Carlo samples per roughness: the Turquin-compensated rough metal's sample weights spread
-#: (std of one albedo estimate 0.010 at 2^14 samples, r = 1), narrow lobes' hardly
-FURNACE_N = {0.1: 1 << 13, 0.5: 1 << 15, 1.0: 1 << 17}
+#: (std of one albedo estimate 0.010 at 2^14 samples, r = 1; 4x less at r = 0.5), other bases' and
+#: narrow lobes' far less
+FURNACE_N = {0.1: 1 << 13, 0.5: 1 << 14, 1.0: 1 << 15}
+FURNACE_N_METAL = {0.1: 1 << 13, 0.5: 1 << 15, 1.0: 1 << 17}
 
 
 @pytest.mark.parametrize("base, layer, mod, r", FURNACE, ids=["-".join(map(str, c)) for c in FURNACE])
@@ -305,7 +307,8 @@ def test_white_furnace_turquin(base, layer, mod, r):
     m = bk.OpenPBR(**p, compensation="turquin")
     wo = np.stack([_dir(z) for z in FURNACE_Z])
     mode = "importance" if p.get("transmission_weight", 0) > 0 else "radiance"
-    a = m.albedo(wo, n_samples=FURNACE_N[r], seed=1, mode=mode)
+    n = (FURNACE_N_METAL if WHITE_BASES[base].get("base_metalness", 0) > 0 else FURNACE_N)[r]
+    a = m.albedo(wo, n_samples=n, seed=1, mode=mode)
     print(f"furnace {base}-{layer}-{mod}-r{r}: max|a-1| {np.abs(a - 1).max():.4f} min {a.min():.4f} max {a.max():.4f}")
     np.testing.assert_allclose(a, 1.0, rtol=0, atol=FURNACE_TOL)
 
@@ -435,7 +438,7 @@ def _modelled(inputs):
 
 EXAMPLE_NAMES = sorted(k for k, v in EXAMPLES.items() if _modelled(v))
 EXAMPLE_SUBSET = ["open_pbr_default", "open_pbr_carpaint", "open_pbr_velvet", "open_pbr_soapbubble", "open_pbr_pearl",
-                  "open_pbr_aluminum_brushed", "open_pbr_honey_liquid", "open_pbr_skin_iii", "open_pbr_gold",
+                  "open_pbr_aluminum_brushed", "open_pbr_honey_liquid", "open_pbr_skin_iii", "open_pbr_copper",
                   "open_pbr_office_paper", "open_pbr_marble", "open_pbr_blackboard"]
 
 
@@ -445,6 +448,19 @@ def test_examples_file():
     assert set(EXAMPLE_SUBSET) <= set(EXAMPLE_NAMES)
     for inputs in EXAMPLES.values():
         assert set(inputs) <= set(ref.DEFAULTS) | set(ref.NOT_MODELLED) | set(ref.IGNORED)
+
+
+def test_examples_construct():
+    """Every example within the contract constructs. The spec's tables give specular_color the range
+    [0, 1], but 7 of its own metal examples (brass, cesium, gold, lithium, potassium, rubidium,
+    sodium) carry F82 edge tints up to 1.394; the F82-tint formula is defined there too."""
+    refused = {}
+    for name in EXAMPLE_NAMES:
+        try:
+            bk.OpenPBR(**EXAMPLES[name])
+        except ValueError as e:
+            refused[name] = str(e)
+    assert not refused, refused
 
 
 @pytest.mark.parametrize("name", EXAMPLE_SUBSET)
