@@ -379,12 +379,6 @@ def test_openpbr_examples(name):
     values; inputs bk.OpenPBR does not model are refused, or dropped (named) with approximate=True."""
     ex = _examples()[name]
     text = shader("open_pbr_surface", {k: tuple(v) if isinstance(v, list) else v for k, v in ex.items()})
-    if np.max(ex.get("specular_color", [1.0])) > 1:
-        # the repository's metals go up to 1.394; the spec's parameter table says [0, 1], which bk.OpenPBR enforces
-        with pytest.raises(ValueError, match=r"input 'specular_color' \(line \d+\) of node 'm_sh' \(open_pbr_surface, "
-                                             r"line 3\): bk\.OpenPBR: specular_color: every channel must be <= 1"):
-            bk.from_materialx(text, approximate=True)
-        pytest.xfail("bk.OpenPBR refuses specular_color > 1 (the spec's table range; this example exceeds it)")
     dropped = sorted(k for k, d in NOT_MODELLED.items() if k in ex and np.any(np.asarray(ex[k]) != d))
     if dropped:
         with pytest.raises(ValueError, match=rf"input '({'|'.join(dropped)})' .*is not modelled by bk\.OpenPBR"):

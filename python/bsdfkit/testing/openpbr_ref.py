@@ -21,10 +21,12 @@ the accuracy measured (<= 5e-7 quadrature, <= 6e-6 table above mu_o = 0.01; test
 Contract choices that the spec leaves open, as read here (see the OPENPBR.md contract):
 
 * Airy thin film: MaterialX's ``mx_fresnel_airy`` (Belcour & Barla 2017, the Gaussian sensitivity
-  fits, CIE XYZ -> RGB(E), clamped to [0, 1]) but with the series summed to convergence (MaterialX
-  truncates at 2 orders), outside IOR 1, film IOR max(1, n_tf);
-  dielectric substrate IOR eta' (real), metal substrate the Gulbrandsen 2014 (n, k) of
-  (r = F0, g = specular_color); the metal's film Fresnel times specular_weight.
+  fits, clamped to [0, 1]) but with the series summed to convergence (MaterialX truncates at 2
+  orders) and XYZ (illuminant E) mapped to bsdfkit's linear Rec. 709 (Bradford E -> D65; MaterialX
+  maps to CIE RGB), outside IOR 1, film IOR max(1, n_tf); dielectric substrate IOR eta' (real);
+  metal: the F82 curve times the Airy reflectance over the Gulbrandsen 2014 (n, k) of (r = F0,
+  g = min(specular_color, 1)) relative to that bare metal's Fresnel (thickness 0 is the F82 metal),
+  times specular_weight.
 * Coat darkening's base albedo E_b = lerp(E_R(1) + (1 - E_R(1)) lerp(lerp(rho, subsurface_color, S),
   transmission_color, T), E_metal(1), M): the translucent slab counts with transmission_color (its
   normal-incidence R + T albedo), where the contract's text writes "+ T*0"; with 0 a white coat over
@@ -284,10 +286,22 @@ def _eval_sensitivity(opd, shift):
     return xyz / 1.0685e-7
 
 
-# CIE XYZ -> CIE RGB (illuminant E), MaterialX mx_fresnel_airy's XYZ_TO_RGB (GLSL column-major, transposed here)
-_XYZ_TO_RGB = np.array([[2.3706743, -0.9000405, -0.4706338],
-                        [-0.5138850, 1.4253036, 0.0885814],
-                        [0.0052982, -0.0146949, 1.0093968]])
+def _xyz_e_to_rec709():
+    """XYZ (illuminant E) -> linear Rec. 709 RGB (D65 white), Bradford-adapted E -> D65: bsdfkit's
+    RGB is linear Rec. 709 (ITU-R BT.709 primaries and white; Bradford cone matrix of Lam 1985).
+    A flat spectrum (XYZ = (1, 1, 1)) maps to RGB (1, 1, 1). MaterialX's mx_fresnel_airy converts to
+    CIE 1931 RGB instead (different primaries: up to 0.1 apart on saturated film colours)."""
+    def xyz(x, y):
+        return np.array([x / y, 1.0, (1.0 - x - y) / y])
+    prim = np.stack([xyz(0.64, 0.33), xyz(0.30, 0.60), xyz(0.15, 0.06)], 1)
+    white = xyz(0.3127, 0.3290)
+    rgb_to_xyz = prim * np.linalg.solve(prim, white)
+    bradford = np.array([[0.8951, 0.2664, -0.1614], [-0.7502, 1.7135, 0.0367], [0.0389, -0.0685, 1.0296]])
+    adapt = np.linalg.inv(bradford) @ np.diag((bradford @ white) / (bradford @ np.ones(3))) @ bradford
+    return np.linalg.inv(rgb_to_xyz) @ adapt
+
+
+_XYZ_TO_RGB = _xyz_e_to_rec709()
 # The Airy series is summed until its terms fall below 1e-13 (at most 200 orders): Belcour & Barla's
 # eq. 10 is the infinite sum; MaterialX's default truncation (2 orders, hwAiryFresnelIterations) errs by
 # up to 0.2 at grazing incidence against a spectral computation (tests/models/test_openpbr.py).
@@ -677,7 +691,7 @@ class Reference:
         rho = p["base_weight"] * p["base_color"]
         self.rho = rho
         if self.w_tf > 0:
-            n_m, k_m = gulbrandsen_nk(rho, p["specular_color"])
+            n_m, k_m = gulbrandsen_nk(rho, np.minimum(p["specular_color"], 1.0))
             self._metal_nk = (n_m, k_m)
         # albedo tables (isotropic alpha of the lobe, the contract)
         turq = compensation == "turquin"
@@ -750,16 +764,23 @@ class Reference:
         return F
 
     def fresnel_R(self, c):
-        return self.p["specular_color"] * self.fresnel_d(c)
+        # a specular_color above 1 (the spec's metal examples reach 1.39) never lifts F past 1
+        return np.clip(self.p["specular_color"] * self.fresnel_d(c), 0.0, 1.0)
 
     def fresnel_metal(self, c):
         p = self.p
-        F = p["specular_weight"] * f82_tint(self.rho, p["specular_color"], np.asarray(c)[..., None])
+        F82 = np.clip(f82_tint(self.rho, p["specular_color"], np.asarray(c)[..., None]), 0.0, 1.0)
+        F = F82
         if self.w_tf > 0:
+            # the film modulates the F82 curve by the Airy reflectance over the Gulbrandsen metal
+            # relative to that bare metal's Fresnel (thickness 0: the F82 metal exactly)
             n_m, k_m = self._metal_nk
-            Fa = p["specular_weight"] * fresnel_airy(c, p["thin_film_thickness"], p["thin_film_ior"], n_m, k_m)
-            F = _lerp(F, Fa, self.w_tf)
-        return F
+            Fa = fresnel_airy(c, p["thin_film_thickness"], p["thin_film_ior"], n_m, k_m)
+            bare = np.stack([0.5 * sum(fresnel_conductor_polarized(np.asarray(c), n_m[j], k_m[j]))
+                             for j in range(3)], -1)
+            film = np.clip(np.where(bare > 0, F82 * Fa / np.where(bare > 0, bare, 1.0), Fa), 0.0, 1.0)
+            F = _lerp(F82, film, self.w_tf)
+        return p["specular_weight"] * F
 
     def fresnel_coat(self, c):
         return fresnel_dielectric(c, self.p["coat_ior"])[..., None] * np.ones(3)

@@ -12,7 +12,8 @@
 //   f_T      GGX dielectric transmission (Walter 2007) at eta', tinted by transmission_color
 //            (transmission_depth 0: the on-surface tint)
 //   f_metal  GGX conductor with the F82-tint Fresnel (Kutz et al. 2021): F0 = base_weight
-//            base_color, edge tint specular_color, times specular_weight
+//            base_color, edge tint specular_color, times specular_weight; a film multiplies it by
+//            the Airy reflectance over the Gulbrandsen-mapped metal relative to that bare metal
 //   f_diffuse  EON (energy-preserving Oren-Nayar, Portsmouth et al. 2024), rho = base_weight base_color
 //   f_sss    subsurface_color / pi: the subsurface slab as a Lambertian lobe (no volume transport)
 //   f_coat   GGX dielectric reflection at coat_ior, untinted; T_coat the view-dependent
@@ -22,8 +23,9 @@
 //   f_fuzz   Zeltner, Burley & Chiang 2022 LTC sheen, tinted by fuzz_color
 // Every microfacet lobe is GGX with height-correlated Smith masking; alphas from roughness and
 // anisotropy by the spec's formula, floored at 1e-3 (so no lobe is a delta). The albedos E of the
-// layering are tabulated in mu_o at construction (32 nodes, i/31, the isotropic alpha = r^2 of each
-// lobe; Gauss-Legendre over visible normals, 24 x 24). compensation="turquin" scales each GGX
+// layering are tabulated at construction in mu_o (48 nodes, (i/47)^3) and, for an anisotropic
+// lobe, in wo's azimuth (9 nodes over [0, pi/2]): Gauss-Legendre over visible normals, 24 x 24
+// (about 4e-3 absolute at worst, near grazing). compensation="turquin" scales each GGX
 // reflection lobe by 1 + F0 (1 - E1) / E1 (Turquin 2019; E1: the lobe's albedo with F = 1) and
 // the transmission so that reflection plus transmission of the white dielectric is 1.
 // layering="reciprocal" replaces each albedo-scaling factor (1 - E(mu_o)) by
@@ -117,7 +119,7 @@ struct OpenPBRParams {
 
 namespace openpbr {
 
-inline constexpr int kTableRes = 32;   // albedo table nodes in mu_o (TableNode)
+inline constexpr int kTableRes = 48;   // albedo table nodes in mu_o (TableNode)
 inline constexpr int kTablePhi = 9;    // ... and in wo's azimuth over [0, pi/2] (anisotropic lobes only)
 inline constexpr int kQuadNodes = 24;  // Gauss-Legendre nodes per axis of the albedo integrals
 inline constexpr double kAlphaFloor = 1e-3;
@@ -166,8 +168,19 @@ template <typename F> inline F Luminance(const Spectrum<F> &s) {
 
 template <typename F> inline Spectrum<F> Lerp(F t, const Spectrum<F> &a, const Spectrum<F> &b) { return a + (b - a) * t; }
 
-// The table nodes mu_i = i / (N - 1), the first taken at 2e-3 (a horizon wo has no albedo integral).
-inline double TableNode(int i) { return std::max(2e-3, double(i) / (kTableRes - 1)); }
+// Per channel into [0, 1]: a specular_color above 1 (the spec's examples go to 1.39) may lift a
+// Fresnel factor, never past 1.
+template <typename F> inline Spectrum<F> Clamp01(const Spectrum<F> &s) {
+    Spectrum<F> r;
+    for (int c = 0; c < 3; ++c) r[c] = min_(F(1), max_(F(0), s[c]));
+    return r;
+}
+
+// The table nodes mu_i = (i / (N - 1))^3, dense toward grazing where the albedos of a nearly
+// smooth lobe change fastest (Fresnel and masking on the scale mu ~ alpha: E of alpha 1e-3 peaks
+// near mu = 0.006); the first taken at 1e-5 (a horizon wo has no albedo integral). Lookups
+// interpolate linearly in mu^(1/3).
+inline double TableNode(int i) { double t = double(i) / (kTableRes - 1); return std::max(1e-5, t * t * t); }
 
 // Where a direction falls in the tables: mu = |cos theta| and its azimuth folded into
 // [0, pi/2] (the GGX lobes are symmetric about both tangent axes), as a fraction of pi/2.
@@ -181,9 +194,9 @@ template <typename F> inline TabPos<F> TablePos(const Vec3<F> &w) {
 }
 
 // A function of (mu_o, phi_o) tabulated at (TableNode(i), j / (kTablePhi - 1)), row-major in mu,
-// bilinear between nodes; an isotropic table has only its column 0.
+// bilinear in (mu^(1/3), phi) between nodes; an isotropic table has only its column 0.
 template <typename T, typename F> inline T TableLookup(const T *tab, const TabPos<F> &q, bool aniso) {
-    double x = double(q.mu) * (kTableRes - 1);
+    double x = std::cbrt(std::max(0.0, double(q.mu))) * (kTableRes - 1);
     x = std::min(std::max(x, 0.0), double(kTableRes - 1));
     int i = std::min(int(x), kTableRes - 2);
     double t = x - i;
@@ -235,6 +248,7 @@ template <typename F> struct OpenPBRBxDF {
     Microfacet<F> spec, coat;  // the base's (roughened) and the coat's GGX distributions
     EONBxDF<F> eon;            // the diffuse lobe, rho = base_weight base_color
     F eta = 1.5, coat_eta = 1.6, f0_diel = 0.04, f0_coat = 0.05;
+    F eta_f = 1.5;  // eta' itself, for the Fresnel factors (eta: the refraction's, kept 1e-3 from 1)
     Spectrum<F> spec_color{F(1)}, trans_color{F(1)}, coat_color{F(1)}, fuzz_color{F(1)}, sss_color{F(0.8)};
     Spectrum<F> metal_f0{F(0.8)}, metal_a{F(0)}, rho{F(0.8)}, E_b{F(0)};
     Spectrum<F> film_eta{F(1)}, film_k{F(0)};  // the metal's effective complex IOR (thin film)
@@ -252,17 +266,22 @@ template <typename F> struct OpenPBRBxDF {
 
     // The dielectric base's Fresnel at wo.h: exact at eta', lerped toward the Airy film.
     Spectrum<F> fresnel_dielectric(F c) const {
-        F fd = FrDielectric(c, eta);
+        F fd = FrDielectric(c, eta_f);
         if (!(tf_w > F(0))) return Spectrum<F>(fd);
-        return openpbr::Lerp(tf_w, Spectrum<F>(fd), AiryReflectanceDielectric(c, tf_ior, eta, tf_thick));
+        return openpbr::Lerp(tf_w, Spectrum<F>(fd), AiryReflectanceDielectric(c, tf_ior, eta_f, tf_thick));
     }
-    // The metal's Fresnel: specular_weight F82-tint, lerped toward the Airy film on the
-    // effective complex IOR of the F82 colours.
+    // The metal's Fresnel: specular_weight F82-tint, lerped toward the filmed metal. The film
+    // modulates the F82 curve by the Airy reflectance of the film over the metal's effective
+    // complex IOR (Gulbrandsen 2014 from F0 and the edge tint, as the spec suggests) relative to
+    // that bare metal's Fresnel: so thickness 0 is the F82 metal exactly, and a white metal stays
+    // white where the mapping (reflectivity clamped below 1) would absorb.
     Spectrum<F> fresnel_metal(F c) const {
-        Spectrum<F> fm = FrF82Tint(c, metal_f0, metal_a) * spec_weight;
-        if (!(tf_w > F(0))) return fm;
-        Spectrum<F> air = AiryReflectanceConductor(c, tf_ior, film_eta, film_k, tf_thick) * spec_weight;
-        return openpbr::Lerp(tf_w, fm, air);
+        Spectrum<F> f82 = openpbr::Clamp01(FrF82Tint(c, metal_f0, metal_a));
+        if (!(tf_w > F(0))) return f82 * spec_weight;
+        Spectrum<F> air = AiryReflectanceConductor(c, tf_ior, film_eta, film_k, tf_thick);
+        Spectrum<F> bare = FrComplex(c, film_eta, film_k), film;
+        for (int k = 0; k < 3; ++k) film[k] = bare[k] > F(0) ? f82[k] * air[k] / bare[k] : air[k];
+        return openpbr::Lerp(tf_w, f82, openpbr::Clamp01(film)) * spec_weight;
     }
 
     static OpenPBRBxDF make(const Params &p) {
@@ -298,9 +317,10 @@ template <typename F> struct OpenPBRBxDF {
         // the dielectric's relative IOR, kept 1e-3 away from 1 (an index-matched rough interface
         // would be a delta transmission)
         double e = ModulatedIOR(SpecularIORRatio(p.specular_ior, p.coat_ior, p.coat_weight), p.specular_weight);
+        m.eta_f = F(e);  // eta' = 1 (specular_weight 0, or a coat matching the base): no reflection
         if (std::abs(e - 1.0) < 1e-3) e = e >= 1.0 ? 1.001 : 0.999;
         m.eta = F(e);
-        m.f0_diel = F(sqr((e - 1) / (e + 1)));
+        m.f0_diel = F(sqr((double(m.eta_f) - 1) / (double(m.eta_f) + 1)));
         m.coat_eta = F(p.coat_ior);
         m.f0_coat = F(sqr((p.coat_ior - 1) / (p.coat_ior + 1)));
         // the metal: F0 = base_weight base_color, F82 edge = specular_color Schlick(1/7)
@@ -314,7 +334,7 @@ template <typename F> struct OpenPBRBxDF {
         }
         if (p.thin_film_weight > 0) {
             Spectrum<F> r = m.metal_f0, g = m.spec_color;
-            for (int c = 0; c < 3; ++c) r[c] = min_(r[c], F(0.9999));
+            for (int c = 0; c < 3; ++c) r[c] = min_(r[c], F(0.9999)), g[c] = min_(g[c], F(1));
             EdgeTintToComplexIOR(r, g, &m.film_eta, &m.film_k);
         }
         // the diffuse lobe
@@ -418,7 +438,7 @@ template <typename F> struct OpenPBRBxDF {
     F e1c(const Pos &q) const { return look(E1c, q); }
     // the dielectric reflection's albedo, untinted (compensated)
     Spectrum<F> E_Rw_c(const Pos &q) const { return look(E_Rw, q) * turquin_factor(f0_diel, e1(q)); }
-    Spectrum<F> E_R(const Pos &q) const { return spec_color * E_Rw_c(q); }
+    Spectrum<F> E_R(const Pos &q) const { return openpbr::Clamp01(spec_color * E_Rw_c(q)); }
     Spectrum<F> E_metal(const Pos &q) const { return look(E_M, q) * turquin_factor(metal_f0 * spec_weight, e1(q)); }
     F E_coat(const Pos &q) const { return look(E_c, q) * turquin_factor(f0_coat, e1c(q)); }
     // The transmission's scale: 1, or (1 - E_Rw_c)/E_T so that the white interface conserves energy.
@@ -499,7 +519,7 @@ template <typename F> struct OpenPBRBxDF {
             Spectrum<F> diel(F(0));
             if (M < F(1)) {
                 Spectrum<F> er_o = E_R(qo);
-                Spectrum<F> fr = dg > F(0) ? spec_color * fresnel_dielectric(c) * (dg * turquin_factor(f0_diel, e1(qo)))
+                Spectrum<F> fr = dg > F(0) ? openpbr::Clamp01(spec_color * fresnel_dielectric(c)) * (dg * turquin_factor(f0_diel, e1(qo)))
                                            : zero;
                 Spectrum<F> sc = scaling(er_o, reciprocal ? E_R(qi) : er_o);
                 diel = fr + sc * opaque_reflection(wo, wi, mode) * (F(1) - T);
@@ -566,10 +586,10 @@ template <typename F> struct OpenPBRBxDF {
         Vec3<F> h;
         if (wi.z > F(0)) {
             F dg = openpbr::MicrofacetReflection(spec, wo, wi, &h);
-            return Spectrum<F>(dg > F(0) ? FrDielectric(dot(wo, h), e) * dg * w : F(0));
+            return Spectrum<F>(dg > F(0) ? FrDielectric(dot(wo, h), F(1) / eta_f) * dg * w : F(0));
         }
         F jac, v = openpbr::MicrofacetTransmission(spec, e, wo, wi, mode, &h, &jac);
-        return v > F(0) ? trans_color * ((F(1) - FrDielectric(dot(wo, h), e)) * v * w) : Spectrum<F>(F(0));
+        return v > F(0) ? trans_color * ((F(1) - FrDielectric(dot(wo, h), F(1) / eta_f)) * v * w) : Spectrum<F>(F(0));
     }
 
     // ---- sampling: a mixture of the lobes, each chosen with its albedo weight at wo
@@ -663,12 +683,12 @@ template <typename F> struct OpenPBRBxDF {
         const bool allow_r = sample_flags & RT_Reflection, allow_t = sample_flags & RT_Transmission;
         if (wi.z > F(0)) {
             if (!allow_r || !(openpbr::MicrofacetReflection(spec, wo, wi, &h) > F(0))) return F(0);
-            F fr = FrDielectric(dot(wo, h), e), pr = allow_t ? fr : F(1);
+            F fr = FrDielectric(dot(wo, h), F(1) / eta_f), pr = allow_t ? fr : F(1);
             return pr * spec.D(wo, h) / (F(4) * dot(wo, h));
         }
         if (!allow_t || !(openpbr::MicrofacetTransmission(spec, e, wo, wi, TransportMode::Importance, &h, &jac) > F(0)))
             return F(0);
-        F fr = FrDielectric(dot(wo, h), e), pt = allow_r ? F(1) - fr : F(1);
+        F fr = FrDielectric(dot(wo, h), F(1) / eta_f), pt = allow_r ? F(1) - fr : F(1);
         return pt * spec.D(wo, h) * jac;
     }
 
@@ -697,7 +717,7 @@ template <typename F> struct OpenPBRBxDF {
             if (!((F(1) - M) * T > F(0))) return invalid_sample<F>();
             Vec3<F> w(wo.x, wo.y, -wo.z);
             Vec3<F> h = spec.Sample_wm(w, u);
-            F e = F(1) / eta, fr = FrDielectric(dot(w, h), e);
+            F e = F(1) / eta, fr = FrDielectric(dot(w, h), F(1) / eta_f);
             const bool allow_r = sample_flags & RT_Reflection, allow_t = sample_flags & RT_Transmission;
             F pr = allow_r ? (allow_t ? fr : F(1)) : F(0);
             if (!allow_r && !allow_t) return invalid_sample<F>();
