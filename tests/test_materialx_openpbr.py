@@ -88,6 +88,20 @@ def test_default_open_pbr_surface_is_the_spec_defaults():
     assert m == bk.OpenPBR()
 
 
+def test_openpbr_options_set_the_knobs():
+    text = shader("open_pbr_surface", {"coat_weight": 1.0})
+    m = load(text, openpbr_options={"compensation": "none", "layering": "reciprocal"})["m"]
+    assert m == bk.OpenPBR(coat_weight=1.0, compensation="none", layering="reciprocal")
+    assert m.compensation == "none" and m.layering == "reciprocal"
+    # the same knobs reach a standard_surface's translation
+    ss = load(shader("standard_surface", {}), openpbr_options={"compensation": "none"})["m"]
+    assert ss.compensation == "none"
+    with pytest.raises(TypeError, match=r"openpbr_options: 'fresnel' is not a bk\.OpenPBR knob"):
+        bk.from_materialx(text, openpbr_options={"fresnel": "f82"})
+    with pytest.raises(ValueError, match=r"compensation: must be one of"):
+        bk.from_materialx(text, openpbr_options={"compensation": "kulla-conty"})
+
+
 @pytest.mark.parametrize("name", sorted(OTHER))
 def test_each_modelled_input_round_trips(name):
     m = load(shader("open_pbr_surface", {name: OTHER[name]}))["m"]

@@ -662,7 +662,7 @@ def _is_default(v, default):
     return bool(np.all(np.asarray(v, dtype=np.float64) == default))
 
 
-def _openpbr(r, node, values, approximate):
+def _openpbr(r, node, values, approximate, knobs=None):
     """(model, notes) of OpenPBR Surface inputs ``values`` ({name: _Opbr}) of ``node``: bk.OpenPBR,
     in bk.Mask for a geometry_opacity < 1, in bk.NormalMap for a geometry_normal from a normalmap node."""
     from ..models import Mask, NormalMap, OpenPBR
@@ -709,7 +709,7 @@ def _openpbr(r, node, values, approximate):
                  "bake the material to constants or give one model per texel")
         kw[name] = o.v
     try:
-        model = OpenPBR(**kw)
+        model = OpenPBR(**kw, **(knobs or {}))
     except (ValueError, TypeError) as e:   # named by its parameter: the input (the longest name it contains)
         named = sorted((k for k in kw if k in str(e)), key=len, reverse=True)
         if named:
@@ -872,7 +872,7 @@ def _graph_sources(ng, out):
     return sorted(names)
 
 
-def _standard_surface(r, node, approximate):
+def _standard_surface(r, node, approximate, knobs=None):
     """(model, notes) of a standard_surface node: its inputs through MaterialX's own translation
     graph to OpenPBR Surface (the graph MaterialX's ShaderTranslator inserts), then :func:`_openpbr`."""
     _check_inputs(r, node)
@@ -920,7 +920,7 @@ def _standard_surface(r, node, approximate):
         if v[0] == "normalmap" or v[1] is not None:
             values["geometry_normal"] = _Opbr(("normalmap", v[1]) if v[0] == "normalmap" else v[1],
                                               node.getInput("normal"))
-    model, notes = _openpbr(r, node, values, approximate)
+    model, notes = _openpbr(r, node, values, approximate, knobs)
     if dropped:
         notes.append("not carried by MaterialX's standard_surface -> OpenPBR translation (approximate=True): "
                      + "; ".join(dropped))
@@ -940,7 +940,7 @@ def _shader_nodes(r, mat):
     return up
 
 
-def from_materialx(source, *, options=None, approximate=False) -> dict:
+def from_materialx(source, *, options=None, approximate=False, openpbr_options=None) -> dict:
     """bsdfkit models for the materials of a MaterialX document: ``{name: model}`` in document
     order, each a :class:`~bsdfkit.FilamentStandard` (``gltf_pbr``, ``UsdPreviewSurface``) or a
     :class:`~bsdfkit.OpenPBR` (``open_pbr_surface``, ``standard_surface``), wrapped in
@@ -960,12 +960,16 @@ def from_materialx(source, *, options=None, approximate=False) -> dict:
         FilamentStandard's keyword-only knobs for every material, as :func:`bsdfkit.from_gltf`'s
         (default Filament's desktop shading). ``{"f90": "one"}`` gives the specifications' Schlick
         Fresnel to a white F90; ``{"energy_compensation": False}`` their single-scattering lobe.
-        OpenPBR materials take bk.OpenPBR's defaults.
+        OpenPBR materials take ``openpbr_options`` instead.
     approximate : bool, default False
         For ``open_pbr_surface`` / ``standard_surface``: inputs bk.OpenPBR does not model, at
         values other than their defaults, are refused (ValueError naming the input, the node and
         their lines); with True they are left out, listed in one :class:`MaterialXWarning` per
         material.
+    openpbr_options : dict, optional
+        bk.OpenPBR's keyword-only knobs for every ``open_pbr_surface`` / ``standard_surface``
+        material: ``{"compensation": "none"}`` (single-scattering GGX lobes) and / or
+        ``{"layering": "reciprocal"}``; default bk.OpenPBR's (``"turquin"``, ``"albedo-scaling"``).
 
     Returns
     -------
@@ -1070,6 +1074,10 @@ def from_materialx(source, *, options=None, approximate=False) -> dict:
     for k in options:
         if k not in _OPTIONS:
             raise TypeError(f"options: {k!r} is not a FilamentStandard option ({', '.join(_OPTIONS)})")
+    knobs = {} if openpbr_options is None else dict(openpbr_options)
+    for k in knobs:
+        if k not in ("compensation", "layering"):
+            raise TypeError(f"openpbr_options: {k!r} is not a bk.OpenPBR knob (compensation, layering)")
     text, path = _source(source)
     label = f"{path}: " if path is not None else ""
     try:
@@ -1110,9 +1118,9 @@ def from_materialx(source, *, options=None, approximate=False) -> dict:
             elif cat == "gltf_pbr":
                 model, notes = _gltf_pbr(r, sh, options)
             elif cat == "open_pbr_surface":
-                model, notes = _openpbr(r, sh, _openpbr_inputs(r, sh), approximate)
+                model, notes = _openpbr(r, sh, _openpbr_inputs(r, sh), approximate, knobs)
             elif cat == "standard_surface":
-                model, notes = _standard_surface(r, sh, approximate)
+                model, notes = _standard_surface(r, sh, approximate, knobs)
             else:
                 r.fail(sh, f"shading model {cat!r} is not read: bsdfkit reads {', '.join(MATERIALX_SHADING_MODELS)}")
             out[name], notes_all[name] = model, notes
