@@ -10,47 +10,37 @@ from .registry import KnobDecl
 
 __all__ = ["OpenPBR", "NOT_MODELLED"]
 
-#: Scalar parameters: name -> (default, lo, hi); hi None: unbounded.
-_SCALARS = {
-    "base_weight": (1.0, 0.0, 1.0),
-    "base_metalness": (0.0, 0.0, 1.0),
-    "base_diffuse_roughness": (0.0, 0.0, 1.0),
-    "specular_weight": (1.0, 0.0, None),
-    "specular_roughness": (0.3, 0.0, 1.0),
-    "specular_roughness_anisotropy": (0.0, 0.0, 1.0),
-    "specular_ior": (1.5, 0.0, None),
-    "transmission_weight": (0.0, 0.0, 1.0),
-    "subsurface_weight": (0.0, 0.0, 1.0),
-    "subsurface_scatter_anisotropy": (0.0, -1.0, 1.0),
-    "coat_weight": (0.0, 0.0, 1.0),
-    "coat_roughness": (0.0, 0.0, 1.0),
-    "coat_roughness_anisotropy": (0.0, 0.0, 1.0),
-    "coat_ior": (1.6, 0.0, None),
-    "coat_darkening": (1.0, 0.0, 1.0),
-    "fuzz_weight": (0.0, 0.0, 1.0),
-    "fuzz_roughness": (0.5, 0.0, 1.0),
-    "thin_film_weight": (0.0, 0.0, 1.0),
-    "thin_film_thickness": (0.5, 0.0, None),
-    "thin_film_ior": (1.4, 0.0, None),
+#: The modelled parameters in the MaterialX nodedef's order (the constructor's), each with its
+#: bounds: name -> (lo, hi, lo_open, rgb); hi None: unbounded; lo_open: strictly above lo (the
+#: IORs). specular_color is unbounded above: the spec's own metal examples reach 1.39.
+_BOUNDS = {
+    "base_weight": (0.0, 1.0, False, False),
+    "base_color": (0.0, 1.0, False, True),
+    "base_metalness": (0.0, 1.0, False, False),
+    "base_diffuse_roughness": (0.0, 1.0, False, False),
+    "specular_weight": (0.0, None, False, False),
+    "specular_color": (0.0, None, False, True),
+    "specular_roughness": (0.0, 1.0, False, False),
+    "specular_roughness_anisotropy": (0.0, 1.0, False, False),
+    "specular_ior": (0.0, None, True, False),
+    "transmission_weight": (0.0, 1.0, False, False),
+    "transmission_color": (0.0, 1.0, False, True),
+    "subsurface_weight": (0.0, 1.0, False, False),
+    "subsurface_color": (0.0, 1.0, False, True),
+    "subsurface_scatter_anisotropy": (-1.0, 1.0, False, False),
+    "coat_weight": (0.0, 1.0, False, False),
+    "coat_color": (0.0, 1.0, False, True),
+    "coat_roughness": (0.0, 1.0, False, False),
+    "coat_roughness_anisotropy": (0.0, 1.0, False, False),
+    "coat_ior": (0.0, None, True, False),
+    "coat_darkening": (0.0, 1.0, False, False),
+    "fuzz_weight": (0.0, 1.0, False, False),
+    "fuzz_color": (0.0, 1.0, False, True),
+    "fuzz_roughness": (0.0, 1.0, False, False),
+    "thin_film_weight": (0.0, 1.0, False, False),
+    "thin_film_thickness": (0.0, None, False, False),
+    "thin_film_ior": (0.0, None, True, False),
 }
-#: The IORs (open at 0).
-_IORS = ("specular_ior", "coat_ior", "thin_film_ior")
-#: Colour parameters in [0, 1]: name -> default.
-_COLOURS = {
-    "base_color": (0.8, 0.8, 0.8),
-    "specular_color": (1.0, 1.0, 1.0),
-    "transmission_color": (1.0, 1.0, 1.0),
-    "subsurface_color": (0.8, 0.8, 0.8),
-    "coat_color": (1.0, 1.0, 1.0),
-    "fuzz_color": (1.0, 1.0, 1.0),
-}
-#: The parameters in the MaterialX nodedef's order (the constructor's).
-_ORDER = ("base_weight", "base_color", "base_metalness", "base_diffuse_roughness", "specular_weight",
-          "specular_color", "specular_roughness", "specular_roughness_anisotropy", "specular_ior",
-          "transmission_weight", "transmission_color", "subsurface_weight", "subsurface_color",
-          "subsurface_scatter_anisotropy", "coat_weight", "coat_color", "coat_roughness",
-          "coat_roughness_anisotropy", "coat_ior", "coat_darkening", "fuzz_weight", "fuzz_color", "fuzz_roughness",
-          "thin_film_weight", "thin_film_thickness", "thin_film_ior")
 
 #: Inputs of ``open_pbr_surface`` that this model does not model: name -> (default, what it is).
 #: A non-default value raises ValueError (``from_materialx(..., approximate=True)`` drops them
@@ -239,20 +229,8 @@ class OpenPBR(BxDF):
             if not _same(v, default):
                 raise ValueError(f"{k}: not modelled by bsdfkit.OpenPBR ({what}); only its default {default} "
                                  "is accepted (bk.from_materialx(..., approximate=True) drops it with a warning)")
-        p = {}
-        for k in _ORDER:
-            if k == "specular_color":   # above 1 allowed (the spec's own metal examples reach 1.39)
-                p[k] = _rgb(given[k], k, lo=0.0)
-            elif k in _COLOURS:
-                p[k] = _rgb(given[k], k, lo=0.0, hi=1.0)
-            else:
-                _, lo, hi = _SCALARS[k]
-                if k in _IORS:
-                    p[k] = _scalar(given[k], k, lo=0.0, lo_open=True)
-                elif hi is None:
-                    p[k] = _scalar(given[k], k, lo=lo)
-                else:
-                    p[k] = _scalar(given[k], k, lo=lo, hi=hi)
+        p = {k: (_rgb if rgb else _scalar)(given[k], k, lo=lo, hi=hi, lo_open=lo_open)
+             for k, (lo, hi, lo_open, rgb) in _BOUNDS.items()}
         if not isinstance(geometry_thin_walled, (bool, np.bool_)):
             raise TypeError(f"geometry_thin_walled: expected True or False, got {geometry_thin_walled!r}")
         p["geometry_thin_walled"] = bool(geometry_thin_walled)
