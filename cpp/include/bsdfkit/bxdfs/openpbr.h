@@ -161,11 +161,6 @@ template <typename F> inline F Darkening(F E_b, F K) { return (F(1) - K) / (F(1)
 // Refracted cosine into the coat, sqrt(1 - (1 - mu^2)/eta_c^2) (OpenPBR "View-dependent absorption").
 template <typename F> inline F CoatCosine(F mu, F eta_c) { return safe_sqrt(F(1) - (F(1) - mu * mu) / (eta_c * eta_c)); }
 
-// Rec. 709 luminance (the lobe-selection weights of colours).
-template <typename F> inline F Luminance(const Spectrum<F> &s) {
-    return F(0.212671) * s[0] + F(0.715160) * s[1] + F(0.072169) * s[2];
-}
-
 template <typename F> inline Spectrum<F> Lerp(F t, const Spectrum<F> &a, const Spectrum<F> &b) { return a + (b - a) * t; }
 
 // Per channel into [0, 1]: a specular_color above 1 (the spec's examples go to 1.39) may lift a
@@ -254,7 +249,8 @@ template <typename F> struct OpenPBRBxDF {
     Spectrum<F> film_eta{F(1)}, film_k{F(0)};  // the metal's effective complex IOR (thin film)
     F spec_weight = 1, M = 0, T = 0, S = 0, C = 0, Fw = 0, fuzz_r = 0.5, sss_g = 0;
     F tf_w = 0, tf_thick = 0.5, tf_ior = 1.4, dark = 1, K_r = 0, r_b = 0;
-    bool thin_walled = false, turquin = true, reciprocal = false, aniso = false, aniso_c = false;
+    bool thin_walled = false, turquin = true, reciprocal = false;
+    bool aniso = false;  // either lobe anisotropic: the tables carry wo's azimuth
     // albedo tables in mu_o: E_Rw (the dielectric reflection, untinted, with the film), E_M (the
     // metal), E_T (the transmission, energy, with the film), E1 / E1c (the GGX lobes with F = 1),
     // E_c (the coat)
@@ -343,9 +339,7 @@ template <typename F> struct OpenPBRBxDF {
         ep.roughness = p.base_diffuse_roughness;
         m.eon = EONBxDF<F>::make(ep);
         m.rho = to_spectrum<F>(ep.reflectance);
-        m.aniso = ax_s != ay_s;
-        m.aniso_c = ax != ay;
-        if (m.aniso_c) m.aniso = true;  // one lookup rule for both tables
+        m.aniso = ax_s != ay_s || ax != ay;
         m.integrate_tables();
         // darkening: K = lerp(K_s(mu_o), K_r, r_b), K_r = 1 - (1 - E_F)/eta_c^2 (OpenPBR eqs.
         // internal_diffuse_reflection_coefficient_*), r_b = lerp(lerp(1, r, xi F_s), r, M)
@@ -365,12 +359,12 @@ template <typename F> struct OpenPBRBxDF {
 
     // The albedo tables (Gauss-Legendre over the visible normals, as plastic.h's
     // RoughInterfaceAlbedo): E = int F G2 / G1(wo) dD_wo, at each node's (mu_o, phi_o); over
-    // phi only when the lobe is anisotropic.
+    // phi only when a lobe is anisotropic.
     void integrate_tables() {
         using namespace openpbr;
         double x[kQuadNodes], w[kQuadNodes];
         GaussLegendre(kQuadNodes, x, w);
-        const int nphi = (aniso || aniso_c) ? kTablePhi : 1;
+        const int nphi = aniso ? kTablePhi : 1;
         // with a film, the two Fresnel curves tabulated in wo.m first (512 intervals, linear):
         // the Airy sum is the integrals' cost otherwise
         constexpr int K = 512;
@@ -417,13 +411,6 @@ template <typename F> struct OpenPBRBxDF {
                     }
                 int k = i * kTablePhi + j;
                 E_Rw[k] = er, E_M[k] = em, E_T[k] = et, E1[k] = e1, E1c[k] = e1c, E_c[k] = ec;
-            }
-        // an isotropic lobe of an anisotropic model: its column 0 everywhere
-        for (int i = 0; i < kTableRes; ++i)
-            for (int j = 1; j < kTablePhi; ++j) {
-                int k = i * kTablePhi + j, k0 = i * kTablePhi;
-                if (!aniso) E_Rw[k] = E_Rw[k0], E_M[k] = E_M[k0], E_T[k] = E_T[k0], E1[k] = E1[k0];
-                if (!aniso_c) E1c[k] = E1c[k0], E_c[k] = E_c[k0];
             }
     }
 
@@ -604,7 +591,7 @@ template <typename F> struct OpenPBRBxDF {
         F top = F(1);
         if (Fw > F(0)) {
             F ef = Fw * E_fuzz(mu);
-            p[kFuzz] = ef * max_(F(1e-3), openpbr::Luminance(fuzz_color));
+            p[kFuzz] = ef * max_(F(1e-3), Luminance(fuzz_color));
             top = F(1) - ef;
         }
         F wb = top;
@@ -612,24 +599,24 @@ template <typename F> struct OpenPBRBxDF {
             F ec = E_coat(q);
             p[kCoat] = top * C * ec;
             Spectrum<F> th = coat_transmittance(mu, mu) * (F(1) - ec);
-            wb = top * lerp(C, F(1), openpbr::Luminance(th)) * openpbr::Luminance(darkening(mu));
+            wb = top * lerp(C, F(1), Luminance(th)) * Luminance(darkening(mu));
         }
         Spectrum<F> er = E_R(q);
-        p[kSpec] = wb * ((F(1) - M) * openpbr::Luminance(er) + M * openpbr::Luminance(E_metal(q)));
+        p[kSpec] = wb * ((F(1) - M) * Luminance(er) + M * Luminance(E_metal(q)));
         if (M < F(1)) {
-            F er_l = max_(F(0), F(1) - openpbr::Luminance(er));
+            F er_l = max_(F(0), F(1) - Luminance(er));
             if (T > F(0)) {
                 Spectrum<F> et = thin_walled ? (Spectrum<F>(e1(q)) - look(E_Rw, q)) * sheet_scale(q) : look(E_T, q) * trans_scale(q);
                 et = et * trans_color;
-                p[kTrans] = wb * (F(1) - M) * T * max_(F(1e-3), openpbr::Luminance(et));
+                p[kTrans] = wb * (F(1) - M) * T * max_(F(1e-3), Luminance(et));
             }
             Spectrum<F> op = openpbr::Lerp(S, rho, sss_color);
             F sss_r = thin_walled ? F(0.5) * (F(1) - sss_g) : F(1);
-            F d_l = lerp(S, openpbr::Luminance(rho), openpbr::Luminance(sss_color) * sss_r);
+            F d_l = lerp(S, Luminance(rho), Luminance(sss_color) * sss_r);
             p[kDiffuse] = wb * (F(1) - M) * (F(1) - T) * er_l * max_(F(1e-3), d_l) * F(op.max_component() > F(0));
             if (thin_walled && S > F(0))
                 p[kDiffuseT] = wb * (F(1) - M) * (F(1) - T) * er_l * S *
-                               max_(F(1e-3), openpbr::Luminance(sss_color) * F(0.5) * (F(1) + sss_g));
+                               max_(F(1e-3), Luminance(sss_color) * F(0.5) * (F(1) + sss_g));
         }
         if (!allow_r) p[kFuzz] = p[kCoat] = p[kSpec] = p[kDiffuse] = F(0);
         if (!allow_t) p[kTrans] = p[kDiffuseT] = F(0);
@@ -699,8 +686,14 @@ template <typename F> struct OpenPBRBxDF {
             if (!thin_walled) return inside_pdf(wo, wi, sample_flags);
             wo.z = -wo.z, wi.z = -wi.z;
         }
-        F p[kLobes], total = F(0);
+        F p[kLobes];
         lobe_weights(wo, sample_flags, p);
+        return mixture_pdf(p, wo, wi);
+    }
+
+    // The mixture's density at wi for the lobe weights p of wo (both above, or mirrored there).
+    F mixture_pdf(const F *p, const Vec3<F> &wo, const Vec3<F> &wi) const {
+        F total = F(0);
         for (int k = 0; k < kLobes; ++k)
             if (p[k] > F(0)) total += p[k] * lobe_pdf(k, wo, wi);
         return total;
@@ -711,6 +704,7 @@ template <typename F> struct OpenPBRBxDF {
         Vec3<F> wo = wo_;
         bool flip = wo.z < F(0);
         Vec3<F> wi;
+        F density;
         BxDFFlags lobe = GlossyReflection;
         if (flip && !thin_walled) {
             // the inside: choose reflection or transmission by the Fresnel of the sampled normal
@@ -729,6 +723,7 @@ template <typename F> struct OpenPBRBxDF {
                 if (!Refract(w, h, e, &etap, &wi) || !(wi.z < F(0))) return invalid_sample<F>();
             }
             wi.z = -wi.z;
+            density = inside_pdf(wo, wi, sample_flags);
         } else {
             if (flip) wo.z = -wo.z;
             F p[kLobes];
@@ -770,11 +765,12 @@ template <typename F> struct OpenPBRBxDF {
             // lobe_pdf are those of the samplers on their hemisphere)
             bool into = k == kTrans || k == kDiffuseT;
             if (into ? !(wi.z < F(0)) : !(wi.z > F(0))) return invalid_sample<F>();
+            density = mixture_pdf(p, wo, wi);  // the weights just drawn from: pdf()'s value
             if (flip) wi.z = -wi.z;
         }
         BSDFSample<F> s;
         s.wi = wi;
-        s.pdf = pdf(wo_, wi, mode, sample_flags);
+        s.pdf = density;
         s.f = f(wo_, wi, mode);
         bool transmit = wi.z * wo_.z < F(0);
         s.flags = lobe == DiffuseTransmission ? uint8_t(DiffuseTransmission) : lobe_flag(lobe, transmit);

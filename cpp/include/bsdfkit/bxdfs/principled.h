@@ -101,7 +101,7 @@ template <typename F> inline F SchlickR0(F eta) { return sqr((eta - F(1)) / (eta
 // The tint colour base / luminance (1 for a black base), luminance by Rec. 709 (Mitsuba
 // core/spectrum.h luminance), computed in double.
 template <typename F> inline Spectrum<F> Tint(const std::array<double, 3> &base) {
-    double lum = 0.212671 * base[0] + 0.715160 * base[1] + 0.072169 * base[2];
+    double lum = Luminance(to_spectrum<double>(base));
     Spectrum<F> t;
     for (int c = 0; c < 3; ++c) t[c] = F(lum > 0 ? base[size_t(c)] / lum : 1.0);
     return t;

@@ -36,6 +36,11 @@ inline Spectrum<Float, N> select(const Mask<Float> &c, const Spectrum<Float, N> 
     Spectrum<Float, N> r; for (int i = 0; i < N; ++i) r.v[i] = select(c, a.v[i], b.v[i]); return r;
 }
 
+// Rec. 709 luminance of linear RGB, with Mitsuba 3's weights (core/spectrum.h luminance).
+template <typename Float> inline Float Luminance(const Spectrum<Float> &s) {
+    return Float(0.212671) * s[0] + Float(0.715160) * s[1] + Float(0.072169) * s[2];
+}
+
 // An RGB parameter (Params field: double, or a Dual for a Dual model) at the model's precision.
 template <typename Float, typename S> inline Spectrum<Float> to_spectrum(const std::array<S, 3> &a) {
     Spectrum<Float> s;
