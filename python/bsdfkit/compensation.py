@@ -412,7 +412,7 @@ def albedo_table(model, grid=None, *, params=None, n_samples: int = 1 << 16, tol
         raise ValueError(f"channel: must be 'rgb', 'mean', 0, 1 or 2, got {channel!r}")
     if interrupt not in ("raise", "return"):
         raise ValueError(f"interrupt: must be 'raise' or 'return', got {interrupt!r}")
-    from .tuning._progress import Progress, check_progress
+    from ._progress import Progress, check_progress
     progress = check_progress(progress)
     mode_name = str(getattr(mode, "name", mode)).lower()
     if mode_name not in ("radiance", "importance"):

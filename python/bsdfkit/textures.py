@@ -27,6 +27,7 @@ import threading
 import numpy as np
 
 from . import _render_ext
+from ._progress import PROGRESS_DELAY, Progress, check_progress, run_polled
 from .io import srgb_to_linear
 from ._values import digest, fmt_param, key_value
 
@@ -303,6 +304,11 @@ def _texture_dir() -> str:
         return _tmp_dir
 
 
+def _write_texture(render, tmp: str, path: str, px: np.ndarray) -> None:
+    render.make_texture(tmp, px)
+    os.replace(tmp, path)
+
+
 def _decode(px: np.ndarray, encoding: str) -> np.ndarray:
     """Encoded values in [0, 1] to linear (pbrt-v4 ColorEncoding: sRGB, linear, gamma g)."""
     if encoding == "linear":
@@ -360,6 +366,12 @@ class Texture(TextureBase):
     transform : array_like, shape (2, 3), optional
         Affine map applied to uv (and, without its offset, to the derivatives) before the lookup:
         ``(u', v') = M @ (u, v, 1)``.
+    progress : bool or callable, optional
+        Building the MIP-mapped texture of a large image takes seconds (2048² sRGB: ~2 s): one bar
+        over reading, decoding and writing it. None (default): on stderr when it is a terminal (a
+        bar in Jupyter), once the build has run for a second, and never inside a call that shows
+        its own (a scene import); True, False, or a callable ``progress(done, total, stage)``.
+        Ctrl-C stops the build with ``KeyboardInterrupt``.
 
     Raises
     ------
@@ -379,13 +391,14 @@ class Texture(TextureBase):
     """
 
     def __init__(self, source, *, filter: str = "bilinear", wrap="periodic", encoding: str = "auto",
-                 scale: float = 1.0, invert: bool = False, channel=None, transform=None):
+                 scale: float = 1.0, invert: bool = False, channel=None, transform=None, progress=None):
         if filter not in _FILTERS:
             raise ValueError(f"filter: expected one of {list(_FILTERS)}, got {filter!r}")
         wraps = (wrap, wrap) if isinstance(wrap, str) else tuple(wrap) if isinstance(wrap, (tuple, list)) else None
         if wraps is None or len(wraps) != 2 or any(w not in _WRAPS for w in wraps):
             raise ValueError(f"wrap: expected one of {list(_WRAPS)} or a pair of them, got {wrap!r}")
         encoding = _encoding(encoding)
+        progress = check_progress(progress)
         if isinstance(scale, bool) or not isinstance(scale, numbers.Real) or not math.isfinite(scale):
             raise TypeError(f"scale: expected a finite real number, got {scale!r}")
         if not isinstance(invert, (bool, np.bool_)):
@@ -447,22 +460,25 @@ class Texture(TextureBase):
         decode = {"auto": "sRGB" if integer else "linear"}.get(encoding, encoding)
         set_("_decode", decode)
         set_("_wraps", tuple(_WRAPS[w] for w in wraps))
-        set_("_file", self._prepare(render, integer, top))
+        if isinstance(self.source, str) and decode == "linear":
+            set_("_file", self.source)   # read as it is: nothing to build
+        else:
+            with Progress(progress, 3, "reading the image", "bk.Texture", delay=PROGRESS_DELAY) as prog:
+                set_("_file", self._prepare(render, integer, top, prog))
 
-    def _prepare(self, render, integer: bool, top) -> str:
-        """The file the TextureSystem reads: the source file itself when its values need no
-        decoding, else a tiled, MIP-mapped float texture of the decoded pixels (in this process's
-        temporary directory, named by content)."""
+    def _prepare(self, render, integer: bool, top, prog) -> str:
+        """The file the TextureSystem reads for an image that needs decoding (or an array): a tiled,
+        MIP-mapped float texture of the decoded pixels (in this process's temporary directory,
+        named by content). ``prog``: three steps (read, decode, write)."""
         src = self.source
         if isinstance(src, str):
-            if self._decode == "linear":
-                return src
             try:
-                px = render.read_image(src)
+                px = run_polled(prog, render.read_image, src)
             except RuntimeError as e:
                 raise OSError(f"source: cannot read image {e}") from None
             if integer:   # OpenImageIO gives k / max exactly: back to the stored integers
                 src = np.rint(px * top).astype(np.uint8 if top == 255 else np.uint16)
+        prog(1, "decoding")
         if isinstance(src, np.ndarray) and integer:
             # a table of the decoded value of every stored integer (the same values as decoding
             # each texel, in a fraction of the time)
@@ -477,9 +493,15 @@ class Texture(TextureBase):
             if raw.shape[-1] in (2, 4):
                 px[..., -1] = raw[..., -1]
         px = np.ascontiguousarray(px, dtype=np.float32)
-        path = os.path.join(_texture_dir(), f"{digest(px)}.tx")
+        name = digest(px)
+        path = os.path.join(_texture_dir(), f"{name}.tx")
+        prog(2, "writing the MIP-mapped texture")
         if not os.path.exists(path):
-            render.make_texture(path, px)
+            # written under a name of its own, then renamed: a file at ``path`` is always whole
+            # (another thread's build of the same pixels, or one left running by Ctrl-C)
+            tmp = os.path.join(_texture_dir(), f"{name}.{os.getpid()}.{threading.get_ident()}.tmp.tx")
+            run_polled(prog, _write_texture, render, tmp, path, px)
+        prog(3)
         return path
 
     def _args(self):

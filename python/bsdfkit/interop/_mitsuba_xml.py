@@ -257,7 +257,7 @@ def read_mitsuba_xml(path, params=None):
     return out, os.fspath(path.parent.resolve())
 
 
-def from_mitsuba_file(path, params=None, strict=False):
+def from_mitsuba_file(path, params=None, strict=False, progress=None):
     """``from_mitsuba(scene_file)``: ``{name: model}`` of the scene's BSDFs (see
     :func:`read_mitsuba_xml` for the names); one that cannot be converted is skipped with a
     ``MitsubaSkipWarning`` naming it, its line and the reason, or raises with ``strict=True``."""
@@ -267,17 +267,21 @@ def from_mitsuba_file(path, params=None, strict=False):
 
     if not isinstance(strict, (bool, np.bool_)):
         raise TypeError(f"strict: expected True or False, got {strict!r}")
+    from .._progress import PROGRESS_DELAY, Progress, check_progress
+    progress = check_progress(progress)
     bsdfs, folder = read_mitsuba_xml(path, params)
     out = {}
-    for name, d in bsdfs.items():
-        try:
-            out[name] = from_mitsuba(d, base_dir=folder)
-        except (ValueError, NotImplementedError, FileNotFoundError, TypeError) as e:
-            if strict:
-                raise
-            w = MitsubaSkipWarning(f"from_mitsuba: {path}: skipped BSDF {name!r} (line {d.get(LINE_KEY)}): {e}")
-            w.material, w.line, w.file, w.reason = name, d.get(LINE_KEY), os.fspath(path), str(e)
-            warnings.warn(w, stacklevel=3)
+    with Progress(progress, len(bsdfs), "BSDFs", "from_mitsuba", delay=PROGRESS_DELAY) as prog:
+        for name, d in bsdfs.items():
+            try:
+                out[name] = from_mitsuba(d, base_dir=folder)
+            except (ValueError, NotImplementedError, FileNotFoundError, TypeError) as e:
+                if strict:
+                    raise
+                w = MitsubaSkipWarning(f"from_mitsuba: {path}: skipped BSDF {name!r} (line {d.get(LINE_KEY)}): {e}")
+                w.material, w.line, w.file, w.reason = name, d.get(LINE_KEY), os.fspath(path), str(e)
+                warnings.warn(w, stacklevel=3)
+            prog.advance()
     return out
 
 

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._progress import PROGRESS_DELAY, Progress, check_progress
 from ..textures import TextureBase, is_texture
 from ._gltf_container import _GltfError, _Doc, _num, _vec, _obj
 
@@ -472,7 +473,7 @@ class GltfValue(TextureBase):
 
 # ---------------------------------------------------------------- public
 
-def read_gltf_materials(path, *, options=None) -> list:
+def read_gltf_materials(path, *, options=None, progress=None) -> list:
     """The materials of a glTF 2.0 file as :class:`GltfMaterial` records (model and what it leaves
     out), in file order, without warnings. Arguments, conversion and errors: :func:`from_gltf`."""
     if isinstance(path, (bytes, bytearray)) or not isinstance(path, (str, os.PathLike)):
@@ -481,13 +482,17 @@ def read_gltf_materials(path, *, options=None) -> list:
     for k in options:
         if k not in _OPTIONS:
             raise TypeError(f"options: {k!r} is not a FilamentStandard option ({', '.join(_OPTIONS)})")
+    progress = check_progress(progress)
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise FileNotFoundError(f"path: glTF file not found: {path}")
+    prog = None
     try:
         doc = _Doc(path)
         out, seen = [], set()
-        for i, mat in enumerate(doc.array("materials")):
+        mats = doc.array("materials")
+        prog = Progress(progress, len(mats), "materials", "from_gltf", delay=PROGRESS_DELAY)
+        for i, mat in enumerate(mats):
             if not isinstance(mat, dict):
                 raise _GltfError(f"materials[{i}]: must be a JSON object")
             name = mat.get("name")
@@ -502,15 +507,19 @@ def read_gltf_materials(path, *, options=None) -> list:
                 raise _GltfError(msg if msg.startswith(f"materials[{i}]") else f"materials[{i}] ({name!r}): {msg}") \
                     from None
             out.append(GltfMaterial(i, name, model, tuple(notes)))
+            prog.advance()
         return out
     except _GltfError as e:
         msg = str(e)
         raise ValueError(msg if msg.startswith(path) else f"{path}: {msg}") from None
     except FileNotFoundError as e:
         raise FileNotFoundError(f"{path}: {e}") from None
+    finally:
+        if prog is not None:
+            prog.close()
 
 
-def from_gltf(path, *, options=None) -> dict:
+def from_gltf(path, *, options=None, progress=None) -> dict:
     """bsdfkit models for the materials of a glTF 2.0 file (``.gltf`` or ``.glb``): ``{name:
     model}`` in file order, each a :class:`~bsdfkit.FilamentStandard` (Filament's model is glTF's
     metallic-roughness), wrapped in ``NormalMap`` / ``Mask`` / ``TwoSided`` where the material
@@ -526,6 +535,10 @@ def from_gltf(path, *, options=None) -> dict:
         FilamentStandard's keyword-only knobs for every material (``diffuse``, ``f90``,
         ``energy_compensation``, ``min_roughness``, ...); default Filament's desktop shading.
         ``{"f90": "one"}`` gives glTF's reference Fresnel (f90 = 1).
+    progress : bool or callable, optional
+        One bar over the materials converted (their images with them), as
+        :func:`bsdfkit.from_pbrt`'s: None (default) shows it on an interactive stderr (a bar in
+        Jupyter) once the import has run for a second.
 
     Returns
     -------
@@ -592,7 +605,7 @@ def from_gltf(path, *, options=None) -> dict:
     >>> bk.from_gltf("gold.gltf")["gold"].roughness
     0.3
     """
-    recs = read_gltf_materials(path, options=options)
+    recs = read_gltf_materials(path, options=options, progress=progress)
     for r in recs:
         if r.left_out:
             w = GltfWarning(f"from_gltf: {os.fspath(path)}: materials[{r.index}] {r.name!r}: left out: "

@@ -21,6 +21,8 @@ import xml.parsers.expat
 
 import numpy as np
 
+from .._progress import PROGRESS_DELAY, Progress, check_progress
+
 __all__ = ["MaterialXWarning", "from_materialx", "MATERIALX_SHADING_MODELS"]
 
 #: Surface shader nodes read.
@@ -940,7 +942,7 @@ def _shader_nodes(r, mat):
     return up
 
 
-def from_materialx(source, *, options=None, approximate=False, openpbr_options=None) -> dict:
+def from_materialx(source, *, options=None, approximate=False, openpbr_options=None, progress=None) -> dict:
     """bsdfkit models for the materials of a MaterialX document: ``{name: model}`` in document
     order, each a :class:`~bsdfkit.FilamentStandard` (``gltf_pbr``, ``UsdPreviewSurface``) or a
     :class:`~bsdfkit.OpenPBR` (``open_pbr_surface``, ``standard_surface``), wrapped in
@@ -970,6 +972,10 @@ def from_materialx(source, *, options=None, approximate=False, openpbr_options=N
         bk.OpenPBR's keyword-only knobs for every ``open_pbr_surface`` / ``standard_surface``
         material: ``{"compensation": "none"}`` (single-scattering GGX lobes) and / or
         ``{"layering": "reciprocal"}``; default bk.OpenPBR's (``"turquin"``, ``"albedo-scaling"``).
+    progress : bool or callable, optional
+        One bar over the materials converted (their images with them), as
+        :func:`bsdfkit.from_pbrt`'s: None (default) shows it on an interactive stderr (a bar in
+        Jupyter) once the import has run for a second.
 
     Returns
     -------
@@ -1078,8 +1084,10 @@ def from_materialx(source, *, options=None, approximate=False, openpbr_options=N
     for k in knobs:
         if k not in ("compensation", "layering"):
             raise TypeError(f"openpbr_options: {k!r} is not a bk.OpenPBR knob (compensation, layering)")
+    progress = check_progress(progress)
     text, path = _source(source)
     label = f"{path}: " if path is not None else ""
+    prog = None
     try:
         lines, root = _line_map(text, label)
         version = root.get("version") or ""
@@ -1110,6 +1118,7 @@ def from_materialx(source, *, options=None, approximate=False, openpbr_options=N
         if not pairs:
             pairs = [(n.getName(), n, n) for n in doc.getNodes() if n.getType() == "surfaceshader"]
         out, notes_all = {}, {}
+        prog = Progress(progress, len(pairs), "materials", "from_materialx", delay=PROGRESS_DELAY)
         for name, mat, sh in pairs:
             cat = sh.getCategory()
             r.require_def(sh)
@@ -1124,8 +1133,12 @@ def from_materialx(source, *, options=None, approximate=False, openpbr_options=N
             else:
                 r.fail(sh, f"shading model {cat!r} is not read: bsdfkit reads {', '.join(MATERIALX_SHADING_MODELS)}")
             out[name], notes_all[name] = model, notes
+            prog.advance()
     except _MxError as e:
         raise ValueError(str(e)) from None
+    finally:
+        if prog is not None:
+            prog.close()
     for name, notes in notes_all.items():
         if notes:
             w = MaterialXWarning(f"from_materialx: {label}material {name!r}: left out: " + "; ".join(notes))

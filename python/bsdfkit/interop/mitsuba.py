@@ -446,7 +446,7 @@ def _mi_hair(d, where):
     return _mi_build(where, lambda: Hair(sigma_a=sigma_a, eta=eta, beta_m=bm, beta_n=bn, alpha=alpha, h=0.0))
 
 
-def from_mitsuba(d, *, base_dir=None, params=None, strict=False):
+def from_mitsuba(d, *, base_dir=None, params=None, strict=False, progress=None):
     """The bsdfkit model of a Mitsuba 3 BSDF plugin dictionary (the inverse of
     :func:`bsdfkit.testing.mitsuba.to_mitsuba`), or of a loaded ``mi.BSDF`` (``mi.load_dict``,
     a scene's BSDF): its plugin class and ``mi.traverse`` parameters are read back into such a
@@ -561,6 +561,10 @@ def from_mitsuba(d, *, base_dir=None, params=None, strict=False):
         Scene files: values of ``$name`` references (override the file's ``<default>``).
     strict : bool, default False
         Scene files: raise instead of skipping a BSDF with a warning.
+    progress : bool or callable, optional
+        Scene files: one bar over the BSDFs converted (their bitmaps with them), as
+        :func:`bsdfkit.from_pbrt`'s: None (default) shows it on an interactive stderr (a bar in
+        Jupyter) once the import has run for a second.
 
     Returns
     -------
@@ -583,7 +587,7 @@ def from_mitsuba(d, *, base_dir=None, params=None, strict=False):
     """
     if isinstance(d, os.PathLike) or (isinstance(d, str) and (d.lower().endswith(".xml") or os.path.isfile(d))):
         from ._mitsuba_xml import from_mitsuba_file
-        return from_mitsuba_file(d, params=params, strict=strict)
+        return from_mitsuba_file(d, params=params, strict=strict, progress=progress)
     if not isinstance(d, dict) and type(d).__module__.startswith("mitsuba") and hasattr(d, "class_name"):
         d = _loaded_to_dict(d)
     token = _BASE_DIR.set(None if base_dir is None else os.fspath(base_dir))

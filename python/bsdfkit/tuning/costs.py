@@ -287,7 +287,7 @@ def _measure(configs, op, n_timing, repeats, rounds, seed, progress=False, min_t
     calls = [_timed_call(c, op, inputs) for c in configs]
     ref_times = []
     times = [[] for _ in configs]
-    from ._progress import Progress
+    from .._progress import Progress
     prog = Progress(progress, rounds * len(calls), "timing configuration")
     try:
         for r in range(rounds):

@@ -475,7 +475,7 @@ class _Evaluation:
             self.reference_noise = relative_rms(v_ref, v_ref + np.concatenate([d, 0 * v_ref[len(d):]]) / np.sqrt(2.0))
         ref_noise = self.reference_noise or 0.0
         self.errors = []
-        from ._progress import Progress
+        from .._progress import Progress
         prog = Progress(progress, len(self.configs), "errors of configuration", what)
         try:
             for i, c in enumerate(self.configs):

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..models import BxDF
-from ._progress import check_progress
+from .._progress import check_progress
 from .costs import BUDGET_MIN_TIME, SPREAD_WARN, _budgeted_n_timing, _check_costs, _costs_for, _measure, _op, _pick, _threads
 from .errors import STOCHASTIC_N, _Evaluation, _check_int, is_stochastic
 from .configs import _check_allow, _check_model, _knobs_from, _label, _specs, family

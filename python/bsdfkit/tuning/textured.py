@@ -19,7 +19,8 @@ import warnings
 
 import numpy as np
 
-from .configs import _check_allow, _check_model, _specs
+from .._progress import Progress
+from .configs import _check_allow, _check_model, _specs, configurations
 from .costs import _check_costs, _costs_for, _pick
 from .errors import _Evaluation
 
@@ -67,8 +68,11 @@ def simplify_textured(model, tol, metric, col, margin, directions, seed, n, n_al
         _check_model(t)
     allowed = _check_allow(texels[0], allow)
     table = _check_costs(costs)
-    evs = [_Evaluation(t, directions, n, seed, n_albedo, allow=allowed, reference="input", progress=progress,
-                       what="simplify") for t in texels]
+    # one bar over every texel's configurations (not one per texel)
+    total = sum(len(configurations(t, allowed)) for t in texels)
+    with Progress(progress, total, f"errors of configuration at {n_texels} texels", "simplify") as prog:
+        evs = [_Evaluation(t, directions, n, seed, n_albedo, allow=allowed, reference="input", progress=prog,
+                           what="simplify") for t in texels]
     # the base: the texel with the most reachable knobs (its configurations enumerate the material's)
     base = max(range(len(evs)), key=lambda j: (len(evs[j].configs), -j))
     bev = evs[base]

@@ -7,6 +7,7 @@ import warnings
 
 import numpy as np
 
+from ..._progress import PROGRESS_DELAY, Progress, check_progress
 from ...models import (CoatedConductor, CoatedDiffuse, Conductor, Dielectric, Diffuse, DiffuseTransmission,
                        ThinDielectric, roughness_to_alpha)
 from ...textures import Scale
@@ -216,7 +217,7 @@ def _measured(rec, ctx):
 
 
 def from_pbrt(source, *, skip_unsupported: bool = False, skip_missing_includes: bool = False,
-              spectral: bool = False) -> dict:
+              spectral: bool = False, progress=None) -> dict:
     """bsdfkit models for the materials of a pbrt-v4 scene: ``{name: BxDF}`` in file order.
 
     ``source``: scene text, or the path of a scene file (an ``os.PathLike``, or a ``str``
@@ -323,6 +324,11 @@ def from_pbrt(source, *, skip_unsupported: bool = False, skip_missing_includes: 
         :class:`PbrtMissingIncludeWarning`.
     spectral : bool, optional
         Keep named and file spectra of metal eta / k and dielectric eta as ``bsdfkit.Spectrum``.
+    progress : bool or callable, optional
+        One bar for the whole import: the characters read (includes too), then the materials
+        converted (their image textures with them). None (default): on stderr when it is a
+        terminal (a bar in Jupyter), once the import has run for a second; True, False, or a
+        callable ``progress(done, total, stage)``. Ctrl-C stops the import with ``KeyboardInterrupt``.
 
     Returns
     -------
@@ -347,24 +353,35 @@ def from_pbrt(source, *, skip_unsupported: bool = False, skip_missing_includes: 
     """
     if not isinstance(spectral, (bool, np.bool_)):
         raise TypeError(f"spectral: expected True or False, got {spectral!r}")
+    progress = check_progress(progress)
     text, path = _scene_source(source)
-    base = None if path is None else os.path.dirname(os.path.abspath(path))
-    out, records = {}, parse_pbrt_materials(text, path=path, skip_missing_includes=skip_missing_includes)
+    prog = Progress(progress, len(text), "reading the scene (characters)", "from_pbrt", delay=PROGRESS_DELAY)
+    try:
+        base = None if path is None else os.path.dirname(os.path.abspath(path))
+        records = parse_pbrt_materials(text, path=path, skip_missing_includes=skip_missing_includes, _progress=prog)
+        prog.begin("materials", len(records))
+        return _convert_all(records, base, skip_unsupported, spectral, prog)
+    finally:
+        prog.close()
+
+
+def _convert_all(records, base, skip_unsupported, spectral, prog):
+    out = {}
 
     def skip(rec, e):
         if not skip_unsupported:
             raise e
         w = PbrtSkipWarning(f"from_pbrt: skipped {e}" + (f" [in {rec.file}]" if rec.file else ""))
         w.material, w.line, w.file, w.reason = rec.name, rec.line, rec.file, str(e)
-        warnings.warn(w, stacklevel=3)
+        warnings.warn(w, stacklevel=4)
     ctx = _context(records[0].textures if records else {}, spectral, base)   # textures converted once per scene
     for rec in records:
-        if rec.type == "mix":   # needs the others: resolved below (mix.py)
-            continue
-        try:
-            out[rec.name] = _pbrt_bxdf(rec, ctx)
-        except _PbrtError as e:
-            skip(rec, e)
+        if rec.type != "mix":   # a mix needs the others: resolved below (mix.py)
+            try:
+                out[rec.name] = _pbrt_bxdf(rec, ctx)
+            except _PbrtError as e:
+                skip(rec, e)
+        prog.advance()
     resolve_mixes([r for r in records if r.type == "mix"], out, _pfail, _pfail_param,
                   lambda rec, name, default: float_value(rec, name, default, ctx), skip)
     return {rec.name: out[rec.name] for rec in records if rec.name in out}   # file order

@@ -122,12 +122,15 @@ def _unescape(s, line):
     return re.sub(r"\\(.)", repl, s)
 
 
-def _tokens(text):
-    """Yield (kind, value, line): kind is "str" (unquoted value), "[", "]" or "bare"."""
+def _tokens(text, at=None):
+    """Yield (kind, value, line): kind is "str" (unquoted value), "[", "]" or "bare". ``at``: a
+    one-element list that holds the offset read so far (progress)."""
     line, last = 1, 0
     for m in _TOKEN.finditer(text):
         line += text.count("\n", last, m.start())
         last = m.start()
+        if at is not None:
+            at[0] = last
         kind = m.lastgroup
         if kind in ("ws", "comment"):
             continue
@@ -148,7 +151,8 @@ def _is_keyword(tok):
 
 class _Stream:
     def __init__(self, text):
-        self._it = _tokens(text)
+        self.at = [0]   # characters read
+        self._it = _tokens(text, self.at)
         self._peek = None
 
     def peek(self):
@@ -291,7 +295,7 @@ class PbrtColorSpaceWarning(UserWarning):
     colours given in that space come out differently (attributes: ``file``, ``line``, ``colorspace``)."""
 
 
-def parse_pbrt_materials(text: str, *, path=None, skip_missing_includes: bool = False) -> list:
+def parse_pbrt_materials(text: str, *, path=None, skip_missing_includes: bool = False, _progress=None) -> list:
     """The material statements of pbrt-v4 scene text, in order, as ``PbrtMaterial`` records.
 
     Understands pbrt's tokens (quoted strings with escapes, numbers, ``true``/``false``,
@@ -352,7 +356,8 @@ def parse_pbrt_materials(text: str, *, path=None, skip_missing_includes: bool = 
     if not isinstance(skip_missing_includes, (bool, np.bool_)):
         raise TypeError(f"skip_missing_includes: expected True or False, got {skip_missing_includes!r}")
     st = {"recs": [], "by_name": {}, "current": None, "stack": [], "n_anon": 0, "textures": {},
-          "skip_missing": bool(skip_missing_includes), "colorspace_warned": set()}
+          "skip_missing": bool(skip_missing_includes), "colorspace_warned": set(),
+          "progress": _progress, "chars_done": 0, "open": []}   # progress: characters read, includes too
     _parse_into(st, text, None if path is None else os.fspath(path), 0)
     return [PbrtMaterial(name=r[0], type=r[1], line=r[2], named=r[3], params=r[4], shapes=r[5], file=r[6],
                          textures=st["textures"]) for r in st["recs"]]
@@ -371,10 +376,17 @@ def _parse_into(st, text, path, depth):
 def _parse_statements(st, text, path, depth, where):
     ts = _Stream(text)
     recs, by_name, stack = st["recs"], st["by_name"], st["stack"]
+    prog = st["progress"]
+    if prog is not None:
+        st["open"].append(ts.at)
+    n = 0
     while True:
         t = ts.next()
         if t is None:
             break
+        n += 1
+        if prog is not None and n % 64 == 0:   # a redraw (and a Ctrl-C point) every 64 statements
+            prog(st["chars_done"] + sum(a[0] for a in st["open"]))
         if not _is_keyword(t):
             if t[0] == "]":
                 raise _PbrtError(f"line {t[2]}: unexpected ']'")
@@ -436,6 +448,8 @@ def _parse_statements(st, text, path, depth, where):
                         if not os.path.exists(full) else "")
                 raise OSError(f"{path or '<text>'}: line {line}: {kw} {fname!r}: cannot read {full!r} "
                               f"({e.strerror or e}){hint}") from None
+            if prog is not None:
+                prog.total += len(sub)
             _parse_into(st, sub, full, depth + 1)
         elif kw == "NamedMaterial":
             name = _statement_name(ts, kw, line)
@@ -470,6 +484,10 @@ def _parse_statements(st, text, path, depth, where):
             _skip_args(ts)
         else:
             _skip_args(ts)
+    if prog is not None:   # this file read whole
+        st["open"].remove(ts.at)
+        st["chars_done"] += len(text)
+        prog(st["chars_done"] + sum(a[0] for a in st["open"]))
 
 
 def _texture_statement(st, ts, line, file):
