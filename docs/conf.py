@@ -51,7 +51,5 @@ plot_html_show_formats = False
 plot_html_show_source_link = False
 plot_rcparams = {"figure.max_open_warning": 0}
 
-# The notebook gallery (docs/gallery/, generated): scripts/docs --gallery executes the notebooks
-# (BSDFKIT_DOCS_GALLERY=1, a few minutes); other builds reuse their last executed copies
-# (docs/_build/executed/) or show them without outputs.
-bsdfkit_execute_notebooks = os.environ.get("BSDFKIT_DOCS_GALLERY", "") == "1"
+# The notebook gallery (docs/gallery/, generated) shows the notebooks with the outputs they are
+# committed with; scripts/docs --notebooks re-executes them in place first.

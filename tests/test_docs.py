@@ -116,4 +116,4 @@ def test_notebook_page_embeds_the_executed_outputs(tmp_path):
     figs = list(tmp_path.glob("99_test_*.png"))
     assert len(figs) == 1 and figs[0].read_bytes() == png and f"(/_generated/gallery/{figs[0].name})" in text
     bare = ext.notebook_markdown(nb, "99_test", tmp_path, "/_generated/gallery", executed=False)
-    assert "scripts/docs --gallery" in bare and "peak 1.8\n```" not in bare
+    assert "scripts/docs --notebooks" in bare and "peak 1.8\n```" not in bare

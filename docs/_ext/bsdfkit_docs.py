@@ -5,6 +5,7 @@ notebook gallery (``notebooks/*.ipynb`` with the figures of their execution).
 Used by docs/conf.py (a Sphinx extension: the ``bsdfkit-models`` directive) and by the README:
 
     python docs/_ext/bsdfkit_docs.py --readme     # rewrite README.md's models table in place
+    python docs/_ext/bsdfkit_docs.py --notebooks [NAME ...]   # re-execute notebooks/*.ipynb in place
 
 tests/test_docs.py checks that README.md's table is the generated one.
 """
@@ -191,22 +192,126 @@ def _write_reports(srcdir: Path) -> None:
 # ------------------------------------------------------------------------- notebook gallery
 
 NOTEBOOKS = ROOT / "notebooks"
-#: Executed copies of the notebooks (``scripts/docs --gallery``), keyed by the source's hash, so a
-#: build without --gallery shows the figures of the last executed run of the same notebook.
-EXECUTED = ROOT / "docs" / "_build" / "executed"
 _STREAM_LINES = 40   # longest printed output shown per cell (the rest is elided)
 
+# The notebooks are committed executed, with their figures, so that a reader on GitHub sees them
+# (issue 50 item 15); ``scripts/docs --notebooks`` re-executes them in place. Kept small and
+# reproducible (tests/test_notebooks.py checks these bounds):
+#: PNG figures: drawn at this dpi, then stored as 8-bit palette PNGs (plots have few colours).
+FIGURE_DPI = 72
+FIGURE_COLOURS = 256
+#: Size bounds (bytes) of one committed notebook, of all of them, of one figure (the largest is
+#: 02_gallery's figure of every model, 23 rows: ~0.73 MB).
+MAX_NOTEBOOK_BYTES = 1_000_000
+MAX_TOTAL_BYTES = 3_000_000
+MAX_FIGURE_BYTES = 800_000
+#: Output MIME types kept: what GitHub and the docs render. Widgets (live only: their state is not
+#: stored) and their progress bars are dropped.
+_KEPT_MIME = ("image/png", "text/html", "text/plain", "text/markdown", "text/latex")
 
-def _nb_hash(path: Path) -> str:
+
+def source_digest(nb) -> str:
+    """SHA-256 of a notebook's cell sources and types: stored in the executed notebook's
+    metadata (``bsdfkit.source_sha256``), so a test can tell outputs that are stale."""
     import hashlib
 
-    return hashlib.sha256(path.read_bytes()).hexdigest()[:16]
+    h = hashlib.sha256()
+    for cell in nb.cells:
+        h.update(cell.cell_type.encode() + b"\0" + cell.source.encode("utf-8") + b"\0")
+    return h.hexdigest()
 
 
-def execute_notebook(path: Path, timeout: int = 600):
-    """Runs the notebook top to bottom with nbclient (headless, Agg) in the notebooks folder and
-    stores the executed copy under ``EXECUTED``; returns it. Raises on the first failing cell."""
+def _small_png(data: str) -> str:
+    """A base64 PNG as an 8-bit palette PNG (adaptive palette, no dithering: flat areas stay flat
+    and compress), without text chunks; the same bytes for the same figure."""
+    import base64
+    import io
+
+    from PIL import Image
+
+    im = Image.open(io.BytesIO(base64.b64decode(data)))
+    im = im.convert("RGBA" if "A" in im.getbands() else "RGB")
+    if im.mode == "RGBA" and im.getextrema()[3][0] == 255:
+        im = im.convert("RGB")   # opaque: no alpha channel
+    q = im.quantize(colors=FIGURE_COLOURS, method=Image.Quantize.FASTOCTREE if im.mode == "RGBA" else
+                    Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+    out = io.BytesIO()
+    q.save(out, format="PNG", optimize=True)
+    return base64.b64encode(out.getvalue()).decode("ascii")
+
+
+def _scrub_text(text: str, workdir: str | None) -> str:
+    """Machine-specific text of an output: the execution's working directory, temporary
+    directories, this checkout's path and the home directory become placeholders."""
     import os
+    import tempfile
+
+    if workdir:
+        text = text.replace(workdir, "<workdir>")
+    tmp = re.escape(tempfile.gettempdir().rstrip("/"))
+    text = re.sub(tmp + r"/[^/\s'\"<>]+", "<tmpdir>", text)
+    text = text.replace(str(ROOT), "<bsdfkit>")
+    home = os.path.expanduser("~")
+    if home not in ("", "/"):
+        text = text.replace(home, "~")
+    return text
+
+
+def normalise_notebook(nb, workdir: str | None = None):
+    """An executed notebook as it is committed: execution counts 1, 2, ... in cell order, no
+    timing / widget metadata, figures as small palette PNGs, widget outputs dropped, consecutive
+    prints as one output, paths scrubbed, the kernel's version left out, and the digest of its
+    sources recorded. In place; returns nb."""
+    import nbformat
+
+    nb.metadata = nbformat.from_dict({
+        "kernelspec": {"display_name": "Python 3", "language": "python", "name": "python3"},
+        "language_info": {"name": "python"},
+        "bsdfkit": {"source_sha256": source_digest(nb)}})
+    count = 0
+    for cell in nb.cells:
+        cell.metadata.pop("execution", None)
+        cell.metadata.pop("scrolled", None)
+        if cell.cell_type != "code":
+            continue
+        count += 1
+        cell.execution_count = count
+        outputs = []
+        for o in cell.outputs:
+            if o.output_type in ("display_data", "execute_result"):
+                data = {k: v for k, v in o.data.items() if k in _KEPT_MIME}
+                if "application/vnd.jupyter.widget-view+json" in o.data and "image/png" not in data:
+                    continue   # a widget (e.g. a progress bar): nothing a static page can show
+                if not data:
+                    continue
+                for k in list(data):
+                    if k == "image/png":
+                        data[k] = _small_png(data[k])
+                    elif isinstance(data[k], str):
+                        data[k] = _scrub_text(data[k], workdir)
+                o.data = data
+                o.metadata = {k: v for k, v in o.get("metadata", {}).items() if k == "image/png"}
+                if o.output_type == "execute_result":
+                    o.execution_count = count
+            elif o.output_type == "stream":
+                o.text = _scrub_text(o.text, workdir)
+                if not o.text:
+                    continue
+                last = outputs[-1] if outputs else None
+                if last is not None and last.output_type == "stream" and last.name == o.name:
+                    last.text += o.text   # one output per run of prints: chunking depends on timing
+                    continue
+            outputs.append(o)
+        cell.outputs = outputs
+    return nb
+
+
+def execute_notebook(path: Path, timeout: int = 600, *, write: bool = True):
+    """Runs the notebook top to bottom with nbclient (headless, figures as inline PNGs at
+    ``FIGURE_DPI``) in a temporary directory, normalises it (:func:`normalise_notebook`) and,
+    with ``write``, saves it over ``path``; returns it. Raises on the first failing cell."""
+    import os
+    import tempfile
 
     import nbclient
     import nbformat
@@ -214,29 +319,30 @@ def execute_notebook(path: Path, timeout: int = 600):
     nb = nbformat.read(path, as_version=4)
     # the kernel inherits this process's environment: Jupyter's inline backend, so that every
     # figure a cell shows becomes a PNG output (scripts/docs sets Agg for the build itself)
-    saved = os.environ.get("MPLBACKEND")
+    saved = {k: os.environ.get(k) for k in ("MPLBACKEND", "MATPLOTLIBRC", "PYTHONHASHSEED")}
     os.environ["MPLBACKEND"] = "module://matplotlib_inline.backend_inline"
+    os.environ["PYTHONHASHSEED"] = "0"
     try:
-        nbclient.NotebookClient(nb, timeout=timeout, kernel_name="python3",
-                                resources={"metadata": {"path": str(path.parent)}}).execute()
+        with tempfile.TemporaryDirectory(prefix="bsdfkit-nb-") as work:
+            rc = Path(work) / "matplotlibrc"   # the inline backend draws PNGs at figure.dpi
+            rc.write_text(f"figure.dpi: {FIGURE_DPI}\n")
+            os.environ["MATPLOTLIBRC"] = str(rc)
+            nbclient.NotebookClient(nb, timeout=timeout, kernel_name="python3", record_timing=False,
+                                    store_widget_state=False, resources={"metadata": {"path": work}}).execute()
+            normalise_notebook(nb, work)
     finally:
-        if saved is None:
-            os.environ.pop("MPLBACKEND", None)
-        else:
-            os.environ["MPLBACKEND"] = saved
-    EXECUTED.mkdir(parents=True, exist_ok=True)
-    for old in EXECUTED.glob(f"{path.stem}-*.ipynb"):
-        old.unlink()
-    nbformat.write(nb, EXECUTED / f"{path.stem}-{_nb_hash(path)}.ipynb")
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+    if write:
+        nbformat.write(nb, path)
     return nb
 
 
-def _executed(path: Path):
-    """The executed copy of this exact notebook source, or None."""
-    import nbformat
-
-    f = EXECUTED / f"{path.stem}-{_nb_hash(path)}.ipynb"
-    return nbformat.read(f, as_version=4) if f.exists() else None
+def has_outputs(nb) -> bool:
+    return any(cell.get("outputs") for cell in nb.cells if cell.cell_type == "code")
 
 
 def notebook_markdown(nb, stem: str, figdir: Path, figurl: str, executed: bool) -> str:
@@ -251,9 +357,9 @@ def notebook_markdown(nb, stem: str, figdir: Path, figurl: str, executed: bool) 
             out += [cell.source, ""]
             if i == 0:
                 out += [f"*The notebook* `notebooks/{stem}.ipynb`" + (
-                    ", executed when this page was built." if executed else
-                    ": its figures are drawn by `scripts/docs --gallery`, which executes the notebooks "
-                    "(this build did not)."), ""]
+                    ", with the outputs it is committed with (`scripts/docs --notebooks` re-executes "
+                    "the notebooks)." if executed else
+                    ": committed without outputs; `scripts/docs --notebooks` executes it."), ""]
             continue
         if cell.cell_type != "code" or not cell.source.strip():
             continue
@@ -278,9 +384,9 @@ def notebook_markdown(nb, stem: str, figdir: Path, figurl: str, executed: bool) 
     return "\n".join(out)
 
 
-def _write_gallery(srcdir: Path, execute: bool) -> None:
-    """docs/gallery/<notebook>.md for every notebook (executed now with ``execute``, else from the
-    last executed copy of the same source, else without outputs) and docs/gallery/index.md."""
+def _write_gallery(srcdir: Path) -> None:
+    """docs/gallery/<notebook>.md for every notebook, with the outputs it is committed with, and
+    docs/gallery/index.md."""
     import nbformat
 
     out = srcdir / "gallery"
@@ -295,14 +401,12 @@ def _write_gallery(srcdir: Path, execute: bool) -> None:
             stale.unlink()
     entries = []
     for path in paths:
-        nb = execute_notebook(path) if execute else _executed(path)
-        executed = nb is not None
-        nb = nb or nbformat.read(path, as_version=4)
+        nb = nbformat.read(path, as_version=4)
         _write_if_changed(out / f"{path.stem}.md", notebook_markdown(nb, path.stem, figdir, "/_generated/gallery",
-                                                                      executed))
+                                                                      has_outputs(nb)))
         entries.append(path.stem)
-    _write_if_changed(out / "index.md", "# Notebooks\n\nThe notebooks of `notebooks/`, with the figures of their "
-                      "last execution (`scripts/docs --gallery` runs them; the test suite runs them too).\n\n"
+    _write_if_changed(out / "index.md", "# Notebooks\n\nThe notebooks of `notebooks/`, with the figures they are "
+                      "committed with (`scripts/docs --notebooks` re-executes them; the test suite runs them too).\n\n"
                       "```{toctree}\n:maxdepth: 1\n\n" + "".join(f"{e}\n" for e in entries) + "```\n")
 
 
@@ -362,7 +466,7 @@ def _generate_sources(app, config):
         if stub.stem not in current:
             stub.unlink()
     _write_reports(srcdir)
-    _write_gallery(srcdir, execute=bool(config.bsdfkit_execute_notebooks))
+    _write_gallery(srcdir)
     figures = _render_figures(srcdir) if config.bsdfkit_model_figures else {}
     _write_if_changed(srcdir / "reference" / "models_generated.rst.inc", models_rst(figures))
 
@@ -459,8 +563,6 @@ def _spectral_text(cls) -> str:
 
 def setup(app):
     app.add_config_value("bsdfkit_model_figures", True, "env")
-    # scripts/docs --gallery: execute the notebooks (minutes); otherwise reuse the last executed copies
-    app.add_config_value("bsdfkit_execute_notebooks", False, "env")
     app.connect("autodoc-process-docstring", _process_docstring, priority=900)   # after napoleon
     app.connect("build-finished", _build_finished)
     # config-inited, not builder-inited: by builder-inited Sphinx has already listed the sources,
@@ -473,5 +575,12 @@ if __name__ == "__main__":
     if sys.argv[1:] == ["--readme"]:
         sys.path.insert(0, str(ROOT / "python"))
         print("README.md " + ("updated" if rewrite_readme() else "unchanged"))
+    elif sys.argv[1:2] == ["--notebooks"]:
+        names = sys.argv[2:]
+        for p in sorted(NOTEBOOKS.glob("*.ipynb")):
+            if names and p.stem not in names and p.name not in names:
+                continue
+            execute_notebook(p)
+            print(f"{p.relative_to(ROOT)}: executed, {p.stat().st_size / 1e3:.0f} kB", flush=True)
     else:
         sys.exit(__doc__)
