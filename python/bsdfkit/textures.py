@@ -367,10 +367,11 @@ class Texture(TextureBase):
         Affine map applied to uv (and, without its offset, to the derivatives) before the lookup:
         ``(u', v') = M @ (u, v, 1)``.
     progress : bool or callable, optional
-        Building the MIP-mapped texture of a large image takes seconds (2048² sRGB: ~2 s): one bar
-        over reading, decoding and writing it. None (default): on stderr when it is a terminal (a
-        bar in Jupyter), once the build has run for a second, and never inside a call that shows
-        its own (a scene import); True, False, or a callable ``progress(done, total, stage)``.
+        Building the MIP-mapped texture of a large image takes seconds (2048² sRGB: 2-4 s, mostly
+        the MIP-mapped write): one bar over reading, decoding and writing it. None (default): on
+        stderr when it is a terminal (a bar in Jupyter), once the build has run for a second, and
+        never inside a call that shows its own (a scene import); True, False, or a callable
+        ``progress(done, total, stage)``.
         Ctrl-C stops the build with ``KeyboardInterrupt``.
 
     Raises
