@@ -197,3 +197,101 @@ def test_tabulate_stops_on_sigint():
             print("interrupted")
     """)
     assert "interrupted" in out, out
+
+
+# ------------------------------------------------------------------ Ctrl-C in long single calls (issue 50 item 18)
+
+def _interrupt_trials(setup, loop, trials=4, deadline=20.0):
+    """Runs `setup` in a subprocess, then `trials` times: the child prints "started", runs `loop`
+    (which only ends by an exception), the parent sends SIGINT 0.2-0.8 s later; the child prints
+    the name of the exception that ended `loop` and survives to run the next trial. Returns the
+    names, one per trial, and the child's exit status."""
+    body = textwrap.indent(textwrap.dedent(loop).strip("\n"), " " * 12)
+    code = textwrap.dedent(setup) + f"""
+for _trial in range({trials}):
+    print("started", flush=True)
+    try:
+        while True:
+{body}
+    except BaseException as e:
+        print("ended", type(e).__name__, flush=True)
+print("survived", flush=True)
+"""
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                         env=env, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    rng = np.random.default_rng(50)
+    names, lines = [], []
+    t_end = time.monotonic() + deadline * trials
+
+    def readline():  # the child's next line; the deadline bounds the whole run (a hang fails, not blocks)
+        timer = threading.Timer(max(0.0, t_end - time.monotonic()), p.kill)
+        timer.start()
+        try:
+            line = p.stdout.readline()
+        finally:
+            timer.cancel()
+        lines.append(line)
+        return line
+    try:
+        for _ in range(trials):
+            while "started" not in (line := readline()):
+                assert line, "".join(lines)
+            time.sleep(rng.uniform(0.2, 0.8))
+            p.send_signal(signal.SIGINT)
+            while not (line := readline()).startswith("ended"):
+                assert line, "".join(lines)
+            names.append(line.split()[1])
+        while "survived" not in (line := readline()):
+            assert line, "".join(lines)
+        return names, p.wait(timeout=deadline), "".join(lines)
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.wait()
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_sample_n_stops_on_sigint(threads):
+    # m.sample(wo, n=...) on one thread ignored SIGINT for over a minute: the seeded uniforms and
+    # the kernel now stop within a chunk. A float32 random-walk model keeps the memory small
+    # (~47 bytes a sample: 235 MB) while each call runs for seconds (~0.3 M samples/s a thread).
+    names, rc, out = _interrupt_trials(f"""
+        import bsdfkit as bk
+        bk.set_num_threads({threads})
+        m = bk.CoatedDiffuse(0.8, alpha=0.3, thickness=0.1, albedo=0.9)
+        wo = bk.direction(0.5, 0.0).astype("float32")
+        s = m.sample(wo, n=1000, seed=1)  # a warm start: the first call's set-up is not under test
+    """, """
+        s = None
+        s = m.sample(wo, n=5_000_000, seed=1)
+        print("finished", flush=True)
+    """, trials=2)
+    assert names == ["KeyboardInterrupt"] * 2 and rc == 0, out
+    assert "finished" not in out, out
+
+
+def test_merl_load_stops_on_sigint(tmp_path):
+    # Ctrl-C while a MERL file loaded surfaced as "SystemError: ... returned a result with an
+    # exception set" when it landed in the sampler's table build (C++): a KeyboardInterrupt now,
+    # wherever it lands, and the process goes on. The loop patches one value per load, so every
+    # load is a new table (no cache hit).
+    nh, nd, npd = bk.measured.MERL_DIMS
+    raw = np.random.default_rng(3).uniform(0.0, 1.0, (3, nh, nd, npd))
+    path = tmp_path / "noise.binary"
+    with open(path, "wb") as fh:  # MERL's format: 3 int32 dims, then float64 channel planes
+        fh.write(np.asarray((nh, nd, npd), "<i4").tobytes())
+        fh.write(raw.astype("<f8").tobytes())
+    names, rc, out = _interrupt_trials(f"""
+        import numpy as np, bsdfkit as bk
+        bk.set_num_threads(1)
+        path, k = {str(path)!r}, 0
+        bk.MERL(path)
+    """, """
+        k += 1
+        with open(path, "r+b") as fh:
+            fh.seek(12 + 8 * (k % 1000))
+            fh.write(np.float64(k * 1e-3).tobytes())
+        m = bk.MERL(path, "linear" if k % 2 else "nearest")
+    """, trials=6)
+    assert names == ["KeyboardInterrupt"] * 6 and rc == 0, out

@@ -74,6 +74,11 @@ void bind_measured_models(py::module_ &m) {
                 py::gil_scoped_release release;
                 t = make_merl_table(std::move(v), K, n_phi, linear, num_threads());
             }
+            // Ctrl-C stopped the build (the pool's hook set KeyboardInterrupt): raise it. Returning a
+            // value with the error set was Python's "SystemError: ... returned a result with an
+            // exception set" (issue 50 item 18).
+            raise_if_interrupted();
+            if (!t) throw std::runtime_error("MERLTable: the table build was interrupted");  // cannot happen
             return PyMERLTable(t);
         }))
         .def_property_readonly("K", [](const PyMERLTable &t) { return t->K; })

@@ -55,7 +55,7 @@ std::shared_ptr<const MERLTable> make_merl_table(std::vector<double> values, int
     t->marg64.assign(size_t(K) * R, 0.0);
     t->cond64.assign(size_t(K) * R * C, 0.0);
     t->dens64.assign(size_t(K) * R * C, 0.0);
-    parallel_chunks(K, nthreads, 1, [&](int64_t k, int64_t) {
+    const bool done = parallel_chunks(K, nthreads, 1, [&](int64_t k, int64_t) {
         std::vector<double> mass(size_t(R) * C);
         if (linear) merl_sampler_rows<true>(*t, int(k), mass);
         else merl_sampler_rows<false>(*t, int(k), mass);
@@ -90,6 +90,7 @@ std::shared_ptr<const MERLTable> make_merl_table(std::vector<double> values, int
         }
         t->marg64[size_t(k) * R + R - 1] = 1.0;
     });
+    if (!done) return nullptr;  // stopped by Ctrl-C: the rows are incomplete, no table
     t->marg32.assign(t->marg64.begin(), t->marg64.end());
     t->cond32.assign(t->cond64.begin(), t->cond64.end());
     t->dens32.assign(t->dens64.begin(), t->dens64.end());

@@ -333,9 +333,9 @@ template <typename F, bool Linear> struct MERLT : MERLKernel<F, Linear> {
 template <typename F> using MERLNearestBxDF = MERLT<F, false>;
 template <typename F> using MERLLinearBxDF = MERLT<F, true>;
 
-// Builds a table from scaled values (kSize * 3, channel-interleaved, unmeasured already 0) and
-// its sampler (K theta_o tables, n_phi azimuth columns) from the `Linear` lookup
-// (cpp/src/measured.cpp). nthreads OpenMP threads; deterministic.
+// Builds a table from scaled values (kSize * 3, channel-interleaved, unmeasured already 0) and its sampler
+// (K theta_o tables, n_phi azimuth columns) from the `Linear` lookup (cpp/src/measured.cpp); nthreads pool
+// threads, deterministic. nullptr when the interrupt hook (Ctrl-C, pool.h) stopped it: its error is set.
 std::shared_ptr<const MERLTable> make_merl_table(std::vector<double> values, int K, int n_phi, bool linear,
                                                  int nthreads);
 
